@@ -1,0 +1,33 @@
+# The two quick-start commands of the README live here:
+#   make run    set up .venv and run the main job
+#   make test   set up .venv (and the system packages the tests need) and run the whole test suite
+# Everything else is a building block of those two.
+
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+
+.PHONY: run test setup system-deps bench clean
+
+run: setup
+	$(BIN)/simatch run omni_circle
+
+test: setup system-deps
+	$(BIN)/python -m pytest
+
+bench: setup
+	$(BIN)/simatch bench
+
+setup: $(VENV)/.installed
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e '.[test]'
+	touch $@
+
+system-deps:
+	scripts/install-system-deps.sh
+
+clean:
+	rm -rf $(VENV) build src/*.egg-info .pytest_cache

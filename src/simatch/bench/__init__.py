@@ -1,0 +1,12 @@
+"""Benchmarks (``simatch bench``): speed is measured here, never asserted by unit tests.
+
+Each benchmark is a function ``run(seconds: float | None) -> dict`` whose keys go into the one JSON object
+``simatch bench --json`` prints. They run in one process, one after another, on one core.
+"""
+
+from __future__ import annotations
+
+#: name -> "module:function", in the order they run
+BENCHMARKS: dict[str, str] = {
+    "physics": "simatch.bench.physics:run",
+}

@@ -1,0 +1,120 @@
+"""The in-process transport: synchronous delivery of message objects, no serialisation, no threads.
+
+A ``put`` calls every matching subscriber right away, in the order the subscriptions were made, so an
+embedded run is deterministic and costs one Python call per delivery. Wildcard subscriptions are resolved
+once, when a publisher is declared, never per message.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import topics as _topics
+from .base import AnyCallback, BusStats, Callback
+
+
+class _Publisher:
+    __slots__ = ("topic", "msgtype", "_bus", "_callbacks")
+
+    def __init__(self, bus: "InProcessBus", topic: str, msgtype: Any):
+        self.topic = topic
+        self.msgtype = msgtype
+        self._bus = bus
+        self._callbacks: list[Callback] = []
+
+    @property
+    def active(self) -> bool:
+        return bool(self._callbacks)
+
+    def put(self, msg: Any) -> None:
+        for cb in self._callbacks:
+            cb(msg)
+
+
+class _Subscription:
+    __slots__ = ("topic", "msgtype", "callback", "any_type", "_bus", "_bound")
+
+    def __init__(self, bus: "InProcessBus", topic: str, msgtype: Any, callback, any_type: bool):
+        self.topic = topic
+        self.msgtype = msgtype
+        self.callback = callback
+        self.any_type = any_type
+        self._bus = bus
+        self._bound: list[tuple[_Publisher, Callback]] = []
+
+    def _bind(self, pub: _Publisher) -> None:
+        if self.any_type:
+            topic, cb = pub.topic, self.callback
+            bound: Callback = lambda msg: cb(topic, msg)  # noqa: E731
+        else:
+            if self.msgtype is not None and pub.msgtype is not None and _name(self.msgtype) != _name(pub.msgtype):
+                raise TypeError(
+                    f"topic {pub.topic!r} carries {_name(pub.msgtype)}, but a subscriber expects {_name(self.msgtype)}")
+            bound = self.callback
+        pub._callbacks.append(bound)
+        self._bound.append((pub, bound))
+
+    def close(self) -> None:
+        for pub, bound in self._bound:
+            try:
+                pub._callbacks.remove(bound)
+            except ValueError:
+                pass
+        self._bound.clear()
+        if self in self._bus._subs:
+            self._bus._subs.remove(self)
+
+
+def _name(msgtype: Any) -> str:
+    return msgtype if isinstance(msgtype, str) else getattr(msgtype, "__msgtype__", repr(msgtype))
+
+
+class InProcessBus:
+    """All nodes of a run in one process; ``run`` only names the run (for logs and recordings)."""
+
+    def __init__(self, run: str = "embedded"):
+        self.run = run
+        self.stats = BusStats()
+        self._pubs: dict[str, _Publisher] = {}
+        self._subs: list[_Subscription] = []
+
+    def publisher(self, topic: str, msgtype: Any) -> _Publisher:
+        pub = self._pubs.get(topic)
+        if pub is not None:
+            if _name(pub.msgtype) != _name(msgtype):
+                raise TypeError(f"topic {topic!r} already carries {_name(pub.msgtype)}, not {_name(msgtype)}")
+            return pub
+        pub = _Publisher(self, topic, msgtype)
+        self._pubs[topic] = pub
+        for sub in self._subs:
+            if _topics.matches(sub.topic, topic):
+                sub._bind(pub)
+        return pub
+
+    def subscribe(self, topic: str, msgtype: Any, callback: Callback) -> _Subscription:
+        return self._add(_Subscription(self, topic, msgtype, callback, any_type=False))
+
+    def subscribe_all(self, pattern: str, callback: AnyCallback) -> _Subscription:
+        return self._add(_Subscription(self, pattern, None, callback, any_type=True))
+
+    def _add(self, sub: _Subscription) -> _Subscription:
+        self._subs.append(sub)
+        for topic, pub in self._pubs.items():
+            if _topics.matches(sub.topic, topic):
+                sub._bind(pub)
+        return sub
+
+    def topics(self) -> dict[str, str]:
+        """Every declared topic and the full name of its message type."""
+        return {t: _name(p.msgtype) for t, p in self._pubs.items()}
+
+    def close(self) -> None:
+        for sub in list(self._subs):
+            sub.close()
+        self._pubs.clear()
+
+    def __enter__(self) -> "InProcessBus":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,131 @@
+"""Nodes and the lockstep clock that ticks them.
+
+A node is a participant of a run: it declares its publishers and subscriptions in ``start`` and does its
+periodic work in ``tick``. Within each physics step nodes tick in a fixed order of phases, so that every
+node handles tick k before the world steps past it:
+
+    SENSE  the simulator publishes the clock, model states and, on control ticks, each robot's perception
+    JUDGE  the scene subsystem (referee, coach, judges) reads the world and publishes game commands
+    TEAM   each team's StrategyPub publishes the fused team picture
+    ROBOT  each robot's WorldModel + Control decide and publish their commands
+    ACT    the simulator applies the commands and advances the physics by one step
+
+Within a phase, nodes tick in the order they were added. A transport that spreads nodes over processes
+keeps this order by waiting, at each control tick, for the remote nodes' answers (lockstep).
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .base import Bus
+
+
+class Phase(enum.IntEnum):
+    SENSE = 0
+    JUDGE = 10
+    TEAM = 20
+    ROBOT = 30
+    ACT = 40
+
+
+def stable_seed(seed: int, *names: str) -> list[int]:
+    """Entropy for an RNG that depends only on the run seed and a node's name (not on process layout)."""
+    digest = hashlib.sha256("/".join(names).encode()).digest()
+    return [int(seed) & 0xFFFFFFFF, int.from_bytes(digest[:8], "little")]
+
+
+@dataclass
+class NodeContext:
+    """What a node gets from the run it joins."""
+
+    bus: Bus
+    dt: float                          # physics step [s]
+    seed: int
+    now: Callable[[], float]           # simulated time [s]
+    step: Callable[[], int]            # physics step index
+
+    def rng(self, *names: str) -> np.random.Generator:
+        """A random generator private to this node, reproducible for the same seed and name."""
+        return np.random.default_rng(stable_seed(self.seed, *names))
+
+    def steps(self, seconds: float, what: str = "period") -> int:
+        """A duration as a whole number of physics steps (at least one)."""
+        n = round(seconds / self.dt)
+        if n < 1 or abs(n * self.dt - seconds) > 1e-9 * max(1.0, seconds):
+            raise ValueError(f"{what} {seconds} s is not a whole number of physics steps of {self.dt} s")
+        return n
+
+
+class Node:
+    """Base class of every node. Subclasses set ``phase`` and ``period`` (seconds; None = never ticks)."""
+
+    phase: Phase = Phase.ROBOT
+    period: float | None = None
+    name: str = "node"
+
+    ctx: NodeContext
+
+    def start(self, ctx: NodeContext) -> None:
+        """Declare publishers and subscriptions. Called once before the first tick."""
+        self.ctx = ctx
+
+    def tick(self, now: float) -> None:
+        """Periodic work; ``now`` is the simulated time [s]."""
+
+    def stop(self) -> None:
+        """Release what ``start`` took."""
+
+
+class LockstepClock:
+    """Ticks nodes in phase order, one physics step at a time, in a single thread (the embedded run)."""
+
+    def __init__(self, bus: Bus, dt: float, seed: int):
+        self.bus = bus
+        self.dt = dt
+        self.seed = seed
+        self.step_index = 0
+        self._nodes: list[Node] = []
+        self._schedule: list[tuple[Node, int]] = []   # (node, period in steps), sorted by phase
+        self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=lambda: self.step_index)
+
+    def now(self) -> float:
+        return self.step_index * self.dt
+
+    @property
+    def nodes(self) -> list[Node]:
+        return list(self._nodes)
+
+    def add(self, node: Node) -> Node:
+        node.start(self.context)
+        self._nodes.append(node)
+        if node.period is not None:
+            period = self.context.steps(node.period, f"period of {node.name}")
+            self._schedule.append((node, period))
+            self._schedule.sort(key=lambda item: item[0].phase)   # stable: keeps insertion order in a phase
+        return node
+
+    def remove(self, node: Node) -> None:
+        if node in self._nodes:
+            self._nodes.remove(node)
+            self._schedule = [(n, p) for n, p in self._schedule if n is not node]
+            node.stop()
+
+    def step(self) -> None:
+        k = self.step_index
+        now = k * self.dt
+        for node, period in self._schedule:
+            if k % period == 0:
+                node.tick(now)
+        self.step_index = k + 1
+
+    def close(self) -> None:
+        for node in reversed(self._nodes):
+            node.stop()
+        self._nodes.clear()
+        self._schedule.clear()

@@ -1,0 +1,126 @@
+"""``simatch run SCENE``: run a scene embedded in this process (no server to start).
+
+Options shared with ``simatch server`` are added by `add_run_options`. Features that attach to a run
+(recording, the live view) are extensions listed in `EXTENSIONS`: each adds its options and wraps the run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import json
+import sys
+from typing import Any
+
+from ..scene.loader import load_scene, parse_override
+from . import UsageError
+
+#: run extensions: "module:Class" with add_arguments(parser) and attach(sim, args) -> context manager
+EXTENSIONS: list[str] = []
+
+
+def add_run_options(p) -> None:
+    p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
+    p.add_argument("--duration", type=float, metavar="S",
+                   help="simulated seconds to run (default: until the judge ends the run)")
+    p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene value (dotted path into the TOML), e.g. teams.magenta.strategy=simple")
+    p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
+    p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    for ext in extensions():
+        ext.add_arguments(p)
+
+
+def extensions() -> list[Any]:
+    out = []
+    for spec in EXTENSIONS:
+        module, _, attr = spec.partition(":")
+        out.append(getattr(importlib.import_module(module), attr)())
+    return out
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("run", help="run a scene embedded in this process",
+                       description="Run a scene (world, teams, judge) in this process, in lockstep: the same "
+                                   "scene and seed give the same run bit for bit. With --json, prints one "
+                                   "JSON object: scene, seed, sim_seconds, wall_seconds, rtf, state_digest, "
+                                   "result (judge-specific) and events.")
+    add_run_options(p)
+    p.set_defaults(func=main)
+
+
+def overrides_of(args) -> dict:
+    return dict(parse_override(o) for o in args.overrides)
+
+
+def run_duration(sim, args) -> float:
+    if args.duration is not None:
+        if args.duration <= 0:
+            raise UsageError("--duration must be positive")
+        return args.duration
+    if sim.duration is None:
+        raise UsageError(f"scene {sim.scene.name} has no natural end (its judge is '{sim.scene.spec.judge.kind}'); "
+                         f"give --duration SECONDS")
+    return sim.duration
+
+
+class Progress:
+    """A progress bar on a terminal (stderr), nothing otherwise."""
+
+    def __init__(self, total: float, enabled: bool):
+        self.bar = None
+        if enabled and sys.stderr.isatty():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=round(total, 3), unit="sim s", file=sys.stderr, dynamic_ncols=True,
+                            bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+        self.last = 0.0
+
+    def __call__(self, t: float) -> None:
+        if self.bar is not None:
+            self.bar.update(t - self.last)
+            self.last = t
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def print_summary(out: dict, file=sys.stdout) -> None:
+    print(f"scene {out['scene']}  seed {out['seed']}", file=file)
+    print(f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall "
+          f"(real-time factor {out['rtf']})", file=file)
+    print(f"state digest {out['state_digest']}", file=file)
+    print("result:", file=file)
+    for key, value in out["result"].items():
+        print(f"  {key}: {json.dumps(value)}", file=file)
+    events = out["events"]
+    print(f"events: {len(events)}", file=file)
+    for ev in events[-30:]:
+        rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
+        print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(rest) if rest else ''}", file=file)
+    if len(events) > 30:
+        print(f"  ... ({len(events) - 30} earlier events: use --json for all)", file=file)
+
+
+def main(args) -> int:
+    from ..simulation import Simulation
+
+    scene = load_scene(args.scene, overrides_of(args))
+    with Simulation(scene, seed=args.seed) as sim, contextlib.ExitStack() as stack:
+        for ext in extensions():
+            stack.enter_context(ext.attach(sim, args))
+        duration = run_duration(sim, args)
+        progress = Progress(duration, not args.quiet)
+        try:
+            sim.run(seconds=duration, progress=progress, realtime=args.realtime)
+        finally:
+            progress.close()
+        out = sim.result()
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print_summary(out)
+    return 0

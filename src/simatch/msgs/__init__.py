@@ -1,0 +1,168 @@
+"""The messages of simatch, defined once as ROS-style ``.msg`` files (package ``simatch_msgs``).
+
+The definitions are loaded at import time into a ``rosbags`` type store, with no build step, so that the
+same types serve the in-process bus (plain objects, never serialised), the wire between processes (CDR),
+the recordings (rosbag2-compatible MCAP) and any ROS 2 bridge.
+
+Every floating-point field is ``float64``: a value that crosses a process boundary comes back bit for bit,
+which is what lets a distributed lockstep run reproduce an embedded one exactly.
+
+Usage::
+
+    from simatch import msgs
+    cmd = msgs.new(msgs.VelCmd, vx=1.0)          # every field not given gets its zero value
+    data = msgs.encode(cmd)                       # CDR bytes
+    again = msgs.decode(msgs.VelCmd, data)        # raises msgs.MessageError on a malformed payload
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import Any, Callable
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+from rosbags.typesys.base import Nodetype
+
+PACKAGE = "simatch_msgs"
+
+__all__ = [
+    "MessageError",
+    "PACKAGE",
+    "typestore",
+    "msgtype_name",
+    "new",
+    "encode",
+    "decode",
+    "definition",
+    "names",
+]
+
+
+class MessageError(ValueError):
+    """A payload that does not decode into the expected message type."""
+
+
+def _load_definitions() -> dict[str, str]:
+    folder = resources.files(__package__).joinpath(PACKAGE, "msg")
+    texts = {}
+    for entry in sorted(folder.iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".msg"):
+            texts[f"{PACKAGE}/msg/{entry.name[:-4]}"] = entry.read_text(encoding="utf-8")
+    return texts
+
+
+_TEXTS = _load_definitions()
+
+#: The type store holding the standard ROS 2 (Jazzy) types and every ``simatch_msgs`` type.
+typestore = get_typestore(Stores.ROS2_JAZZY)
+_defs: dict = {}
+for _name, _text in _TEXTS.items():
+    _defs.update(get_types_from_msg(_text, _name))
+typestore.register(_defs)
+
+
+def names() -> list[str]:
+    """Full names (``simatch_msgs/msg/X``) of every simatch message type."""
+    return list(_TEXTS)
+
+
+def msgtype_name(msgtype: Any) -> str:
+    """The full type name of a message class, instance or name (short names are completed)."""
+    if isinstance(msgtype, str):
+        return msgtype if "/" in msgtype else f"{PACKAGE}/msg/{msgtype}"
+    return msgtype.__msgtype__
+
+
+def definition(msgtype: Any) -> str:
+    """The ``.msg`` text of a simatch type, as shipped (used for MCAP schemas and ROS bridges)."""
+    return _TEXTS[msgtype_name(msgtype)]
+
+
+# ---------------------------------------------------------------------------------------------------
+# Construction with defaults. The generated dataclasses require every field; `new` fills the missing
+# ones with zero values (fresh containers for arrays and nested messages).
+
+_ARRAY_DTYPES = {
+    "float64": np.float64, "float32": np.float32, "int8": np.int8, "int16": np.int16, "int32": np.int32,
+    "int64": np.int64, "uint8": np.uint8, "uint16": np.uint16, "uint32": np.uint32, "uint64": np.uint64,
+}
+
+
+def _zero(desc) -> Callable[[], Any]:
+    kind, info = desc
+    if kind == Nodetype.BASE:
+        base = info[0]
+        if base == "string":
+            return str
+        if base == "bool":
+            return bool
+        if base in ("float32", "float64"):
+            return float
+        return int
+    if kind == Nodetype.NAME:
+        return lambda: new(info)
+    if kind in (Nodetype.SEQUENCE, Nodetype.ARRAY):
+        inner, length = info
+        if inner[0] == Nodetype.BASE and inner[1][0] in _ARRAY_DTYPES:
+            dtype = _ARRAY_DTYPES[inner[1][0]]
+            return lambda: np.zeros(length if kind == Nodetype.ARRAY else 0, dtype=dtype)
+        if kind == Nodetype.ARRAY:
+            make = _zero(inner)
+            return lambda: [make() for _ in range(length)]
+        return list
+    raise TypeError(f"unsupported field description {desc!r}")
+
+
+_FACTORIES: dict[str, dict[str, Callable[[], Any]]] = {}
+
+
+def _factories(name: str) -> dict[str, Callable[[], Any]]:
+    found = _FACTORIES.get(name)
+    if found is None:
+        _, fields = typestore.fielddefs[name]
+        found = {fname: _zero(desc) for fname, desc in fields}
+        _FACTORIES[name] = found
+    return found
+
+
+def new(msgtype: Any, **fields: Any):
+    """A message of ``msgtype`` with ``fields`` set and every other field at its zero value."""
+    name = msgtype_name(msgtype)
+    factories = _factories(name)
+    unknown = set(fields) - set(factories)
+    if unknown:
+        raise TypeError(f"{name} has no field(s) {', '.join(sorted(unknown))}")
+    for fname, make in factories.items():
+        if fname not in fields:
+            fields[fname] = make()
+    return typestore.types[name](**fields)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Wire format: CDR (little endian, with the 4-byte encapsulation header), as ROS 2 and rosbag2 use it.
+
+def encode(msg) -> bytes:
+    """CDR bytes of a message."""
+    return bytes(typestore.serialize_cdr(msg, msg.__msgtype__))
+
+
+def decode(msgtype: Any, data: bytes | bytearray | memoryview):
+    """The message of type ``msgtype`` held in ``data``; ``MessageError`` if it is not one."""
+    name = msgtype_name(msgtype)
+    try:
+        msg = typestore.deserialize_cdr(bytes(data), name)
+    except Exception as exc:  # rosbags raises SerdeError, struct.error, IndexError, UnicodeError...
+        raise MessageError(f"malformed {name} payload ({len(data)} bytes): {exc}") from None
+    return msg
+
+
+def _export_classes() -> None:
+    g = globals()
+    for full in _TEXTS:
+        short = full.rsplit("/", 1)[1]
+        g[short] = typestore.types[full]
+        __all__.append(short)
+
+
+_export_classes()

@@ -1,0 +1,1 @@
+"""The scene subsystem: scene files, game commands, coaches, the automatic referee and other judges."""

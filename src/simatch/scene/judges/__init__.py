@@ -1,0 +1,28 @@
+"""Judges, chosen by the scene's ``judge.kind``: a shipped name or ``"package.module:Class"``."""
+
+from __future__ import annotations
+
+from ...plugins import PluginError, load
+from ..loader import LoadedScene, SceneError, validate_params
+from .base import Judge, NoJudge, WorldControl
+
+SHIPPED = {
+    "none": "simatch.scene.judges.base:NoJudge",
+    "locomotion_test": "simatch.scene.judges.locomotion:LocomotionTest",
+}
+
+
+def make_judge(scene: LoadedScene, world: WorldControl) -> Judge:
+    spec = scene.spec.judge
+    try:
+        cls = load(spec.kind, SHIPPED, "judge")
+    except PluginError as exc:
+        raise SceneError(f"{scene.source}: judge.kind: {exc}") from None
+    if not (isinstance(cls, type) and issubclass(cls, Judge)):
+        raise SceneError(f"{scene.source}: judge.kind: {spec.kind!r} is not a simatch.scene.judges.Judge subclass")
+    extra = dict(spec.model_extra or {})
+    params = validate_params(cls.Params, extra, scene.source, "judge")
+    return cls(scene, params, world)
+
+
+__all__ = ["Judge", "NoJudge", "SHIPPED", "WorldControl", "make_judge"]

@@ -1,0 +1,231 @@
+"""Dribbler and kicker: the robot mechanisms that act on the ball.
+
+Dribbler. When a robot's dribbler is on and the ball lies in its mouth (within the scene's distance and
+bearing thresholds, on the ground, not arriving faster than the rollers can absorb), a connect constraint
+ties the ball's centre to a point of the robot and draws that point into the mouth at the rollers' speed.
+The constraint is physical: the engine computes the force it needs, and when that force exceeds the
+dribbler's grip (a violent turn or acceleration, or an opponent wrestling for the ball) the ball is lost.
+Nothing is teleported.
+
+Kicker. A kick request fires at the first physics step the ball sits in the mouth: it releases the
+dribbler and gives the ball the robot's own velocity at the mouth plus the kick speed along the heading
+(ground kick, with rolling spin) or along the heading tilted up by the lob angle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from .kernels import catch_candidate, equality_force
+
+#: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
+_ROBOT_TOP_SPEED = 12.0
+#: how long a robot that lost the ball (grip exceeded) cannot take it back while it is still in its mouth [s]
+RECATCH_WAIT = 0.5
+
+
+@dataclass
+class KickRequest:
+    speed: float
+    lob: bool
+    until_step: int
+
+
+class BallHandling:
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, index, robot_models, scene, on_event):
+        self.m, self.d, self.ix = model, data, index
+        self.n = len(index.robots)
+        dr, kk = scene.dribbler, scene.kicker
+        self.ball_r = scene.ball.radius
+        self.hold_dist = dr.distance
+        self.hold_cos = math.cos(math.radians(dr.angle))
+        self.grip = dr.grip_force
+        self.pull_step = dr.pull_speed * model.opt.timestep
+        self.catch_speed = dr.catch_speed
+        self.settle_steps = max(1, round(dr.settle_time / model.opt.timestep))
+        self.kick_max = kk.max_speed
+        self.lob_max = kk.max_lob_speed
+        self.lob_angle = math.radians(kk.lob_angle)
+        self.recharge_steps = round(kk.recharge / model.opt.timestep)
+        self.mouth = np.array([[rm.mouth_x(self.ball_r), 0.0, 0.0] for rm in robot_models])
+        self.dribble_on = np.zeros(self.n, dtype=bool)
+        self.holder = -1
+        self.hold_since = 0
+        self.kicks: dict[int, KickRequest] = {}
+        self.ready_at = np.zeros(self.n, dtype=np.int64)
+        self.on_event = on_event
+        self.kicked_by = -1          # robot whose kicker fired during the last step, -1 if none
+        self.kicked_speed = 0.0
+        self.kicked_lob = False
+        self._eq_rows_type = mujoco.mjtConstraint.mjCNSTR_EQUALITY.value
+        self._catch_idle_until = 0        # no catch is possible before this step (see _catch)
+        # a robot that lost the ball cannot take it again until the ball has left its mouth (or for
+        # RECATCH_WAIT seconds): the lost ball is on its way out, not to be caught back at once
+        self.lost_by = -1
+        self.lost_until = 0
+        self._dt = model.opt.timestep
+        self.recatch_steps = round(RECATCH_WAIT / self._dt)
+        self._robot_q0 = int(index.robot_qpos[0, 0]) if self.n else 0   # robots' joints are consecutive
+        self._robot_v0 = int(index.robot_qvel[0, 0]) if self.n else 0
+
+    # --- requests from commands -----------------------------------------------------------------------------
+    def set_dribbler(self, i: int, on: bool) -> None:
+        self.dribble_on[i] = on
+        self._catch_idle_until = 0
+        if not on and self.holder == i:
+            self.release("dribbler_off")
+
+    def request_kick(self, i: int, speed: float, lob: bool, until_step: int) -> None:
+        if speed <= 0.0:
+            self.kicks.pop(i, None)
+            return
+        self.kicks[i] = KickRequest(min(speed, self.lob_max if lob else self.kick_max), lob, until_step)
+
+    # --- geometry ---------------------------------------------------------------------------------------
+    def _ball_in_robot_frame(self, i: int) -> tuple[float, float, float]:
+        q = self.d.qpos
+        x, y, yaw = q[self.ix.robot_qpos[i]]
+        b = self.ix.ball_qpos
+        dx, dy = q[b] - x, q[b + 1] - y
+        c, s = math.cos(yaw), math.sin(yaw)
+        return (c * dx + s * dy, -s * dx + c * dy, q[b + 2])
+
+    def in_mouth(self, i: int) -> bool:
+        bx, by, bz = self._ball_in_robot_frame(i)
+        dist = math.hypot(bx, by)
+        return (dist <= self.hold_dist and bx >= self.hold_cos * dist and bz <= self.ball_r + 0.05)
+
+    def _mouth_velocity(self, i: int) -> np.ndarray:
+        """World velocity of robot i's mouth point (robot velocity plus w x r)."""
+        q, v = self.d.qpos, self.d.qvel
+        yaw = q[self.ix.robot_qpos[i, 2]]
+        vx, vy, w = v[self.ix.robot_qvel[i]]
+        mx = self.mouth[i, 0]
+        c, s = math.cos(yaw), math.sin(yaw)
+        rx, ry = c * mx, s * mx
+        return np.array([vx - w * ry, vy + w * rx, 0.0])
+
+    # --- per physics step ---------------------------------------------------------------------------------
+    def before_step(self, step: int, enabled: np.ndarray) -> None:
+        self.kicked_by = -1
+        if self.kicks:
+            self._kicks(step, enabled)
+        if self.holder >= 0:
+            self._keep(step, enabled)
+        elif step >= self._catch_idle_until and self.dribble_on.any():
+            self._catch(step, enabled)
+
+    def _kicks(self, step: int, enabled: np.ndarray) -> None:
+        for i in sorted(self.kicks):
+            req = self.kicks[i]
+            if step > req.until_step or not enabled[i]:
+                del self.kicks[i]
+                continue
+            if step < self.ready_at[i] or self.kicked_by >= 0:
+                continue
+            if self.holder == i or (self.holder < 0 and self.in_mouth(i)):
+                self._fire(i, req, step)
+                del self.kicks[i]
+
+    def _fire(self, i: int, req: KickRequest, step: int) -> None:
+        if self.holder >= 0:
+            self.release("kick")
+        yaw = self.d.qpos[self.ix.robot_qpos[i, 2]]
+        c, s = math.cos(yaw), math.sin(yaw)
+        v = self._mouth_velocity(i)
+        bv = self.ix.ball_qvel
+        if req.lob:
+            ch, sv = math.cos(self.lob_angle), math.sin(self.lob_angle)
+            v += (req.speed * ch * c, req.speed * ch * s, req.speed * sv)
+            self.d.qvel[bv:bv + 3] = v
+            self.d.qvel[bv + 3:bv + 6] = 0.0
+        else:
+            v += (req.speed * c, req.speed * s, 0.0)
+            self.d.qvel[bv:bv + 3] = v
+            # rolling without slipping: w = z x v / r, expressed in the ball's own frame (free-joint convention)
+            w_world = np.array([-v[1], v[0], 0.0]) / self.ball_r
+            quat = self.d.qpos[self.ix.ball_qpos + 3:self.ix.ball_qpos + 7]
+            inv = np.empty(4)
+            mujoco.mju_negQuat(inv, quat)
+            w_local = np.empty(3)
+            mujoco.mju_rotVecQuat(w_local, w_world, inv)
+            self.d.qvel[bv + 3:bv + 6] = w_local
+        self.ready_at[i] = step + self.recharge_steps
+        self.kicked_by, self.kicked_speed, self.kicked_lob = i, req.speed, req.lob
+        self.on_event("kick", i, value=req.speed, detail="lob" if req.lob else "ground")
+
+    def _catch(self, step: int, enabled: np.ndarray) -> None:
+        q = self.d.qpos
+        if q[self.ix.ball_qpos + 2] > self.ball_r + 0.05:
+            return
+        cand = np.flatnonzero(self.dribble_on & enabled)
+        if self.lost_by >= 0:
+            if step < self.lost_until and self.in_mouth(self.lost_by):
+                cand = cand[cand != self.lost_by]
+            else:
+                self.lost_by = -1
+        if cand.size == 0:
+            return
+        ix = self.ix
+        i, fwd, lat, nearest = catch_candidate(q, self.d.qvel, self._robot_q0, self._robot_v0, ix.ball_qpos,
+                                               ix.ball_qvel, cand, self.hold_dist, self.hold_cos,
+                                               self.mouth[:, 0], self.catch_speed)
+        if i >= 0:
+            self._attach(i, fwd, lat, step)
+        elif nearest > self.hold_dist:
+            # nothing can come within reach before the gap closes at the fastest possible closing speed
+            # (ball speed plus a robot's top speed): sleep until then (switching a dribbler on wakes it)
+            bv = self.d.qvel[ix.ball_qvel:ix.ball_qvel + 2]
+            closing = math.hypot(bv[0], bv[1]) + _ROBOT_TOP_SPEED
+            self._catch_idle_until = step + max(0, int((nearest - self.hold_dist) / (closing * self._dt)))
+
+    def _attach(self, i: int, fx: float, fy: float, step: int) -> None:
+        eq = self.ix.dribble_eq[i]
+        self.m.eq_data[eq, 0:3] = (fx, fy, self.ball_r)
+        self.m.eq_data[eq, 3:6] = 0.0
+        self.d.eq_active[eq] = 1
+        self.holder = i
+        self.hold_since = step
+        self.on_event("dribble_start", i)
+
+    def _keep(self, step: int, enabled: np.ndarray) -> None:
+        i = self.holder
+        if not (self.dribble_on[i] and enabled[i]):
+            self.release("dribbler_off")
+            return
+        eq = self.ix.dribble_eq[i]
+        anchor = self.m.eq_data[eq, 0:3]
+        target = self.mouth[i]
+        dx, dy = target[0] - anchor[0], target[1] - anchor[1]
+        gap = math.hypot(dx, dy)
+        if gap > 1e-9:
+            f = min(1.0, self.pull_step / gap)
+            anchor[0] += f * dx
+            anchor[1] += f * dy
+        if step - self.hold_since >= self.settle_steps:
+            force = self._grip_force(eq)
+            if force > self.grip:
+                self.release("grip_exceeded", value=force, limit=self.grip, step=step)
+                return
+        bx, by, _ = self._ball_in_robot_frame(i)
+        if math.hypot(bx - anchor[0], by - anchor[1]) > 0.1:
+            self.release("pulled_away", step=step)
+
+    def _grip_force(self, eq: int) -> float:
+        d = self.d
+        return equality_force(d.efc_type, d.efc_id, d.efc_force, d.nefc, eq, self._eq_rows_type)
+
+    def release(self, why: str, value: float = 0.0, limit: float = 0.0, step: int | None = None) -> None:
+        i = self.holder
+        if i < 0:
+            return
+        self.d.eq_active[self.ix.dribble_eq[i]] = 0
+        self.holder = -1
+        if why in ("grip_exceeded", "pulled_away") and step is not None:
+            self.lost_by = i
+            self.lost_until = step + self.recatch_steps
+        self.on_event("dribble_end", i, value=value, limit=limit, detail=why)

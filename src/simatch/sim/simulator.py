@@ -1,0 +1,671 @@
+"""The simulation subsystem's core: the MuJoCo world with its robots and ball, stepped at the physics rate.
+
+It realises the robots' motions (omnidirectional drive with wheel limits, dribbler, kicker), gives exact
+model and link states, and offers the Gazebo-like interface: set model/link state, apply a force/torque
+for a duration. It knows nothing of soccer rules; the bus adapter (`simatch.sim.node`) connects it to
+the other subsystems.
+
+Bad input never reaches the physics: a command with a NaN, an infinity or an absurd value is refused and
+reported as an event (rate-limited per robot, with a count), and the robot keeps its last good command.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections import Counter
+from dataclasses import dataclass
+from typing import Callable, Iterable
+
+import mujoco
+import numpy as np
+
+from .. import msgs
+from ..scene.schema import Scene
+from .ballhandling import BallHandling
+from .drive import OmniDrive
+from .perception import Perception, Snapshot
+from .world import BALL_NAME, build_world
+
+#: Commands beyond these are refused as absurd (anything a robot could follow is far below them).
+MAX_COMMAND_SPEED = 50.0      # m/s
+MAX_COMMAND_TURN = 100.0      # rad/s
+MAX_KICK_REQUEST = 100.0      # m/s (requests above the kicker's limit but below this are clamped)
+MAX_WRENCH = 1e5              # N, N m
+BOUNCE_MIN_SPEED = 0.3        # m/s: slower impacts are absorbed (the ball settles instead of chattering)
+
+
+class CommandError(ValueError):
+    """A command or request the simulator refuses."""
+
+
+@dataclass
+class ModelStateView:
+    """One model's state in the world frame."""
+
+    name: str
+    x: float
+    y: float
+    z: float
+    yaw: float
+    qw: float
+    qx: float
+    qy: float
+    qz: float
+    vx: float
+    vy: float
+    vz: float
+    wx: float
+    wy: float
+    wz: float
+
+
+def _yaw_of(qw: float, qx: float, qy: float, qz: float) -> float:
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+def _finite(*values: float) -> bool:
+    return all(isinstance(v, (int, float)) and math.isfinite(v) for v in values)
+
+
+def _describe_bad_velocity(vx, vy, w) -> str:
+    if not _finite(vx, vy, w):
+        return f"velocity command with a non-finite or non-numeric value: vx={vx!r} vy={vy!r} w={w!r}"
+    return (f"absurd velocity command vx={vx:g} vy={vy:g} w={w:g} (limits {MAX_COMMAND_SPEED:g} m/s, "
+            f"{MAX_COMMAND_TURN:g} rad/s)")
+
+
+class Simulator:
+    def __init__(self, scene: Scene, seed: int = 0, on_event: Callable | None = None):
+        self.scene = scene
+        self.seed = seed
+        self.m, self.d, self.ix, self.field = build_world(scene)
+        self.dt = float(self.m.opt.timestep)
+        self.step_index = 0
+        robots = self.ix.robots
+        self.n = len(robots)
+        self.robot_names = [r.name for r in robots]
+        self.robot_index = {r.name: i for i, r in enumerate(robots)}
+        self.robot_models = [r.model for r in robots]
+        self.team_of = [r.team for r in robots]
+        self.model_names = self.robot_names + [BALL_NAME]
+        self.signs = np.array([scene.team_sign(r.team) for r in robots], dtype=float)
+        self.radii = np.array([rm.params.radius for rm in self.robot_models])
+        self.ball_radius = scene.ball.radius
+        p = [rm.params for rm in self.robot_models]
+        self.control_steps = max(1, round(scene.control.period / self.dt))
+        self.drive = OmniDrive([rm.rim_matrix() for rm in self.robot_models],
+                               [q.max_wheel_speed for q in p], [q.max_acceleration for q in p],
+                               [q.max_deceleration for q in p], self.dt)
+        self._on_event = on_event
+        self.events: list = []                       # GameEvent messages not yet taken by the bus adapter
+        self.mechanics: Counter = Counter()          # kicks, catches, ball losses by reason
+        self.ball = BallHandling(self.m, self.d, self.ix, self.robot_models, scene, self._mechanism_event)
+        self.enabled = np.ones(self.n, dtype=bool)
+        self.frozen = np.zeros(self.n, dtype=bool)
+        self.usable = np.ones(self.n, dtype=bool)     # enabled and not frozen
+        self.last_command_step = np.zeros(self.n, dtype=np.int64)
+        self.watchdog_tripped = np.zeros(self.n, dtype=bool)
+        self.commanded = np.zeros(self.n, dtype=bool)      # has ever received a command
+        self.refused = np.zeros(self.n, dtype=np.int64)
+        self._refused_reported_step = np.full(self.n, -10**9, dtype=np.int64)
+        self._refused_since_report = np.zeros(self.n, dtype=np.int64)
+        self.stuck = np.zeros(self.n, dtype=bool)
+        self._slow_since = np.full(self.n, -1, dtype=np.int64)
+        self._wrenches: list[tuple[int, np.ndarray, int]] = []    # (body, 6-vector, until step)
+        self._wheel_r = np.array([rm.params.wheel_radius for rm in self.robot_models])[:, None]
+        self.touching: list[int] = []                 # robots touching the ball after the last step
+        self._ctrl_ids = self.ix.robot_ctrl
+        self._act_ids = self.ix.robot_act
+        self._kv = np.ascontiguousarray(self.m.actuator_gainprm[self._ctrl_ids, 0])   # (N, 3)
+        self._inv_dt = 1.0 / self.dt
+        self._command_limits = np.array([MAX_COMMAND_SPEED, MAX_COMMAND_SPEED, MAX_COMMAND_TURN])
+        # the servos are the model's first 3N actuators, in robot order: views instead of fancy indexing
+        assert np.array_equal(self._ctrl_ids.ravel(), np.arange(3 * self.n))
+        assert np.array_equal(self._act_ids.ravel(), np.arange(3 * self.n))
+        self._act3 = self.d.act[: 3 * self.n].reshape(self.n, 3)
+        self._ctrl3 = self.d.ctrl[: 3 * self.n].reshape(self.n, 3)
+        self._actrange3 = self.m.actuator_actrange[: 3 * self.n].reshape(self.n, 3, 2)
+        self._bias3 = self.m.actuator_biasprm[: 3 * self.n, 0].reshape(self.n, 3)
+        assert np.shares_memory(self._bias3, self.m.actuator_biasprm)
+        self.track_wheels = False
+        self.wheel_travel = np.zeros((self.n, self.drive.max_wheels))   # rim distance rolled [m]
+        self._rq = self.ix.robot_qpos
+        self._rv = self.ix.robot_qvel
+        # robots' joints are consecutive (x, y, yaw per robot): views instead of fancy indexing
+        q0, v0 = int(self._rq[0, 0]), int(self._rv[0, 0])
+        assert np.array_equal(self._rq.ravel(), np.arange(q0, q0 + 3 * self.n))
+        assert np.array_equal(self._rv.ravel(), np.arange(v0, v0 + 3 * self.n))
+        self._qpos3 = self.d.qpos[q0:q0 + 3 * self.n].reshape(self.n, 3)
+        self._qvel3 = self.d.qvel[v0:v0 + 3 * self.n].reshape(self.n, 3)
+        self._bq = self.ix.ball_qpos
+        self._bv = self.ix.ball_qvel
+        self._bz = self._bq + 2
+        self._bvz = self._bv + 2
+        self.restitution = scene.ball.restitution
+        self._geom_robot = np.full(self.m.ngeom, -1, dtype=np.int64)
+        for g, i in self.ix.robot_of_geom.items():
+            self._geom_robot[g] = i
+        self.perception = Perception(robots, self.signs, self.radii, self.drive.n_wheels, scene.perception,
+                                     self.dt, np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]))
+        self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
+
+    # --- time --------------------------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.step_index * self.dt
+
+    # --- events ---------------------------------------------------------------------------------------------
+    def event(self, kind: str, robot: int = -1, value: float = 0.0, limit: float = 0.0, detail: str = "",
+              x: float | None = None, y: float | None = None) -> None:
+        team, rid = ("", 0)
+        if robot >= 0:
+            team, rid = self.team_of[robot], self.ix.robots[robot].rid
+            if x is None:
+                x, y = (float(v) for v in self.d.qpos[self._rq[robot, :2]])
+        ev = msgs.GameEvent(stamp=self.time, type=kind, team=team, robot=rid, x=float(x or 0.0), y=float(y or 0.0),
+                            value=float(value), limit=float(limit), detail=detail)
+        self.events.append(ev)
+        if self._on_event is not None:
+            self._on_event(ev)
+
+    def _mechanism_event(self, kind: str, robot: int, value: float = 0.0, limit: float = 0.0, detail: str = "") -> None:
+        """Kicks, catches and losses of the ball are counted, not logged: the ball contacts carry them."""
+        self.mechanics[kind if not detail or kind == "kick" else f"{kind}:{detail}"] += 1
+
+    def take_events(self) -> list:
+        out, self.events = self.events, []
+        return out
+
+    # --- commands ------------------------------------------------------------------------------------------
+    def index_of(self, name: str) -> int:
+        try:
+            return self.robot_index[name]
+        except KeyError:
+            raise CommandError(f"no robot named {name!r}; robots are {', '.join(self.robot_names)}") from None
+
+    def _refuse(self, i: int, why: str) -> bool:
+        self.refused[i] += 1
+        self._refused_since_report[i] += 1
+        # report the first refusal, then at most one event a second with the count since the last one
+        if self.step_index - self._refused_reported_step[i] >= round(1.0 / self.dt):
+            self.event("bad_command", i, value=float(self._refused_since_report[i]), detail=why)
+            self._refused_reported_step[i] = self.step_index
+            self._refused_since_report[i] = 0
+        return False
+
+    def command_velocity(self, i: int, vx: float, vy: float, w: float) -> bool:
+        """Robot i's body-frame velocity command. False (and an event) if refused."""
+        try:
+            ok = (-MAX_COMMAND_SPEED <= vx <= MAX_COMMAND_SPEED and -MAX_COMMAND_SPEED <= vy <= MAX_COMMAND_SPEED
+                  and -MAX_COMMAND_TURN <= w <= MAX_COMMAND_TURN)      # False for NaN, inf and absurd values
+        except TypeError:
+            ok = False
+        if not ok:
+            return self._refuse(i, _describe_bad_velocity(vx, vy, w))
+        self.last_command_step[i] = self.step_index
+        if not self.commanded[i] or self.watchdog_tripped[i]:
+            self._fresh(i)
+        if self.usable[i]:
+            self.drive.command(i, float(vx), float(vy), float(w))
+        return True
+
+    def command_all(self, V: np.ndarray, dribble: np.ndarray | None = None) -> None:
+        """Every robot's body-frame velocity command at once, V of shape (N, 3) (for scripted drivers), and
+        optionally every dribbler; rows with a bad value are refused one by one, like `command_velocity`."""
+        V = np.asarray(V, dtype=float)
+        ok = np.isfinite(V).all(axis=1)
+        ok &= (np.abs(V) <= self._command_limits).all(axis=1)
+        drive = self.drive
+        if ok.all() and self.usable.all():
+            drive.cmd[:] = V
+            drive.dirty[:] = True
+            self.last_command_step[:] = self.step_index
+        else:
+            for i in np.flatnonzero(~ok):
+                self._refuse(int(i), _describe_bad_velocity(*V[i]))
+            take = ok & self.usable
+            drive.cmd[take] = V[take]
+            drive.dirty |= take
+            self.last_command_step[ok] = self.step_index
+        drive.any_dirty = True
+        if not self.commanded.all() or self.watchdog_tripped.any():
+            for i in np.flatnonzero(ok & (~self.commanded | self.watchdog_tripped)):
+                self._fresh(int(i))
+        if dribble is not None:
+            want = np.asarray(dribble, dtype=bool) & self.usable
+            changed = want != self.ball.dribble_on
+            if changed.any():
+                for i in np.flatnonzero(changed):
+                    self.ball.set_dribbler(int(i), bool(want[i]))
+
+    def command_action(self, i: int, dribble: bool, kick_speed: float = 0.0, lob: bool = False,
+                       window: float | None = None) -> bool:
+        """Robot i's dribbler state and kick request (fires at the first step the ball is in the mouth,
+        within ``window`` seconds, by default one control period)."""
+        try:
+            ok = 0.0 <= kick_speed <= MAX_KICK_REQUEST
+        except TypeError:
+            ok = False
+        if not ok:
+            return self._refuse(i, f"kick speed {kick_speed!r} is not a number in [0, {MAX_KICK_REQUEST:g}] m/s")
+        self.last_command_step[i] = self.step_index
+        if not self.commanded[i] or self.watchdog_tripped[i]:
+            self._fresh(i)
+        usable = bool(self.usable[i])
+        on = bool(dribble) and usable
+        if on != self.ball.dribble_on[i]:
+            self.ball.set_dribbler(i, on)
+        if kick_speed > 0.0 and usable:
+            window = self.scene.control.period if window is None else window
+            self.ball.request_kick(i, float(kick_speed), bool(lob), self.step_index + max(1, round(window / self.dt)))
+        return True
+
+    def _fresh(self, i: int) -> None:
+        if self.watchdog_tripped[i]:
+            self.watchdog_tripped[i] = False
+            self.event("watchdog_resume", i, detail="commands arrive again")
+        self.last_command_step[i] = self.step_index
+        self.commanded[i] = True
+
+    def stop_robot(self, i: int) -> None:
+        self.drive.stop(i)
+        self.ball.set_dribbler(i, False)
+        self.ball.kicks.pop(i, None)
+
+    def watchdog(self, timeout: float, next_check: int = 1) -> None:
+        """Stop every robot whose last command would be older than ``timeout`` before the next check,
+        ``next_check`` steps from now (its node died or hangs): it is stopped within ``timeout``."""
+        limit = round(timeout / self.dt)
+        stale = (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
+        for i in np.flatnonzero(stale):
+            self.watchdog_tripped[i] = True
+            self.stop_robot(int(i))
+            self.event("watchdog_stop", int(i), value=(self.step_index - self.last_command_step[i]) * self.dt,
+                       limit=timeout, detail="no fresh command: robot stopped, dribbler off")
+
+    # --- stepping --------------------------------------------------------------------------------------------
+    def step(self, n: int = 1) -> None:
+        step = self._step
+        for _ in range(n):
+            step()
+
+    def _step(self) -> None:
+        d = self.d
+        drive = self.drive
+        k = self.step_index
+        into = k % self.control_steps
+        if drive.any_dirty or (into == 0 and drive.ramping.any()):
+            self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(),
+                             self.control_steps - into)
+        if self.track_wheels:
+            self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self._act3) * self.dt
+        self.ball.before_step(self.step_index, self.usable)
+        if self._wrenches:
+            self._apply_wrenches()
+        vz = d.qvel[self._bvz]
+        z = d.qpos[self._bz]
+        mujoco.mj_step(self.m, d)
+        if vz < -BOUNCE_MIN_SPEED and d.qpos[self._bz] < self.ball_radius and self.restitution > 0:
+            self._bounce(z, vz)
+        self.step_index += 1
+
+    def _bounce(self, z0: float, vz0: float) -> None:
+        """The falling ball (height ``z0``, vertical speed ``vz0`` at the start of the step) met the floor
+        during the step: its vertical motion is replaced by the exact one, impact included, rebounding at
+        restitution times the impact speed. (The floor contact itself is critically damped and would
+        swallow the bounce; it is not active yet during the step the ball arrives.)"""
+        d, g, dt, r = self.d, self.scene.physics.gravity, self.dt, self.ball_radius
+        # time of impact: z0 + vz0 t - g t^2 / 2 = r
+        h = max(z0 - r, 0.0)
+        disc = vz0 * vz0 + 2.0 * g * h
+        t_hit = min(dt, (vz0 + math.sqrt(disc)) / g) if g > 0 else min(dt, h / -vz0)
+        v_up = -self.restitution * (vz0 - g * t_hit)
+        tau = dt - t_hit
+        d.qpos[self._bz] = r + v_up * tau - 0.5 * g * tau * tau
+        d.qvel[self._bvz] = v_up - g * tau
+
+    def _plan_drive(self, due: np.ndarray, window: int) -> None:
+        """Plan the wheel ramps of the robots marked in ``due`` for the next ``window`` steps and hand them to
+        their base servos: the set point (the servo's activation) moves at the planned rate (ctrl) and
+        stops at the target (actrange), integrated by the engine. The bias corrects for the engine moving
+        a body during a step along its heading at the start of the step (it turns the set point by half
+        the step's rotation), so the base follows the commanded twist along the exact arc."""
+        self.drive.plan(due, self._act3, window, self._actrange3, self._ctrl3, self._bias3, self._kv)
+
+    def _reset_drive(self, i: int, body_velocity: np.ndarray | None) -> None:
+        """Robot i's wheels turn at once at the speeds of ``body_velocity`` (teleports, freezing)."""
+        V = np.zeros(3) if body_velocity is None else body_velocity
+        self.drive.cmd[i] = V
+        self.drive.U_target[i] = self.drive.target_speeds(V[None, :], np.array([i]))[0]
+        V = np.einsum("kw,w->k", self.drive.Mpinv[i], self.drive.U_target[i])
+        self._act3[i] = V
+        self.drive.dirty[i] = False
+        due = np.zeros(self.n, dtype=bool)
+        due[i] = True
+        self._plan_drive(due, self.control_steps - self.step_index % self.control_steps)
+
+    def commanded_velocity(self) -> np.ndarray:
+        """(N, 3): each robot's body-velocity set point now (after the wheel limits)."""
+        return self._act3.copy()
+
+    def wheel_speeds(self) -> np.ndarray:
+        """(N, W): each robot's commanded rim speeds now."""
+        return np.einsum("nwk,nk->nw", self.drive.M, self._act3)
+
+    def _apply_wrenches(self) -> None:
+        xf = self.d.xfrc_applied
+        xf[:] = 0.0
+        keep = []
+        for body, wrench, until in self._wrenches:
+            if self.step_index < until:
+                xf[body] += wrench
+                keep.append((body, wrench, until))
+        self._wrenches = keep
+
+    def ball_touches(self) -> list[int]:
+        """Robots whose mouth touches the ball right now (from the engine's contacts)."""
+        d = self.d
+        n = d.ncon
+        if n == 0:
+            return []
+        geoms = d.contact.geom[:n]
+        bg = self.ix.ball_geom
+        rows = (geoms[:, 0] == bg) | (geoms[:, 1] == bg)
+        if not rows.any():
+            return []
+        other = np.where(geoms[rows, 0] == bg, geoms[rows, 1], geoms[rows, 0])
+        robots = self._geom_robot[other]
+        return sorted({int(r) for r in robots if r >= 0})
+
+    # --- states --------------------------------------------------------------------------------------------
+    def robot_positions(self) -> np.ndarray:
+        """(N, 3) view of x, y, yaw of every robot (world frame); valid until the next step, do not modify."""
+        return self._qpos3
+
+    def ball_position(self) -> np.ndarray:
+        """(3,) view of the ball's x, y, z (world frame); valid until the next step, do not modify."""
+        return self.d.qpos[self._bq:self._bq + 3]
+
+    def robot_array(self) -> np.ndarray:
+        """(N, 6): x y yaw vx vy w of every robot, world frame."""
+        out = np.empty((self.n, 6))
+        out[:, :3] = self._qpos3
+        out[:, 3:] = self._qvel3
+        return out
+
+    def ball_array(self) -> np.ndarray:
+        """(6,): x y z vx vy vz of the ball, world frame."""
+        q, v = self.d.qpos, self.d.qvel
+        b, bv = self._bq, self._bv
+        return np.array((q[b], q[b + 1], q[b + 2], v[bv], v[bv + 1], v[bv + 2]))
+
+    def _ball_angular_world(self) -> np.ndarray:
+        w = np.empty(3)
+        mujoco.mju_rotVecQuat(w, self.d.qvel[self._bv + 3:self._bv + 6], self.d.qpos[self._bq + 3:self._bq + 7])
+        return w
+
+    def model_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """Names, poses (M, 7: x y z qw qx qy qz) and twists (M, 6: v, w), world frame; ball last."""
+        n = self.n
+        pose = np.zeros((n + 1, 7))
+        twist = np.zeros((n + 1, 6))
+        q, v = self.d.qpos, self.d.qvel
+        rp = q[self._rq]
+        half = 0.5 * rp[:, 2]
+        pose[:n, 0] = rp[:, 0]
+        pose[:n, 1] = rp[:, 1]
+        pose[:n, 3] = np.cos(half)
+        pose[:n, 6] = np.sin(half)
+        rv = v[self._rv]
+        twist[:n, 0] = rv[:, 0]
+        twist[:n, 1] = rv[:, 1]
+        twist[:n, 5] = rv[:, 2]
+        pose[n] = q[self._bq:self._bq + 7]
+        twist[n, :3] = v[self._bv:self._bv + 3]
+        twist[n, 3:] = self._ball_angular_world()
+        return self.model_names, pose, twist
+
+    def model_states(self) -> dict[str, ModelStateView]:
+        names, pose, twist = self.model_state_arrays()
+        out = {}
+        for k, name in enumerate(names):
+            p, t = pose[k], twist[k]
+            out[name] = ModelStateView(name, *p[:3], _yaw_of(*p[3:]), *p[3:], *t)
+        return out
+
+    def robot_body_velocity(self) -> np.ndarray:
+        """(N, 3): each robot's velocity in its own body frame (vx forward, vy left, w)."""
+        q, v = self.d.qpos[self._rq], self.d.qvel[self._rv]
+        c, s = np.cos(q[:, 2]), np.sin(q[:, 2])
+        return np.stack((c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1], v[:, 2]), axis=1)
+
+    def measured_wheel_speeds(self) -> np.ndarray:
+        """(N, W): rim speeds that follow from each robot's actual motion (what wheel encoders measure)."""
+        return np.einsum("nwk,nk->nw", self.drive.M, self.robot_body_velocity())
+
+    def link_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """Every link: each robot's base and wheels, and the ball. Same layout as model states.
+
+        A wheel's pose is its hub centre, with its axle along the line from the robot centre; its
+        angular velocity adds the wheel's spin (from its rim speed) to the robot's turn."""
+        self.track_wheels = True
+        names, pose, twist = self.model_state_arrays()
+        travel = self.wheel_travel
+        U = self.wheel_speeds()
+        out_names, out_pose, out_twist = [], [], []
+        for i, rname in enumerate(self.robot_names):
+            rm = self.robot_models[i]
+            out_names.append(f"{rname}/base")
+            out_pose.append(pose[i])
+            out_twist.append(twist[i])
+            x, y, _, qw, _, _, qz = pose[i]
+            yaw = 2.0 * math.atan2(qz, qw)
+            r = rm.params.wheel_radius
+            for k, wheel in enumerate(rm.wheels):
+                a = yaw + wheel.alpha
+                cx, cy = x + wheel.distance * math.cos(a), y + wheel.distance * math.sin(a)
+                spin = travel[i, k] / r
+                # orientation: yaw to the wheel's radial direction, then spin about that (local x) axis
+                qa = (math.cos(a / 2), 0.0, 0.0, math.sin(a / 2))
+                qs = (math.cos(spin / 2), math.sin(spin / 2), 0.0, 0.0)
+                quat = np.empty(4)
+                mujoco.mju_mulQuat(quat, np.array(qa), np.array(qs))
+                wz = twist[i, 5]
+                spin_rate = U[i, k] / r
+                vx = twist[i, 0] - wz * (cy - y)
+                vy = twist[i, 1] + wz * (cx - x)
+                out_names.append(f"{rname}/wheel_{k + 1}")
+                out_pose.append(np.array((cx, cy, r, *quat)))
+                out_twist.append(np.array((vx, vy, 0.0, spin_rate * math.cos(a), spin_rate * math.sin(a), wz)))
+        out_names.append(BALL_NAME)
+        out_pose.append(pose[self.n])
+        out_twist.append(twist[self.n])
+        return out_names, np.array(out_pose), np.array(out_twist)
+
+    def snapshot(self) -> Snapshot:
+        """The current world for perception (also updates each robot's 'stuck' flag)."""
+        R = self.robot_array()
+        self._update_stuck(R)
+        F = self.field
+        valid = (np.abs(R[:, 0]) <= F.half_length + 1.0) & (np.abs(R[:, 1]) <= F.half_width + 1.0) & self.enabled
+        return Snapshot(step=self.step_index, robots=R, ball=self.ball_array(), holder=self.ball.holder,
+                        wheels=self.measured_wheel_speeds(), valid=valid, stuck=self.stuck.copy())
+
+    def _update_stuck(self, R: np.ndarray) -> None:
+        """Stuck: commanded to move (> 0.2 m/s) but moving at less than half of it for 0.5 s or more."""
+        V = self._act3
+        cmd = np.hypot(V[:, 0], V[:, 1])
+        slow = (cmd > 0.2) & (np.hypot(R[:, 3], R[:, 4]) < 0.5 * cmd)
+        since = np.where(slow, np.where(self._slow_since < 0, self.step_index, self._slow_since), -1)
+        self._slow_since = since
+        self.stuck = slow & (self.step_index - since >= round(0.5 / self.dt))
+
+    def digest(self) -> str:
+        """Hex SHA-256 of every model's state: equal digests mean the same run, bit for bit."""
+        names, pose, twist = self.model_state_arrays()
+        h = hashlib.sha256()
+        h.update("\n".join(names).encode())
+        h.update(np.ascontiguousarray(pose).tobytes())
+        h.update(np.ascontiguousarray(twist).tobytes())
+        return h.hexdigest()
+
+    # --- the Gazebo-like interface ------------------------------------------------------------------------------
+    def set_model_state(self, name: str, **state: float) -> None:
+        """Place a model and/or set its velocity, world frame. Keys: x y z yaw qw qx qy qz vx vy vz wx wy wz;
+        keys not given keep their current value. Robots are planar: a robot asked to leave the floor or to
+        tilt is put back upright on the floor (and an event says so)."""
+        allowed = {"x", "y", "z", "yaw", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"}
+        unknown = set(state) - allowed
+        if unknown:
+            raise CommandError(f"set_model_state: unknown key(s) {', '.join(sorted(unknown))}; "
+                               f"allowed: {', '.join(sorted(allowed))}")
+        for k, v in state.items():
+            if not _finite(v) or abs(v) > 1e4:
+                raise CommandError(f"set_model_state({name!r}): {k}={v!r} is not a finite value of sensible size")
+        if name == BALL_NAME:
+            self._set_ball(state)
+        else:
+            self._set_robot(self.index_of(name), state)
+        mujoco.mj_forward(self.m, self.d)
+        self._push_ball_out_of_robots()
+
+    def _set_ball(self, s: dict) -> None:
+        q, v = self.d.qpos, self.d.qvel
+        b, bv = self._bq, self._bv
+        if self.ball.holder >= 0 and any(k in s for k in ("x", "y", "z")):
+            self.ball.release("ball_placed")
+        for k, off in (("x", 0), ("y", 1), ("z", 2)):
+            if k in s:
+                q[b + off] = s[k]
+        q[b + 2] = max(q[b + 2], self.ball_radius)
+        if any(k in s for k in ("qw", "qx", "qy", "qz")):
+            quat = np.array([s.get("qw", q[b + 3]), s.get("qx", q[b + 4]), s.get("qy", q[b + 5]), s.get("qz", q[b + 6])])
+            norm = np.linalg.norm(quat)
+            if norm < 1e-9:
+                raise CommandError("set_model_state('ball'): the quaternion has zero length")
+            q[b + 3:b + 7] = quat / norm
+        for k, off in (("vx", 0), ("vy", 1), ("vz", 2)):
+            if k in s:
+                v[bv + off] = s[k]
+        if any(k in s for k in ("wx", "wy", "wz")):
+            w_world = self._ball_angular_world()
+            for k, off in (("wx", 0), ("wy", 1), ("wz", 2)):
+                if k in s:
+                    w_world[off] = s[k]
+            inv = np.empty(4)
+            mujoco.mju_negQuat(inv, q[b + 3:b + 7])
+            w_local = np.empty(3)
+            mujoco.mju_rotVecQuat(w_local, w_world, inv)
+            v[bv + 3:bv + 6] = w_local
+
+    def _set_robot(self, i: int, s: dict) -> None:
+        q, v = self.d.qpos, self.d.qvel
+        qa, va = self._rq[i], self._rv[i]
+        lifted = abs(s.get("z", 0.0)) > 1e-9 or abs(s.get("qx", 0.0)) > 1e-9 or abs(s.get("qy", 0.0)) > 1e-9 \
+            or abs(s.get("vz", 0.0)) > 1e-9 or abs(s.get("wx", 0.0)) > 1e-9 or abs(s.get("wy", 0.0)) > 1e-9
+        if "x" in s:
+            q[qa[0]] = s["x"]
+        if "y" in s:
+            q[qa[1]] = s["y"]
+        if "yaw" in s:
+            q[qa[2]] = s["yaw"]
+        elif "qw" in s or "qz" in s:
+            q[qa[2]] = _yaw_of(s.get("qw", 1.0), s.get("qx", 0.0), s.get("qy", 0.0), s.get("qz", 0.0))
+        for k, dof in (("vx", va[0]), ("vy", va[1]), ("wz", va[2])):
+            if k in s:
+                v[dof] = s[k]
+        if self.ball.holder == i:
+            self.ball.release("robot_placed")
+        # the wheels now turn at the speeds of the new body velocity (no ramp through a teleport)
+        yaw = q[qa[2]]
+        c, sn = math.cos(yaw), math.sin(yaw)
+        body = np.array((c * v[va[0]] + sn * v[va[1]], -sn * v[va[0]] + c * v[va[1]], v[va[2]]))
+        self._reset_drive(i, body)
+        if self.frozen[i]:
+            self._freeze(i, True)
+        if lifted:
+            self.event("robot_upright", i, detail="robots are planar: put back upright on the floor")
+
+    def _push_ball_out_of_robots(self) -> None:
+        """A ball placed inside a robot is moved out in front of the overlap (never left inside)."""
+        q = self.d.qpos
+        b = self._bq
+        bx, by = q[b], q[b + 1]
+        R = q[self._rq]
+        for i in range(self.n):
+            rm = self.robot_models[i]
+            cx_off, cr = rm.ball_collider(self.ball_radius)
+            yaw = R[i, 2]
+            c, s = math.cos(yaw), math.sin(yaw)
+            cx, cy = R[i, 0] + c * cx_off, R[i, 1] + s * cx_off
+            dx, dy = bx - cx, by - cy
+            dist = math.hypot(dx, dy)
+            need = cr + self.ball_radius + 1e-3
+            if dist < need and q[b + 2] < rm.params.height + self.ball_radius:
+                if dist < 1e-9:
+                    dx, dy, dist = c, s, 1.0
+                bx, by = cx + dx / dist * need, cy + dy / dist * need
+                q[b], q[b + 1] = bx, by
+                self.event("ball_moved_out", i, detail="the ball was placed inside a robot; moved out to its surface")
+        mujoco.mj_forward(self.m, self.d)
+
+    def set_link_state(self, name: str, **state: float) -> None:
+        """Links: ``<robot>/base`` is the robot itself and ``ball`` the ball; wheels follow their base."""
+        if name == BALL_NAME:
+            return self.set_model_state(name, **state)
+        robot, _, link = name.rpartition("/")
+        if link == "base":
+            return self.set_model_state(robot, **state)
+        if link.startswith("wheel_") and robot in self.robot_index:
+            raise CommandError(f"set_link_state({name!r}): a wheel follows its robot's base; "
+                               f"set the state of {robot!r} (or {robot}/base) instead")
+        raise CommandError(f"no link named {name!r} (links: <robot>/base, <robot>/wheel_<k>, ball)")
+
+    def apply_wrench(self, name: str, force: Iterable[float] = (0, 0, 0), torque: Iterable[float] = (0, 0, 0),
+                     duration: float = 0.0) -> None:
+        """Apply a world-frame force [N] and torque [N m] at a model's centre for ``duration`` seconds
+        (at least one physics step). On a robot only the planar part acts (x, y force, z torque)."""
+        f, t = list(force), list(torque)
+        if len(f) != 3 or len(t) != 3:
+            raise CommandError("apply_wrench: force and torque must have 3 components each")
+        if not _finite(*f, *t, duration) or duration < 0 or any(abs(x) > MAX_WRENCH for x in f + t):
+            raise CommandError(f"apply_wrench({name!r}): force {f}, torque {t}, duration {duration!r} must be "
+                               f"finite, |value| <= {MAX_WRENCH:g}, duration >= 0")
+        body = self.ix.ball_body if name == BALL_NAME else int(self.ix.robot_body[self.index_of(name)])
+        steps = max(1, round(duration / self.dt))
+        self._wrenches.append((body, np.array(f + t, dtype=float), self.step_index + steps))
+
+    def set_enabled(self, name: str, enabled: bool) -> None:
+        """A disabled robot ignores its commands and stands still (e.g. sent off)."""
+        i = self.index_of(name)
+        self.enabled[i] = enabled
+        self.usable[i] = self.enabled[i] and not self.frozen[i]
+        if not enabled:
+            self.stop_robot(i)
+            if self.ball.holder == i:
+                self.ball.release("robot_disabled")
+
+    def set_frozen(self, name: str, frozen: bool) -> None:
+        """A frozen robot is welded to the floor where it stands: nothing moves it (e.g. a captured target)."""
+        i = self.index_of(name)
+        self.frozen[i] = frozen
+        self.usable[i] = self.enabled[i] and not self.frozen[i]
+        self._freeze(i, frozen)
+        if frozen:
+            self.stop_robot(i)
+            self._reset_drive(i, None)
+            self.d.qvel[self._rv[i]] = 0.0
+
+    def _freeze(self, i: int, on: bool) -> None:
+        eq = self.ix.freeze_eq[i]
+        if on:
+            x, y, yaw = self.d.qpos[self._rq[i]]
+            # weld body1 = robot to body2 = world: anchor at the robot origin, world pose of the robot
+            # expressed as body2's pose in body1's frame (relpos/relquat of the inverse transform)
+            c, s = math.cos(yaw), math.sin(yaw)
+            self.m.eq_data[eq, 0:3] = 0.0
+            self.m.eq_data[eq, 3:6] = (-(c * x + s * y), -(-s * x + c * y), 0.0)
+            self.m.eq_data[eq, 6:10] = (math.cos(-yaw / 2), 0.0, 0.0, math.sin(-yaw / 2))
+            self.m.eq_data[eq, 10] = 1.0
+        self.d.eq_active[eq] = 1 if on else 0

@@ -1,0 +1,269 @@
+"""`Simulation`: one run of a scene, embedded in this process — the Python API of simatch.
+
+It composes the three subsystems on one bus: the simulator (simulation subsystem), the judge and coaches
+(scene subsystem) and each team's nodes (strategy subsystem), and ticks them in lockstep, so the same
+scene and seed give the same run, bit for bit.
+
+    import simatch
+    sim = simatch.Simulation("msl_5v5", seed=1, overrides={"teams.magenta.strategy": "simple"})
+    sim.run(seconds=2.0)
+    sim.model_states()["ball"].x
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Any, Callable, Mapping
+
+from . import msgs
+from .bus import Bus, InProcessBus, LockstepClock, Node, Phase, topics
+from .scene.judges import make_judge
+from .scene.loader import LoadedScene, load_scene
+from .sim.node import PhysicsNode, SimulatorNode
+from .sim.robots import check_models
+from .sim.simulator import CommandError, Simulator
+from .strategy.node import RobotNode
+from .strategy.team import build_team
+
+def event_dict(ev) -> dict:
+    """A GameEvent as the JSON object of ``simatch run --json``."""
+    out: dict[str, Any] = {"t": round(float(ev.stamp), 6), "type": ev.type}
+    if ev.team:
+        out["team"] = ev.team
+    if ev.robot:
+        out["robot"] = int(ev.robot)
+    if ev.x or ev.y:
+        out["x"], out["y"] = round(float(ev.x), 4), round(float(ev.y), 4)
+    if ev.value or ev.limit:
+        out["value"], out["limit"] = float(ev.value), float(ev.limit)
+    if ev.detail:
+        out["detail"] = ev.detail
+    return out
+
+
+class ManualDriver(Node):
+    """Drives a robot taken over by the caller (`Simulation.take_control`): re-sends the last command every
+    control period, as a joystick node would, so the watchdog sees a live robot."""
+
+    phase = Phase.ROBOT
+
+    def __init__(self, team: str, rid: int, period: float):
+        self.team, self.rid, self.period = team, rid, period
+        self.name = f"{team}/{rid}/manual"
+        self.vel = (0.0, 0.0, 0.0)
+        self.dribble = False
+        self.kick = 0.0
+        self.lob = False
+
+    def start(self, ctx) -> None:
+        super().start(ctx)
+        self.pub_vel = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
+        self.pub_action = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD),
+                                            msgs.ActionCmd)
+
+    def send_now(self, now: float) -> None:
+        vx, vy, w = self.vel
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=0, vx=vx, vy=vy, w=w))
+        self.pub_action.put(msgs.new(msgs.ActionCmd, stamp=now, dribble=self.dribble, kick_speed=self.kick,
+                                     kick_type=msgs.ActionCmd.KICK_LOB if self.lob else msgs.ActionCmd.KICK_GROUND))
+        self.kick = 0.0
+
+    def tick(self, now: float) -> None:
+        self.send_now(now)
+
+
+class Simulation:
+    """One run of a scene. ``scene`` is a shipped scene name, a path to a TOML file, or a LoadedScene."""
+
+    def __init__(self, scene: str | LoadedScene = "msl_5v5", seed: int = 0,
+                 overrides: Mapping[str, Any] | None = None, bus: Bus | None = None,
+                 run_name: str = "embedded", teams: str = "embedded"):
+        self.scene = scene if isinstance(scene, LoadedScene) else load_scene(scene, overrides)
+        spec = self.scene.spec
+        self.seed = int(seed)
+        self.bus = bus or InProcessBus(run_name)
+        self.clock = LockstepClock(self.bus, spec.physics.timestep, self.seed)
+        self._events: list = []
+        self._wall = 0.0
+        self._closed = False
+        self._sub_events = self.bus.subscribe(topics.EVENTS, msgs.GameEvent, self._on_event)
+        check_models(self.scene)
+        self.simulator = Simulator(spec, self.seed)
+        self._sensor = self.clock.add(SimulatorNode(self.simulator))
+        self.judge = self.clock.add(make_judge(self.scene, self.simulator))
+        self.robot_nodes: dict[str, RobotNode] = {}
+        self.team_nodes: dict[str, list[Node]] = {}
+        if teams == "embedded":
+            for team in spec.teams:
+                nodes = build_team(self.scene, team, self.seed)
+                self.team_nodes[team] = nodes
+                for node in nodes:
+                    self.clock.add(node)
+                    if isinstance(node, RobotNode):
+                        self.robot_nodes[node.name] = node
+        self._physics = self.clock.add(PhysicsNode(self.simulator, self._sensor))
+        self._manual: dict[str, ManualDriver] = {}
+
+    # --- events ------------------------------------------------------------------------------------------
+    def _on_event(self, ev) -> None:
+        self._events.append(ev)
+
+    @property
+    def events(self) -> list[dict]:
+        """Every event so far, as in ``simatch run --json``."""
+        return [event_dict(ev) for ev in self._events]
+
+    # --- time ----------------------------------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        return self.simulator.dt
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since the start."""
+        return self.simulator.time
+
+    @property
+    def done(self) -> bool:
+        """The judge has ended the run (e.g. the match is over)."""
+        return self.judge.done
+
+    @property
+    def duration(self) -> float | None:
+        return self.judge.duration
+
+    def step(self, n: int = 1) -> None:
+        """Advance by ``n`` physics steps; every node and the judge run in lockstep."""
+        t0 = _time.perf_counter()
+        step = self.clock.step
+        for _ in range(n):
+            step()
+        self._wall += _time.perf_counter() - t0
+
+    def run(self, seconds: float | None = None, until_done: bool = True,
+            progress: Callable[[float], None] | None = None, realtime: bool = False) -> None:
+        """Advance by ``seconds`` of simulated time (default: the run's duration), stopping early when the
+        judge ends the run. ``progress(sim_time)`` is called about ten times a simulated second;
+        ``realtime`` paces the run at wall-clock speed."""
+        if seconds is None:
+            seconds = self.duration
+            if seconds is None:
+                raise ValueError("this scene has no duration: give seconds=...")
+            seconds = max(0.0, seconds - self.time)
+        steps = int(round(seconds / self.dt))
+        chunk = max(1, int(round(0.1 / self.dt)))
+        step = self.clock.step
+        start_wall, start_sim = _time.perf_counter(), self.time
+        t0 = start_wall
+        done = 0
+        while done < steps and not (until_done and self.judge.done):
+            n = min(chunk, steps - done)
+            for _ in range(n):
+                step()
+                if until_done and self.judge.done:
+                    break
+            done += n
+            if progress is not None:
+                progress(self.time)
+            if realtime:
+                ahead = (self.time - start_sim) - (_time.perf_counter() - start_wall)
+                if ahead > 0:
+                    _time.sleep(ahead)
+        self._wall += _time.perf_counter() - t0
+
+    # --- the simulation interface ---------------------------------------------------------------------------
+    def model_states(self):
+        """Every model's state (name -> ModelStateView: pose with yaw, twist), world frame."""
+        return self.simulator.model_states()
+
+    def link_states(self):
+        names, pose, twist = self.simulator.link_state_arrays()
+        return {n: (pose[i], twist[i]) for i, n in enumerate(names)}
+
+    def set_model_state(self, name: str, **state: float) -> None:
+        self.simulator.set_model_state(name, **state)
+        self._sensor.flush_events()
+
+    def set_link_state(self, name: str, **state: float) -> None:
+        self.simulator.set_link_state(name, **state)
+        self._sensor.flush_events()
+
+    def apply_wrench(self, name: str, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0), duration: float = 0.0) -> None:
+        self.simulator.apply_wrench(name, force, torque, duration)
+
+    # --- driving robots by hand -------------------------------------------------------------------------------
+    def take_control(self, name: str) -> None:
+        """Detach ``name`` from its strategy: from now on the caller drives it (send_vel, send_action)."""
+        if name in self._manual:
+            return
+        team, rid = topics.split_robot_name(name)
+        self.simulator.index_of(name)   # raises for an unknown robot
+        node = self.robot_nodes.get(name)
+        if node is not None:
+            node.detached = True
+        driver = ManualDriver(team, rid, self.scene.spec.control.period)
+        self.clock.add(driver)
+        self._manual[name] = driver
+
+    def release_control(self, name: str) -> None:
+        driver = self._manual.pop(name, None)
+        if driver is not None:
+            self.clock.remove(driver)
+        node = self.robot_nodes.get(name)
+        if node is not None:
+            node.detached = False
+
+    def _driver(self, name: str) -> ManualDriver:
+        try:
+            return self._manual[name]
+        except KeyError:
+            raise CommandError(f"{name} is not under manual control: call take_control({name!r}) first") from None
+
+    def send_vel(self, name: str, vx: float, vy: float, w: float) -> None:
+        """Body-frame velocity command for a robot under manual control (applies at once)."""
+        d = self._driver(name)
+        d.vel = (vx, vy, w)
+        d.send_now(self.time)
+
+    def send_action(self, name: str, dribble: bool = False, kick: float = 0.0, lob: bool = False) -> None:
+        """Dribbler on/off and a kick (speed in m/s, ground or lob) for a robot under manual control."""
+        d = self._driver(name)
+        d.dribble, d.kick, d.lob = bool(dribble), float(kick), bool(lob)
+        d.send_now(self.time)
+
+    # --- results -------------------------------------------------------------------------------------------
+    @property
+    def game(self) -> dict | None:
+        """Per-team command, score, stage and clock, where a referee judges a game."""
+        return self.judge.game()
+
+    def state_digest(self) -> str:
+        return self.simulator.digest()
+
+    def result(self) -> dict:
+        """The object ``simatch run --json`` prints."""
+        wall = self._wall
+        return {
+            "scene": self.scene.name,
+            "seed": self.seed,
+            "sim_seconds": round(self.time, 6),
+            "wall_seconds": round(wall, 6),
+            "rtf": round(self.time / wall, 3) if wall > 0 else None,
+            "state_digest": self.state_digest(),
+            "result": self.judge.result(),
+            "events": self.events,
+        }
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self.clock.close()
+        self._sub_events.close()
+        self.bus.close()
+
+    def __enter__(self) -> "Simulation":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,34 @@
+"""The strategy subsystem: per robot a WorldModel and a Control (a `RobotStrategy`), per team a StrategyPub.
+
+Strategies are plug-ins named in the scene (``teams.<team>.strategy``): a shipped name, a
+``"package.module:Class"``, ``"none"`` (the team's robots get no node and stand still) or ``"external"``
+(the team runs in its own process and connects over the bus).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..plugins import PluginError, load
+from .base import Command, PassIntent, RobotContext, RobotStrategy, TeamContext, TeamStrategy
+from .worldmodel import WorldModel
+
+SHIPPED = {
+    "constant": "simatch.strategy.scripted:ConstantVelocity",
+    "startpose": "simatch.strategy.scripted:StartPose",
+}
+
+#: strategies that create no node in the run that loads the scene
+NO_NODES = ("none", "external")
+
+
+def strategy_class(spec: str) -> type:
+    cls = load(spec, SHIPPED, "strategy")
+    if not (isinstance(cls, type) and issubclass(cls, (RobotStrategy, TeamStrategy))):
+        raise PluginError(f"strategy {spec!r} is neither a simatch.strategy.RobotStrategy nor a TeamStrategy "
+                          f"subclass")
+    return cls
+
+
+__all__ = ["Command", "NO_NODES", "PassIntent", "RobotContext", "RobotStrategy", "SHIPPED", "TeamContext",
+           "TeamStrategy", "WorldModel", "strategy_class"]

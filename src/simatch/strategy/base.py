@@ -1,0 +1,130 @@
+"""The strategy plug-in API: what a team writes to play in simatch.
+
+A strategy is named in the scene as ``teams.<team>.strategy = "package.module:Class"`` (or a shipped
+name). ``Class`` is either
+
+* a `RobotStrategy` subclass: one instance per robot (the robot's Control), all of the same class; or
+* a `TeamStrategy` subclass: one instance per team, which makes each robot's `RobotStrategy`
+  (e.g. a different class for the goalkeeper).
+
+Every control period, each robot's `RobotStrategy.decide` gets the robot's `WorldModel` and returns a
+`Command`: a body-frame velocity, or a target pose for the robot's low-level controller, plus the
+dribbler, the kicker and what the robot tells its team (role, action, pass). A strategy sees the world
+only through its robot's topics, so the same class runs embedded or in its own process over Zenoh.
+
+Parameters: a class may declare ``Params`` (a pydantic model); ``teams.<team>.strategy_params`` is
+checked against it and handed over as ``ctx.params``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Optional
+
+import numpy as np
+from pydantic import BaseModel
+
+from ..field import FieldGeometry
+from .worldmodel import WorldModel
+
+
+@dataclass
+class PassIntent:
+    catch_id: int
+    pass_x: float
+    pass_y: float
+    catch_x: float
+    catch_y: float
+    kicked: bool = False
+    dynamic: bool = True
+    static: bool = False
+
+
+@dataclass
+class Command:
+    """One robot's decision for one control period.
+
+    Motion: if ``target`` is None the robot drives at the body-frame velocity (vx, vy, w); otherwise its
+    low-level controller drives it to ``target`` (team frame) and turns it to ``target_ori`` (if given),
+    within ``max_vel`` and ``max_w``.
+    """
+
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+    target: Optional[tuple[float, float]] = None
+    target_ori: Optional[float] = None
+    target_vel: tuple[float, float] = (0.0, 0.0)
+    max_vel: float = 3.0
+    max_w: float = 6.0
+    dribble: bool = False
+    kick_speed: float = 0.0
+    lob: bool = False
+    # what the robot tells its team (StrategyInfo)
+    role: int = 0
+    action: int = 0
+    intent: Optional[tuple[float, float]] = None
+    pass_intent: Optional[PassIntent] = None
+    target_num: tuple[int, ...] = ()
+    user: tuple[float, ...] = ()
+
+    @classmethod
+    def stop(cls, **info: Any) -> "Command":
+        return cls(**info)
+
+
+@dataclass
+class RobotContext:
+    """What a robot's strategy is given when it is created."""
+
+    team: str
+    id: int
+    goalkeeper: Optional[int]
+    ids: list[int]                       # every robot id of the team
+    field: FieldGeometry                 # in the team frame
+    start: tuple[float, float, float]    # start pose, team frame
+    control_period: float                # [s]
+    params: Any                          # validated strategy_params (a pydantic model or a dict)
+    rng: np.random.Generator = field(repr=False, default_factory=np.random.default_rng)
+
+    @property
+    def is_goalkeeper(self) -> bool:
+        return self.goalkeeper is not None and self.id == self.goalkeeper
+
+
+@dataclass
+class TeamContext:
+    team: str
+    ids: list[int]
+    goalkeeper: Optional[int]
+    field: FieldGeometry
+    starts: dict[int, tuple[float, float, float]]
+    control_period: float
+    params: Any
+
+
+class RobotStrategy:
+    """The Control of one robot. Override `decide`."""
+
+    Params: ClassVar[Optional[type[BaseModel]]] = None
+
+    def __init__(self, ctx: RobotContext):
+        self.ctx = ctx
+
+    def decide(self, world: WorldModel) -> Command:
+        raise NotImplementedError
+
+
+class TeamStrategy:
+    """A team: makes its robots' strategies. Override `make_robot` or set ``robot_class``."""
+
+    Params: ClassVar[Optional[type[BaseModel]]] = None
+    robot_class: ClassVar[Optional[type[RobotStrategy]]] = None
+
+    def __init__(self, ctx: TeamContext):
+        self.ctx = ctx
+
+    def make_robot(self, ctx: RobotContext) -> RobotStrategy:
+        if self.robot_class is None:
+            raise NotImplementedError(f"{type(self).__name__} must set robot_class or override make_robot")
+        return self.robot_class(ctx)

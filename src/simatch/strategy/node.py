@@ -1,0 +1,158 @@
+"""The strategy subsystem on the bus: one RobotNode per robot (WorldModel + Control) and one StrategyPub
+per team, written against the bus interface only, so the same nodes run embedded or in other processes.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import traceback
+
+import numpy as np
+
+from .. import msgs
+from ..bus import Node, NodeContext, Phase, topics
+from .base import Command, RobotStrategy
+from .hwcontroller import velocity_towards
+from .worldmodel import WorldModel
+
+log = logging.getLogger(__name__)
+_EMPTY_I32 = np.zeros(0, dtype=np.int32)
+_EMPTY_F64 = np.zeros(0)
+
+
+class RobotNode(Node):
+    """One robot's WorldModel and Control: perception in, VelCmd/ActionCmd/StrategyInfo out."""
+
+    phase = Phase.ROBOT
+
+    def __init__(self, team: str, rid: int, strategy: RobotStrategy, world: WorldModel, period: float):
+        self.team, self.rid = team, rid
+        self.name = f"{team}/{rid}"
+        self.strategy = strategy
+        self.world = world
+        self.period = period
+        self.errors = 0
+        self.detached = False
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        bus, t, r, w = ctx.bus, self.team, self.rid, self.world
+        self.subs = [
+            bus.subscribe(topics.robot_topic(t, r, topics.OMNI_VISION), msgs.OmniVisionInfo, w.on_vision),
+            bus.subscribe(topics.team_topic(t, topics.TEAM_STRATEGY), msgs.TeamStrategy, w.on_team),
+            bus.subscribe(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, w.on_coach),
+        ]
+        self.pub_vel = bus.publisher(topics.robot_topic(t, r, topics.VEL_CMD), msgs.VelCmd)
+        self.pub_action = bus.publisher(topics.robot_topic(t, r, topics.ACTION_CMD), msgs.ActionCmd)
+        self.pub_info = bus.publisher(topics.robot_topic(t, r, topics.STRATEGY_INFO), msgs.StrategyInfo)
+        self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+
+    def tick(self, now: float) -> None:
+        world = self.world
+        if self.detached or not world.ready:
+            return
+        try:
+            cmd = self.strategy.decide(world)
+            if not isinstance(cmd, Command):
+                raise TypeError(f"decide() returned {type(cmd).__name__}, not a Command")
+            vx, vy, w = self._velocity(cmd)
+        except Exception as exc:   # a strategy bug must not stop the match: this robot stands still
+            self._error(now, exc)
+            cmd, (vx, vy, w) = Command(), (0.0, 0.0, 0.0)
+        self.publish(now, world.tick, cmd, vx, vy, w)
+
+    def _velocity(self, cmd: Command) -> tuple[float, float, float]:
+        coach = self.world.coach
+        max_vel, max_w = cmd.max_vel, cmd.max_w
+        if coach is not None and coach.max_vel > 0:
+            max_vel = min(max_vel, coach.max_vel)
+        if coach is not None and coach.max_w > 0:
+            max_w = min(max_w, coach.max_w)
+        if cmd.target is None and cmd.target_ori is None:
+            return cmd.vx, cmd.vy, cmd.w
+        me = self.world.me
+        vx, vy, w = velocity_towards(me.x, me.y, me.yaw, cmd, max_vel, max_w)
+        if cmd.target is None:
+            vx, vy = cmd.vx, cmd.vy
+        if cmd.target_ori is None:
+            w = cmd.w
+        return vx, vy, w
+
+    def publish(self, now: float, tick: int, cmd: Command, vx: float, vy: float, w: float) -> None:
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=tick, vx=float(vx), vy=float(vy), w=float(w)))
+        A = msgs.ActionCmd
+        tx, ty = cmd.target if cmd.target is not None else (0.0, 0.0)
+        self.pub_action.put(A(
+            stamp=now, tick=tick, move_action=A.MOVE if cmd.target is not None else A.NO_ACTION,
+            rotate_action=A.MOVE if cmd.target_ori is not None else A.NO_ACTION, rotate_mode=A.ROTATE_SHORTEST,
+            target_x=float(tx), target_y=float(ty), target_ori=float(cmd.target_ori or 0.0),
+            target_vx=float(cmd.target_vel[0]), target_vy=float(cmd.target_vel[1]), max_vel=float(cmd.max_vel),
+            max_w=float(cmd.max_w), dribble=bool(cmd.dribble), kick_speed=float(cmd.kick_speed),
+            kick_type=A.KICK_LOB if cmd.lob else A.KICK_GROUND))
+        if self.pub_info.active:
+            self.pub_info.put(self.strategy_info(now, tick, cmd))
+
+    def strategy_info(self, now: float, tick: int, cmd: Command):
+        p = cmd.pass_intent
+        pass_cmd = msgs.PassCommands(
+            pass_id=self.rid if p else 0, catch_id=p.catch_id if p else 0, pass_x=p.pass_x if p else 0.0,
+            pass_y=p.pass_y if p else 0.0, catch_x=p.catch_x if p else 0.0, catch_y=p.catch_y if p else 0.0,
+            is_passout=bool(p and p.kicked), is_dynamic_pass=bool(p and p.dynamic),
+            is_static_pass=bool(p and p.static), is_valid=p is not None)
+        ix, iy = cmd.intent if cmd.intent is not None else (cmd.target if cmd.target is not None else (math.nan, math.nan))
+        return msgs.StrategyInfo(
+            stamp=now, tick=tick, agent_id=self.rid, role=int(cmd.role), action=int(cmd.action),
+            is_dribble=bool(self._holding()), is_kickoff=False, role_time=0.0, target_x=float(ix), target_y=float(iy),
+            target_num=np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32,
+            static_pass_num=0, static_catch_num=0, pass_cmd=pass_cmd,
+            user=np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64)
+
+    def _holding(self) -> bool:
+        try:
+            return bool(self.world.me.holding_ball)
+        except LookupError:
+            return False
+
+    def _error(self, now: float, exc: Exception) -> None:
+        self.errors += 1
+        if self.errors == 1 or self.errors % 100 == 0:
+            where = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
+            detail = f"{type(exc).__name__}: {exc}" + (f" ({where.filename}:{where.lineno})" if where else "")
+            log.warning("strategy of %s failed (%d errors so far): %s", self.name, self.errors, detail)
+            self.pub_events.put(msgs.GameEvent(stamp=now, type="strategy_error", team=self.team, robot=self.rid,
+                                               x=0.0, y=0.0, value=float(self.errors), limit=0.0, detail=detail))
+
+    def stop(self) -> None:
+        for sub in getattr(self, "subs", []):
+            sub.close()
+
+
+class StrategyPub(Node):
+    """Gathers the StrategyInfo of a team's robots and publishes the fused team picture, dropping entries
+    older than ``stale_after`` (a robot that went silent disappears from its teammates' picture)."""
+
+    phase = Phase.TEAM
+
+    def __init__(self, team: str, period: float, stale_after: float):
+        self.team = team
+        self.name = f"{team}/strategy_pub"
+        self.period = period
+        self.stale_after = stale_after
+        self.latest: dict[int, object] = {}
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        self.sub = ctx.bus.subscribe(topics.team_topic(self.team, f"*/{topics.STRATEGY_INFO}"), msgs.StrategyInfo,
+                                     self._on_info)
+        self.pub = ctx.bus.publisher(topics.team_topic(self.team, topics.TEAM_STRATEGY), msgs.TeamStrategy)
+
+    def _on_info(self, msg) -> None:
+        self.latest[msg.agent_id] = msg
+
+    def tick(self, now: float) -> None:
+        fresh = [m for _, m in sorted(self.latest.items()) if now - m.stamp <= self.stale_after + 1e-9]
+        self.pub.put(msgs.TeamStrategy(stamp=now, tick=0, strategies=fresh))
+
+    def stop(self) -> None:
+        self.sub.close()

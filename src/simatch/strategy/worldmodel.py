@@ -1,0 +1,135 @@
+"""The WorldModel of one robot: everything it knows, in its team frame (its team attacks +x).
+
+It is fed only by topics: its own perception (OmniVisionInfo), its team's fused strategy picture
+(TeamStrategy, from StrategyPub) and the game command (CoachInfo on receive_from_coach). A strategy reads
+it and never touches the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..field import Area, FieldGeometry
+
+
+def team_field(field: FieldGeometry, sign: int) -> FieldGeometry:
+    """The field as a team sees it: lines and goals are symmetric; named areas are turned with the frame."""
+    if sign > 0 or not field.areas:
+        return field
+    from dataclasses import replace
+
+    areas = tuple(Area(a.name, -a.x1, -a.y1, -a.x0, -a.y0) for a in field.areas)
+    return replace(field, areas=areas)
+
+
+@dataclass
+class Ball:
+    """The ball as this robot knows it (team frame)."""
+
+    x: float
+    y: float
+    z: float
+    vx: float
+    vy: float
+    vz: float
+    angle: float          # bearing from my kicker axis [rad]
+    distance: float       # from my centre [m]
+    seen: bool            # seen in the latest observation (else: last known position)
+    age: float            # seconds since it was last seen
+
+
+class WorldModel:
+    def __init__(self, team: str, rid: int, sign: int, field: FieldGeometry, goalkeeper: int | None):
+        self.team = team
+        self.id = rid
+        self.sign = sign
+        self.field = team_field(field, sign)
+        self.goalkeeper = goalkeeper
+        self.vision = None              # latest OmniVisionInfo
+        self.coach = None               # latest CoachInfo
+        self.strategies: dict = {}      # teammate id -> latest StrategyInfo (from the team picture)
+        self.time = 0.0
+        self.tick = 0
+        self._ball: Ball | None = None
+        self._last_seen = -math.inf
+
+    # --- inputs (bus callbacks) -------------------------------------------------------------------------
+    def on_vision(self, msg) -> None:
+        self.vision = msg
+        self.time = msg.stamp
+        self.tick = msg.tick
+        b = msg.ball
+        if b.pos_known:
+            self._last_seen = msg.stamp
+            self._ball = Ball(b.x, b.y, b.z, b.vx, b.vy, b.vz, b.angle, b.distance, True, 0.0)
+        elif self._ball is not None:
+            me = self.me
+            dx, dy = self._ball.x - me.x, self._ball.y - me.y
+            self._ball = Ball(self._ball.x, self._ball.y, self._ball.z, 0.0, 0.0, 0.0,
+                              math.remainder(math.atan2(dy, dx) - me.yaw, 2 * math.pi), math.hypot(dx, dy),
+                              False, msg.stamp - self._last_seen)
+
+    def on_team(self, msg) -> None:
+        self.strategies = {s.agent_id: s for s in msg.strategies}
+
+    def on_coach(self, msg) -> None:
+        self.coach = msg
+
+    # --- what a strategy reads ---------------------------------------------------------------------------
+    @property
+    def ready(self) -> bool:
+        return self.vision is not None
+
+    @property
+    def me(self):
+        """My RobotInfo (team frame)."""
+        for r in self.vision.robots:
+            if r.id == self.id:
+                return r
+        raise LookupError(f"robot {self.id} is missing from its own perception")
+
+    @property
+    def teammates(self) -> list:
+        """RobotInfo of the other robots of my team."""
+        return [r for r in self.vision.robots if r.id != self.id]
+
+    @property
+    def robots(self) -> list:
+        """RobotInfo of my whole team, me included."""
+        return list(self.vision.robots)
+
+    @property
+    def ball(self) -> Ball | None:
+        return self._ball
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """(K, 4): x, y, vx, vy of every other robot I see (team frame)."""
+        o = self.vision.obstacles
+        return np.stack((o.x, o.y, o.vx, o.vy), axis=1) if len(o.x) else np.zeros((0, 4))
+
+    @property
+    def opponents(self) -> np.ndarray:
+        """Obstacles that are not one of my teammates (farther than 0.1 m from every teammate)."""
+        obs = self.obstacles
+        mates = self.teammates
+        if not len(obs) or not mates:
+            return obs
+        mx = np.array([[r.x, r.y] for r in mates])
+        d = np.hypot(obs[:, None, 0] - mx[None, :, 0], obs[:, None, 1] - mx[None, :, 1])
+        return obs[d.min(axis=1) > 0.1]
+
+    @property
+    def match_mode(self) -> int:
+        return self.coach.match_mode if self.coach is not None else 0
+
+    @property
+    def match_type(self) -> int:
+        return self.coach.match_type if self.coach is not None else 0
+
+    @property
+    def is_goalkeeper(self) -> bool:
+        return self.goalkeeper is not None and self.id == self.goalkeeper

@@ -1,0 +1,46 @@
+"""Shared fixtures: every test talks to the real parts (real MuJoCo, real buses, real processes)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import simatch
+from simatch.scene.loader import load_scene
+
+
+def empty_field(**overrides):
+    """The msl_5v5 world with every robot idle (no strategies) unless overrides say otherwise."""
+    base = {"teams.cyan.strategy": "none", "teams.magenta.strategy": "none"}
+    base.update(overrides)
+    return base
+
+
+@pytest.fixture
+def field_sim():
+    """A Simulation of the msl_5v5 world with idle robots; the test drives what it needs."""
+    sims = []
+
+    def make(seed: int = 0, **overrides):
+        sim = simatch.Simulation("msl_5v5", seed=seed, overrides=empty_field(**overrides))
+        sims.append(sim)
+        return sim
+
+    yield make
+    for sim in sims:
+        sim.close()
+
+
+def park_everyone_but(sim, keep: list[str]):
+    """Move every robot not in ``keep`` to the side line, out of the way."""
+    x = -10.0
+    for name in sim.simulator.robot_names:
+        if name not in keep:
+            sim.set_model_state(name, x=x, y=-7.8, yaw=0.0, vx=0.0, vy=0.0, wz=0.0)
+            x += 0.8
+
+
+def heading(vx: float, vy: float) -> float:
+    return math.atan2(vy, vx)
