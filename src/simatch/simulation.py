@@ -17,6 +17,7 @@ from typing import Any, Callable, Mapping
 
 from . import msgs
 from .bus import Bus, InProcessBus, LockstepClock, Node, Phase, topics
+from .scene.coach import Coach
 from .scene.judges import make_judge
 from .scene.loader import LoadedScene, load_scene
 from .sim.node import PhysicsNode, SimulatorNode
@@ -91,6 +92,11 @@ class Simulation:
         self.simulator = Simulator(spec, self.seed)
         self._sensor = self.clock.add(SimulatorNode(self.simulator))
         self.judge = self.clock.add(make_judge(self.scene, self.simulator))
+        #: per-team coaches, where no referee gives the commands (``sim.coaches["cyan"].start_play()``)
+        self.coaches: dict[str, Coach] = {}
+        if not self.judge.gives_commands:
+            for team in spec.teams:
+                self.coaches[team] = self.clock.add(Coach(team, spec.control.period))
         self.robot_nodes: dict[str, RobotNode] = {}
         self.team_nodes: dict[str, list[Node]] = {}
         if teams == "embedded":

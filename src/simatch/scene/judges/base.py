@@ -33,6 +33,8 @@ class Judge(Node):
     phase = Phase.JUDGE
     Params: ClassVar[type[BaseModel]] = NoParams
     name = "judge"
+    #: the judge sends the game commands itself (a referee); otherwise each team gets a Coach
+    gives_commands: ClassVar[bool] = False
 
     def __init__(self, scene: LoadedScene, params: Any, world: WorldControl):
         self.scene = scene
