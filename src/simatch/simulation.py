@@ -109,6 +109,9 @@ class Simulation:
                         self.robot_nodes[node.name] = node
         self._physics = self.clock.add(PhysicsNode(self.simulator, self._sensor))
         self._manual: dict[str, ManualDriver] = {}
+        #: pace `run` at this many simulated seconds per wall second (None: as fast as possible); may be
+        #: changed while running (e.g. a live viewer asks for real time while it is open)
+        self.pace: float | None = None
 
     # --- events ------------------------------------------------------------------------------------------
     def _on_event(self, ev) -> None:
@@ -150,7 +153,7 @@ class Simulation:
             progress: Callable[[float], None] | None = None, realtime: bool = False) -> None:
         """Advance by ``seconds`` of simulated time (default: the run's duration), stopping early when the
         judge ends the run. ``progress(sim_time)`` is called about ten times a simulated second;
-        ``realtime`` paces the run at wall-clock speed."""
+        ``realtime`` paces the run at wall-clock speed (as does ``pace``, which may change during the run)."""
         if seconds is None:
             seconds = self.duration
             if seconds is None:
@@ -159,8 +162,8 @@ class Simulation:
         steps = int(round(seconds / self.dt))
         chunk = max(1, int(round(0.1 / self.dt)))
         step = self.clock.step
-        start_wall, start_sim = _time.perf_counter(), self.time
-        t0 = start_wall
+        t0 = _time.perf_counter()
+        anchor: tuple[float, float, float] | None = None      # (wall, sim, pace) when pacing began
         done = 0
         while done < steps and not (until_done and self.judge.done):
             n = min(chunk, steps - done)
@@ -171,10 +174,16 @@ class Simulation:
             done += n
             if progress is not None:
                 progress(self.time)
-            if realtime:
-                ahead = (self.time - start_sim) - (_time.perf_counter() - start_wall)
+            pace = 1.0 if realtime else self.pace
+            if pace:
+                now = _time.perf_counter()
+                if anchor is None or anchor[2] != pace:
+                    anchor = (now, self.time, pace)
+                ahead = (self.time - anchor[1]) / pace - (now - anchor[0])
                 if ahead > 0:
                     _time.sleep(ahead)
+            else:
+                anchor = None
         self._wall += _time.perf_counter() - t0
 
     # --- the simulation interface ---------------------------------------------------------------------------

@@ -25,9 +25,12 @@ class ConstantVelocity(RobotStrategy):
 
 
 class StartPose(RobotStrategy):
-    """Drives each robot back to its start pose and holds it there. It exercises the plumbing (perception
-    in, commands out) and is not a team strategy: it never plays the ball."""
+    """Drives each robot back to its start pose and holds it there, and stands still on STOP. It exercises
+    the plumbing (perception and game commands in, commands out) and is not a team strategy: it never
+    plays the ball."""
 
     def decide(self, world) -> Command:
+        if world.match_mode == 0:          # STOPROBOT
+            return Command()
         x, y, yaw = self.ctx.start
         return Command(target=(x, y), target_ori=yaw, max_vel=2.0, max_w=3.0)
