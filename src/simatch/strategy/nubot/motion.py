@@ -1,0 +1,129 @@
+"""From "go there, face that way" to a body-frame velocity command.
+
+* Path: sub-target obstacle avoidance (avoidance.py) around every other robot.
+* Speed: as fast as allowed while the robot can still brake to the wanted end speed at the target
+  (v = sqrt(v_end^2 + 2 a d)), proportional in the last centimetres so that it settles without dithering.
+* No charging: the velocity towards each opponent nearby is capped so that the robot could slow down to
+  a gentle contact speed before touching it (the MSL rules let robots touch, not ram).
+* Heading: the same braking law on the angle error, within the turn-rate limit.
+* The world (team-frame) velocity is turned into the body frame at the middle of the control period, so
+  that a robot that turns while it drives keeps its course.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .avoidance import sub_target
+from .geometry import wrap
+from .observation import Observation
+from .params import NubotParams
+
+#: within this distance the position law is proportional (gain POSITION_GAIN)
+POSITION_GAIN = 3.0
+#: the braking assumed when closing in on an opponent (below the drive's, which also has to turn) [m/s^2]
+CHARGE_BRAKING = 2.5
+HEADING_GAIN = 5.0
+
+
+class Motion:
+    def __init__(self, params: NubotParams, period: float, field):
+        self.p = params
+        self.period = period
+        self.field = field
+        self.side = 0                # side of the last avoidance, for its hysteresis
+        self.clearance = 2.0 * params.robot_radius + 0.3           # robot to robot centres
+        self.ball_clearance = params.robot_radius + 0.11 + 0.12      # robot centre to ball centre
+        self.xlim = field.half_length + 0.9
+        self.ylim = field.half_width + 0.9
+
+    # -----------------------------------------------------------------------------------------------------
+    def limits(self, obs: Observation, vmax: float, wmax: float) -> tuple[float, float]:
+        """The speed limits the coach allows (CoachInfo max_vel / max_w) applied to ours."""
+        c = obs.coach
+        if c is not None:
+            if c.max_vel > 0.0:
+                vmax = min(vmax, c.max_vel)
+            if c.max_w > 0.0:
+                wmax = min(wmax, c.max_w)
+        return vmax, wmax
+
+    def obstacles(self, obs: Observation, ball: bool = False) -> list[tuple[float, float, float]]:
+        """Every other robot (and the ball if asked) with the clearance to keep from it."""
+        me = obs.me
+        c = self.clearance
+        out = [(o[0], o[1], c) for o in obs.opps]
+        for m in obs.mates:
+            if m is not me:
+                out.append((m.x, m.y, c))
+        if ball:
+            out.append((obs.bx, obs.by, self.ball_clearance))
+        return out
+
+    def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
+           avoid: bool = True, ball_obstacle: bool = False, end_speed: float = 0.0,
+           feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
+           gentle: bool = True) -> tuple[float, float, float]:
+        """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0)."""
+        me = obs.me
+        vmax, wmax = self.limits(obs, vmax, wmax)
+        # keep targets on the floor, inside the boards
+        tx = min(max(tx, -self.xlim), self.xlim)
+        ty = min(max(ty, -self.ylim), self.ylim)
+        dx, dy = tx - me.x, ty - me.y
+        d = math.hypot(dx, dy)
+        vx = vy = 0.0
+        if d > 0.01 or end_speed > 0.0:
+            sx, sy = tx, ty
+            if avoid:
+                sx, sy, self.side = sub_target(me.x, me.y, tx, ty, self.obstacles(obs, ball_obstacle), self.side)
+            a = self.p.braking if brake is None else brake
+            speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
+            ex, ey = sx - me.x, sy - me.y
+            e = math.hypot(ex, ey)
+            if e > 1e-9:
+                vx, vy = ex / e * speed, ey / e * speed
+        vx += feed[0]
+        vy += feed[1]
+        n = math.hypot(vx, vy)
+        if n > vmax:
+            vx, vy = vx / n * vmax, vy / n * vmax
+        if gentle:
+            vx, vy = self.no_charging(obs, vx, vy)
+        w = 0.0 if face is None else self.turn_rate(wrap(face - me.yaw), wmax)
+        return self.body(me.yaw, vx, vy, w)
+
+    def turn_rate(self, err: float, wmax: float) -> float:
+        a = abs(err)
+        w = min(wmax, math.sqrt(2.0 * self.p.turn_acceleration * a), HEADING_GAIN * a)
+        return w if err >= 0.0 else -w
+
+    def no_charging(self, obs: Observation, vx: float, vy: float) -> tuple[float, float]:
+        """Cap the velocity towards every opponent so that the robot could still slow to the contact speed
+        before it touches it. The drive changes velocity slowly (wheel acceleration limits), so a robot
+        already closing in too fast is commanded to back off along that line, which brakes it hardest."""
+        me = obs.me
+        touch = 2.0 * self.p.robot_radius + 0.05
+        vc = self.p.contact_speed
+        a = CHARGE_BRAKING
+        for ox, oy, _, _ in obs.opps:
+            rx, ry = ox - me.x, oy - me.y
+            d = math.hypot(rx, ry)
+            if d > 3.5 or d < 1e-6:
+                continue
+            nx, ny = rx / d, ry / d
+            allowed = math.sqrt(vc * vc + 2.0 * a * max(0.0, d - touch))
+            now = me.vx * nx + me.vy * ny
+            limit = allowed if now <= allowed else max(-1.5, allowed - 2.0 * (now - allowed))
+            closing = vx * nx + vy * ny
+            if closing > limit:
+                cut = closing - limit
+                vx -= cut * nx
+                vy -= cut * ny
+        return vx, vy
+
+    def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:
+        """Team-frame velocity to the body frame, at the heading the robot will have half a period on."""
+        h = yaw + 0.5 * w * self.period
+        c, s = math.cos(h), math.sin(h)
+        return (c * vx + s * vy, -s * vx + c * vy, w)

@@ -1,0 +1,261 @@
+"""The team picture: what every robot of the team concludes from the same facts at one control tick.
+
+Who has the ball or will get it first (interception times of every robot, ours and theirs, on the ball's
+predicted path), whether we attack or defend, and the roles: the active robot is the one that reaches the
+ball first (the one holding it, or the receiver of a pass under way), the others take the remaining roles
+(passive, assistant, midfield, or a set-piece slot) by the assignment that minimises the total distance to
+the roles' points. Both choices have hysteresis against the roles the robots announced last tick, so roles
+do not flicker when two robots are nearly equal.
+
+Each robot computes the picture from its own WorldModel; the result depends only on its inputs, so robots
+that see the same facts agree, and a team whose robots run in one process may share one computation per
+tick (see `TeamMemo`) without any robot deciding on anything but its own observations.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from ..roles import Role
+from .ballpath import BallPath, intercepts
+from .gameflow import GameFlow, Phase
+from .geometry import wrap
+from .observation import Observation
+from .params import NubotParams
+from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
+from .setpieces import formation, spread
+
+BALL_RADIUS = 0.11
+#: an opponent whose centre is this close to the ball controls it [m]
+OPP_CONTROL = 0.45
+#: restart roles are kept once START is given
+RESTART_HYSTERESIS = 50.0
+
+
+class Picture:
+    __slots__ = ("path", "phase", "holder", "goalie_plays", "opp_holds", "attacking", "catch", "their_t",
+                 "their_xy", "roles", "slots", "receiver", "pass_info", "active")
+
+    def __init__(self):
+        self.holder = 0               # our robot holding the ball (0: none)
+        self.goalie_plays = False     # the ball is our goalkeeper's to play
+        self.opp_holds = False
+        self.attacking = False
+        self.catch: dict[int, tuple[float, float, float]] = {}   # id -> (time, x, y) interception
+        self.their_t = math.inf
+        self.their_xy = (0.0, 0.0)
+        self.roles: dict[int, int] = {}
+        self.slots: dict[int, tuple[float, float, float, float]] = {}   # id -> (x, y, face x, face y)
+        self.receiver = 0             # robot a pass is (to be) played to
+        self.pass_info = None
+        self.active = 0
+
+
+class TeamMemo:
+    """The last picture computed in this process for a team, keyed by every input it depends on: robots
+    of the team that see exactly the same facts at the same tick reuse it instead of recomputing it."""
+
+    def __init__(self):
+        self.key = None
+        self.picture = None
+
+
+def picture_key(obs: Observation, flow: GameFlow) -> tuple:
+    return (obs.tick, obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype,
+            tuple(m.key() for m in obs.mates), tuple(obs.opps), flow.key(),
+            tuple((m.id, m.pass_info.catch_id, m.pass_info.catch_x, m.pass_info.catch_y, m.pass_info.is_passout)
+                  for m in obs.mates if m.pass_info is not None))
+
+
+def assign(robots: list, slots: list[tuple], hysteresis: float) -> dict[int, int]:
+    """Robot id -> slot index, minimising the total distance, each robot's announced role earning
+    ``hysteresis`` metres when it keeps it. Slots beyond the number of robots stay empty (they are listed
+    by priority)."""
+    n = len(robots)
+    if n == 0:
+        return {}
+    slots = slots[:n] if len(slots) >= n else slots
+    cost = [[math.hypot(m.x - s[1], m.y - s[2]) - (hysteresis if m.role == s[0] else 0.0) for s in slots]
+            for m in robots]
+    best, best_c = None, math.inf
+    k = min(n, len(slots))
+    for perm in itertools.permutations(range(len(slots)), k):
+        c = 0.0
+        for i in range(k):
+            c += cost[i][perm[i]]
+        if c < best_c - 1e-9:
+            best, best_c = perm, c
+    return {robots[i].id: best[i] for i in range(k)}
+
+
+class Analyst:
+    """Computes team pictures for one team (field, parameters and the receiving-spot grid are fixed)."""
+
+    def __init__(self, params: NubotParams, areas: Areas, spots: tuple[np.ndarray, np.ndarray]):
+        self.p = params
+        self.areas = areas
+        self.spots = spots
+        self.xlim = areas.L2 + 1.3
+        self.ylim = areas.W2 + 1.3
+
+    def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
+        p = self.p
+        pic = Picture()
+        pic.phase = flow.phase
+        pic.path = path = BallPath(obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, p.ball_deceleration,
+                                   BALL_RADIUS, self.xlim, self.ylim)
+        mates = [m for m in obs.mates if m.valid]
+        for m in mates:
+            if m.holding:
+                pic.holder = m.id
+        opps = obs.opps
+        if pic.holder == 0:
+            pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
+        if mates:
+            turn = np.array([abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)) for m in mates]) / p.max_turn
+            t, ix, iy = intercepts(path, np.array([m.x for m in mates]), np.array([m.y for m in mates]),
+                                   np.array([m.vx for m in mates]), np.array([m.vy for m in mates]), p.max_speed,
+                                   p.acceleration, 0.7 * turn)
+            tl, xl, yl = t.tolist(), ix.tolist(), iy.tolist()
+            for k, m in enumerate(mates):
+                pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else (tl[k], xl[k], yl[k])
+        if opps:
+            a = np.array(opps)
+            t, ix, iy = intercepts(path, a[:, 0], a[:, 1], a[:, 2], a[:, 3], p.max_speed, p.acceleration)
+            k = int(np.argmin(t))
+            pic.their_t, pic.their_xy = float(t[k]), (float(ix[k]), float(iy[k]))
+            if pic.opp_holds:
+                pic.their_t = 0.0
+        self._passes(obs, pic)
+        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
+            self._set_piece(obs, flow, pic, mates)
+        else:
+            self._play(obs, flow, pic, mates)
+        return pic
+
+    # --- passes announced by team-mates ---------------------------------------------------------------
+    def _passes(self, obs: Observation, pic: Picture) -> None:
+        for m in obs.mates:
+            info = m.pass_info
+            if info is None or info.catch_id == m.id or info.catch_id not in obs.by_id:
+                continue
+            if info.is_passout:
+                # under way while the ball is loose and still moving towards the catch point
+                if pic.holder or obs.ball_speed < 0.25:
+                    continue
+                dx, dy = info.catch_x - obs.bx, info.catch_y - obs.by
+                d = math.hypot(dx, dy)
+                if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < 0.6 * d * obs.ball_speed:
+                    continue
+            elif pic.holder != m.id:
+                continue
+            pic.receiver, pic.pass_info = info.catch_id, info
+            return
+
+    # --- open play --------------------------------------------------------------------------------------
+    def _play(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
+        p, areas = self.p, self.areas
+        field = [m for m in mates if not m.is_goalie]
+        goalie = next((m for m in mates if m.is_goalie), None)
+        holder = obs.by_id.get(pic.holder) if pic.holder else None
+        if goalie is not None:
+            pic.roles[goalie.id] = Role.GOALIE
+            if holder is goalie:
+                pic.goalie_plays = True
+            elif holder is None:
+                gt, gx, gy = pic.catch[goalie.id]
+                pic.goalie_plays = (areas.near_own_penalty_area(gx, gy, -0.1)
+                                    and areas.near_own_penalty_area(obs.bx, obs.by, 0.6))
+        active = None
+        if holder is not None and not holder.is_goalie:
+            active = holder
+        elif pic.receiver and pic.pass_info.is_passout and pic.receiver in obs.by_id \
+                and not obs.by_id[pic.receiver].is_goalie and obs.by_id[pic.receiver].valid:
+            active = obs.by_id[pic.receiver]
+        elif holder is None:
+            best = math.inf
+            for m in field:
+                if m.id == flow.taker:
+                    continue
+                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == Role.ACTIVE else 0.0)
+                if score < best:
+                    best, active = score, m
+        if active is not None:
+            pic.active = active.id
+            pic.roles[active.id] = Role.ACTIVE if pic.receiver != active.id else Role.CATCHOFPASS
+        our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
+        pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - 0.3)
+        rest = [m for m in field if m is not active]
+        if not rest:
+            return
+        bx, by = pic.path.at(0.4)
+        receiver = None
+        if pic.receiver and pic.receiver != pic.active and pic.pass_info is not None:
+            receiver = next((m for m in rest if m.id == pic.receiver), None)
+        n_assist = 2 if len(rest) >= 4 else 1
+        assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
+        order = ([Role.ASSISTANT, Role.PASSIVE, Role.MIDFIELD] if pic.attacking
+                 else [Role.PASSIVE, Role.MIDFIELD, Role.ASSISTANT])
+        if n_assist == 2:
+            order = [Role.ASSISTANT, Role.ASSISTANT] + [r for r in order if r != Role.ASSISTANT]
+        if receiver is not None:
+            # the announced receiver waits at the catch point, facing the passer; the others share the rest
+            info = pic.pass_info
+            pic.roles[receiver.id] = Role.ASSISTANT
+            pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
+            rest = [m for m in rest if m is not receiver]
+            order.remove(Role.ASSISTANT)
+        slots: list[tuple] = []
+        used = 0
+        for role in order[:len(rest)]:
+            if role == Role.ASSISTANT:
+                x, y = assist[min(used, len(assist) - 1)]
+                used += 1
+            elif role == Role.PASSIVE:
+                x, y = passive_point(areas, bx, by, pic.attacking)
+            else:
+                x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
+            slots.append((role, x, y, bx, by))
+        slots = spread(slots, bx, by)
+        for rid, i in assign(rest, slots, p.role_hysteresis).items():
+            role, x, y, fx, fy = slots[i]
+            pic.roles[rid] = role
+            pic.slots[rid] = (x, y, fx, fy)
+
+    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
+        cx, cy = self.spots
+        bx, by = obs.bx, obs.by
+        ox = np.array([o[0] for o in obs.opps])
+        oy = np.array([o[1] for o in obs.opps])
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+        score = score_spots(cx, cy, bx, by, ox, oy, self.areas.L2, 3.0, 8.5, prev)
+        out = []
+        for k in np.argsort(-score)[:12].tolist():
+            x, y = float(cx[k]), float(cy[k])
+            if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
+                out.append((x, y))
+                if len(out) == n:
+                    break
+        return out
+
+    # --- set pieces ---------------------------------------------------------------------------------------
+    def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
+        field = [m for m in mates if not m.is_goalie]
+        for m in mates:
+            if m.is_goalie:
+                pic.roles[m.id] = Role.GOALIE
+        bx, by = (obs.bx, obs.by) if flow.phase == Phase.SETUP else flow.ball0
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+        slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
+        hyst = self.p.role_hysteresis if flow.phase == Phase.SETUP else RESTART_HYSTERESIS
+        chosen = assign(field, slots, hyst)
+        for rid, i in chosen.items():
+            role, x, y, fx, fy = slots[i]
+            pic.roles[rid] = role
+            pic.slots[rid] = (x, y, fx, fy)
+            if role == Role.ACTIVE:
+                pic.active = rid
+        pic.attacking = flow.kind % 2 == 1 and flow.kind != 13

@@ -1,0 +1,155 @@
+"""The nubot robot (one per robot: its Control) and team (makes its robots and lets them share work).
+
+Every control period a robot reads its WorldModel into an Observation, follows the game flow, gets the team
+picture (roles and points, see picture.py) and acts on the game command:
+
+    STOP                stand still, dribbler off
+    a set piece         go to its set-piece slot (setpieces.py)
+    START               play: the active robot plays the ball (active.py), the goalkeeper keeps the goal
+                        (goalie.py), the others take their role's point; right after a set piece, the
+                        taker passes (restart.py) and everybody else keeps its distance until the ball is
+                        in play
+    PARK                drive to its parking place beside the field
+    TEST                the coach's test commands (testmodes.py)
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
+from ..roles import Action, Role
+from ..worldmodel import WorldModel
+from .active import BallPlayer
+from .gameflow import GameFlow, Phase
+from .goalie import Goalkeeper
+from .motion import Motion
+from .observation import Observation
+from .params import NubotParams
+from .picture import Analyst, Picture, TeamMemo, picture_key
+from .positions import Areas, spot_grid
+from .restart import RestartTaker
+from .testmodes import TestModes
+
+#: parking: robots line up beside the side line on their right, in their own half, facing the field
+PARK_OUTSIDE = 0.7
+PARK_SPACING = 1.3
+
+
+class _Shared:
+    """What the robots of one team in one process may share: fixed tables and the last team picture."""
+
+    def __init__(self, params: NubotParams, field):
+        self.params = params
+        self.areas = Areas(field, params.robot_radius + 0.15)
+        self.spots = spot_grid(self.areas)
+        self.analyst = Analyst(params, self.areas, self.spots)
+        self.memo = TeamMemo()
+        self.evaluated = 0            # pictures computed (for profiling)
+        self.reused = 0
+
+
+class NubotRobot(RobotStrategy):
+    """One robot of the nubot team. Used alone (``teams.X.strategy = "simatch.strategy.nubot:NubotRobot"``)
+    each robot computes its own team picture; `NubotTeam` lets the robots of one process share it."""
+
+    Params = NubotParams
+
+    def __init__(self, ctx: RobotContext, shared: _Shared | None = None):
+        super().__init__(ctx)
+        params = ctx.params if isinstance(ctx.params, NubotParams) else NubotParams.model_validate(ctx.params or {})
+        self.p = params
+        self.shared = shared or _Shared(params, ctx.field)
+        areas = self.shared.areas
+        goal_half = 0.5 * ctx.field.goal_width
+        self.areas = areas
+        self.motion = Motion(params, ctx.control_period, ctx.field)
+        self.flow = GameFlow(params.restart_wait)
+        self.player = BallPlayer(params, self.motion, areas, goal_half)
+        self.keeper = Goalkeeper(params, self.motion, areas, ctx.field, self.player)
+        self.taker = RestartTaker(params, self.motion, self.player, goal_half, areas.L2)
+        self.tests = TestModes(params, self.motion, self.player)
+        ids = sorted(ctx.ids)
+        k = ids.index(ctx.id) if ctx.id in ids else 0
+        self.park_at = (-areas.L2 + 1.0 + PARK_SPACING * k, -(areas.W2 + PARK_OUTSIDE))
+        self.role = Role.NOROLE
+        self.picture: Picture | None = None
+
+    # -----------------------------------------------------------------------------------------------------
+    def team_picture(self, obs: Observation) -> Picture:
+        memo = self.shared.memo
+        key = picture_key(obs, self.flow)
+        if memo.key == key:
+            self.shared.reused += 1
+            return memo.picture
+        pic = self.shared.analyst.analyse(obs, self.flow)
+        memo.key, memo.picture = key, pic
+        self.shared.evaluated += 1
+        return pic
+
+    def decide(self, world: WorldModel) -> Command:
+        obs = Observation(world)
+        flow = self.flow
+        flow.update(obs)
+        self.player.track(obs)
+        me = obs.me
+        phase = flow.phase
+        if phase == Phase.STOP:
+            return Command(role=self.role, action=Action.NO_ACTION)
+        if phase == Phase.PARK:
+            return self.park(obs)
+        pic = self.team_picture(obs)
+        self.picture = pic
+        if phase == Phase.TEST:
+            cmd = self.tests.decide(obs, pic)
+        else:
+            role = pic.roles.get(me.id, Role.NOROLE)
+            if me.is_goalie:
+                cmd = self.keeper.decide(obs, pic, flow)
+            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE:
+                cmd = self.taker.take(obs, pic, flow)
+            elif phase != Phase.PLAY:
+                cmd = self.hold_slot(obs, pic, role)
+            elif me.holding:
+                cmd = self.player.play(obs, pic, flow, role)
+            elif role in (Role.ACTIVE, Role.CATCHOFPASS):
+                cmd = self.player.fetch(obs, pic, role)
+            else:
+                cmd = self.hold_slot(obs, pic, role)
+        if cmd.pass_intent is None:
+            cmd.pass_intent = self.player.pass_intent(obs)
+        self.role = cmd.role
+        return cmd
+
+    # --- simple movements ---------------------------------------------------------------------------------
+    def hold_slot(self, obs: Observation, pic: Picture, role: int) -> Command:
+        me = obs.me
+        slot = pic.slots.get(me.id)
+        if slot is None:
+            # no place in the team picture: off the field (come back in) or nothing to do
+            x, y = self.areas.inside_field(me.x, me.y, 1.0)
+            slot = (x, y, obs.bx, obs.by)
+        x, y, fx, fy = slot
+        face = math.atan2(fy - me.y, fx - me.x)
+        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=True)
+        return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
+
+    def park(self, obs: Observation) -> Command:
+        x, y = self.park_at
+        vx, vy, w = self.motion.go(obs, x, y, 0.5 * math.pi, self.p.max_speed, self.p.max_turn)
+        return Command(vx=vx, vy=vy, w=w, role=Role.NOROLE, action=Action.POSITIONED, intent=(x, y))
+
+
+class NubotTeam(TeamStrategy):
+    """The default team. Its robots decide each from its own WorldModel; robots of the team that run in
+    the same process reuse one another's team picture when they see exactly the same facts."""
+
+    Params = NubotParams
+
+    def __init__(self, ctx: TeamContext):
+        super().__init__(ctx)
+        params = ctx.params if isinstance(ctx.params, NubotParams) else NubotParams.model_validate(ctx.params or {})
+        self.shared = _Shared(params, ctx.field)
+
+    def make_robot(self, ctx: RobotContext) -> RobotStrategy:
+        return NubotRobot(ctx, self.shared)
