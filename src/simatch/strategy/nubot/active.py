@@ -27,7 +27,7 @@ from ..base import Command, PassIntent
 from ..roles import Action, Role
 from .evaluate import lane_clear, pass_speed, position_value, pressure, shot_window
 from .gameflow import GameFlow, Phase
-from .geometry import clamp, wrap
+from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
@@ -35,6 +35,8 @@ from .picture import Picture
 from .positions import Areas
 
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
+CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
+ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
 RELEASE_DISTANCE = 0.5  # a dribble ends once the ball is this far from the mouth [m] ...
 RELEASE_TIME = 0.3      # ... for this long [s]
 PASS_ANNOUNCE = 1.0     # a kicked pass is announced this long beyond its expected travel time [s]
@@ -152,37 +154,68 @@ class BallPlayer:
         opps = obs.opps
         bx, by = obs.bx, obs.by
         can_score = (not flow.pass_pending and me.x > 0.3 and flow.phase == Phase.PLAY)
-        plan = None
+        threat = self.threat_time(obs)
         prev = self.plan
-        # 1. shoot
+        plan = None
+        # 1. shoot, when part of the goal stays open and there is time to turn to it
         if can_score and math.hypot(L2 - bx, by) < p.shoot_range:
             aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed)
             need = 0.045 if (prev and prev[0] == "shoot") else 0.07
-            if width > need or (left < 0.4 and width > 0.02):
+            if left < 0.4 or threat < 0.8:
+                need = 0.025
+            if width > need and self.turn_time(obs, L2, aim_y) < threat + 0.3:
                 plan = ("shoot", L2 + 0.3, aim_y, p.shot_speed, width)
-        # 2. pass
+        # 2. pass, when a team-mate is clearly better placed, or pressed, or the dribble runs out
         if plan is None:
-            best = self.best_pass(obs, pic)
             mine = position_value(bx, by, opps, L2)
-            pressed = pressure(bx, by, opps, 1.3) > 0.25
+            best, best_score = None, -math.inf
+            for value, rid, cx, cy, v in self.passes(obs):
+                late = self.turn_time(obs, cx, cy) > threat
+                keep = prev is not None and prev[0] == "pass" and prev[4] == rid
+                score = value - (2.0 if late else 0.0) + (0.6 if keep else 0.0)
+                if score > best_score:
+                    best, best_score = (value, rid, cx, cy, v, keep), score
             if best is not None:
-                keep = prev is not None and prev[0] == "pass" and prev[4] == best[1]
+                value, rid, cx, cy, v, keep = best
                 margin = 0.4 if keep else 1.0
-                if flow.pass_pending or best[0] > mine + margin or left < 0.8 or (pressed and best[0] > mine - 1.0):
-                    plan = ("pass", best[2], best[3], best[4], best[1])
+                urgent = left < 0.8 or threat < 1.2
+                if flow.pass_pending or value > mine + margin or (urgent and value > mine - 2.5):
+                    plan = ("pass", cx, cy, v, rid)
+            if plan is None and threat < CONTACT_THREAT:
+                plan = self.first_time(obs, can_score)
             if plan is None and left < 0.35:
                 plan = self.release(obs, can_score)
-        # 3. dribble
+        # 3. dribble, away from pressure, towards the best point in reach
         if plan is None:
             plan = self.dribble_target(obs, left)
         self.plan = plan
         return self.execute(obs, plan, role)
 
-    def best_pass(self, obs: Observation, pic: Picture):
-        """(value, receiver id, catch x, catch y, kick speed) of the best pass, or None."""
+    def threat_time(self, obs: Observation) -> float:
+        """Seconds before the nearest opponent can reach the ball (and challenge for it)."""
+        p = self.p
+        best = math.inf
+        for ox, oy, vx, vy in obs.opps:
+            dx, dy = obs.bx - ox, obs.by - oy
+            d = math.hypot(dx, dy)
+            gap = d - 0.55
+            if gap <= 0.0:
+                return 0.0
+            v0 = max(0.0, (vx * dx + vy * dy) / d)
+            best = min(best, time_to_cover(gap, v0, p.max_speed, p.acceleration))
+        return best
+
+    def turn_time(self, obs: Observation, tx: float, ty: float) -> float:
+        """Seconds to turn (with the ball) to face (tx, ty)."""
+        me = obs.me
+        err = abs(wrap(math.atan2(ty - me.y, tx - me.x) - me.yaw))
+        return err / (0.7 * self.p.dribble_turn) + 0.1
+
+    def passes(self, obs: Observation) -> list[tuple]:
+        """(value, receiver id, catch x, catch y, kick speed) of every pass worth considering."""
         p, me = self.p, obs.me
         bx, by = obs.bx, obs.by
-        best = None
+        out = []
         for m in obs.mates:
             if m is me or not m.valid or m.is_goalie:
                 continue
@@ -200,9 +233,32 @@ class BallPlayer:
             if near < 1.1:
                 continue
             value = position_value(cx, cy, obs.opps, self.areas.L2) + 0.3 * min(margin, 1.5)
-            if best is None or value > best[0]:
-                best = (value, m.id, cx, cy, v)
-        return best
+            out.append((value, m.id, cx, cy, v))
+        return out
+
+    def best_pass(self, obs: Observation):
+        """(value, receiver id, catch x, catch y, kick speed) of the best pass, or None."""
+        return max(self.passes(obs), default=None, key=lambda c: c[0])
+
+    def first_time(self, obs: Observation, can_score: bool):
+        """An opponent is on the ball: no time to turn. Play it where the robot already faces, if that is
+        forward: at the goal, to a team-mate, or into space; else None (dribble away)."""
+        me, p = obs.me, self.p
+        c, s = math.cos(me.yaw), math.sin(me.yaw)
+        if c < -0.2:
+            return None
+        L2 = self.areas.L2
+        if can_score and c > 0.3:
+            y_goal = me.y + s / c * (L2 - me.x)
+            if abs(y_goal) < self.goal_half - 0.1 and L2 - me.x < p.shoot_range:
+                return ("shoot", L2 + 0.3, y_goal, p.shot_speed, 0.0)
+        for value, rid, cx, cy, v in self.passes(obs):
+            if abs(wrap(math.atan2(cy - me.y, cx - me.x) - me.yaw)) < 0.2:
+                return ("pass", cx, cy, v, rid)
+        tx, ty = me.x + 4.0 * c, me.y + 4.0 * s
+        if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
+            return None
+        return ("clear", tx, ty, 4.0, 0)
 
     def release(self, obs: Observation, can_score: bool):
         """The dribble must end now and nothing better is on: shoot if the shot can count, else play the ball
@@ -242,6 +298,12 @@ class BallPlayer:
                 continue
             score = position_value(tx, ty, opps, L2)
             score += 0.35 * min(lane_clear(me.x, me.y, tx, ty, opps, 1.5), 0.5)
+            # away from opponents closing in: keep the body between them and the ball
+            for ox, oy, _, _ in opps:
+                rx, ry = ox - me.x, oy - me.y
+                d = math.hypot(rx, ry)
+                if d < ESCAPE_RANGE:
+                    score -= 2.0 * max(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
             turn = 1.0 - (ux * c + uy * s)
             score -= 0.25 * turn
             if ux * c + uy * s < -0.3 and self.back > self.p.dribble_back_limit - 0.5:

@@ -111,7 +111,10 @@ class GameFlow:
             if touched or (holder is not None and holder.id != self.taker) or obs.t - self.taker_since > TAKER_BLOCK_LIMIT:
                 self.taker = 0
         if self.pass_pending:
+            # no direct goal: a second robot of ours must have had the ball (at a dropped ball, any
+            # second robot, an opponent too)
             if holder is not None and self.first_holder == 0:
                 self.first_holder = holder.id
-            elif (holder is not None and holder.id != self.first_holder) or touched:
+            elif (holder is not None and holder.id != self.first_holder) or (
+                    touched and self.kind == MatchMode.DROPBALL):
                 self.pass_pending = False

@@ -65,3 +65,13 @@ def push_out_of_box(x: float, y: float, x0: float, x1: float, half_w: float) -> 
     options = [(x - x0, x0, y), (x1 - x, x1, y), (half_w - y, x, half_w), (y + half_w, x, -half_w)]
     _, nx, ny = min(options)
     return nx, ny
+
+
+def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
+    """Seconds to cover distance ``d`` starting at speed ``v0`` (towards it), speeding up at ``acc`` to
+    ``vmax``."""
+    v0 = min(max(v0, 0.0), vmax)
+    d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
+    if d <= d_acc:
+        return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
+    return (vmax - v0) / acc + (d - d_acc) / vmax

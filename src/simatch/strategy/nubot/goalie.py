@@ -146,7 +146,7 @@ class Goalkeeper:
                     face = math.atan2(obs.by - me.y, obs.bx - me.x)
                     cmd.vx, cmd.vy, cmd.w = self.motion.go(obs, tx, ty, face, self.p.max_speed, self.p.max_turn)
             return cmd
-        best = self.player.best_pass(obs, pic)
+        best = self.player.best_pass(obs)
         if best is not None:
             plan = ("pass", best[2], best[3], best[4], best[1])
         else:

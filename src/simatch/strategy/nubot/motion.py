@@ -48,8 +48,9 @@ class Motion:
                 wmax = min(wmax, c.max_w)
         return vmax, wmax
 
-    def obstacles(self, obs: Observation, ball: bool = False) -> list[tuple[float, float, float]]:
-        """Every other robot (and the ball if asked) with the clearance to keep from it."""
+    def obstacles(self, obs: Observation, ball: bool | float = False) -> list[tuple[float, float, float]]:
+        """Every other robot (and the ball if asked: True for the usual clearance, or a distance to keep
+        from it) with the clearance to keep from it."""
         me = obs.me
         c = self.clearance
         out = [(o[0], o[1], c) for o in obs.opps]
@@ -57,11 +58,11 @@ class Motion:
             if m is not me:
                 out.append((m.x, m.y, c))
         if ball:
-            out.append((obs.bx, obs.by, self.ball_clearance))
+            out.append((obs.bx, obs.by, self.ball_clearance if ball is True else float(ball)))
         return out
 
     def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
-           avoid: bool = True, ball_obstacle: bool = False, end_speed: float = 0.0,
+           avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
            feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
            gentle: bool = True) -> tuple[float, float, float]:
         """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0)."""

@@ -15,7 +15,7 @@ class NubotParams(BaseModel):
 
     # --- the robot as the strategy models it ------------------------------------------------------------
     max_speed: float = Field(4.5, gt=0.0, le=10.0, description="cruise speed without the ball [m/s]")
-    dribble_speed: float = Field(2.2, gt=0.0, le=6.0, description="top speed while holding the ball [m/s]")
+    dribble_speed: float = Field(3.0, gt=0.0, le=6.0, description="top speed while holding the ball [m/s]")
     acceleration: float = Field(2.4, gt=0.0, le=20.0, description="speeding up, for reach-time estimates [m/s^2]")
     braking: float = Field(3.5, gt=0.0, le=20.0, description="planned slowing down [m/s^2]")
     max_turn: float = Field(7.0, gt=0.0, le=30.0, description="turn-rate limit without the ball [rad/s]")

@@ -23,7 +23,8 @@ from .params import NubotParams
 from .picture import Picture
 
 LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
-ALIGNED = 0.07          # heading error allowed before driving through the ball [rad]
+ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
+ON_LINE = 0.045         # distance off the kick line allowed (the ball must enter the mouth) [m]
 
 
 class RestartTaker:
@@ -60,22 +61,32 @@ class RestartTaker:
         ux, uy = unit(ax - bx, ay - by)
         face = math.atan2(uy, ux)
         err = abs(wrap(face - me.yaw))
-        # where the taker stands, lined up, and how far it is off that line
-        lx, ly = bx - LINE_UP * ux, by - LINE_UP * uy
+        # where the taker stands relative to the kick line through the ball
         rx, ry = me.x - bx, me.y - by
         behind = -(rx * ux + ry * uy)               # distance behind the ball along the kick line
         off = abs(rx * uy - ry * ux)                # distance off the kick line
         kick = 0.0
-        if behind > MOUTH - 0.05 and off < 0.06 and err < ALIGNED:
-            # lined up: drive through the ball with the kicker armed
-            tx, ty = bx - (MOUTH - 0.1) * ux, by - (MOUTH - 0.1) * uy
-            vx, vy, w = self.motion.go(obs, tx, ty, face, 0.6, 2.0, avoid=False, end_speed=0.4, gentle=False)
-            kick = speed
-            action = Action.STATIC_PASS if receiver is not None else Action.AT_SHOOT_SITUATION
-        else:
-            vx, vy, w = self.motion.go(obs, lx, ly, face, p.max_speed, p.max_turn, avoid=True,
-                                       ball_obstacle=behind < LINE_UP - 0.1 or off > 0.2)
+        if behind < 0.2 or off > 0.5:
+            # beside or in front of the ball: go round it to the line-up point
+            tx, ty = bx - LINE_UP * ux, by - LINE_UP * uy
+            vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=True,
+                                       ball_obstacle=0.45)
             action = Action.POSITIONED_STATIC
+        else:
+            # behind it: close in along the line, converging onto it; drive through the ball only when lined
+            # up, with the kicker armed (it fires as the ball enters the mouth, before any push)
+            armed = off < ON_LINE and err < ALIGNED
+            s_back = (MOUTH - 0.12 if armed else MOUTH + 0.16) + 2.5 * off
+            tx, ty = bx - s_back * ux, by - s_back * uy
+            vmax = 0.7 if behind < 0.9 else p.max_speed
+            vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, avoid=False,
+                                       end_speed=0.4 if armed else 0.0, gentle=False)
+            if armed:
+                kick = speed
+                action = Action.STATIC_PASS if receiver is not None else Action.AT_SHOOT_SITUATION
+            else:
+                action = Action.POSITIONED_STATIC
+        lx, ly = bx - LINE_UP * ux, by - LINE_UP * uy
         cmd = Command(vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=Role.ACTIVE, action=action,
                       intent=(lx, ly))
         if receiver is not None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+from ...scene.commands import MatchMode, is_ours
 from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from ..roles import Action, Role
 from ..worldmodel import WorldModel
@@ -131,8 +132,21 @@ class NubotRobot(RobotStrategy):
             slot = (x, y, obs.bx, obs.by)
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
-        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=True)
+        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn,
+                                   ball_obstacle=self.keep_from_ball(obs))
         return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
+
+    def keep_from_ball(self, obs: Observation) -> float | bool:
+        """How far to stay from the ball on the way to a slot: the set-piece distance while a restart is
+        being set up or taken (so that robots go round the circle, not through it), else a little."""
+        flow, p = self.flow, self.p
+        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
+            if flow.kind == MatchMode.DROPBALL:
+                return p.dropball_distance - 0.1
+            if is_ours(flow.kind):
+                return p.mate_distance - 0.1
+            return p.opponent_distance - 0.1
+        return True
 
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at

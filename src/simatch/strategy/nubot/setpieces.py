@@ -75,11 +75,12 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
         slots.append((Role.PASSIVE, -4.5, -side * 1.0, bx, by))
         slots.append((Role.MIDFIELD, -2.2, -side * 2.6, bx, by))
     elif kind == M.OPP_KICKOFF:
+        # a block in front of the ball and two robots on the half-way line, near the receivers
         r = p.opponent_distance + 0.1
         slots.append((Role.ACTIVE, -r, 0.0, bx, by))
-        slots.append((Role.MIDFIELD, -r * 0.72, r * 0.72, bx, by))
-        slots.append((Role.ASSISTANT, -r * 0.72, -r * 0.72, bx, by))
-        slots.append((Role.PASSIVE, -6.5, 0.0, bx, by))
+        slots.append((Role.MIDFIELD, -0.6, r + 0.3, bx, by))
+        slots.append((Role.ASSISTANT, -0.6, -r - 0.3, bx, by))
+        slots.append((Role.PASSIVE, -6.0, 0.0, bx, by))
     elif kind == M.OUR_PENALTY:
         gx = areas.L2
         ux, uy = unit(gx - bx, -by)
