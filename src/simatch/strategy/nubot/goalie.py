@@ -28,7 +28,7 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
-LINE_DEPTH = 0.45          # the keeper's line, in front of the goal line [m]
+LINE_DEPTH = 0.7          # the keeper's line, in front of the goal line [m]
 KEEPER_HEIGHT = 0.75       # a ball below this height hits the keeper [m]
 HISTORY = 6
 

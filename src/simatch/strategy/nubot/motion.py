@@ -5,7 +5,8 @@
   (v = sqrt(v_end^2 + 2 a d)), proportional in the last centimetres so that it settles without dithering.
 * No charging: the velocity towards each opponent nearby is capped so that the robot could slow down to
   a gentle contact speed before touching it (the MSL rules let robots touch, not ram).
-* Heading: the same braking law on the angle error, within the turn-rate limit.
+* Heading: the same braking law on the angle error, within the turn-rate limit, and turning slower while
+  driving fast (|v| |w| bounded: the wheels' acceleration limit makes fast turns at speed cost speed).
 * The world (team-frame) velocity is turned into the body frame at the middle of the control period, so
   that a robot that turns while it drives keeps its course.
 """
@@ -21,6 +22,9 @@ from .params import NubotParams
 
 #: within this distance the position law is proportional (gain POSITION_GAIN)
 POSITION_GAIN = 3.0
+#: largest |v| |w| [m/s^2]: a robot that turns while it drives fast loses speed (its wheels, limited to
+#: 2.5 m/s^2, must keep turning the body-frame velocity); measured: 3.5 m/s holds at 1 rad/s, not at 2
+SPIN_COUPLING = 3.0
 #: the braking assumed when closing in on an opponent (below the drive's, which also has to turn) [m/s^2]
 CHARGE_BRAKING = 2.5
 HEADING_GAIN = 5.0
@@ -92,6 +96,11 @@ class Motion:
         if gentle:
             vx, vy = self.no_charging(obs, vx, vy)
         w = 0.0 if face is None else self.turn_rate(wrap(face - me.yaw), wmax)
+        # turning while driving costs the wheels |v| |w| of acceleration: keep the product within what they
+        # can give, so that the robot keeps its speed (it turns fully once it slows down near the target)
+        speed = math.hypot(vx, vy)
+        if speed * abs(w) > SPIN_COUPLING:
+            w = math.copysign(SPIN_COUPLING / speed, w)
         return self.body(me.yaw, vx, vy, w)
 
     def turn_rate(self, err: float, wmax: float) -> float:

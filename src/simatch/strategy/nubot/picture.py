@@ -22,7 +22,7 @@ import numpy as np
 from ..roles import Role
 from .ballpath import BallPath, intercepts
 from .gameflow import GameFlow, Phase
-from .geometry import wrap
+from .geometry import segment_distance, wrap
 from .observation import Observation
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
@@ -31,7 +31,8 @@ from .setpieces import formation, spread
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
 OPP_CONTROL = 0.45
-#: restart roles are kept once START is given
+#: set-piece slots change hands easily while robots run to them, and never once START is given [m]
+SETUP_HYSTERESIS = 0.5
 RESTART_HYSTERESIS = 50.0
 
 
@@ -70,16 +71,25 @@ def picture_key(obs: Observation, flow: GameFlow) -> tuple:
                   for m in obs.mates if m.pass_info is not None))
 
 
-def assign(robots: list, slots: list[tuple], hysteresis: float) -> dict[int, int]:
+def assign(robots: list, slots: list[tuple], hysteresis: float,
+           around: tuple[float, float, float] | None = None) -> dict[int, int]:
     """Robot id -> slot index, minimising the total distance, each robot's announced role earning
     ``hysteresis`` metres when it keeps it. Slots beyond the number of robots stay empty (they are listed
-    by priority)."""
+    by priority). ``around`` = (x, y, r): a circle robots must go round (a set piece's ball), whose detour
+    counts too."""
     n = len(robots)
     if n == 0:
         return {}
     slots = slots[:n] if len(slots) >= n else slots
-    cost = [[math.hypot(m.x - s[1], m.y - s[2]) - (hysteresis if m.role == s[0] else 0.0) for s in slots]
-            for m in robots]
+
+    def way(m, s) -> float:
+        d = math.hypot(m.x - s[1], m.y - s[2])
+        if around is not None:
+            gap, _ = segment_distance(around[0], around[1], m.x, m.y, s[1], s[2])
+            d += 2.0 * max(0.0, around[2] - gap)
+        return d
+
+    cost = [[way(m, s) - (hysteresis if m.role == s[0] else 0.0) for s in slots] for m in robots]
     best, best_c = None, math.inf
     k = min(n, len(slots))
     for perm in itertools.permutations(range(len(slots)), k):
@@ -150,8 +160,8 @@ class Analyst:
                 d = math.hypot(dx, dy)
                 if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < 0.6 * d * obs.ball_speed:
                     continue
-            elif pic.holder != m.id:
-                continue
+            elif pic.holder != m.id and not info.is_static_pass:
+                continue                   # announced by a robot that does not have the ball (any more)
             pic.receiver, pic.pass_info = info.catch_id, info
             return
 
@@ -250,12 +260,19 @@ class Analyst:
         bx, by = (obs.bx, obs.by) if flow.phase == Phase.SETUP else flow.ball0
         prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
         slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
-        hyst = self.p.role_hysteresis if flow.phase == Phase.SETUP else RESTART_HYSTERESIS
-        chosen = assign(field, slots, hyst)
+        hyst = SETUP_HYSTERESIS if flow.phase == Phase.SETUP else RESTART_HYSTERESIS
+        keep = self.p.dropball_distance if flow.kind == 13 else (
+            self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
+        chosen = assign(field, slots, hyst, around=(bx, by, keep))
         for rid, i in chosen.items():
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
             if role == Role.ACTIVE:
                 pic.active = rid
+        if flow.phase == Phase.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
+                and flow.kind != 1:
+            # the taker aims at the receiver: it waits for the ball where it is announced, facing it
+            info = pic.pass_info
+            pic.slots[pic.receiver] = (info.catch_x, info.catch_y, bx, by)
         pic.attacking = flow.kind % 2 == 1 and flow.kind != 13

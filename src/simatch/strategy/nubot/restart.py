@@ -34,6 +34,22 @@ class RestartTaker:
         self.player = player
         self.goal_half = goal_half
         self.L2 = L2
+        self.restart = -1.0           # the restart (its START time) the choice below is for
+        self.choice = 0               # the receiver chosen for it
+
+    def receiver(self, obs: Observation, pic: Picture, flow: GameFlow):
+        """The team-mate to pass to: the one set up as receiver (assistant), unless an opponent marks it
+        and another one is clearly freer; kept once chosen for this restart unless it gets marked."""
+        designated = next((m for m in obs.mates if pic.roles.get(m.id) == Role.ASSISTANT and m is not obs.me),
+                          None)
+        if flow.kind == MatchMode.OUR_KICKOFF:
+            return designated
+        if self.restart != flow.t0:
+            self.restart, self.choice = flow.t0, designated.id if designated is not None else 0
+        options = {rid: value for value, rid, _, _, _ in self.player.passes(obs)}
+        if options and self.choice not in options:
+            self.choice = max(options, key=options.get)
+        return obs.by_id.get(self.choice, designated)
 
     def take(self, obs: Observation, pic: Picture, flow: GameFlow) -> Command:
         p, me = self.p, obs.me
@@ -44,7 +60,7 @@ class RestartTaker:
             ax, ay, speed = self.L2 + 0.3, aim_y, p.shot_speed
         else:
             slot = pic.slots.get(me.id)
-            mate = next((m for m in obs.mates if pic.roles.get(m.id) == Role.ASSISTANT and m is not me), None)
+            mate = self.receiver(obs, pic, flow)
             if flow.kind == MatchMode.OUR_KICKOFF and slot is not None:
                 ax, ay = slot[2], slot[3]                  # the lead point in front of the receiver
                 arrival = 2.0
@@ -60,6 +76,9 @@ class RestartTaker:
             speed = pass_speed(math.hypot(ax - bx, ay - by), arrival, p.ball_deceleration)
         ux, uy = unit(ax - bx, ay - by)
         face = math.atan2(uy, ux)
+        if receiver is not None and flow.kind != MatchMode.OUR_KICKOFF:
+            # the moment it is lined up, the receiver's current place counts (it may still be moving)
+            ax, ay = receiver.x, receiver.y
         err = abs(wrap(face - me.yaw))
         # where the taker stands relative to the kick line through the ball
         rx, ry = me.x - bx, me.y - by

@@ -23,6 +23,7 @@ from ..roles import Action, Role
 from ..worldmodel import WorldModel
 from .active import BallPlayer
 from .gameflow import GameFlow, Phase
+from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
 from .observation import Observation
@@ -35,6 +36,8 @@ from .testmodes import TestModes
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
 PARK_SPACING = 1.3
+#: a robot going round the ball's circle at a restart heads this far (in angle) along it [rad]
+ORBIT_STEP = 0.6
 
 
 class _Shared:
@@ -132,21 +135,44 @@ class NubotRobot(RobotStrategy):
             slot = (x, y, obs.bx, obs.by)
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
-        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn,
-                                   ball_obstacle=self.keep_from_ball(obs))
+        keep = self.keep_from_ball(obs)
+        if keep is not None:
+            x, y = self.round_the_ball(obs, x, y, keep)
+        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=True)
         return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
 
-    def keep_from_ball(self, obs: Observation) -> float | bool:
-        """How far to stay from the ball on the way to a slot: the set-piece distance while a restart is
-        being set up or taken (so that robots go round the circle, not through it), else a little."""
+    def keep_from_ball(self, obs: Observation) -> float | None:
+        """The distance the rules keep this robot from the ball while a restart is being set up or taken
+        (None in play)."""
         flow, p = self.flow, self.p
         if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
             if flow.kind == MatchMode.DROPBALL:
-                return p.dropball_distance - 0.1
+                return p.dropball_distance
             if is_ours(flow.kind):
-                return p.mate_distance - 0.1
-            return p.opponent_distance - 0.1
-        return True
+                return p.mate_distance
+            return p.opponent_distance
+        return None
+
+    def round_the_ball(self, obs: Observation, x: float, y: float, keep: float) -> tuple[float, float]:
+        """The next point on the way to (x, y) that respects the circle of radius ``keep`` round the ball: a
+        robot inside it leaves it straight away, a robot whose straight way would cut through it follows the
+        circle round."""
+        me = obs.me
+        bx, by = obs.bx, obs.by
+        d = math.hypot(me.x - bx, me.y - by)
+        if math.hypot(x - bx, y - by) < keep - 0.05:
+            return x, y                                # a slot inside the circle (the taker's)
+        if d < keep - 0.25:
+            ux, uy = ((me.x - bx) / d, (me.y - by) / d) if d > 1e-6 else (-1.0, 0.0)
+            return bx + ux * (keep + 0.4), by + uy * (keep + 0.4)
+        gap, _ = segment_distance(bx, by, me.x, me.y, x, y)
+        if gap >= keep:
+            return x, y
+        a_me = math.atan2(me.y - by, me.x - bx)
+        turn = wrap(math.atan2(y - by, x - bx) - a_me)
+        step = max(-ORBIT_STEP, min(ORBIT_STEP, turn))
+        r = max(d, keep + 0.3)
+        return bx + r * math.cos(a_me + step), by + r * math.sin(a_me + step)
 
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at

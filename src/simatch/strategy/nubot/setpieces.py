@@ -139,7 +139,10 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
                 ox, oy = zones[k]
             slots.append((role, ox, oy, bx, by))
     slots = [_legal(kind, s, areas, bx, by, p) for s in slots]
-    return [_legal(kind, s, areas, bx, by, p) for s in spread(slots, bx, by)]
+    out: list[tuple] = []
+    for s in spread(slots, bx, by):
+        out.append(_legal(kind, s, areas, bx, by, p, taken=[(o[1], o[2]) for o in out]))
+    return out
 
 
 def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> list[tuple]:
@@ -162,8 +165,10 @@ def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> l
     return out
 
 
-def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotParams) -> tuple:
-    """Make a slot respect the distances and areas of set piece ``kind``."""
+def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotParams,
+           taken: list[tuple[float, float]] = ()) -> tuple:
+    """Make a slot respect the distances and areas of set piece ``kind`` (and keep ``SLOT_GAP`` from the
+    points already ``taken``)."""
     role, x, y, fx, fy = slot
     M = MatchMode
     taker = role == Role.ACTIVE and kind % 2 == 1 and kind != M.DROPBALL
@@ -176,21 +181,23 @@ def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotP
     x, y = areas.inside_field(x, y, -0.6 if taker else 0.5)
     if kind in (M.OUR_KICKOFF, M.OPP_KICKOFF):
         x = min(x, -0.35)
-    x, y = _settle(kind, areas, x, y, bx, by, r, taker)
+    x, y = _settle(kind, areas, x, y, bx, by, r, taker, taken)
     return (role, x, y, fx, fy)
 
 
 def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r: float,
-            taker: bool) -> tuple[float, float]:
+            taker: bool, taken: list[tuple[float, float]] = ()) -> tuple[float, float]:
     """The point moved out of the areas, to ``r`` from the ball and (at a kick-off) into our half; where
-    those pushes undo each other (near a box), the nearest point on the circle round the ball that
-    satisfies all of them."""
+    those pushes undo each other (near a box), or the point is taken by another slot, the nearest point
+    round the ball that satisfies all of them."""
     kickoff = kind in (MatchMode.OUR_KICKOFF, MatchMode.OPP_KICKOFF)
 
     def legal(px: float, py: float) -> bool:
         if kickoff and px > -0.35 + 1e-6:
             return False
         if r > 0.0 and math.hypot(px - bx, py - by) < r - 1e-6:
+            return False
+        if any(math.hypot(px - tx, py - ty) < SLOT_GAP - 1e-6 for tx, ty in taken):
             return False
         return areas.keep_out(px, py, own_pa=True, opp_pa=not taker) == (px, py)
 
@@ -205,7 +212,7 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
     best, best_d = (x, y), math.inf
     for k in range(48):
         a = k * math.pi / 24
-        for rr in (r + 0.05, r + 0.6, r + 1.2):
+        for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0):
             px, py = bx + rr * math.cos(a), by + rr * math.sin(a)
             if abs(px) > areas.L2 + 0.5 or abs(py) > areas.W2 - 0.3 or not legal(px, py):
                 continue
