@@ -56,7 +56,7 @@ class BallWatch:
             self.holders.append((m.stamp, m.holder))
         if m.kicker:
             self.kicks.append((m.stamp, m.kicker, m.kick_speed))
-        for name in m.touching:
+        for name in list(m.touching) + [n for n in (m.holder, m.kicker) if n]:
             if not self.touches or self.touches[-1][1] != name:
                 self.touches.append((m.stamp, name))
 

@@ -88,7 +88,7 @@ def test_set_piece_positions_keep_their_distances(cmd, team, spot):
                                            (M.OUR_CORNERKICK, "cyan", (10.7, -6.7))])
 def test_the_restart_is_a_pass_taken_at_once(cmd, team, spot):
     """After START the taker kicks within the 7 s the rules give, without dribbling (it never holds the
-    ball), as a pass: the ball heads for a team-mate (at a kick-off, into the space in front of one); and
+    ball), as a pass: the ball heads for a team-mate (at a kick-off, to stop in front of one); and
     the taker does not touch the ball again before another robot did."""
     sim = scenario(cyan="nubot", magenta="nubot")
     bx, by = spot
@@ -106,7 +106,7 @@ def test_the_restart_is_a_pass_taken_at_once(cmd, team, spot):
     ms = sim.model_states()
     b = ms["ball"]
     heading = math.atan2(b.vy, b.vx)
-    lead = 2.6 if cmd == M.OUR_KICKOFF else 0.0          # a kick-off pass is played ahead of the receiver
+    lead = 0.6 if cmd == M.OUR_KICKOFF else 0.0          # a kick-off pass stops in front of the receiver
     aimed = []
     for n in sim.simulator.robot_names:
         if n.startswith(team) and n != taker:

@@ -37,8 +37,8 @@ from .positions import Areas
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
 CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
 ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
-RELEASE_DISTANCE = 0.5  # a dribble ends once the ball is this far from the mouth [m] ...
-RELEASE_TIME = 0.3      # ... for this long [s]
+CONTACT_DISTANCE = 0.42  # ball centre this close to the robot's centre: touching it [m]
+RELEASE_DISTANCE = 0.75  # a dribble ends once the ball centre is this far from the robot's (referee: 0.6) [m]
 PASS_ANNOUNCE = 1.0     # a kicked pass is announced this long beyond its expected travel time [s]
 DRIBBLE_DIRECTIONS = [(math.cos(k * math.pi / 8), math.sin(k * math.pi / 8)) for k in range(16)]
 
@@ -50,7 +50,6 @@ class BallPlayer:
         self.areas = areas
         self.goal_half = goal_half
         self.dribble_from: tuple[float, float] | None = None
-        self.loose_since: float | None = None
         self.back = 0.0               # backward travel while holding [m]
         self._last_pos = (0.0, 0.0)
         self.plan: tuple | None = None
@@ -62,29 +61,23 @@ class BallPlayer:
     # --- bookkeeping every tick --------------------------------------------------------------------------
     def track(self, obs: Observation) -> None:
         me = obs.me
-        if me.holding:
-            self.loose_since = None
+        dball = math.hypot(obs.bx - me.x, obs.by - me.y)
+        if me.holding or dball < CONTACT_DISTANCE:
+            # the referee counts a dribble from the first touch (a push is one), not from the catch
             if self.dribble_from is None:
                 self.dribble_from = (me.x, me.y)
                 self.back = 0.0
                 self.plan = None
                 self.dribble_dir = None
-            else:
+            elif me.holding:
                 dx, dy = me.x - self._last_pos[0], me.y - self._last_pos[1]
                 along = dx * math.cos(me.yaw) + dy * math.sin(me.yaw)
                 if along < 0.0:
                     self.back -= along
-        elif self.dribble_from is not None:
-            # the dribble ends only with a visible release: the ball away from the mouth for a while, or
-            # somebody else on it; a grip lost and regained at once continues the same dribble
-            if self.loose_since is None:
-                self.loose_since = obs.t
-            mx, my = me.x + MOUTH * math.cos(me.yaw), me.y + MOUTH * math.sin(me.yaw)
-            away = math.hypot(obs.bx - mx, obs.by - my) > RELEASE_DISTANCE
-            taken = any(m.holding for m in obs.mates) or any(
-                math.hypot(o[0] - obs.bx, o[1] - obs.by) < 0.45 for o in obs.opps)
-            if taken or (away and obs.t - self.loose_since >= RELEASE_TIME):
-                self.dribble_from = None
+        elif self.dribble_from is not None and dball > RELEASE_DISTANCE:
+            # released: the ball is clearly away from the robot (a grip lost and regained at once, the ball
+            # still at the robot, continues the same dribble)
+            self.dribble_from = None
         self._last_pos = (me.x, me.y)
         if self.areas.in_opp_penalty_area(me.x, me.y):
             if self.pa_since is None:
@@ -142,7 +135,18 @@ class BallPlayer:
             tx, ty = self.areas.keep_out(tx, ty, own_pa=True, opp_pa=not self.may_enter_opp_area(obs))
         else:
             tx, ty = self.areas.keep_out(tx, ty, own_pa=False, opp_pa=not self.may_enter_opp_area(obs))
-        vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed)
+        if self.dribble_from is not None and not me.holding:
+            # touching the ball without holding it (pushing it) counts as dribbling: when that runs out,
+            # let the ball go clear before taking it again
+            used = math.hypot(me.x - self.dribble_from[0], me.y - self.dribble_from[1])
+            if used > p.dribble_limit - 0.4:
+                ux, uy = math.cos(face), math.sin(face)
+                tx, ty = obs.bx - ux * (RELEASE_DISTANCE + 0.3), obs.by - uy * (RELEASE_DISTANCE + 0.3)
+                vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=False)
+                return Command(vx=vx, vy=vy, w=w, dribble=False, role=role, action=Action.CATCH_BALL_SLOW,
+                               intent=(tx, ty))
+        vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed,
+                                   turn_first=dball < 2.5)
         return Command(vx=vx, vy=vy, w=w, dribble=dball < 2.0, role=role, action=action, intent=(tx, ty))
 
     # --- with the ball -------------------------------------------------------------------------------------

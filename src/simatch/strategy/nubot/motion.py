@@ -22,9 +22,11 @@ from .params import NubotParams
 
 #: within this distance the position law is proportional (gain POSITION_GAIN)
 POSITION_GAIN = 3.0
-#: largest |v| |w| [m/s^2]: a robot that turns while it drives fast loses speed (its wheels, limited to
-#: 2.5 m/s^2, must keep turning the body-frame velocity); measured: 3.5 m/s holds at 1 rad/s, not at 2
-SPIN_COUPLING = 3.0
+#: largest |v| |w| [m/s^2]. A body-frame command for a fixed course turns with the robot, at |v| |w|; the
+#: wheels follow at 2.5 m/s^2 at most, so a robot turning fast at speed never reaches its speed (measured:
+#: starting at 3.5 m/s with 2 rad/s it only reaches 2.5 m/s). Turning slowly at speed leaves the wheels the
+#: acceleration to get there; the robot turns fully once it slows down near its target.
+SPIN_COUPLING = 1.5
 #: the braking assumed when closing in on an opponent (below the drive's, which also has to turn) [m/s^2]
 CHARGE_BRAKING = 2.5
 HEADING_GAIN = 5.0
@@ -68,8 +70,11 @@ class Motion:
     def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
            avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
            feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
-           gentle: bool = True) -> tuple[float, float, float]:
-        """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0)."""
+           gentle: bool = True, turn_first: bool = False) -> tuple[float, float, float]:
+        """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0).
+        Turning and driving fast at once cost the same wheel acceleration: by default the robot keeps its
+        speed and turns slowly; with ``turn_first`` it slows down to turn (to take the ball, the heading
+        matters more)."""
         me = obs.me
         vmax, wmax = self.limits(obs, vmax, wmax)
         # keep targets on the floor, inside the boards
@@ -100,7 +105,11 @@ class Motion:
         # can give, so that the robot keeps its speed (it turns fully once it slows down near the target)
         speed = math.hypot(vx, vy)
         if speed * abs(w) > SPIN_COUPLING:
-            w = math.copysign(SPIN_COUPLING / speed, w)
+            if turn_first:
+                k = SPIN_COUPLING / (speed * abs(w))
+                vx, vy = vx * k, vy * k
+            else:
+                w = math.copysign(SPIN_COUPLING / speed, w)
         return self.body(me.yaw, vx, vy, w)
 
     def turn_rate(self, err: float, wmax: float) -> float:
@@ -116,14 +125,18 @@ class Motion:
         touch = 2.0 * self.p.robot_radius + 0.05
         vc = self.p.contact_speed
         a = CHARGE_BRAKING
-        for ox, oy, _, _ in obs.opps:
+        for ox, oy, ovx, ovy in obs.opps:
             rx, ry = ox - me.x, oy - me.y
             d = math.hypot(rx, ry)
             if d > 3.5 or d < 1e-6:
                 continue
             nx, ny = rx / d, ry / d
-            allowed = math.sqrt(vc * vc + 2.0 * a * max(0.0, d - touch))
             now = me.vx * nx + me.vy * ny
+            # an opponent coming towards us shortens the way we have to slow down in
+            towards_me = max(0.0, -(ovx * nx + ovy * ny))
+            mine = max(now, 0.2)
+            gap = max(0.0, d - touch) * mine / (mine + towards_me)
+            allowed = math.sqrt(vc * vc + 2.0 * a * gap)
             limit = allowed if now <= allowed else max(-1.5, allowed - 2.0 * (now - allowed))
             closing = vx * nx + vy * ny
             if closing > limit:

@@ -22,6 +22,7 @@ from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 
+KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
 LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
 ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
 ON_LINE = 0.045         # distance off the kick line allowed (the ball must enter the mouth) [m]
@@ -62,8 +63,8 @@ class RestartTaker:
             slot = pic.slots.get(me.id)
             mate = self.receiver(obs, pic, flow)
             if flow.kind == MatchMode.OUR_KICKOFF and slot is not None:
-                ax, ay = slot[2], slot[3]                  # the lead point in front of the receiver
-                arrival = 2.0
+                ax, ay = slot[2], slot[3]                  # the point in front of the receiver
+                arrival = KICKOFF_ARRIVAL
             elif mate is not None:
                 ax, ay = mate.x, mate.y
                 arrival = p.pass_arrival_speed

@@ -3,7 +3,8 @@
 For a restart of ours: a taker behind the ball, lined up with its pass; a receiver at a free spot within
 passing range and at least 2 m (``mate_distance``) from the ball; the others in their defensive shape, also
 2 m away. The taker passes first: no goal may come straight from a set piece. At a kick-off everybody stays
-in our half, so the taker plays a lead pass diagonally forward into the space the receiver runs to.
+in our half (the taker too, until it touches the ball), so the pass cannot go backwards: the taker plays
+the ball gently sideways, to stop in front of the receiver, nearer to it than to any opponent.
 
 For a restart of theirs: nobody within 3 m (``opponent_distance``) of the ball; a wall between the ball
 and our goal, and markers on the opponents nearest to the ball. At a dropped ball everybody keeps 1 m
@@ -26,7 +27,7 @@ from .positions import Areas, guard_point, outlet_point, passive_point, score_sp
 
 SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
-KICKOFF_LEAD = (0.5, 2.4)   # where the kick-off pass goes (team frame, y mirrored to the receiver's side)
+KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to the receiver's side) [m]
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
@@ -70,7 +71,7 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
         lx, ly = KICKOFF_LEAD[0], side * KICKOFF_LEAD[1]
         ux, uy = unit(lx - bx, ly - by)
         slots.append((Role.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, lx, ly))
-        rx, ry = push_from(-0.45, side * 2.5, bx, by, p.mate_distance + 0.15)
+        rx, ry = push_from(-0.45, side * 2.35, bx, by, p.mate_distance + 0.15)
         slots.append((Role.ASSISTANT, rx, ry, bx, by))
         slots.append((Role.PASSIVE, -4.5, -side * 1.0, bx, by))
         slots.append((Role.MIDFIELD, -2.2, -side * 2.6, bx, by))
