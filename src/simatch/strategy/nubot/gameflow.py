@@ -15,7 +15,7 @@ import math
 from ...scene.commands import MatchMode, is_ours
 from .observation import Observation
 
-IN_PLAY_DISTANCE = 0.5        # the ball is in play once it moved this far from its restart spot [m]
+IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
 TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
 OUR_RESTART_LIMIT = 10.0      # a restart of ours not taken by then is given up [s]
 TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]

@@ -27,8 +27,10 @@ POSITION_GAIN = 3.0
 #: starting at 3.5 m/s with 2 rad/s it only reaches 2.5 m/s). Turning slowly at speed leaves the wheels the
 #: acceleration to get there; the robot turns fully once it slows down near its target.
 SPIN_COUPLING = 1.5
+#: robots are avoided where they will be this much later [s]
+LOOK_AHEAD = 0.3
 #: the braking assumed when closing in on an opponent (below the drive's, which also has to turn) [m/s^2]
-CHARGE_BRAKING = 2.5
+CHARGE_BRAKING = 2.0
 HEADING_GAIN = 5.0
 
 
@@ -55,14 +57,16 @@ class Motion:
         return vmax, wmax
 
     def obstacles(self, obs: Observation, ball: bool | float = False) -> list[tuple[float, float, float]]:
-        """Every other robot (and the ball if asked: True for the usual clearance, or a distance to keep
-        from it) with the clearance to keep from it."""
+        """Every other robot (where it will be in LOOK_AHEAD seconds: a robot cannot swerve at once) and the
+        ball if asked (True for the usual clearance, or a distance to keep from it), with the clearance to
+        keep from each."""
         me = obs.me
         c = self.clearance
-        out = [(o[0], o[1], c) for o in obs.opps]
+        k = LOOK_AHEAD
+        out = [(o[0] + k * o[2], o[1] + k * o[3], c) for o in obs.opps]
         for m in obs.mates:
             if m is not me:
-                out.append((m.x, m.y, c))
+                out.append((m.x + k * m.vx, m.y + k * m.vy, c))
         if ball:
             out.append((obs.bx, obs.by, self.ball_clearance if ball is True else float(ball)))
         return out
@@ -119,12 +123,14 @@ class Motion:
 
     def no_charging(self, obs: Observation, vx: float, vy: float) -> tuple[float, float]:
         """Cap the velocity towards every opponent so that the robot could still slow to the contact speed
-        before it touches it. The drive changes velocity slowly (wheel acceleration limits), so a robot
-        already closing in too fast is commanded to back off along that line, which brakes it hardest."""
+        before it touches it. The drive changes velocity slowly (wheel acceleration limits): a robot
+        already closing in too fast is commanded its current velocity with the closing part cut hard, so
+        that all the wheels' effort goes into braking along that line, not into turning its course."""
         me = obs.me
         touch = 2.0 * self.p.robot_radius + 0.05
         vc = self.p.contact_speed
         a = CHARGE_BRAKING
+        worst, brake = 0.0, None
         for ox, oy, ovx, ovy in obs.opps:
             rx, ry = ox - me.x, oy - me.y
             d = math.hypot(rx, ry)
@@ -137,12 +143,16 @@ class Motion:
             mine = max(now, 0.2)
             gap = max(0.0, d - touch) * mine / (mine + towards_me)
             allowed = math.sqrt(vc * vc + 2.0 * a * gap)
-            limit = allowed if now <= allowed else max(-1.5, allowed - 2.0 * (now - allowed))
+            if now > allowed and now - allowed > worst:
+                worst, brake = now - allowed, (nx, ny, allowed)
             closing = vx * nx + vy * ny
-            if closing > limit:
-                cut = closing - limit
-                vx -= cut * nx
-                vy -= cut * ny
+            if closing > allowed:
+                vx -= (closing - allowed) * nx
+                vy -= (closing - allowed) * ny
+        if brake is not None:
+            nx, ny, allowed = brake
+            cut = me.vx * nx + me.vy * ny - max(-1.5, allowed - 2.0 * worst)
+            vx, vy = me.vx - cut * nx, me.vy - cut * ny
         return vx, vy
 
     def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:

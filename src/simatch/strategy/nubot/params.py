@@ -43,7 +43,7 @@ class NubotParams(BaseModel):
                                      description="distance kept at a dropped ball (MSL: 1 m) [m]")
     area_time: float = Field(6.0, gt=0.0, le=60.0,
                              description="longest stay of a field robot in a penalty area (MSL: 10 s) [s]")
-    restart_wait: float = Field(7.0, gt=0.0, le=60.0,
+    restart_wait: float = Field(7.5, gt=0.0, le=60.0,
                                 description="after this long the defending team may play an opponents' "
                                             "restart that was not taken (MSL: 7 s) [s]")
     contact_speed: float = Field(0.8, gt=0.0, le=10.0,
