@@ -35,6 +35,7 @@ from .picture import Picture
 from .positions import Areas
 
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
+OPEN_GOAL_VALUE = 15.0  # value of a place with an open shot, per radian of open goal (capped at 0.15 rad)
 CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
 ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
 CONTACT_DISTANCE = 0.42  # ball centre this close to the robot's centre: touching it [m]
@@ -145,8 +146,9 @@ class BallPlayer:
                 vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=False)
                 return Command(vx=vx, vy=vy, w=w, dribble=False, role=role, action=Action.CATCH_BALL_SLOW,
                                intent=(tx, ty))
+        boxes = self.areas.forbidden(self.may_enter_opp_area(obs)) if stay_out_own_area else ()
         vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed,
-                                   turn_first=dball < 2.5)
+                                   turn_first=dball < 2.5, boxes=boxes)
         return Command(vx=vx, vy=vy, w=w, dribble=dball < 2.0, role=role, action=action, intent=(tx, ty))
 
     # --- with the ball -------------------------------------------------------------------------------------
@@ -191,7 +193,7 @@ class BallPlayer:
                 plan = self.release(obs, can_score)
         # 3. dribble, away from pressure, towards the best point in reach
         if plan is None:
-            plan = self.dribble_target(obs, left)
+            plan = self.dribble_target(obs, left, can_score)
         self.plan = plan
         return self.execute(obs, plan, role)
 
@@ -237,6 +239,9 @@ class BallPlayer:
             if near < 1.1:
                 continue
             value = position_value(cx, cy, obs.opps, self.areas.L2) + 0.3 * min(margin, 1.5)
+            if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
+                value += OPEN_GOAL_VALUE * min(shot_window(cx, cy, obs.opps, self.areas.L2, self.goal_half,
+                                                           p.shot_speed)[1], 0.15)
             out.append((value, m.id, cx, cy, v))
         return out
 
@@ -276,8 +281,9 @@ class BallPlayer:
         d = max(2.0, math.hypot(tx - obs.bx, ty - obs.by))
         return ("clear", tx, ty, pass_speed(d, 1.0, p.ball_deceleration, 1.8, 4.0), 0)
 
-    def dribble_target(self, obs: Observation, left: float):
-        """("dribble", x, y): the best point within reach of the ball, inside the dribble circle."""
+    def dribble_target(self, obs: Observation, left: float, can_score: bool = False):
+        """("dribble", x, y): the best point within reach of the ball, inside the dribble circle; near the
+        opponents' goal, one from which more of the goal is open."""
         me, areas = obs.me, self.areas
         L2, W2 = areas.L2, areas.W2
         opps = obs.opps
@@ -302,6 +308,9 @@ class BallPlayer:
                 continue
             score = position_value(tx, ty, opps, L2)
             score += 0.35 * min(lane_clear(me.x, me.y, tx, ty, opps, 1.5), 0.5)
+            if can_score and tx > 0.0 and L2 - tx < self.p.shoot_range:
+                score += OPEN_GOAL_VALUE * min(shot_window(tx, ty, opps, L2, self.goal_half, self.p.shot_speed)[1],
+                                               0.15)
             # away from opponents closing in: keep the body between them and the ball
             for ox, oy, _, _ in opps:
                 rx, ry = ox - me.x, oy - me.y
@@ -332,7 +341,9 @@ class BallPlayer:
             face = math.atan2(ty - me.y, tx - me.x) if d > 0.3 else me.yaw
             err = abs(wrap(face - me.yaw))
             vmax = p.dribble_speed * max(0.15, math.cos(min(err, 1.5)))
-            vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.dribble_turn, avoid=True)
+            vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.dribble_turn, avoid=True,
+                                       boxes=self.areas.forbidden(self.may_enter_opp_area(obs)) if role != Role.GOALIE
+                                       else ())
             return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=Action.MOVE_WITH_BALL,
                            intent=(tx, ty))
         tx, ty, speed = plan[1], plan[2], plan[3]
@@ -347,11 +358,15 @@ class BallPlayer:
             action = Action.TURN_TO_PASS
         vx, vy, w = self.motion.go(obs, me.x, me.y, face, 0.5, p.dribble_turn, avoid=False)
         kick = 0.0
-        if abs(err) < tol and abs(me.w) < 1.2 and me.holding:
+        spin = 2.5 if kind == "clear" else 1.2     # turning adds the mouth's sideways speed to the kick
+        if abs(err) < tol and abs(me.w) < spin and me.holding:
             kick = speed
             action = Action.AT_SHOOT_SITUATION if kind == "shoot" else Action.STATIC_PASS
-        # the dribbler lets go as the kicker fires: a slow kick would otherwise be taken straight back
-        cmd = Command(vx=vx, vy=vy, w=w, dribble=kick == 0.0, kick_speed=kick, lob=kind == "lob", role=role,
+        # a kick slower than the dribbler can take would be taken straight back by the robot's own dribbler:
+        # for those the dribbler lets go as the kicker fires (the ball must then lie in the mouth); a faster
+        # kick fires from the held ball
+        dribble = kick == 0.0 or kick > p.catch_speed + 0.6
+        cmd = Command(vx=vx, vy=vy, w=w, dribble=dribble, kick_speed=kick, lob=kind == "lob", role=role,
                       action=action, intent=(tx, ty))
         if kind == "pass":
             intent = PassIntent(catch_id=plan[4], pass_x=obs.bx, pass_y=obs.by, catch_x=tx, catch_y=ty,

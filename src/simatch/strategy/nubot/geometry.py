@@ -75,3 +75,22 @@ def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
     if d <= d_acc:
         return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
     return (vmax - v0) / acc + (d - d_acc) / vmax
+
+
+def segment_hits_box(ax: float, ay: float, bx: float, by: float, x0: float, x1: float, half_w: float) -> bool:
+    """Whether the segment AB passes through the open box [x0, x1] x [-half_w, half_w] (Liang-Barsky)."""
+    t0, t1 = 0.0, 1.0
+    dx, dy = bx - ax, by - ay
+    for p, q in ((-dx, ax - x0), (dx, x1 - ax), (-dy, ay + half_w), (dy, half_w - ay)):
+        if abs(p) < 1e-12:
+            if q <= 0.0:
+                return False
+            continue
+        r = q / p
+        if p < 0.0:
+            t0 = max(t0, r)
+        else:
+            t1 = min(t1, r)
+        if t0 >= t1:
+            return False
+    return True

@@ -35,8 +35,9 @@ HEADING_GAIN = 5.0
 
 
 class Motion:
-    def __init__(self, params: NubotParams, period: float, field):
+    def __init__(self, params: NubotParams, period: float, field, areas=None):
         self.p = params
+        self.areas = areas
         self.period = period
         self.field = field
         self.side = 0                # side of the last avoidance, for its hysteresis
@@ -74,11 +75,16 @@ class Motion:
     def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
            avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
            feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
-           gentle: bool = True, turn_first: bool = False) -> tuple[float, float, float]:
+           gentle: bool = True, turn_first: bool = False,
+           boxes: list[tuple[float, float, float]] = (),
+           fence: tuple[float, float, float] | None = None,
+           max_x: float | None = None) -> tuple[float, float, float]:
         """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0).
         Turning and driving fast at once cost the same wheel acceleration: by default the robot keeps its
         speed and turns slowly; with ``turn_first`` it slows down to turn (to take the ball, the heading
-        matters more)."""
+        matters more). ``boxes`` are areas to go round (see `Areas.route`); ``fence`` = (x, y, r) is a
+        circle the robot must not enter (a restart's ball), whatever avoiding others asks; ``max_x`` a
+        line it must not cross (the half-way line at a kick-off)."""
         me = obs.me
         vmax, wmax = self.limits(obs, vmax, wmax)
         # keep targets on the floor, inside the boards
@@ -89,8 +95,10 @@ class Motion:
         vx = vy = 0.0
         if d > 0.01 or end_speed > 0.0:
             sx, sy = tx, ty
+            if boxes:
+                sx, sy = self.areas.route(me.x, me.y, tx, ty, boxes)
             if avoid:
-                sx, sy, self.side = sub_target(me.x, me.y, tx, ty, self.obstacles(obs, ball_obstacle), self.side)
+                sx, sy, self.side = sub_target(me.x, me.y, sx, sy, self.obstacles(obs, ball_obstacle), self.side)
             a = self.p.braking if brake is None else brake
             speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
             ex, ey = sx - me.x, sy - me.y
@@ -104,6 +112,10 @@ class Motion:
             vx, vy = vx / n * vmax, vy / n * vmax
         if gentle:
             vx, vy = self.no_charging(obs, vx, vy)
+        if fence is not None:
+            vx, vy = self.keep_out_of_circle(me.x, me.y, vx, vy, *fence)
+        if max_x is not None:
+            vx = min(vx, 2.0 * (max_x - me.x))
         w = 0.0 if face is None else self.turn_rate(wrap(face - me.yaw), wmax)
         # turning while driving costs the wheels |v| |w| of acceleration: keep the product within what they
         # can give, so that the robot keeps its speed (it turns fully once it slows down near the target)
@@ -153,6 +165,23 @@ class Motion:
             nx, ny, allowed = brake
             cut = me.vx * nx + me.vy * ny - max(-1.5, allowed - 2.0 * worst)
             vx, vy = me.vx - cut * nx, me.vy - cut * ny
+        return vx, vy
+
+    @staticmethod
+    def keep_out_of_circle(x: float, y: float, vx: float, vy: float, cx: float, cy: float,
+                           r: float) -> tuple[float, float]:
+        """The velocity with its part towards the circle's centre capped so that the robot stops at the
+        circle (and leaves it at once if it is inside)."""
+        dx, dy = cx - x, cy - y
+        d = math.hypot(dx, dy)
+        if d > r + 1.0 or d < 1e-6:
+            return vx, vy
+        nx, ny = dx / d, dy / d
+        inward = vx * nx + vy * ny
+        allowed = 2.0 * (d - r - 0.1)             # negative inside: move out
+        if inward > allowed:
+            vx -= (inward - allowed) * nx
+            vy -= (inward - allowed) * ny
         return vx, vy
 
     def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .geometry import box_exit, clamp, push_out_of_box
+from .geometry import box_exit, clamp, push_out_of_box, segment_hits_box
 
 
 class Areas:
@@ -52,6 +52,27 @@ class Areas:
         else:
             x, y = push_out_of_box(x, y, *self.opp_ga)
         return x, y
+
+    def forbidden(self, opp_area: bool) -> list[tuple[float, float, float]]:
+        """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
+        goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
+        return [self.own_pa, self.opp_pa if not opp_area else self.opp_ga]
+
+    def route(self, px: float, py: float, tx: float, ty: float,
+              boxes: list[tuple[float, float, float]]) -> tuple[float, float]:
+        """The next point on the way from P to T that keeps out of ``boxes``: the way out of a box the robot
+        is in, or the nearer field-side corner of a box the straight way would cross."""
+        for x0, x1, hw in boxes:
+            if x0 < px < x1 and -hw < py < hw:
+                ex, ey = push_out_of_box(px, py, x0, x1, hw)
+                return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
+        for x0, x1, hw in boxes:
+            if segment_hits_box(px, py, tx, ty, x0, x1, hw):
+                cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15        # the corners on the field side
+                best = min(((cx, hw + 0.15), (cx, -hw - 0.15)),
+                           key=lambda c: math.hypot(c[0] - px, c[1] - py) + math.hypot(tx - c[0], ty - c[1]))
+                return best
+        return tx, ty
 
     def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
         return clamp(x, -self.L2 + margin, self.L2 - margin), clamp(y, -self.W2 + margin, self.W2 - margin)

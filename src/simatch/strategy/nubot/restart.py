@@ -55,6 +55,9 @@ class RestartTaker:
     def take(self, obs: Observation, pic: Picture, flow: GameFlow) -> Command:
         p, me = self.p, obs.me
         bx, by = obs.bx, obs.by
+        if obs.ball_speed > 0.3 and math.hypot(bx - flow.ball0[0], by - flow.ball0[1]) > 0.05:
+            # kicked: the taker may not touch the ball again before another robot did; it stays put
+            return Command(role=Role.PASSOFPASS, action=Action.NO_ACTION, pass_intent=self.player.pass_intent(obs))
         receiver = None
         if flow.kind == MatchMode.OUR_PENALTY:
             aim_y, _ = shot_window(bx, by, obs.opps, self.L2, self.goal_half, p.shot_speed)

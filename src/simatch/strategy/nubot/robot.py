@@ -36,6 +36,10 @@ from .testmodes import TestModes
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
 PARK_SPACING = 1.3
+#: at a kick-off, robots in their own half keep this far from the half-way line [m]
+KICKOFF_LINE_MARGIN = 0.15
+#: after taking a restart, the taker keeps this far from the ball until another robot has touched it [m]
+TAKER_BALL_CLEARANCE = 0.9
 #: a robot going round the ball's circle at a restart heads this far (in angle) along it [rad]
 ORBIT_STEP = 0.6
 
@@ -67,7 +71,7 @@ class NubotRobot(RobotStrategy):
         areas = self.shared.areas
         goal_half = 0.5 * ctx.field.goal_width
         self.areas = areas
-        self.motion = Motion(params, ctx.control_period, ctx.field)
+        self.motion = Motion(params, ctx.control_period, ctx.field, areas)
         self.flow = GameFlow(params.restart_wait)
         self.player = BallPlayer(params, self.motion, areas, goal_half)
         self.keeper = Goalkeeper(params, self.motion, areas, ctx.field, self.player)
@@ -136,9 +140,19 @@ class NubotRobot(RobotStrategy):
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
         keep = self.keep_from_ball(obs)
+        fence = None
         if keep is not None:
             x, y = self.round_the_ball(obs, x, y, keep)
-        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=True)
+            if math.hypot(x - obs.bx, y - obs.by) >= keep:
+                fence = (obs.bx, obs.by, keep)
+        ball = True
+        if self.flow.taker == me.id:
+            ball = TAKER_BALL_CLEARANCE          # the restart's taker must not touch the ball again yet
+            fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
+        kickoff = keep is not None and self.flow.kind in (MatchMode.OUR_KICKOFF, MatchMode.OPP_KICKOFF)
+        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=ball,
+                                   boxes=self.areas.forbidden(False), fence=fence,
+                                   max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None)
         return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
 
     def keep_from_ball(self, obs: Observation) -> float | None:
