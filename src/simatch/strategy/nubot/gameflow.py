@@ -103,7 +103,7 @@ class GameFlow:
         elif self.phase == Phase.OPP_RESTART:
             if moved or obs.t - self.t0 > self.restart_wait:
                 self.phase = Phase.PLAY
-        if self.phase != Phase.PLAY:
+        if self.phase != Phase.PLAY or not (self.taker or self.pass_pending):
             return
         holder = next((m for m in obs.mates if m.holding), None)
         touched = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)

@@ -41,6 +41,7 @@ class Motion:
         self.period = period
         self.field = field
         self.side = 0                # side of the last avoidance, for its hysteresis
+        self.last = (0.0, 0.0, 0.0)  # the last course: team-frame velocity and turn rate
         self.clearance = 2.0 * params.robot_radius + 0.3           # robot to robot centres
         self.ball_clearance = params.robot_radius + 0.11 + 0.12      # robot centre to ball centre
         self.xlim = field.half_length + 0.9
@@ -126,6 +127,7 @@ class Motion:
                 vx, vy = vx * k, vy * k
             else:
                 w = math.copysign(SPIN_COUPLING / speed, w)
+        self.last = (vx, vy, w)
         return self.body(me.yaw, vx, vy, w)
 
     def turn_rate(self, err: float, wmax: float) -> float:

@@ -37,35 +37,59 @@ class Mate:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
 
 
-class Observation:
-    __slots__ = ("t", "tick", "me", "mates", "by_id", "bx", "by", "bz", "bvx", "bvy", "bvz", "ball_seen",
-                 "ball_age", "opps", "mode", "mtype", "coach", "goalie_id")
+class TeamView:
+    """The part of an observation that every robot of the team shares (its team's RobotInfo list and
+    StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
+    the others when they hold the very same messages."""
 
-    def __init__(self, world: WorldModel):
-        v = world.vision
-        self.t = world.time
-        self.tick = world.tick
-        gk = world.goalkeeper
-        self.goalie_id = gk
+    __slots__ = ("tick", "robots", "infos", "mates", "by_id")
+
+    def __init__(self):
+        self.tick = -1
+        self.robots = None
+        self.infos: tuple = ()
+        self.mates: list[Mate] = []
+        self.by_id: dict[int, Mate] = {}
+
+    def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate]]:
+        robots = world.vision.robots
         strategies = world.strategies
+        infos = self.infos
+        if (self.tick == world.tick and self.robots is robots and len(infos) == len(strategies)
+                and all(a is b for a, b in zip(infos, strategies.values()))):
+            return self.mates, self.by_id
+        gk = world.goalkeeper
         mates = []
-        me = None
-        for r in v.robots:
+        for r in robots:
             m = Mate(r, r.id == gk)
             s = strategies.get(r.id)
             if s is not None:
                 m.role, m.action = s.role, s.action
                 if s.pass_cmd.is_valid:
                     m.pass_info = s.pass_cmd
-            if r.id == world.id:
-                me = m
             mates.append(m)
+        self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
+        self.mates, self.by_id = mates, {m.id: m for m in mates}
+        return self.mates, self.by_id
+
+
+class Observation:
+    __slots__ = ("t", "tick", "me", "mates", "by_id", "bx", "by", "bz", "bvx", "bvy", "bvz", "ball_seen",
+                 "ball_age", "opps", "mode", "mtype", "coach", "goalie_id")
+
+    def __init__(self, world: WorldModel, view: TeamView | None = None):
+        v = world.vision
+        self.t = world.time
+        self.tick = world.tick
+        self.goalie_id = world.goalkeeper
+        mates, by_id = (view or TeamView()).get(world)
+        me = by_id.get(world.id)
         if me is None:
             raise LookupError(f"robot {world.id} is missing from its own perception")
         self.me = me
         self.mates = mates
-        self.by_id = {m.id: m for m in mates}
-        b = world.ball
+        self.by_id = by_id
+        b = v.ball if v.ball.pos_known else world.ball
         if b is None:
             self.bx = self.by = self.bvx = self.bvy = self.bvz = 0.0
             self.bz = 0.11
@@ -74,20 +98,9 @@ class Observation:
         else:
             self.bx, self.by, self.bz = b.x, b.y, b.z
             self.bvx, self.bvy, self.bvz = b.vx, b.vy, b.vz
-            self.ball_seen = b.seen
-            self.ball_age = b.age
-        o = v.obstacles
-        opps = []
-        if len(o.x):
-            xs, ys, vxs, vys = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
-            for k in range(len(xs)):
-                x, y = xs[k], ys[k]
-                for m in mates:
-                    if abs(m.x - x) < _SAME_ROBOT and abs(m.y - y) < _SAME_ROBOT:
-                        break
-                else:
-                    opps.append((x, y, vxs[k], vys[k]))
-        self.opps = opps
+            self.ball_seen = b is v.ball
+            self.ball_age = 0.0 if self.ball_seen else b.age
+        self.opps = opponents(v.obstacles, mates)
         c = world.coach
         self.coach = c
         self.mode = c.match_mode if c is not None else 0
@@ -100,3 +113,25 @@ class Observation:
     def field_mates(self) -> list[Mate]:
         """Valid team-mates that are not the goalkeeper, me included."""
         return [m for m in self.mates if m.valid and not m.is_goalie]
+
+
+def opponents(o, mates: list[Mate]) -> list[tuple[float, float, float, float]]:
+    """(x, y, vx, vy) of the obstacles that are not team-mates. With exact perception a team-mate's
+    obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of one."""
+    n = len(o.x)
+    if n == 0:
+        return []
+    xs, ys, vxs, vys = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
+    spots = {(m.x, m.y) for m in mates}
+    found = 0
+    rest = []
+    for k in range(n):
+        if (xs[k], ys[k]) in spots:
+            found += 1
+        else:
+            rest.append(k)
+    if found < len(mates) - 1:
+        # some team-mates are not where the team list says (noisy perception): match by distance
+        rest = [k for k in rest
+                if all(abs(m.x - xs[k]) >= _SAME_ROBOT or abs(m.y - ys[k]) >= _SAME_ROBOT for m in mates)]
+    return [(xs[k], ys[k], vxs[k], vys[k]) for k in rest]

@@ -56,19 +56,27 @@ class Picture:
 
 
 class TeamMemo:
-    """The last picture computed in this process for a team, keyed by every input it depends on: robots
-    of the team that see exactly the same facts at the same tick reuse it instead of recomputing it."""
+    """The last picture computed in this process for a team, with every input it depends on: robots of
+    the team that see exactly the same facts at the same tick reuse it instead of recomputing it. (The
+    team-mates' part of an observation is the very same object then, see observation.TeamView.)"""
 
     def __init__(self):
-        self.key = None
+        self.tick = -1
+        self.mates = None
+        self.rest: tuple = ()
         self.picture = None
 
+    def get(self, obs: Observation, flow: GameFlow) -> Picture | None:
+        if self.tick == obs.tick and self.mates is obs.mates and self.rest == _rest_key(obs, flow):
+            return self.picture
+        return None
 
-def picture_key(obs: Observation, flow: GameFlow) -> tuple:
-    return (obs.tick, obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype,
-            tuple(m.key() for m in obs.mates), tuple(obs.opps), flow.key(),
-            tuple((m.id, m.pass_info.catch_id, m.pass_info.catch_x, m.pass_info.catch_y, m.pass_info.is_passout)
-                  for m in obs.mates if m.pass_info is not None))
+    def put(self, obs: Observation, flow: GameFlow, picture: Picture) -> None:
+        self.tick, self.mates, self.rest, self.picture = obs.tick, obs.mates, _rest_key(obs, flow), picture
+
+
+def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
+    return (obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype, obs.opps, flow.key())
 
 
 def assign(robots: list, slots: list[tuple], hysteresis: float,
@@ -124,21 +132,19 @@ class Analyst:
         opps = obs.opps
         if pic.holder == 0:
             pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
-        if mates:
-            turn = np.array([abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)) for m in mates]) / p.max_turn
-            t, ix, iy = intercepts(path, np.array([m.x for m in mates]), np.array([m.y for m in mates]),
-                                   np.array([m.vx for m in mates]), np.array([m.vy for m in mates]), p.max_speed,
-                                   p.acceleration, 0.7 * turn)
-            tl, xl, yl = t.tolist(), ix.tolist(), iy.tolist()
+        # interception of every robot, ours (with the time to face the ball) and theirs, in one go
+        n_us = len(mates)
+        turn = 0.7 / p.max_turn
+        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)))
+                for m in mates] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
+        if rows:
+            a = np.array(rows).T.copy()
+            res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
             for k, m in enumerate(mates):
-                pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else (tl[k], xl[k], yl[k])
-        if opps:
-            a = np.array(opps)
-            t, ix, iy = intercepts(path, a[:, 0], a[:, 1], a[:, 2], a[:, 3], p.max_speed, p.acceleration)
-            k = int(np.argmin(t))
-            pic.their_t, pic.their_xy = float(t[k]), (float(ix[k]), float(iy[k]))
-            if pic.opp_holds:
-                pic.their_t = 0.0
+                pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
+            if opps:
+                t, x, y = min(res[n_us:])
+                pic.their_t, pic.their_xy = (0.0 if pic.opp_holds else t), (x, y)
         self._passes(obs, pic)
         if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
             self._set_piece(obs, flow, pic, mates)

@@ -26,9 +26,9 @@ from .gameflow import GameFlow, Phase
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
-from .observation import Observation
+from .observation import Observation, TeamView
 from .params import NubotParams
-from .picture import Analyst, Picture, TeamMemo, picture_key
+from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
@@ -36,6 +36,10 @@ from .testmodes import TestModes
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
 PARK_SPACING = 1.3
+#: a steady robot decides again at once when the ball, or another robot, is this close [m]
+STEADY_BALL_DISTANCE = 3.0
+STEADY_ROBOT_DISTANCE = 1.5
+STEADY_ACTIONS = (Action.POSITIONED, Action.CATCH_BALL)
 #: at a kick-off, robots in their own half keep this far from the half-way line [m]
 KICKOFF_LINE_MARGIN = 0.15
 #: after taking a restart, the taker keeps this far from the ball until another robot has touched it [m]
@@ -53,6 +57,7 @@ class _Shared:
         self.spots = spot_grid(self.areas)
         self.analyst = Analyst(params, self.areas, self.spots)
         self.memo = TeamMemo()
+        self.view = TeamView()
         self.evaluated = 0            # pictures computed (for profiling)
         self.reused = 0
 
@@ -82,21 +87,25 @@ class NubotRobot(RobotStrategy):
         self.park_at = (-areas.L2 + 1.0 + PARK_SPACING * k, -(areas.W2 + PARK_OUTSIDE))
         self.role = Role.NOROLE
         self.picture: Picture | None = None
+        self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
 
     # -----------------------------------------------------------------------------------------------------
     def team_picture(self, obs: Observation) -> Picture:
         memo = self.shared.memo
-        key = picture_key(obs, self.flow)
-        if memo.key == key:
+        pic = memo.get(obs, self.flow)
+        if pic is not None:
             self.shared.reused += 1
-            return memo.picture
+            return pic
         pic = self.shared.analyst.analyse(obs, self.flow)
-        memo.key, memo.picture = key, pic
+        memo.put(obs, self.flow, pic)
         self.shared.evaluated += 1
         return pic
 
     def decide(self, world: WorldModel) -> Command:
-        obs = Observation(world)
+        again = self.repeat(world)
+        if again is not None:
+            return again
+        obs = Observation(world, self.shared.view)
         flow = self.flow
         flow.update(obs)
         self.player.track(obs)
@@ -127,7 +136,33 @@ class NubotRobot(RobotStrategy):
         if cmd.pass_intent is None:
             cmd.pass_intent = self.player.pass_intent(obs)
         self.role = cmd.role
+        self.steady = None
+        if (phase in (Phase.PLAY, Phase.SETUP) and cmd.action in STEADY_ACTIONS and cmd.pass_intent is None
+                and pic.receiver != me.id and not me.holding):
+            # a robot taking its place (or running to a ball far away) decides at half rate; in between it
+            # keeps its course
+            self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
         return cmd
+
+    def repeat(self, world: WorldModel) -> Command | None:
+        """The last command again, with the course kept in the team frame, when this robot decided last
+        tick, only to take its place, and nothing that concerns it changed since (same game command, the
+        ball still far away and not coming at it)."""
+        steady = self.steady
+        if steady is None:
+            return None
+        self.steady = None
+        tick, mode, cmd, (vx, vy, w) = steady
+        if world.tick != tick + 1 or world.match_mode != mode:
+            return None
+        v = world.vision
+        me, b = world.me, v.ball
+        if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < STEADY_BALL_DISTANCE ** 2:
+            return None
+        if len(v.obstacles.distance) and v.obstacles.distance.min() < STEADY_ROBOT_DISTANCE:
+            return None
+        bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
+        return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent)
 
     # --- simple movements ---------------------------------------------------------------------------------
     def hold_slot(self, obs: Observation, pic: Picture, role: int) -> Command:
