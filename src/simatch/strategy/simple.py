@@ -73,7 +73,8 @@ class SimpleRobot(RobotStrategy):
             self.wait_from = (world.time, ball.x, ball.y)
         if self.wait_from is not None and ball is not None:
             t0, x0, y0 = self.wait_from
-            if mode != MatchMode.STARTROBOT or world.time - t0 > OPPONENT_WAIT or math.hypot(ball.x - x0, ball.y - y0) > 0.5:
+            moved = math.hypot(ball.x - x0, ball.y - y0) > 0.5
+            if mode != MatchMode.STARTROBOT or world.time - t0 > OPPONENT_WAIT or moved:
                 self.wait_from = None
         self.last_mode = mode
 

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ...scene.commands import MatchMode
 from ..base import Command, PassIntent
 from ..roles import Action, Role
@@ -35,6 +37,9 @@ from .picture import Picture
 from .positions import Areas
 
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
+TASTE = 0.3             # spread of a possession's taste for each receiver (position value units)
+LEAN = 0.15             # weight of a possession's preferred dribbling side
+AIM_SPREAD = 0.25       # a shot aims this fraction of the open width either side of its middle
 OPEN_GOAL_VALUE = 15.0  # value of a place with an open shot, per radian of open goal (capped at 0.15 rad)
 CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
 ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
@@ -45,8 +50,15 @@ DRIBBLE_DIRECTIONS = [(math.cos(k * math.pi / 8), math.sin(k * math.pi / 8)) for
 
 
 class BallPlayer:
-    def __init__(self, params: NubotParams, motion: Motion, areas: Areas, goal_half: float):
+    def __init__(self, params: NubotParams, motion: Motion, areas: Areas, goal_half: float,
+                 rng: np.random.Generator | None = None):
         self.p = params
+        # the run's seed varies play: each possession draws a preferred dribbling side, a taste for each
+        # receiver and an aim within the open part of the goal (the same seed always draws the same)
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.taste: dict[int, float] = {}
+        self.lean = (1.0, 0.0)
+        self.aim_offset = 0.0
         self.motion = motion
         self.areas = areas
         self.goal_half = goal_half
@@ -70,6 +82,7 @@ class BallPlayer:
                 self.back = 0.0
                 self.plan = None
                 self.dribble_dir = None
+                self.new_possession()
             elif me.holding:
                 dx, dy = me.x - self._last_pos[0], me.y - self._last_pos[1]
                 along = dx * math.cos(me.yaw) + dy * math.sin(me.yaw)
@@ -88,6 +101,13 @@ class BallPlayer:
         if self.announce is not None and (obs.t > self.announce_until or
                                           (not me.holding and any(m.holding for m in obs.mates))):
             self.announce = None
+
+    def new_possession(self) -> None:
+        rng = self.rng
+        a = float(rng.uniform(-math.pi, math.pi))
+        self.lean = (math.cos(a), math.sin(a))
+        self.taste = {rid: float(x) for rid, x in zip(range(1, 33), rng.normal(0.0, TASTE, 32))}
+        self.aim_offset = float(rng.uniform(-AIM_SPREAD, AIM_SPREAD))
 
     def may_enter_opp_area(self, obs: Observation) -> bool:
         return self.pa_since is None or obs.t - self.pa_since < self.p.area_time
@@ -170,6 +190,7 @@ class BallPlayer:
             if left < 0.4 or threat < 0.8:
                 need = 0.025
             if width > need and self.turn_time(obs, L2, aim_y) < threat + 0.3:
+                aim_y += self.aim_offset * width * (L2 - bx)
                 plan = ("shoot", L2 + 0.3, aim_y, p.shot_speed, width)
         # 2. pass, when a team-mate is clearly better placed, or pressed, or the dribble runs out
         if plan is None:
@@ -239,6 +260,7 @@ class BallPlayer:
             if near < 1.1:
                 continue
             value = position_value(cx, cy, obs.opps, self.areas.L2) + 0.3 * min(margin, 1.5)
+            value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(shot_window(cx, cy, obs.opps, self.areas.L2, self.goal_half,
                                                            p.shot_speed)[1], 0.15)
@@ -319,6 +341,7 @@ class BallPlayer:
                     score -= 2.0 * max(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
             turn = 1.0 - (ux * c + uy * s)
             score -= 0.25 * turn
+            score += LEAN * (ux * self.lean[0] + uy * self.lean[1])
             if ux * c + uy * s < -0.3 and self.back > self.p.dribble_back_limit - 0.5:
                 score -= 5.0
             if self.dribble_dir is not None:

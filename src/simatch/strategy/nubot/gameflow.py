@@ -108,7 +108,8 @@ class GameFlow:
         holder = next((m for m in obs.mates if m.holding), None)
         touched = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
         if self.taker:
-            if touched or (holder is not None and holder.id != self.taker) or obs.t - self.taker_since > TAKER_BLOCK_LIMIT:
+            if (touched or (holder is not None and holder.id != self.taker)
+                    or obs.t - self.taker_since > TAKER_BLOCK_LIMIT):
                 self.taker = 0
         if self.pass_pending:
             # no direct goal: a second robot of ours must have had the ball (at a dropped ball, any

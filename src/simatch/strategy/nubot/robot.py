@@ -78,7 +78,7 @@ class NubotRobot(RobotStrategy):
         self.areas = areas
         self.motion = Motion(params, ctx.control_period, ctx.field, areas)
         self.flow = GameFlow(params.restart_wait)
-        self.player = BallPlayer(params, self.motion, areas, goal_half)
+        self.player = BallPlayer(params, self.motion, areas, goal_half, ctx.rng)
         self.keeper = Goalkeeper(params, self.motion, areas, ctx.field, self.player)
         self.taker = RestartTaker(params, self.motion, self.player, goal_half, areas.L2)
         self.tests = TestModes(params, self.motion, self.player)
