@@ -87,6 +87,8 @@ class Encirclement(Judge):
         self.teams = list(spec.teams)
         tspec = spec.teams[params.targets]
         self.target_names = [f"{params.targets}/{rid}" for rid in tspec.robot_ids()]
+        self.team_of = {name: name.partition("/")[0] for name in spec.robot_names()}
+        self.top_speed = {team: 0.0 for team in self.teams}
         self.captures: list[dict] = []
         self.captured: set[str] = set()
         self._published = -math.inf
@@ -132,6 +134,7 @@ class Encirclement(Judge):
     def tick(self, now: float) -> None:
         if not self.done:
             states = self.world.model_states()
+            self._measure_speeds(states)
             prison = self.prison
             for name in self.target_names:
                 if name not in self.captured:
@@ -143,6 +146,16 @@ class Encirclement(Judge):
         self._publish_commands(now)
         if self._dirty or now - self._published >= GAME_STATE_PERIOD - 1e-9:
             self._publish_game(now)
+
+    def _measure_speeds(self, states: dict) -> None:
+        """Each team's top speed so far (captured targets excluded), so every run shows the speed ratio."""
+        top = self.top_speed
+        for name, team in self.team_of.items():
+            if name not in self.captured:
+                st = states[name]
+                v = math.hypot(st.vx, st.vy)
+                if v > top[team]:
+                    top[team] = v
 
     def _capture(self, now: float, name: str, x: float, y: float) -> None:
         self.world.set_frozen(name, True)
@@ -206,6 +219,7 @@ class Encirclement(Judge):
             "target_team": self.params.targets,
             "prison": {"name": p.name, "x0": p.x0, "y0": p.y0, "x1": p.x1, "y1": p.y1},
             "captures": list(self.captures),
+            "top_speed_m_s": {team: round(v, 3) for team, v in self.top_speed.items()},
             "end": self._end_reason(),
         }
 

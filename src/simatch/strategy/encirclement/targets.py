@@ -29,8 +29,8 @@ from .view import opponents
 class TargetParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     max_speed: float = Field(2.45, gt=0.0, le=10.0, description="speed cap of a target [m/s]")
-    sense_radius: float = Field(3.5, gt=0.0, le=50.0, description="chasers nearer than this are fled from [m]")
-    panic_radius: float = Field(2.0, gt=0.0, le=50.0, description="a chaser nearer than this: full speed [m]")
+    sense_radius: float = Field(4.0, gt=0.0, le=50.0, description="chasers nearer than this are fled from [m]")
+    panic_radius: float = Field(2.5, gt=0.0, le=50.0, description="a chaser nearer than this: full speed [m]")
     wall_margin: float = Field(1.0, gt=0.0, le=10.0, description="walls nearer than this push away [m]")
     corner_radius: float = Field(2.5, gt=0.0, le=20.0, description="corners nearer than this push away [m]")
     separation: float = Field(1.0, ge=0.0, le=10.0, description="free team-mates nearer than this push away [m]")

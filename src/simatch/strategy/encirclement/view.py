@@ -3,22 +3,36 @@ robots in sight this is cheaper than array code, and every robot does it every c
 
 from __future__ import annotations
 
-#: an obstacle this close to a team-mate's position (each axis) is that team-mate [m]
-SAME_ROBOT = 0.1
+#: an obstacle within this distance of where a team-mate says it is may be that team-mate [m]; two robots'
+#: centres are never nearer than a robot's width (0.5 m), so noise up to a few centimetres is told apart
+SAME_ROBOT = 0.4
 
 
 def opponents(world) -> list[tuple[float, float]]:
-    """Positions (team frame) of the robots I see that are not my team-mates."""
+    """Positions (team frame) of the robots I see that are not my team-mates.
+
+    Each team-mate claims the obstacle nearest to where it is (nearest pairs first, each obstacle claimed
+    once), so noisy positions and missed obstacles do not turn a team-mate into an opponent."""
     vision = world.vision
     me = world.id
-    mates = [(r.x, r.y) for r in vision.robots if r.id != me]
-    out = []
     obstacles = vision.obstacles
-    for x, y in zip(obstacles.x.tolist(), obstacles.y.tolist()):
-        for mx, my in mates:
-            if abs(x - mx) <= SAME_ROBOT and abs(y - my) <= SAME_ROBOT:
-                break
-        else:
-            out.append((x, y))
-    return out
-
+    seen = list(zip(obstacles.x.tolist(), obstacles.y.tolist()))
+    limit = SAME_ROBOT * SAME_ROBOT
+    pairs = []
+    for j, r in enumerate(vision.robots):
+        if r.id == me:
+            continue
+        mx, my = r.x, r.y
+        for i, (x, y) in enumerate(seen):
+            dx, dy = x - mx, y - my
+            if abs(dx) < SAME_ROBOT and abs(dy) < SAME_ROBOT and (d2 := dx * dx + dy * dy) < limit:
+                pairs.append((d2, i, j))
+    if not pairs:
+        return seen
+    pairs.sort()
+    claimed, matched = set(), set()
+    for _, i, j in pairs:
+        if i not in claimed and j not in matched:
+            claimed.add(i)
+            matched.add(j)
+    return [p for i, p in enumerate(seen) if i not in claimed]
