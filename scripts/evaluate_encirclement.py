@@ -46,6 +46,7 @@ def run_one(series: str, seed: int, extra: list[str]) -> dict:
     return {"series": series, "seed": seed, "targets": r["targets"], "captured": r["captured"],
             "capture_time_s": r["capture_time_s"], "sim_seconds": out["sim_seconds"],
             "wall_seconds": out["wall_seconds"], "rtf": out["rtf"], "top_speed_m_s": r.get("top_speed_m_s", {}),
+            "chasers": r.get("chasers", "cyan"), "target_team": r.get("target_team", "magenta"),
             "state_digest": out["state_digest"]}
 
 
@@ -59,7 +60,7 @@ def table(rows: list[dict]) -> str:
              "|---|---|---|---|---|---|---|"]
     for row in rows:
         speeds = row["top_speed_m_s"]
-        top = f"{speeds.get('magenta', 0.0):.2f} / {speeds.get('cyan', 0.0):.2f}"
+        top = f"{speeds.get(row['target_team'], 0.0):.2f} / {speeds.get(row['chasers'], 0.0):.2f}"
         t = row["capture_time_s"]
         lines.append(f"| {row['series']} | {row['seed']} | {row['captured']}/{row['targets']} | "
                      f"{'-' if t is None else f'{t:.2f}'} | {top} | {row['sim_seconds']:.1f} | {row['rtf']:.0f} |")

@@ -172,7 +172,7 @@ class Encirclement(Judge):
         self.done = True
         n = len(self.target_names)
         self.pub_events.put(msgs.GameEvent(stamp=now, type="all_captured", team=self.params.targets, robot=0, x=0.0,
-                                           y=0.0, value=now, limit=self.params.time_limit,
+                                           y=0.0, value=round(now, 6), limit=self.params.time_limit,
                                            detail=f"all {n} targets captured in {now:.2f} s"))
         self._dirty = True
 

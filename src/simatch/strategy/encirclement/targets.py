@@ -26,6 +26,10 @@ from .game import Captures
 from .view import opponents
 
 
+#: with no chaser in sight, pushes weaker than this leave a target at rest (it does not creep for ever)
+RESTFUL = 0.1
+
+
 class TargetParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     max_speed: float = Field(2.45, gt=0.0, le=10.0, description="speed cap of a target [m/s]")
@@ -95,7 +99,8 @@ class Target(RobotStrategy):
             speed = max(p.max_speed * urgency, p.idle_speed)
         else:
             wish_x, wish_y = push_x, push_y
-            speed = p.idle_speed * min(1.0, math.hypot(push_x, push_y))
+            push = math.hypot(push_x, push_y)
+            speed = p.idle_speed * min(1.0, push) if push > RESTFUL else 0.0
         wish_x, wish_y = self._slide(x, y, wish_x, wish_y)
         n = math.hypot(wish_x, wish_y)
         if n < 1e-9 or speed <= 0.0:
