@@ -132,3 +132,32 @@ def test_a_run_is_repeatable_bit_for_bit_and_seeds_differ(encirclement):
         sim.run(6.0)
     assert a.state_digest() == b.state_digest() != c.state_digest()
     assert np.allclose(list(target_positions(a).values()), list(target_positions(b).values()))
+
+
+def test_a_chaser_without_its_prison_is_refused_with_the_key_named():
+    import simatch
+    from simatch.scene.loader import SceneError
+
+    with pytest.raises(SceneError, match=r"teams.cyan.strategy_params.prison: the world has no area named 'jail' "
+                                         r"\(world.areas: prison\)"):
+        simatch.Simulation("encirclement_9v7", overrides={"teams.cyan.strategy_params.prison": "jail"})
+    with pytest.raises(SceneError, match=r"teams.magenta.strategy_params.max_speed: expected greater than 0"):
+        simatch.Simulation("encirclement_9v7", overrides={"teams.magenta.strategy_params.max_speed": 0})
+
+
+def test_the_net_squeezes_when_nothing_gives_way():
+    from simatch.scene.loader import load_scene
+    from simatch.strategy.base import RobotContext
+    from simatch.strategy.encirclement import Chaser, ChaserParams
+
+    field = load_scene("encirclement_9v7").spec.world.geometry()
+    p = ChaserParams()
+    chaser = Chaser(RobotContext(team="cyan", id=1, goalkeeper=None, ids=[1], field=field, start=(0.0, 0.0, 0.0),
+                                 control_period=0.05, params=p))
+    assert chaser._slack(0.0, 6.0, 0) == p.slack
+    assert chaser._slack(p.squeeze_after, 6.0, 0) == p.slack                        # patience
+    assert chaser._slack(p.squeeze_after + 2.0, 6.0, 0) == pytest.approx(p.slack - 2.0 * p.squeeze_rate)
+    assert chaser._slack(p.squeeze_after + 100.0, 6.0, 0) == p.min_slack            # down to the floor
+    assert chaser._slack(200.0, 5.5, 0) == p.slack                                  # a target gave way
+    assert chaser._slack(200.0 + p.squeeze_after + 1.0, 5.6, 0) < p.slack
+    assert chaser._slack(200.0 + p.squeeze_after + 1.0, 5.6, 1) == p.slack          # a capture

@@ -23,6 +23,7 @@ import statistics
 from pydantic import BaseModel, ConfigDict, Field
 
 from ...scene.commands import MatchMode
+from ...scene.loader import SceneError
 from ..base import Command, RobotContext, RobotStrategy
 from .game import Captures
 from .net import Arena, make_net, prison_distance
@@ -55,7 +56,9 @@ class Chaser(RobotStrategy):
         try:
             self.prison = field.area(p.prison)
         except KeyError:
-            raise ValueError(f"the world has no area named {p.prison!r} for the chasers' prison") from None
+            names = ", ".join(a.name for a in field.areas) or "none"
+            raise SceneError(f"teams.{ctx.team}.strategy_params.prison: the world has no area named {p.prison!r} "
+                             f"(world.areas: {names})") from None
         c = max(p.wall_clearance, 0.0)
         self.arena = Arena(field.half_length + field.margin - c, field.half_width + field.margin - c)
         self.max_radius = max(prison_distance(self.prison, sx * self.arena.half_x, sy * self.arena.half_y)
@@ -74,7 +77,7 @@ class Chaser(RobotStrategy):
         prison = self.prison
         caps = self.captures.update(world)
         free = [d for x, y in caps.free(opponents(world)) if (d := prison_distance(prison, x, y)) > 0.0]
-        if not free:                      # (a target in the prison is captured at the next step)
+        if not free:                      # (a target in the prison is captured at the judge's next look)
             return Command(target=(me.x, me.y), max_vel=p.max_speed)
         outermost = max(free)
         slack = self._slack(world.time, outermost, len(caps.names))
