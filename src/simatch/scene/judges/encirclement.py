@@ -71,10 +71,8 @@ class Encirclement(Judge):
         geometry = spec.world.geometry()
         try:
             self.prison = geometry.area(params.prison)
-        except KeyError:
-            names = ", ".join(a.name for a in geometry.areas) or "none"
-            raise SceneError(f"{scene.source}: judge.prison: the world has no area named {params.prison!r} "
-                             f"(world.areas: {names})") from None
+        except KeyError as exc:
+            raise SceneError(f"{scene.source}: judge.prison: {exc.args[0]}") from None
         if params.scatter is not None:
             x0, y0, x1, y1 = params.scatter
             reach_x, reach_y = geometry.half_length + geometry.margin, geometry.half_width + geometry.margin

@@ -55,12 +55,9 @@ class Chaser(RobotStrategy):
         field = ctx.field
         try:
             self.prison = field.area(p.prison)
-        except KeyError:
-            names = ", ".join(a.name for a in field.areas) or "none"
-            raise SceneError(f"teams.{ctx.team}.strategy_params.prison: the world has no area named {p.prison!r} "
-                             f"(world.areas: {names})") from None
-        c = max(p.wall_clearance, 0.0)
-        self.arena = Arena(field.half_length + field.margin - c, field.half_width + field.margin - c)
+        except KeyError as exc:
+            raise SceneError(f"teams.{ctx.team}.strategy_params.prison: {exc.args[0]}") from None
+        self.arena = Arena.of(field, p.wall_clearance)
         self.max_radius = max(prison_distance(self.prison, sx * self.arena.half_x, sy * self.arena.half_y)
                               for sx in (-1, 1) for sy in (-1, 1))
         self.captures = Captures()

@@ -19,7 +19,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ...field import Area
+from ...field import Area, FieldGeometry
 
 HALF_PI = 0.5 * math.pi
 _EPS = 1e-9
@@ -31,6 +31,11 @@ class Arena:
 
     half_x: float
     half_y: float
+
+    @classmethod
+    def of(cls, field: FieldGeometry, clearance: float) -> "Arena":
+        """The reach of a robot's centre inside the walls at the edge of the field's margin."""
+        return cls(field.half_length + field.margin - clearance, field.half_width + field.margin - clearance)
 
     def clamp(self, x: float, y: float) -> tuple[float, float]:
         return (min(max(x, -self.half_x), self.half_x), min(max(y, -self.half_y), self.half_y))

@@ -23,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from ...scene.commands import MatchMode
 from ..base import Command, RobotContext, RobotStrategy
 from .game import Captures
+from .net import Arena
 from .view import opponents
 
 
@@ -54,10 +55,8 @@ class Target(RobotStrategy):
 
     def __init__(self, ctx: RobotContext):
         super().__init__(ctx)
-        field = ctx.field
-        c = ctx.params.wall_clearance
-        self.half_x = field.half_length + field.margin - c
-        self.half_y = field.half_width + field.margin - c
+        arena = Arena.of(ctx.field, ctx.params.wall_clearance)
+        self.half_x, self.half_y = arena.half_x, arena.half_y
         self.captures = Captures()
         self.name = f"{ctx.team}/{ctx.id}"
         self.jink_angle = 0.0
