@@ -37,9 +37,9 @@ class ChaserParams(BaseModel):
     slack: float = Field(1.4, gt=0.0, le=10.0,
                          description="how far outside the outermost free target the net stays [m]")
     min_slack: float = Field(0.6, gt=0.0, le=10.0, description="the closest the net comes when squeezing [m]")
-    squeeze_after: float = Field(8.0, ge=0.0, le=600.0,
+    squeeze_after: float = Field(4.0, ge=0.0, le=600.0,
                                  description="seconds without progress before the net squeezes [s]")
-    squeeze_rate: float = Field(0.1, ge=0.0, le=10.0, description="how fast the slack shrinks then [m/s]")
+    squeeze_rate: float = Field(0.2, ge=0.0, le=10.0, description="how fast the slack shrinks then [m/s]")
     contract_speed: float = Field(0.6, gt=0.0, le=10.0, description="fastest the net closes in [m/s]")
     expand_speed: float = Field(2.0, gt=0.0, le=10.0, description="fastest the net backs off [m/s]")
     wall_clearance: float = Field(0.3, ge=0.0, le=5.0,
