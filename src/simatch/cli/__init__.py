@@ -15,6 +15,8 @@ SUBCOMMANDS = [
     "simatch.cli.run",
     "simatch.cli.bench",
     "simatch.cli.scenes",
+    "simatch.cli.replay",
+    "simatch.cli.export",
 ]
 
 

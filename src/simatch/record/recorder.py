@@ -48,12 +48,9 @@ class RecordError(Exception):
 
 
 def simatch_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
+    from ..cli import _version
 
-    try:
-        return version("simatch")
-    except PackageNotFoundError:
-        return "unknown"
+    return _version()
 
 
 class _Channel:
