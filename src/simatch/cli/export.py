@@ -1,5 +1,5 @@
 """``simatch export FILE.mcap --format parquet|csv [--out DIR]``: a recording as tidy tables for pandas,
-polars or any tool that reads Parquet or CSV (see `simatch.record.export` for the tables)."""
+polars or any tool that reads Parquet or CSV (see `simatch.record.tables` for the tables)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def add_parser(sub) -> None:
 
 
 def main(args) -> int:
-    from ..record.export import ExportError, export
+    from ..record.tables import ExportError, export
     from ..record.reader import RecordingError
 
     try:

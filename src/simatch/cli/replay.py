@@ -75,7 +75,7 @@ def _warn(problems: list[str], already: int = 0) -> int:
 
 def main(args) -> int:
     from ..record.reader import Recording, RecordingError
-    from ..record.verify import VerifyError, verify
+    from ..record.reproduce import VerifyError, verify
 
     if args.start < 0:
         raise UsageError("--from must be a time >= 0")

@@ -14,7 +14,6 @@ import sys
 import threading
 
 from ..cli import UsageError
-from .recorder import Recorder, RecordError
 
 
 class RecordExtension:
@@ -40,6 +39,8 @@ class _Terminated(BaseException):
 
 @contextlib.contextmanager
 def _recording(sim, path: str, links: bool):
+    from .recorder import Recorder, RecordError
+
     try:
         recorder = Recorder.for_run(sim, path, links=links, command_line=["simatch"] + sys.argv[1:])
     except RecordError as exc:

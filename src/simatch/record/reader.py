@@ -87,9 +87,9 @@ class Recording:
                     if offset == 0:
                         raise RecordingError(f"{self.path} is not an MCAP recording ({_describe(exc)})") from None
                     self._problem("end", f"{self.path.name} breaks off at byte {offset} of "
-                                         f"{self.path.stat().st_size} ({_describe(exc)}): it was not closed "
-                                         f"properly (the recording process was probably killed); "
-                                         f"what comes before is intact")
+                                         f"{self.path.stat().st_size} ({_describe(exc)}): it was not finalised "
+                                         f"(the recording process was probably killed); what comes before "
+                                         f"is read")
                     return
                 yield offset, record
 
@@ -110,9 +110,30 @@ class Recording:
                     self.end = dict(record.metadata)
             elif isinstance(record, Footer):
                 self.finalised = True
-        if not self.finalised and "end" not in self._reported:
-            self._problem("end", f"{self.path.name} was not finalised (the recording process stopped before "
-                                 f"closing it): it is read up to where it is intact")
+        if not self.finalised:
+            if "end" not in self._reported:
+                self._problem("end", f"{self.path.name} was not finalised (the recording process stopped before "
+                                     f"closing it): it is read up to where it is intact")
+            self._scan_chunks()      # no summary: channels are known only from inside the chunks
+
+    def _scan_chunks(self) -> None:
+        for offset, record in self._records():
+            if isinstance(record, Chunk):
+                for item in self._open_chunk(offset, record) or ():
+                    if isinstance(item, Schema):
+                        self._schemas[item.id] = (item.name, item.data)
+                    elif isinstance(item, Channel):
+                        self._add_channel(item)
+
+    def _open_chunk(self, offset: int, record: Chunk) -> list | None:
+        """The records inside a chunk, or None if it is damaged (noted in `problems`)."""
+        try:
+            return breakup_chunk(record, validate_crc=True)
+        except Exception as exc:       # checksum mismatch, broken compression, broken records
+            self._problem(f"chunk{offset}", f"{self.path.name}: the chunk at byte {offset} "
+                          f"(t={record.message_start_time / layout.NS:.3f}..{record.message_end_time / layout.NS:.3f} s) "
+                          f"is damaged ({_describe(exc)}): its messages are skipped")
+            return None
 
     def _add_channel(self, record: Channel) -> None:
         if record.id not in self.channels:
@@ -182,13 +203,8 @@ class Recording:
             if isinstance(record, Chunk):
                 if record.message_end_time < start_ns:
                     continue
-                try:
-                    inner = breakup_chunk(record, validate_crc=True)
-                except Exception as exc:       # checksum mismatch, broken compression, broken records
-                    self._problem(f"chunk{offset}", f"{self.path.name}: the chunk at byte {offset} "
-                                  f"(t={record.message_start_time / layout.NS:.3f}..."
-                                  f"{record.message_end_time / layout.NS:.3f} s) is damaged ({_describe(exc)}): "
-                                  f"its messages are skipped")
+                inner = self._open_chunk(offset, record)
+                if inner is None:
                     continue
                 for item in inner:
                     if isinstance(item, Message):
@@ -208,9 +224,12 @@ class Recording:
 
     def messages(self, topics: Iterable[str] | None = None, start_ns: int = 0) -> Iterator[tuple[str, int, object]]:
         """Like `raw`, decoded; messages of a type this simatch does not know are skipped (and noted)."""
-        types = self.topics()
+        types: dict[str, str] = {}
         for topic, t, data in self.raw(topics, start_ns):
-            msg = self.decode(types.get(topic, ""), data, topic)
+            typename = types.get(topic)
+            if typename is None:
+                typename = types[topic] = self.topics().get(topic, "")
+            msg = self.decode(typename, data, topic)
             if msg is not None:
                 yield topic, t, msg
 
