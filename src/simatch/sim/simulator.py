@@ -146,6 +146,7 @@ class Simulator:
         self._geom_robot = np.full(self.m.ngeom, -1, dtype=np.int64)
         for g, i in self.ix.robot_of_geom.items():
             self._geom_robot[g] = i
+        self._geom_robot_list = self._geom_robot.tolist()
         self.perception = Perception(robots, self.signs, self.radii, self.drive.n_wheels, scene.perception,
                                      self.dt, np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]))
         self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
@@ -369,14 +370,18 @@ class Simulator:
         n = d.ncon
         if n == 0:
             return []
-        geoms = d.contact.geom[:n]
+        # a plain loop: there are few contacts, and the ball always lies on the floor (numpy per call
+        # costs more than the loop; this runs every physics step when ball contacts are published)
         bg = self.ix.ball_geom
-        rows = (geoms[:, 0] == bg) | (geoms[:, 1] == bg)
-        if not rows.any():
-            return []
-        other = np.where(geoms[rows, 0] == bg, geoms[rows, 1], geoms[rows, 0])
-        robots = self._geom_robot[other]
-        return sorted({int(r) for r in robots if r >= 0})
+        owner = self._geom_robot_list
+        found = set()
+        for g1, g2 in d.contact.geom[:n].tolist():
+            if g1 == bg:
+                found.add(owner[g2])
+            elif g2 == bg:
+                found.add(owner[g1])
+        found.discard(-1)
+        return sorted(found)
 
     # --- states --------------------------------------------------------------------------------------------
     def robot_positions(self) -> np.ndarray:
@@ -411,19 +416,16 @@ class Simulator:
         pose = np.zeros((n + 1, 7))
         twist = np.zeros((n + 1, 6))
         q, v = self.d.qpos, self.d.qvel
-        rp = q[self._rq]
+        rp, rv = self._qpos3, self._qvel3          # views of the robots' joints (x, y, yaw)
         half = 0.5 * rp[:, 2]
-        pose[:n, 0] = rp[:, 0]
-        pose[:n, 1] = rp[:, 1]
+        pose[:n, 0:2] = rp[:, 0:2]
         pose[:n, 3] = np.cos(half)
         pose[:n, 6] = np.sin(half)
-        rv = v[self._rv]
-        twist[:n, 0] = rv[:, 0]
-        twist[:n, 1] = rv[:, 1]
+        twist[:n, 0:2] = rv[:, 0:2]
         twist[:n, 5] = rv[:, 2]
         pose[n] = q[self._bq:self._bq + 7]
         twist[n, :3] = v[self._bv:self._bv + 3]
-        twist[n, 3:] = self._ball_angular_world()
+        mujoco.mju_rotVecQuat(twist[n, 3:], v[self._bv + 3:self._bv + 6], q[self._bq + 3:self._bq + 7])
         return self.model_names, pose, twist
 
     def model_states(self) -> dict[str, ModelStateView]:
