@@ -47,3 +47,17 @@ def test_player_offers_what_a_viewer_needs(recording):
     player = Player(path, pace=2.0)
     assert player.scene.name == "msl_5v5" and player.scene.spec.world.length == 22.0
     assert player.duration == 1.995 and player.bus.run == "embedded"
+
+
+def test_a_viewer_attaches_to_the_replay_through_the_extension_hook(recording, monkeypatch, capsys):
+    from simatch import cli
+    from simatch.cli import replay
+
+    from . import viewer_hook
+
+    path, _ = recording
+    monkeypatch.setattr(replay, "EXTENSIONS", ["tests.record.viewer_hook:CountingViewer"])
+    assert cli.main(["replay", str(path), "--speed", "max", "--count", "--quiet"]) == 0
+    seen = viewer_hook.SEEN
+    assert seen["scene"] == "msl_5v5" and seen["done"] and seen["model_states"] == 400
+    assert "replayed" in capsys.readouterr().out

@@ -9,12 +9,13 @@ each problem is reported on stderr.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
-import importlib
 import json
 import sys
 from typing import Any
 
+from ..plugins import load
 from . import UsageError
 from .run import Progress
 
@@ -24,11 +25,7 @@ EXTENSIONS: list[str] = []
 
 
 def extensions() -> list[Any]:
-    out = []
-    for spec in EXTENSIONS:
-        module, _, attr = spec.partition(":")
-        out.append(getattr(importlib.import_module(module), attr)())
-    return out
+    return [load(spec, {}, "replay extension")() for spec in EXTENSIONS]
 
 
 def speed(text: str) -> float | None:
@@ -39,8 +36,6 @@ def speed(text: str) -> float | None:
     except ValueError:
         value = float("nan")
     if not value > 0 or value == float("inf"):
-        import argparse
-
         raise argparse.ArgumentTypeError(f"expected a positive number or 'max', got {text!r}")
     return value
 

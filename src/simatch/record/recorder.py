@@ -2,7 +2,7 @@
 
 It listens on the bus, not inside the simulator, so it records an embedded run today and a distributed
 run (a server's bus) the same way. Messages are encoded to CDR on arrival (`cdr.Encoders`) and handed to
-the MCAP writer of ``foxglove-sdk`` (Rust: chunking and zstd compression off the Python interpreter); a
+the MCAP writer of ``foxglove-sdk`` (Rust: chunking, indexes and streaming zstd compression); a
 chunk is closed and written out at the end of every simulated second.
 
 What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics
@@ -41,6 +41,9 @@ log = logging.getLogger(__name__)
 WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.EVENTS, topics.GAME_STATE,
                 topics.OPERATOR)
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
+#: zstd level of the chunks: 1 costs some 2.5 ms less per simulated second of 5v5 than the default (3) and
+#: makes files about 1 % larger (measured); higher levels gain about 2 % for twice the time
+COMPRESSION_LEVEL = 1
 
 
 class RecordError(Exception):
@@ -69,7 +72,7 @@ class Recorder:
 
     def __init__(self, bus, path: str | Path, *, scene: LoadedScene, seed: int, dt: float, first_step: int = 0,
                  command_line: Iterable[str] | None = None, links: bool = False,
-                 extra_topics: Iterable[str] = (), compression_level: int = 0):
+                 extra_topics: Iterable[str] = (), compression_level: int = COMPRESSION_LEVEL):
         self.path = Path(path)
         _check_path(self.path)
         self.bus = bus
