@@ -161,3 +161,24 @@ def test_readable_without_simatch_by_rosbags_and_mcap(recording):
     t, names, pose = out["rosbags_last"]
     _, t2, mine = list(Recording(path).messages(topics={"model_states"}))[-1]
     assert (t, names, pose) == (t2, list(mine.name), list(mine.pose))
+
+
+def test_what_a_producer_sends_never_stops_the_recording(tmp_path):
+    """A malformed message, or an object that is no message at all, is counted and skipped."""
+    from simatch import msgs
+
+    path = tmp_path / "odd.mcap"
+    with simatch.Simulation("omni_circle") as sim:
+        with Recorder.for_run(sim, path):
+            bad = sim.bus.publisher("cyan/1/Weird", msgs.VelCmd)
+            alien = sim.bus.publisher("cyan/1/Alien", "not/a/Type")
+            sim.run(seconds=0.1)
+            bad.put(msgs.VelCmd(stamp=0.1, tick=0, vx="fast", vy=0.0, w=0.0))   # does not encode
+            alien.put(object())
+            bad.put(msgs.VelCmd(stamp=0.1, tick=0, vx=1.0, vy=0.0, w=0.0))
+            sim.run(seconds=0.1)
+    rec = Recording(path)
+    assert rec.end["status"] == "complete"
+    assert json.loads(rec.end["encode_errors"]) == {"cyan/1/Weird": 1}
+    assert "cyan/1/Alien" in json.loads(rec.end["skipped_topics"])
+    assert [m.vx for _, _, m in rec.messages(topics={"cyan/1/Weird"})] == [1.0]
