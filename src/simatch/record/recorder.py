@@ -21,6 +21,7 @@ import datetime as _dt
 import json
 import logging
 import sys
+import threading
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -87,6 +88,7 @@ class Recorder:
         except Exception as exc:      # the SDK reports I/O problems as its own error types
             raise RecordError(f"cannot write the recording {self.path}: {exc}") from None
         self._encoders = Encoders(msgs.typestore, memo=True)
+        self._lock = threading.Lock()
         self._schemas: dict[str, Any] = {}
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
@@ -155,21 +157,22 @@ class Recorder:
 
     # --- bus callbacks (hot path) --------------------------------------------------------------------------
     def _on_message(self, topic: str, msg) -> None:
-        ch = self._channels.get(topic, False)
-        if ch is False:
-            ch = self._open(topic, msg)
-        if ch is None:
-            return
-        try:
-            data = ch.encode(msg)
-        except Exception as exc:      # a malformed message from a producer: counted, never raised
-            ch.errors += 1
-            if ch.errors == 1:
-                log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
-                            topic, exc)
-            return
-        ch.log(data, self._now, None)
-        ch.count += 1
+        with self._lock:          # uncontended in process; a transport may call from several threads
+            ch = self._channels.get(topic, False)
+            if ch is False:
+                ch = self._open(topic, msg)
+            if ch is None:
+                return
+            try:
+                data = ch.encode(msg)
+            except Exception as exc:      # a malformed message from a producer: counted, never raised
+                ch.errors += 1
+                if ch.errors == 1:
+                    log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
+                                topic, exc)
+                return
+            ch.log(data, self._now, None)
+            ch.count += 1
 
     def _advance(self, step: int) -> None:
         now = step * self.dt_ns
@@ -181,14 +184,19 @@ class Recorder:
                 self._next_flush = (now // layout.NS + 1) * layout.NS
 
     def _on_clock(self, topic: str, msg) -> None:
-        self._advance(msg.step)
+        with self._lock:
+            step = _step_of(msg)
+            if step is not None:
+                self._advance(step)
         self._on_message(topic, msg)
 
     def _on_model_states(self, topic: str, msg) -> None:
-        step = msg.step
-        self._advance(step)
+        with self._lock:
+            step = _step_of(msg)
+            if step is not None:
+                self._advance(step)
         self._on_message(topic, msg)
-        if step % self._game_every == 0:
+        if step is not None and step % self._game_every == 0:
             try:
                 pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
                 self._game.log(self._scene3d.game_update(msg.name, pose), self._now, None)
@@ -218,10 +226,11 @@ class Recorder:
                "encode_errors": json.dumps(errors, sort_keys=True)}
         for key, value in (summary or {}).items():
             end[key] = value if isinstance(value, str) else json.dumps(value)
-        try:
-            self._writer.write_metadata(layout.META_END, end)
-        finally:
-            self._writer.close()
+        with self._lock:
+            try:
+                self._writer.write_metadata(layout.META_END, end)
+            finally:
+                self._writer.close()
 
     def __enter__(self) -> "Recorder":
         return self
@@ -256,6 +265,13 @@ class RunRecorder(Recorder):
                "events": len(self.sim.events)}
         out.update(summary or {})
         super().close(status, out)
+
+
+def _step_of(msg) -> int | None:
+    try:
+        return int(msg.step)
+    except (AttributeError, TypeError, ValueError):
+        return None
 
 
 def _check_path(path: Path) -> None:
