@@ -183,18 +183,20 @@ class Recorder:
                 self._writer.flush()          # the second that just ended goes to disk as one chunk
                 self._next_flush = (now // layout.NS + 1) * layout.NS
 
-    def _on_clock(self, topic: str, msg) -> None:
+    def _track(self, msg) -> int | None:
+        """The physics step a clock or model-states message opens: the recording's time follows it."""
         with self._lock:
             step = _step_of(msg)
             if step is not None:
                 self._advance(step)
+        return step
+
+    def _on_clock(self, topic: str, msg) -> None:
+        self._track(msg)
         self._on_message(topic, msg)
 
     def _on_model_states(self, topic: str, msg) -> None:
-        with self._lock:
-            step = _step_of(msg)
-            if step is not None:
-                self._advance(step)
+        step = self._track(msg)
         self._on_message(topic, msg)
         if step is not None and step % self._game_every == 0:
             try:
