@@ -16,7 +16,9 @@ from ..scene.loader import load_scene, parse_override
 from . import UsageError
 
 #: run extensions: "module:Class" with add_arguments(parser) and attach(sim, args) -> context manager
-EXTENSIONS: list[str] = []
+EXTENSIONS: list[str] = [
+    "simatch.web.view:ViewExtension",
+]
 
 
 def add_run_options(p) -> None:

@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Bus, topics
+from ..scene.commands import name as command_name
 
 #: columns of a Timeline sample, per model
 COLUMNS = ("x", "y", "z", "yaw", "vx", "vy")
@@ -120,7 +121,8 @@ def game_record(msg) -> dict:
     return {
         "t": round(float(msg.stamp), 3), "stage": msg.stage, "clock": round(float(msg.clock), 2),
         "stage_time_left": round(float(msg.stage_time_left), 2), "command": int(msg.command),
-        "next_command": int(msg.next_command), "command_team": msg.command_team, "teams": teams,
+        "next_command": int(msg.next_command), "command_name": command_name(msg.command),
+        "next_command_name": command_name(msg.next_command), "command_team": msg.command_team, "teams": teams,
         "score": per_team(msg.score), "yellow_cards": per_team(msg.yellow_cards),
         "red_cards": per_team(msg.red_cards), "fouls": per_team(msg.fouls), "sent_off": list(msg.sent_off),
         "last_touch": msg.last_touch, "ball_in_play": bool(msg.ball_in_play), "manual": bool(msg.manual),

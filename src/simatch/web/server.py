@@ -109,6 +109,9 @@ class ViewServer:
 
     # --- life cycle (main thread) ------------------------------------------------------------------------
     def start(self) -> None:
+        """Bind and serve (again, after `stop`: the same port, so open pages reconnect by themselves)."""
+        self._ready.clear()
+        self._error = None
         family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
         sock = socket.socket(family, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -175,6 +178,7 @@ class ViewServer:
         app.router.add_get("/replay", self._page(PAGES["replay"]))
         app.router.add_get("/coach/{team}", self._coach_page)
         app.router.add_get("/ws", self._ws)
+        app.router.add_get("/favicon.ico", lambda request: web.Response(status=204))
         app.router.add_static("/static", str(static), show_index=False, follow_symlinks=False)
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await runner.setup()
