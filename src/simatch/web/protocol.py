@@ -54,7 +54,7 @@ class Command(_Msg):
     cmd: Union[int, str]
     team: Optional[str] = None
 
-    @field_validator("cmd")
+    @field_validator("cmd", mode="before")
     @classmethod
     def _cmd(cls, v):
         return _command(v)
@@ -142,6 +142,13 @@ def parse(text: str | bytes, role: str) -> ClientMessage:
         return _adapter.validate_python(data)
     except ValidationError as exc:
         raise ProtocolError(_explain(exc)) from None
+
+
+def authorize(message, role: str, team: str) -> None:
+    """A coach page commands its own team only: refuse, before anything acts, a message naming another."""
+    other = getattr(message, "team", None)
+    if role == "coach" and other is not None and other != team:
+        raise ProtocolError(f"this page commands {team} only, not {other}")
 
 
 def _explain(exc: ValidationError) -> str:

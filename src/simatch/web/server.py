@@ -178,11 +178,11 @@ class ViewServer:
         app.router.add_get("/replay", self._page(PAGES["replay"]))
         app.router.add_get("/coach/{team}", self._coach_page)
         app.router.add_get("/ws", self._ws)
-        app.router.add_get("/favicon.ico", lambda request: web.Response(status=204))
+        app.router.add_get("/favicon.ico", _no_content)
         app.router.add_static("/static", str(static), show_index=False, follow_symlinks=False)
-        runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await runner.setup()
-        await web.SockSite(runner, self._sock, shutdown_timeout=1.0).start()
+        await web.SockSite(runner, self._sock).start()
         ticker = asyncio.create_task(self._ticker())
         self._ready.set()
         try:
@@ -343,6 +343,7 @@ class ViewServer:
         mid = P.message_id(text)
         try:
             m = P.parse(text, c.grant.role)
+            P.authorize(m, c.grant.role, c.grant.team)
             if isinstance(m, P.Timeline):
                 tl = self.observer.timeline
                 c.cursor.apply(m, tl.start if tl else 0.0, tl.end if tl else 0.0)
@@ -387,6 +388,10 @@ class ViewServer:
             await c.ws.send_json(out)
         except ConnectionError:
             pass
+
+
+async def _no_content(request) -> web.Response:
+    return web.Response(status=204)
 
 
 async def _headers(request, response) -> None:
