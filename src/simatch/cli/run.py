@@ -21,7 +21,7 @@ EXTENSIONS: list[str] = [
 ]
 
 
-def add_run_options(p) -> None:
+def add_run_options(p, with_extensions: bool = True) -> None:
     p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
     p.add_argument("--duration", type=float, metavar="S",
                    help="simulated seconds to run (default: until the judge ends the run)")
@@ -31,7 +31,7 @@ def add_run_options(p) -> None:
     p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    for ext in extensions():
+    for ext in (extensions() if with_extensions else ()):
         ext.add_arguments(p)
 
 

@@ -8,7 +8,6 @@ closes, the run goes back to its own pace.
 
 from __future__ import annotations
 
-import threading
 import time
 
 from .access import Access
@@ -47,7 +46,6 @@ class LiveView:
         self.server = ViewServer(self.observer, self.picture, self.access, hello_of(spec, self.picture, fps),
                                  control=self.control, host=host, port=port, fps=fps,
                                  on_viewers=self._on_viewers)
-        self._viewed = threading.Event()
         self._closed = False
 
     def start(self) -> "LiveView":
@@ -61,19 +59,16 @@ class LiveView:
     def _on_viewers(self, n: int) -> None:
         """Called in the server's thread; ``Simulation.run`` reads ``pace`` between its chunks."""
         self.sim.pace = 1.0 if n > 0 else self._own_pace
-        if n > 0:
-            self._viewed.set()
 
     def wait_for_viewer(self, timeout: float | None = None) -> bool:
         """Block until a live page is open (at most ``timeout`` seconds; None: as long as it takes)."""
         self.server.status = "waiting"
         deadline = None if timeout is None else time.monotonic() + timeout
         try:
-            while not self._viewed.is_set():
-                left = None if deadline is None else deadline - time.monotonic()
-                if left is not None and left <= 0:
+            while self.server.live_viewers == 0:
+                if deadline is not None and time.monotonic() >= deadline:
                     return False
-                self._viewed.wait(0.2 if left is None else min(0.2, left))   # short waits: Ctrl-C works
+                time.sleep(0.05)           # short sleeps: Ctrl-C works
             return True
         finally:
             self.server.status = "running"
@@ -105,7 +100,7 @@ class LiveView:
         self.sim.pace = self._own_pace
 
     def __enter__(self) -> "LiveView":
-        return self.start()
+        return self if self.server._thread is not None else self.start()
 
     def __exit__(self, *exc) -> None:
         self.close()

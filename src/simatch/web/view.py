@@ -37,6 +37,16 @@ def add_view_options(group, default_wait: float | None = None) -> None:
                             "(default: until one opens)")
 
 
+def start_view(sim, host: str, port: int) -> LiveView:
+    """A started LiveView; a port that cannot be had is a usage error (no traceback)."""
+    from ..cli import UsageError
+
+    try:
+        return LiveView(sim, host=host, port=port).start()
+    except OSError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def print_urls(view: LiveView, file=sys.stderr) -> None:
     print("simatch: web UI (each address carries that page's token; keep them to yourself):", file=file)
     for label, url in view.urls.items():
@@ -59,7 +69,7 @@ class ViewExtension:
         if not getattr(args, "view", False):
             yield None
             return
-        with LiveView(sim, host=args.view_host, port=args.view_port) as view:
+        with start_view(sim, args.view_host, args.view_port) as view:
             print_urls(view)
             if args.view_wait is None or args.view_wait > 0:
                 print("simatch: waiting for a page to open (Ctrl-C to give up)...", file=sys.stderr, flush=True)

@@ -185,7 +185,8 @@ export class FieldView {
     const b = frame.ball;
     if (b && this.options.trail) {
       const last = this.trail[this.trail.length - 1];
-      if (last && (frame.t < last.t || frame.t - last.t > 0.5)) this.trail = [];
+      // a new trail after a jump in time (seek, reconnect) or in space (the ball was placed)
+      if (last && (frame.t < last.t || frame.t - last.t > 0.5 || Math.hypot(b.x - last.x, b.y - last.y) > 1.0)) this.trail = [];
       this.trail.push({ t: frame.t, x: b.x, y: b.y });
       while (this.trail.length && frame.t - this.trail[0].t > 1.5) this.trail.shift();
     }
