@@ -33,7 +33,7 @@ def hello_of(spec, picture: Picture, fps: float) -> dict:
 
 
 class LiveView:
-    def __init__(self, sim, host: str = "127.0.0.1", port: int = 8765, fps: float = 30.0,
+    def __init__(self, sim, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
                  access: Access | None = None):
         spec = sim.scene.spec
         self.sim = sim

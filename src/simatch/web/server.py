@@ -87,7 +87,7 @@ class ViewServer:
     commanded from here, e.g. a recording); ``on_viewers(n)`` hears how many live pages are open."""
 
     def __init__(self, observer: RunObserver, picture: Picture, access: Access, hello: dict,
-                 control=None, host: str = "127.0.0.1", port: int = 8765, fps: float = 30.0,
+                 control=None, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
                  on_viewers: Callable[[int], None] | None = None):
         self.observer = observer
         self.picture = picture
@@ -207,9 +207,13 @@ class ViewServer:
     async def _ticker(self) -> None:
         loop = asyncio.get_running_loop()
         period = 1.0 / self.fps
-        last = loop.time()
+        last = due = loop.time()
         while True:
-            await asyncio.sleep(max(0.0, period - (loop.time() - last)))
+            due += period                       # a fixed schedule: sleeping late does not drift the rate
+            now = loop.time()
+            if due < now - period:
+                due = now
+            await asyncio.sleep(max(0.0, due - now))
             now = loop.time()
             dt, last = now - last, now
             try:
