@@ -1,13 +1,11 @@
 // The coach machine of one team (paper section V-A): command area, display area, status area.
-import { Connection, EventLog, FieldView, clock, expose, fmt, teamColor, toast } from "/static/simatch.js";
+import { EventLog, FieldView, clock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
-const SET_PIECES = [["KICKOFF", "Kick-off"], ["THROWIN", "Throw-in"], ["PENALTY", "Penalty"],
-                    ["GOALKICK", "Goal kick"], ["CORNERKICK", "Corner"], ["FREEKICK", "Free kick"]];
 const page = { hello: null, view: null, frame: null, test: { mode: "move", point: null } };
 const log = new EventLog($("events"), 200);
 
-const conn = new Connection({
+startPage(page, {
   onHello(h) {
     page.hello = h;
     document.title = `simatch coach · ${h.team}`;
@@ -26,30 +24,17 @@ const conn = new Connection({
     }
     runStatus(h.status);
   },
-  onFrame(f) {
-    page.frame = f;
-    page.view && page.view.setFrame(f);
-    render(f);
-  },
+  render,
   onEvents: (m) => log.update(m),
 });
-page.conn = conn;
-expose(page);
 
-function send(msg) { return conn.request(msg).then(() => toast("done", true)).catch(() => {}); }
+const send = page.send;
 function command(cmd) { return send({ type: "command", cmd }); }
 
 // --- command area ----------------------------------------------------------------------------------
 $("start").onclick = () => command("STARTROBOT");
 $("stop").onclick = () => command("STOPROBOT");
-for (const [key, label] of SET_PIECES) {
-  for (const [side, text] of [["OUR", label], ["OPP", `${label} (opp)`]]) {
-    const b = document.createElement("button");
-    b.textContent = text;
-    b.dataset.cmd = `${side}_${key}`;
-    $("setpieces").appendChild(b);
-  }
-}
+setPieceButtons($("setpieces"));
 document.querySelectorAll("[data-cmd]").forEach((b) => { b.onclick = () => command(b.dataset.cmd); });
 document.addEventListener("keydown", (ev) => {
   // Space stops the team, always (as the original coach), unless typing in a field

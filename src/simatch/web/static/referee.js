@@ -1,13 +1,11 @@
 // The referee console: both teams, score and clock, the event log with reasons, manual mode.
-import { Connection, EventLog, FieldView, clock, expose, fmt, teamColor, toast } from "/static/simatch.js";
+import { EventLog, FieldView, clock, fmt, setPieceButtons, startPage, teamColor } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
-const SET_PIECES = [["KICKOFF", "Kick-off"], ["THROWIN", "Throw-in"], ["PENALTY", "Penalty"],
-                    ["GOALKICK", "Goal kick"], ["CORNERKICK", "Corner"], ["FREEKICK", "Free kick"]];
 const page = { hello: null, view: null, frame: null, team: null };
 const log = new EventLog($("events"), 500);
 
-const conn = new Connection({
+startPage(page, {
   onHello(h) {
     page.hello = h;
     $("scene").textContent = h.scene;
@@ -42,30 +40,18 @@ const conn = new Connection({
       dragging(page.view);
     } else page.view.hello = h;
   },
-  onFrame(f) {
-    page.frame = f;
-    page.view && page.view.setFrame(f);
-    render(f);
-  },
+  render,
   onEvents: (m) => log.update(m),
 });
-page.conn = conn;
-expose(page);
 
-function send(msg) { return conn.request(msg).then(() => toast("done", true)).catch(() => {}); }
+const send = page.send;
 
 function selectTeam(team) {
   page.team = team;
   document.querySelectorAll("#teamsel button").forEach((b) => b.classList.toggle("on", b.dataset.team === team));
 }
 
-for (const [key, label] of SET_PIECES) {
-  for (const [side, text] of [["OUR", label], ["OPP", `${label} (opp)`]]) {
-    const b = document.createElement("button");
-    b.textContent = text; b.dataset.cmd = `${side}_${key}`;
-    $("setpieces").appendChild(b);
-  }
-}
+setPieceButtons($("setpieces"));
 document.querySelectorAll("[data-cmd]").forEach((b) => {
   b.onclick = () => send({ type: "command", cmd: b.dataset.cmd, team: page.team });
 });

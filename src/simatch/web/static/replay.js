@@ -1,27 +1,21 @@
 // The replay page: a timeline to play, pause, change speed and seek through the run.
-import { Connection, EventLog, FieldView, clock, expose, teamColor } from "/static/simatch.js";
+import { EventLog, FieldView, clock, startPage, teamColor } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, seeking: false };
 const log = new EventLog($("events"), 50);
 
-const conn = new Connection({
+startPage(page, {
   onHello(h) {
     page.hello = h;
     $("scene").textContent = h.scene;
     if (!page.view) page.view = new FieldView($("field"), h);
     else page.view.hello = h;
   },
-  onFrame(f) {
-    page.frame = f;
-    page.view && page.view.setFrame(f);
-    render(f);
-  },
+  render,
 });
-page.conn = conn;
-expose(page);
 
-function timeline(action, value = 0) { return conn.request({ type: "timeline", action, value }).catch(() => {}); }
+function timeline(action, value = 0) { return page.conn.request({ type: "timeline", action, value }).catch(() => {}); }
 
 $("play").onclick = () => timeline(page.frame && page.frame.timeline.playing ? "pause" : "play");
 $("speed").onchange = () => timeline("speed", Number($("speed").value));

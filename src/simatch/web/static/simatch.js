@@ -366,7 +366,36 @@ export class FieldView {
   }
 }
 
-// Robots by the world position the page shows (for tests and tools).
-export function expose(page) {
+// ------------------------------------------------------------------------------------------------
+// What every page does with its connection: keep the newest frame, draw it, render the rest; `page.send`
+// sends a request and shows its answer. The page object is `window.simatch` (for tests and tools).
+
+export function startPage(page, { onHello, render, onEvents }) {
+  page.conn = new Connection({
+    onHello,
+    onFrame(f) {
+      page.frame = f;
+      if (page.view) page.view.setFrame(f);
+      render(f);
+    },
+    onEvents,
+  });
+  page.send = (msg) => page.conn.request(msg).then(() => toast("done", true)).catch(() => {});
   window.simatch = page;
+  return page.conn;
+}
+
+export const SET_PIECES = [["KICKOFF", "Kick-off"], ["THROWIN", "Throw-in"], ["PENALTY", "Penalty"],
+                           ["GOALKICK", "Goal kick"], ["CORNERKICK", "Corner"], ["FREEKICK", "Free kick"]];
+
+// A button for each set piece, ours and theirs (data-cmd holds the command's name).
+export function setPieceButtons(container) {
+  for (const [key, label] of SET_PIECES) {
+    for (const [side, text] of [["OUR", label], ["OPP", `${label} (opp)`]]) {
+      const b = document.createElement("button");
+      b.textContent = text;
+      b.dataset.cmd = `${side}_${key}`;
+      container.appendChild(b);
+    }
+  }
 }
