@@ -126,8 +126,9 @@ class Simulation:
     # --- events ------------------------------------------------------------------------------------------
     def _on_event(self, ev) -> None:
         self._events.append(ev)
-        if ev.type == "coach_command" and not self._stepping and ev.team in self.coaches:
-            coach = self.coaches[ev.team]          # given by hand between steps: an operator command
+        if ev.type == "coach_command" and ev.team in self.coaches:
+            # a run has coaches only where no judge gives commands: their commands come from outside
+            coach = self.coaches[ev.team]
             self._operator("coach", ev.team, cmd=int(ev.value), max_vel=coach.max_vel, max_w=coach.max_w,
                            **coach.extra)
 
@@ -137,8 +138,8 @@ class Simulation:
         a recorder, listens), so that the run can be re-simulated from its recording."""
         if self._pub_operator.active:
             self._pub_operator.put(msgs.OperatorCommand(
-                stamp=self.time, step=self.simulator.step_index, call=call, target=target,
-                args=json.dumps(args, default=_plain)))
+                stamp=self.time, step=self.simulator.step_index, during_step=self._stepping, call=call,
+                target=target, args=json.dumps(args, default=_plain)))
 
     @property
     def events(self) -> list[dict]:

@@ -10,6 +10,7 @@ import sys
 import pytest
 
 import simatch
+from simatch.bus import Node, Phase
 from simatch.record import Recorder, VerifyError, verify
 
 from .conftest import record_run
@@ -67,3 +68,32 @@ def test_a_recording_that_missed_the_start_is_refused(tmp_path):
             sim.run(seconds=0.1)
     with pytest.raises(VerifyError, match="started at t=0.100 s"):
         verify(path)
+
+
+class _Console(Node):
+    """Like a viewer's control node: carries out queued operator requests inside a step (JUDGE phase)."""
+
+    phase = Phase.JUDGE
+    name = "test/console"
+
+    def __init__(self, sim):
+        self.sim, self.period, self.queue = sim, sim.dt, []
+
+    def tick(self, now: float) -> None:
+        while self.queue:
+            self.queue.pop(0)()
+
+
+def test_requests_carried_out_inside_a_step_are_reproduced(tmp_path):
+    path = tmp_path / "console.mcap"
+    with simatch.Simulation("msl_5v5", seed=2) as sim:
+        with Recorder.for_run(sim, path):
+            console = sim.clock.add(_Console(sim))
+            sim.run(seconds=0.2)
+            console.queue.append(lambda: sim.coaches["cyan"].start_play())
+            console.queue.append(lambda: sim.set_model_state("ball", x=-1.5, y=1.0, vx=-0.5))
+            sim.run(seconds=0.3)
+            console.queue.append(lambda: sim.coaches["magenta"].send(15, max_vel=2.0))
+            sim.run(seconds=0.3)
+    verdict = verify(path)
+    assert verdict.identical and verdict.operator_commands == 3, verdict.describe()

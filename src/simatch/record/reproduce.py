@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from .. import msgs
-from ..bus import topics
+from ..bus import Node, Phase, topics
 from .cdr import Encoders
 from .reader import Recording, RecordingError
 from .recorder import simatch_version
@@ -131,43 +131,73 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None) ->
     if external:
         raise VerifyError(f"{rec.path}: team(s) {', '.join(external)} ran outside the simulator process "
                           f"(strategy 'external'): their decisions cannot be re-simulated")
+    with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
+        return _compare(rec, sim, problems, progress)
+
+
+class _DuringStep(Node):
+    """Applies the operator commands that were made while a step's nodes ran (a viewer's control node),
+    at the same point: in the JUDGE phase, after the run's own judge and coaches."""
+
+    phase = Phase.JUDGE
+    name = "replay/operator"
+
+    def __init__(self, sim, verdict: Verdict):
+        self.sim, self.verdict = sim, verdict
+        self.period = sim.dt
+        self.due: list = []
+
+    def tick(self, now: float) -> None:
+        for op in self.due:
+            apply_operator(self.sim, op)
+            self.verdict.operator_commands += 1
+        self.due = []
+
+
+def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     encode = Encoders(msgs.typestore)
     latest: list = [None]
     verdict = Verdict(identical=True, compared=0, until=0.0)
-    with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
-        sub = sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m))
-        pending: list = []
-        last_report = -1.0
-        try:
-            for topic, t_ns, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR}):
-                if topic == topics.OPERATOR:
-                    op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
-                    if op is not None:
-                        pending.append(op)
-                    continue
-                _, step = _STEP.unpack_from(data)
-                if step < sim.simulator.step_index:
-                    continue                          # a repeated sample (should not happen)
-                while sim.simulator.step_index < step:       # a gap (damaged chunk): step through it
-                    _apply_due(sim, pending, verdict)
-                    sim.step()
-                _apply_due(sim, pending, verdict)
-                latest[0] = None
-                sim.step()
-                mine = latest[0]
-                if mine is None:
-                    raise VerifyError("the re-simulation published no model states")
-                verdict.compared += 1
-                verdict.until = step * sim.dt
-                if encode(mine) != bytes(data):
-                    verdict.identical = False
-                    verdict.first_difference = _difference(rec, data, mine, sim.dt)
-                    break
-                if progress is not None and verdict.until - last_report >= 1.0:
-                    last_report = verdict.until
-                    progress(verdict.until)
-        finally:
-            sub.close()
+    during = sim.clock.add(_DuringStep(sim, verdict))
+    sub = sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m))
+    pending: list = []
+    last_report = -1.0
+
+    def step_to(step: int) -> None:
+        """Advance the re-simulation through physics step ``step`` with the commands recorded for it."""
+        while sim.simulator.step_index <= step:
+            k = sim.simulator.step_index
+            while pending and pending[0].step <= k:
+                op = pending.pop(0)
+                if op.during_step and op.step == k:
+                    during.due.append(op)
+                else:
+                    apply_operator(sim, op)
+                    verdict.operator_commands += 1
+            latest[0] = None
+            sim.step()
+
+    try:
+        # a sample is compared once the next one is read: the commands made during its step come after it
+        held: tuple[int, bytes] | None = None
+        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR}):
+            if topic == topics.OPERATOR:
+                op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
+                if op is not None:
+                    pending.append(op)
+                continue
+            _, step = _STEP.unpack_from(data)
+            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim):
+                held = None
+                break
+            held = (step, bytes(data)) if step >= sim.simulator.step_index else None
+            if progress is not None and verdict.until - last_report >= 1.0:
+                last_report = verdict.until
+                progress(verdict.until)
+        if held is not None:
+            _check(held, step_to, latest, encode, verdict, rec, sim)
+    finally:
+        sub.close()
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
     verdict.problems = problems + rec.problems
@@ -175,10 +205,20 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None) ->
     return verdict
 
 
-def _apply_due(sim, pending: list, verdict: Verdict) -> None:
-    while pending and pending[0].step <= sim.simulator.step_index:
-        apply_operator(sim, pending.pop(0))
-        verdict.operator_commands += 1
+def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim) -> bool:
+    """Re-simulate the held sample's step and compare; False at the first difference."""
+    step, data = held
+    step_to(step)
+    mine = latest[0]
+    if mine is None:
+        raise VerifyError("the re-simulation published no model states")
+    verdict.compared += 1
+    verdict.until = step * sim.dt
+    if encode(mine) != data:
+        verdict.identical = False
+        verdict.first_difference = _difference(rec, data, mine, sim.dt)
+        return False
+    return True
 
 
 def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
