@@ -32,6 +32,7 @@ from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 from .. import msgs
 from ..bus import topics
 from ..scene.loader import LoadedScene
+from . import foxglove_msgs as fg
 from . import layout
 from .cdr import HEADER, Encoders
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
@@ -126,8 +127,6 @@ class Recorder:
         return found
 
     def _raw_channel(self, channel_topic: str, typestore=None, typename: str | None = None):
-        from . import foxglove_msgs as fg
-
         typestore = typestore or fg.typestore
         typename = typename or fg.SCENE_UPDATE
         ch = foxglove.Channel(channel_topic, schema=self._schema(typestore, typename),
