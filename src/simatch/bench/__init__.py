@@ -9,4 +9,6 @@ from __future__ import annotations
 #: name -> "module:function", in the order they run
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
+    "record": "simatch.bench.record:run",
+    "web": "simatch.bench.web:run",
 }
