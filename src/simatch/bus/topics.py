@@ -29,6 +29,7 @@ BALL_CONTACTS = "ball_contacts"
 # scene
 GAME_STATE = "game_state"
 EVENTS = "events"
+REFEREE_COMMAND = "referee_command"
 
 
 def robot_name(team: str, rid: int) -> str:
