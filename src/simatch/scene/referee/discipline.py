@@ -44,12 +44,14 @@ class Discipline:
         elif colour == "red":
             self.red[i] += 1
             self.log("red_card", i, int(self.red[i]), 0, f"red card for {name}: {why}")
-            self.send_off(i, now, self.p.red_send_off_time, f"{name}'s red card")
+            self.send_off(i, now, self.p.red_send_off_time, f"{name}'s red card", "for the rest of the match")
         else:
             raise ValueError(f"a card is 'yellow' or 'red', not {colour!r}")
 
     # --- off and back ---------------------------------------------------------------------------------------
-    def send_off(self, i: int, now: float, seconds: Optional[float], why: str) -> None:
+    def send_off(self, i: int, now: float, seconds: Optional[float], why: str,
+                 forever: str = "until returned") -> None:
+        """Park robot i outside the field and disable it for ``seconds`` (None: ``forever``)."""
         obs = self.obs
         until = math.inf if seconds is None else now + seconds
         if i in self.off_until:
@@ -61,7 +63,7 @@ class Discipline:
         self.world.set_model_state(name, x=x, y=y, yaw=math.pi / 2, vx=0.0, vy=0.0, wz=0.0)
         self.world.set_enabled(name, False)
         obs.active[i] = False
-        length = "until returned" if seconds is None else f"for {seconds:.0f} s"
+        length = forever if seconds is None else f"for {seconds:g} s"
         self.log("send_off", i, 0.0 if seconds is None else seconds, 0.0,
                  f"{name} sent off {length} ({why}); parked at ({x:.2f}, {y:.2f})")
 

@@ -354,7 +354,8 @@ class MslReferee(Judge):
         if self.shootout is not None:
             extra = " (shoot-out " + ", ".join(f"{t} {self.shootout.goals(t)}" for t in self.teams) + ")"
         self._send(now, MatchMode.STOPROBOT, "", "the match is over")
-        g.phase = Phase.ENDED
+        g.stage_index = len(g.stages) - 1
+        g.go(Phase.ENDED)
         g.version += 1
         self._log(now, "match_end", team=winner or "", detail=f"final score {score}{extra}: "
                                                              + (f"{winner} wins" if winner else "a draw"))

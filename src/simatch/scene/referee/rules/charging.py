@@ -87,5 +87,5 @@ class ChargingRule(Rule):
         what = "rammed" if ramming else "charged"
         return self.call("charging", charger, speed, p.charging_red_speed if ramming else p.charging_speed,
                          f"{obs.names[charger]} {what} {obs.names[victim]} at {speed:.2f} m/s (the other drove in "
-                         f"at {max(other, 0.0):.2f} m/s; limit {p.charging_speed:.2f} m/s): {then}"
+                         f"at {max(other, 0.0) + 0.0:.2f} m/s; limit {p.charging_speed:.2f} m/s): {then}"
                          + (f", {card} card" if card else ""), restart=restart, card=card)

@@ -19,5 +19,5 @@ class KickoffHalfRule(PositionRule):
         for i in range(obs.n):
             over = obs.attack_sign[i] * obs.X[i]
             if over > 0.0 and obs.active[i] and i != taker:
-                out.append((i, over, 0.0, f"{obs.names[i]} is {over:.2f} m inside the opponent half at the kick-off"))
+                out.append((i, over, 0.0, f"{obs.names[i]} is {over:.3f} m inside the opponent half at the kick-off"))
         return out

@@ -34,7 +34,7 @@ class SetPieceDistanceRule(PositionRule):
                     continue
                 if d[i] < p.opponent_distance:
                     out.append((i, d[i], p.opponent_distance,
-                                f"{name} is {d[i]:.2f} m from the penalty mark (at least {p.opponent_distance:.2f} m)"))
+                                f"{name} is {d[i]:.3f} m from the penalty mark (at least {p.opponent_distance:.2f} m)"))
                 elif obs.penalty_area[i] == box:
                     out.append((i, 0.0, 0.0, f"{name} is in the penalty area during the penalty kick"))
                 continue
@@ -45,5 +45,5 @@ class SetPieceDistanceRule(PositionRule):
                     continue
                 limit, who = p.opponent_distance, "opponent"
             if d[i] < limit:
-                out.append((i, d[i], limit, f"{name} ({who}) is {d[i]:.2f} m from the ball (at least {limit:.2f} m)"))
+                out.append((i, d[i], limit, f"{name} ({who}) is {d[i]:.3f} m from the ball (at least {limit:.2f} m)"))
         return out
