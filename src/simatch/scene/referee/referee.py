@@ -506,6 +506,8 @@ class MslReferee(Judge):
         req = check(req, self.teams, m.obs.names, m.obs.field)
         if not self._begun:
             raise OperatorError("the referee has not started yet: step the simulation once first")
+        if req.op == "return" and m.obs.index[req.robot] not in self.discipline.off_until:
+            raise OperatorError(f"{req.robot} is not sent off")
         now = self.ctx.now()
         self._log(now, "operator", team=req.team or (req.robot.split("/")[0] if req.robot else ""),
                   value=float(req.command) if req.command is not None else 0.0,
@@ -602,10 +604,7 @@ class MslReferee(Judge):
         self.discipline.send_off(i, now, req.seconds, "the operator sent it off")
 
     def _op_return(self, now: float, req: OperatorRequest) -> None:
-        i = self.m.obs.index[req.robot]
-        if i not in self.discipline.off_until:
-            raise OperatorError(f"{req.robot} is not sent off")
-        self.discipline.bring_back(i, "the operator brought it back")
+        self.discipline.bring_back(self.m.obs.index[req.robot], "the operator brought it back")
 
     def _op_card(self, now: float, req: OperatorRequest) -> None:
         self.discipline.card(self.m.obs.index[req.robot], req.card, now, "shown by the operator")
