@@ -15,6 +15,7 @@ SUBCOMMANDS = [
     "simatch.cli.run",
     "simatch.cli.bench",
     "simatch.cli.scenes",
+    "simatch.cli.coach",
 ]
 
 
