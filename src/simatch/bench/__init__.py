@@ -9,4 +9,5 @@ from __future__ import annotations
 #: name -> "module:function", in the order they run
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
+    "referee": "simatch.bench.referee:run",
 }

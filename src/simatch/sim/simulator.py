@@ -146,6 +146,7 @@ class Simulator:
         self._geom_robot = np.full(self.m.ngeom, -1, dtype=np.int64)
         for g, i in self.ix.robot_of_geom.items():
             self._geom_robot[g] = i
+        self._geom_robot_list = self._geom_robot.tolist()
         self.perception = Perception(robots, self.signs, self.radii, self.drive.n_wheels, scene.perception,
                                      self.dt, np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]))
         self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
@@ -364,19 +365,26 @@ class Simulator:
         self._wrenches = keep
 
     def ball_touches(self) -> list[int]:
-        """Robots whose mouth touches the ball right now (from the engine's contacts)."""
+        """Robots whose mouth touches the ball right now (from the engine's contacts).
+
+        Called every physics step while anybody listens to ``ball_contacts``: a scan of plain ints (the
+        contacts are few) costs a few microseconds where NumPy calls on such small arrays cost tens."""
         d = self.d
         n = d.ncon
         if n == 0:
             return []
-        geoms = d.contact.geom[:n]
+        flat = d.contact.geom[:n].ravel().tolist()
         bg = self.ix.ball_geom
-        rows = (geoms[:, 0] == bg) | (geoms[:, 1] == bg)
-        if not rows.any():
+        if bg not in flat:
             return []
-        other = np.where(geoms[rows, 0] == bg, geoms[rows, 1], geoms[rows, 0])
-        robots = self._geom_robot[other]
-        return sorted({int(r) for r in robots if r >= 0})
+        robot_of = self._geom_robot_list
+        robots = set()
+        for k in range(0, 2 * n, 2):
+            a, b = flat[k], flat[k + 1]
+            r = robot_of[b] if a == bg else robot_of[a] if b == bg else -1
+            if r >= 0:
+                robots.add(r)
+        return sorted(robots)
 
     # --- states --------------------------------------------------------------------------------------------
     def robot_positions(self) -> np.ndarray:
