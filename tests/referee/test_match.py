@@ -93,3 +93,17 @@ def test_the_referee_needs_two_teams(tmp_path):
     path.write_text('name = "solo"\n[teams.cyan]\nstart = [[0.0, 0.0, 0.0]]\n[judge]\nkind = "msl_referee"\n')
     with pytest.raises(SceneError, match="msl_referee judges two teams"):
         simatch.Simulation(str(path))
+
+
+def test_the_teams_must_attack_opposite_goals(tmp_path):
+    path = tmp_path / "same_way.toml"
+    path.write_text('name = "same_way"\n[teams.blue]\nstart = [[-1.0, 0.0, 0.0]]\n'
+                    '[teams.yellow]\nstart = [[1.0, 0.0, 0.0]]\n[match]\nkickoff = "blue"\n'
+                    '[judge]\nkind = "msl_referee"\n')
+    with pytest.raises(SceneError, match="teams.yellow.attacks: blue and yellow both attack"):
+        simatch.Simulation(str(path))
+    text = path.read_text().replace('[teams.yellow]\n', '[teams.yellow]\nattacks = "-x"\n')
+    path.write_text(text)
+    with simatch.Simulation(str(path), overrides=SHORT) as sim:      # any team names, once they face each other
+        sim.run()
+        assert sim.done and set(sim.game["score"]) == {"blue", "yellow"}

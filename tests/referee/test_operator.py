@@ -179,3 +179,11 @@ def test_the_api_raises_for_a_bad_request(match):
         sim.judge.send_off("cyan/7")
     with pytest.raises(ValueError, match="unknown game command"):
         sim.judge.command("hop")
+
+
+def test_no_request_after_the_match(match):
+    sim, _ = match(**{"match.halves": 1, "match.half_duration": 1.0})
+    sim.run()
+    assert sim.done and sim.game["phase"] == "ended"
+    with pytest.raises(OperatorError, match="the match is over"):
+        sim.judge.command("STARTROBOT")

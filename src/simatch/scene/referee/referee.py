@@ -68,6 +68,11 @@ class MslReferee(Judge):
         if len(spec.teams) != 2:
             raise SceneError(f"{scene.source}: judge.kind: msl_referee judges two teams, the scene has "
                              f"{len(spec.teams)}")
+        a, b = spec.teams
+        if spec.team_sign(a) == spec.team_sign(b):
+            raise SceneError(f"{scene.source}: teams.{b}.attacks: {a} and {b} both attack "
+                             f"{'+x' if spec.team_sign(a) > 0 else '-x'}; a referee needs them to attack "
+                             f"opposite goals")
         self.m = m = Match(scene, params)
         self.p = params
         self.dt = m.dt
@@ -177,9 +182,7 @@ class MslReferee(Judge):
         g = self.m.game
         g.kickoff_team = self.match_spec.kickoff
         self._log(now, "stage", detail=f"{g.stage.name} begins", value=g.stage.duration or 0.0)
-        g.next_restart = self.m.spots.kickoff(g.kickoff_team)
-        self._cause = "the match begins"
-        self._send(now, MatchMode.STOPROBOT, "", f"the match is about to begin: {g.next_restart.describe()} next")
+        self._stop(now, self.m.spots.kickoff(g.kickoff_team), "the match begins")
 
     # --- every control period ------------------------------------------------------------------------------
     def _control(self, now: float) -> None:
@@ -283,6 +286,7 @@ class MslReferee(Judge):
         self._send(now, MatchMode.STARTROBOT, "", f"START: the {r.describe()}")
 
     def _stop(self, now: float, restart: Restart, reason: str) -> None:
+        """Stop play (STOP to every team); ``restart`` follows when the stoppage is over."""
         g = self.m.game
         if g.phase is Phase.PAUSED:
             g.paused_phase = Phase.STOPPED
@@ -337,14 +341,7 @@ class MslReferee(Judge):
             g.kickoff_team = first if half % 2 == 1 else m.obs.other(first)
             restart = m.spots.kickoff(g.kickoff_team)
             reason = "half time" if nxt.kind == "break" else f"{nxt.name}"
-        if g.phase is Phase.PAUSED:
-            g.paused_phase = Phase.STOPPED
-        else:
-            g.go(Phase.STOPPED)
-        g.next_restart = restart
-        g.hold = False
-        self._cause = reason
-        self._send(now, MatchMode.STOPROBOT, "", f"{reason}: {restart.describe()} next")
+        self._stop(now, restart, reason)
 
     def _end_match(self, now: float) -> None:
         g = self.m.game
@@ -371,6 +368,19 @@ class MslReferee(Judge):
         if not g.auto:
             self._log(now, "proposal", team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
                       limit=call.limit, detail=f"{call.type} (not enforced: manual mode): {call.detail}")
+            return
+        if g.stage.kind == "shootout" and call.restart is not None and g.restart is not None:
+            # in a shoot-out a foul does not restart play: the kicking team's misses the kick, the
+            # defending team's has the kick taken again
+            self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
+                      limit=call.limit, detail=call.detail)
+            if call.card and call.robot >= 0:
+                self.discipline.card(call.robot, call.card, now, call.detail)
+            if call.team == g.restart.team:
+                self._shootout_result(now, False, f"{call.type} by {obs.names[call.robot]}" if call.robot >= 0
+                                      else call.type)
+            else:
+                self._stop(now, g.restart, f"{call.type}: the penalty is taken again")
             return
         self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value, limit=call.limit,
                   detail=call.detail)
@@ -506,6 +516,8 @@ class MslReferee(Judge):
         req = check(req, self.teams, m.obs.names, m.obs.field)
         if not self._begun:
             raise OperatorError("the referee has not started yet: step the simulation once first")
+        if m.game.ended:
+            raise OperatorError("the match is over")
         if req.op == "return" and m.obs.index[req.robot] not in self.discipline.off_until:
             raise OperatorError(f"{req.robot} is not sent off")
         now = self.ctx.now()
