@@ -8,33 +8,33 @@ event log on ``events``. It acts on the world only to place the ball and to park
 
 Cost: what must be exact in time — the ball wholly over a line, every touch of the ball — is judged at the
 physics rate with a few float comparisons; everything else (positions, areas, dribbling, contacts between
-robots, timers) at the control period, on NumPy views of the latest model states.
+robots, timers) at the control period, on plain lists read from the latest model states.
+
+The operator's side (pause, commands, cards, ...) is in `takeover.py`, what it reports in `report.py`.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from collections import deque
 from dataclasses import replace
 from typing import Optional
 
-import numpy as np
-
 from ... import msgs
 from ...bus import NodeContext, topics
-from ..commands import SET_PIECES, MatchMode, for_team, name as command_name, restart_kind, is_ours
+from ..commands import SET_PIECES, MatchMode, for_team, name as command_name
 from ..judges.base import Judge
 from ..loader import SceneError
+from . import report
 from .discipline import Discipline
 from .log import EventLog
 from .observation import Observation
-from .operator import OperatorError, OperatorRequest, check, from_message
 from .params import RefereeParams
 from .restarts import NAMES, Restart, Spots
 from .rules import CONTROL_RULES, BallOutRule, Call, GoalRule, PositionRule
 from .shootout import ShootOut
 from .state import LIVE, Game, Phase, schedule
+from .takeover import OperatorTakeover
 from .touches import Touches
 
 
@@ -57,7 +57,7 @@ class Match:
         return NAMES[r.kind] if r is not None else "restart"
 
 
-class MslReferee(Judge):
+class MslReferee(OperatorTakeover, Judge):
     Params = RefereeParams
     name = "msl_referee"
     gives_commands = True
@@ -96,7 +96,7 @@ class MslReferee(Judge):
         self._out_latched = False
         self._ops: deque = deque()
         self._begun = False
-        self._coach_msgs: dict[str, object] = {}
+        self.coach_info: dict[str, object] = {}
         self._published = (-1, -math.inf)           # (game version, time) of the last GameState
         self._last_replace = -math.inf
         self._settle_spot = False
@@ -345,7 +345,7 @@ class MslReferee(Judge):
 
     def _end_match(self, now: float) -> None:
         g = self.m.game
-        winner = self.winner()
+        winner = report.winner(self)
         score = ", ".join(f"{t} {g.score[t]}" for t in self.teams)
         extra = ""
         if self.shootout is not None:
@@ -438,14 +438,14 @@ class MslReferee(Judge):
             bx, by = (sign * r.x, sign * r.y) if r is not None else (0.0, 0.0)
             info = msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(mode), match_type=int(g.match_type[t]),
                             max_vel=self.p.max_vel, max_w=self.p.max_w, ball_x=bx, ball_y=by)
-            self._coach_msgs[t] = info
+            self.coach_info[t] = info
             self.pub_coach[t].put(info)            # at once; and again every control period
         self._log(now, "command", team=team, value=float(cmd), detail=f"{command_name(cmd)}"
                   + (f" for {team}" if team else "") + f": {reason}")
 
     def _publish(self, now: float, force: bool = False) -> None:
         for t, pub in self.pub_coach.items():
-            info = self._coach_msgs.get(t)
+            info = self.coach_info.get(t)
             if info is not None:
                 pub.put(info)
         g = self.m.game
@@ -469,241 +469,15 @@ class MslReferee(Judge):
         self.log.add(self.ctx.now(), type, team=obs.team_of[i], robot=obs.rid[i], x=obs.X[i], y=obs.Y[i],
                      value=value, limit=limit, detail=detail)
 
-    # --- operator takeover (Python API) --------------------------------------------------------------------------------
-    def pause(self, source: str = "api") -> None:
-        """Halt the game: robots STOP, the clock stands still, until `resume`."""
-        self.operate(OperatorRequest("pause", source=source))
-
-    def resume(self, source: str = "api") -> None:
-        self.operate(OperatorRequest("resume", source=source))
-
-    def command(self, cmd: int | str, team: str = "", spot: tuple[float, float] | None = None,
-                source: str = "api") -> None:
-        """Give any game command, from ``team``'s point of view (``"OUR_FREEKICK"``, 11, ``"opp corner"``).
-        A set piece is prepared and, with automatic judging on, started when the robots are in position."""
-        from ..commands import parse
-        mode = parse(cmd) if isinstance(cmd, str) else MatchMode(cmd)
-        x, y = spot if spot is not None else (None, None)
-        self.operate(OperatorRequest("command", team=team, command=mode, x=x, y=y, source=source))
-
-    def place_ball(self, x: float, y: float, source: str = "api") -> None:
-        self.operate(OperatorRequest("place_ball", x=float(x), y=float(y), source=source))
-
-    def send_off(self, robot: str, seconds: float | None = None, source: str = "api") -> None:
-        """Send ``robot`` (e.g. ``"cyan/3"``) off for ``seconds`` (None: until `return_robot`)."""
-        self.operate(OperatorRequest("send_off", robot=robot, seconds=seconds, source=source))
-
-    def return_robot(self, robot: str, source: str = "api") -> None:
-        self.operate(OperatorRequest("return", robot=robot, source=source))
-
-    def card(self, robot: str, colour: str, source: str = "api") -> None:
-        self.operate(OperatorRequest("card", robot=robot, card=colour, source=source))
-
-    def award_goal(self, team: str, source: str = "api") -> None:
-        self.operate(OperatorRequest("goal", team=team, source=source))
-
-    def set_auto(self, on: bool, source: str = "api") -> None:
-        """Automatic judging on, or off (manual mode: the referee only proposes, the operator commands)."""
-        self.operate(OperatorRequest("auto", on=bool(on), source=source))
-
-    @property
-    def auto(self) -> bool:
-        return self.m.game.auto
-
-    def operate(self, req: OperatorRequest) -> None:
-        """Carry out an operator's request now (OperatorError if it cannot be)."""
-        m = self.m
-        req = check(req, self.teams, m.obs.names, m.obs.field)
-        if not self._begun:
-            raise OperatorError("the referee has not started yet: step the simulation once first")
-        if m.game.ended:
-            raise OperatorError("the match is over")
-        if req.op == "return" and m.obs.index[req.robot] not in self.discipline.off_until:
-            raise OperatorError(f"{req.robot} is not sent off")
-        now = self.ctx.now()
-        self._log(now, "operator", team=req.team or (req.robot.split("/")[0] if req.robot else ""),
-                  value=float(req.command) if req.command is not None else 0.0,
-                  detail=f"{req.describe()} (by {req.source})")
-        getattr(self, "_op_" + req.op)(now, req)
-        self._publish(now, force=True)
-
-    def _operator_queue(self, now: float) -> None:
-        while self._ops:
-            msg = self._ops.popleft()
-            try:
-                self.operate(from_message(msg))
-            except (OperatorError, ValueError, TypeError, AttributeError) as exc:
-                self._log(now, "operator_refused", detail=f"{exc} (from {getattr(msg, 'source', '') or 'bus'})")
-
-    def _op_pause(self, now: float, req: OperatorRequest) -> None:
-        g = self.m.game
-        if g.phase in (Phase.PAUSED, Phase.ENDED):
-            return
-        steps = g.phase_steps
-        g.paused_phase = g.phase
-        g.go(Phase.PAUSED)
-        g.phase_steps = steps
-        self._send(now, MatchMode.STOPROBOT, "", "the operator paused the game")
-
-    def _op_resume(self, now: float, req: OperatorRequest) -> None:
-        g = self.m.game
-        if g.phase is not Phase.PAUSED:
-            return
-        back = g.paused_phase or Phase.STOPPED
-        steps = g.phase_steps
-        g.go(back)
-        g.phase_steps = steps
-        g.paused_phase = None
-        if back in (Phase.TAKING, Phase.PLAY):
-            self._send(now, MatchMode.STARTROBOT, "", "the operator resumed the game")
-        elif back is Phase.PREPARE:
-            r = g.restart
-            self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team,
-                       "the operator resumed the game")
-        else:
-            self._send(now, MatchMode.STOPROBOT, "", "the operator resumed the game (the ball is dead)")
-
-    def _op_command(self, now: float, req: OperatorRequest) -> None:
-        m = self.m
-        g, obs = m.game, m.obs
-        cmd = req.command
-        if g.phase is Phase.PAUSED:
-            g.paused_phase = None
-        if cmd in (MatchMode.STOPROBOT, MatchMode.PARKINGROBOT):
-            g.go(Phase.STOPPED)
-            g.hold = True
-            g.next_restart = None
-            self._send(now, cmd, "", "the operator stopped the game" if cmd == MatchMode.STOPROBOT
-                       else "the operator parks the robots")
-        elif cmd == MatchMode.STARTROBOT:
-            if g.phase is Phase.PREPARE:
-                self._start(now)
-            elif g.phase in (Phase.TAKING, Phase.PLAY):
-                self._send(now, cmd, "", "the operator confirmed play")
-            else:
-                m.touches.on_restart()
-                for rule in self.rules:
-                    rule.on_restart()
-                g.restart = None
-                g.next_restart = None
-                g.hold = False
-                g.go(Phase.PLAY)
-                self._send(now, cmd, "", "the operator started play (the ball is in play)")
-        else:
-            kind = restart_kind(cmd)
-            taker = "" if kind == "dropped_ball" else (req.team if is_ours(cmd) else obs.other(req.team))
-            if kind == "kickoff":
-                r = m.spots.kickoff(taker)
-            elif kind == "penalty":
-                r = m.spots.penalty(taker, obs.own_goal_side(obs.other(taker)))
-            elif req.x is not None:
-                r = Restart(kind, taker, req.x, req.y)
-            else:
-                r = Restart(kind, taker, obs.bx, obs.by)
-            if g.phase is not Phase.STOPPED:
-                g.go(Phase.STOPPED)
-            self._call_restart(now, r, "the operator called it")
-
-    def _op_place_ball(self, now: float, req: OperatorRequest) -> None:
-        g = self.m.game
-        self._place_ball(req.x, req.y)
-        if g.phase is Phase.PREPARE and g.restart is not None:
-            g.restart = replace(g.restart, x=req.x, y=req.y)
-        self._log(now, "ball_placed", x=req.x, y=req.y, detail="the operator placed the ball")
-
-    def _op_send_off(self, now: float, req: OperatorRequest) -> None:
-        i = self.m.obs.index[req.robot]
-        self.discipline.send_off(i, now, req.seconds, "the operator sent it off")
-
-    def _op_return(self, now: float, req: OperatorRequest) -> None:
-        self.discipline.bring_back(self.m.obs.index[req.robot], "the operator brought it back")
-
-    def _op_card(self, now: float, req: OperatorRequest) -> None:
-        self.discipline.card(self.m.obs.index[req.robot], req.card, now, "shown by the operator")
-
-    def _op_goal(self, now: float, req: OperatorRequest) -> None:
-        g = self.m.game
-        g.score[req.team] += 1
-        g.version += 1
-        self.goals.append({"t": round(now, 6), "team": req.team, "robot": ""})
-        self._log(now, "goal", team=req.team, detail=f"goal for {req.team}, awarded by the operator")
-
-    def _op_auto(self, now: float, req: OperatorRequest) -> None:
-        g = self.m.game
-        g.auto = req.on
-        g.version += 1
-
-    # --- what the referee reports ---------------------------------------------------------------------------------
+    # --- what the referee reports (see report.py) ------------------------------------------------------------
     def winner(self) -> Optional[str]:
-        g = self.m.game
-        a, b = self.teams
-        if g.score[a] != g.score[b]:
-            return a if g.score[a] > g.score[b] else b
-        return self.shootout.winner() if self.shootout is not None else None
+        return report.winner(self)
 
     def game(self) -> dict:
-        m = self.m
-        g, obs = m.game, m.obs
-        last = m.touches.last
-        nxt = g.next_restart
-        return {
-            "stage": g.stage.name,
-            "phase": g.phase.value,
-            "clock": round(g.clock, 6),
-            "time_left": round(g.time_left, 6),
-            "score": dict(g.score),
-            "fouls": {t: self.log.fouls.get(t, 0) for t in self.teams},
-            "yellow_cards": self.discipline.per_team(self.discipline.yellow),
-            "red_cards": self.discipline.per_team(self.discipline.red),
-            "sent_off": [obs.names[i] for i in self.discipline.sent_off],
-            "commands": {t: {"match_mode": int(msg.match_mode), "match_type": int(msg.match_type),
-                             "name": command_name(msg.match_mode)} for t, msg in self._coach_msgs.items()},
-            "reason": g.reason,
-            "restart": g.restart.describe() if g.restart is not None else None,
-            "next_restart": nxt.describe() if nxt is not None else None,
-            "last_touch": obs.names[last] if last >= 0 else "",
-            "ball_in_play": g.ball_in_play,
-            "paused": g.phase is Phase.PAUSED,
-            "manual": not g.auto,
-            "shootout": self.shootout.summary() if self.shootout is not None else None,
-        }
+        return report.game(self)
 
     def result(self) -> dict:
-        g = self.m.game
-        return {
-            "score": dict(g.score),
-            "fouls": {t: self.log.fouls.get(t, 0) for t in self.teams},
-            "yellow_cards": self.discipline.per_team(self.discipline.yellow),
-            "red_cards": self.discipline.per_team(self.discipline.red),
-            "winner": self.winner() if g.ended else None,
-            "ended": g.ended,
-            "stage": g.stage.name,
-            "clock": round(g.clock, 6),
-            "goals": list(self.goals),
-            "disallowed_goals": len(self.log.of_type("goal_disallowed")),
-            "shootout": self.shootout.summary() if self.shootout is not None else None,
-        }
+        return report.result(self)
 
     def game_state(self, now: float):
-        m = self.m
-        g, obs = m.game, m.obs
-        first = self.teams[0]
-        nxt = g.next_restart
-        spot = nxt if g.phase is Phase.STOPPED and nxt is not None else g.restart
-        last = m.touches.last
-        return msgs.GameState(
-            stamp=now, stage=g.stage.name, phase=g.phase.value, clock=g.clock, stage_time_left=g.time_left,
-            command=int(for_team(g.command, g.command_team, first) if g.command_team else g.command),
-            next_command=int(nxt.command_for(first)) if nxt is not None else 0,
-            command_team=(nxt.team if g.phase is Phase.STOPPED and nxt is not None else g.command_team),
-            reason=g.reason, teams=list(self.teams),
-            score=np.array([g.score[t] for t in self.teams], dtype=np.int32),
-            yellow_cards=np.array([self.discipline.per_team(self.discipline.yellow)[t] for t in self.teams],
-                                  dtype=np.int32),
-            red_cards=np.array([self.discipline.per_team(self.discipline.red)[t] for t in self.teams], dtype=np.int32),
-            fouls=np.array([self.log.fouls.get(t, 0) for t in self.teams], dtype=np.int32),
-            sent_off=[obs.names[i] for i in self.discipline.sent_off],
-            last_touch=obs.names[last] if last >= 0 else "", ball_in_play=g.ball_in_play,
-            paused=g.phase is Phase.PAUSED, manual=not g.auto,
-            ball_x=float(spot.x) if spot is not None else 0.0, ball_y=float(spot.y) if spot is not None else 0.0,
-            result=json.dumps(self.result()))
+        return report.game_state(self, now)
