@@ -10,7 +10,7 @@ from dataclasses import replace
 from ..commands import MatchMode, is_ours, parse, restart_kind
 from .operator import OperatorError, OperatorRequest, check, from_message
 from .restarts import Restart
-from .state import Phase
+from .state import Phase, TransitionError
 
 
 class OperatorTakeover:
@@ -77,7 +77,7 @@ class OperatorTakeover:
             msg = self._ops.popleft()
             try:
                 self.operate(from_message(msg))
-            except (OperatorError, ValueError, TypeError, AttributeError) as exc:
+            except (OperatorError, TransitionError, ValueError, TypeError, AttributeError) as exc:
                 self._log(now, "operator_refused", detail=f"{exc} (from {getattr(msg, 'source', '') or 'bus'})")
 
     def _op_pause(self, now: float, req: OperatorRequest) -> None:
