@@ -10,4 +10,5 @@ from __future__ import annotations
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
     "referee": "simatch.bench.referee:run",
+    "web": "simatch.bench.web:run",
 }

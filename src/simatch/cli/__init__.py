@@ -16,6 +16,7 @@ SUBCOMMANDS = [
     "simatch.cli.bench",
     "simatch.cli.scenes",
     "simatch.cli.coach",
+    "simatch.cli.serve",
 ]
 
 

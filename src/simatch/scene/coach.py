@@ -68,8 +68,13 @@ class Coach(Node):
         self.send(MatchMode.PARKINGROBOT)
 
     def info(self, now: float):
-        return msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(self.match_mode), match_type=int(self.match_type),
-                        max_vel=self.max_vel, max_w=self.max_w, **self.extra)
+        if self.extra:
+            return msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(self.match_mode),
+                            match_type=int(self.match_type), max_vel=self.max_vel, max_w=self.max_w, **self.extra)
+        return msgs.CoachInfo(stamp=now, match_mode=int(self.match_mode), match_type=int(self.match_type), test_mode=0,
+                              point_a_x=0.0, point_a_y=0.0, point_b_x=0.0, point_b_y=0.0, angle_a=0.0, angle_b=0.0,
+                              id_a=0, id_b=0, kick_force=0.0, max_vel=self.max_vel, max_w=self.max_w, ball_x=0.0,
+                              ball_y=0.0)
 
     def tick(self, now: float) -> None:
         self.pub.put(self.info(now))
