@@ -107,3 +107,10 @@ def test_the_teams_must_attack_opposite_goals(tmp_path):
     with simatch.Simulation(str(path), overrides=SHORT) as sim:      # any team names, once they face each other
         sim.run()
         assert sim.done and set(sim.game["score"]) == {"blue", "yellow"}
+
+
+def test_referee_benchmark_reports_its_figures():
+    from simatch.bench.referee import run
+    out = run(1.0)
+    assert set(out) >= {"referee_us_per_step", "referee_overhead_us_per_step", "referee_decisions"}
+    assert out["referee_us_per_step"] > 0 and out["referee_sim_seconds"] == 1.0
