@@ -37,10 +37,13 @@ def browser():
 
 @pytest.fixture
 def live():
-    """``live(**overrides)``: a Simulation of msl_5v5 with the web UI on a free loopback port."""
+    """``live(**overrides)``: a Simulation of msl_5v5 with the web UI on a free loopback port; a coach per team
+    and no referee, unless the overrides name a judge."""
     made = []
 
     def make(scene: str = "msl_5v5", seed: int = 0, **overrides):
+        if scene == "msl_5v5":
+            overrides = {"judge.kind": "none", **overrides}
         sim = simatch.Simulation(scene, seed=seed, overrides=overrides)
         view = LiveView(sim, port=0).start()
         made.append((sim, view))

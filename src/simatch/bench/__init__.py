@@ -10,5 +10,6 @@ from __future__ import annotations
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
     "record": "simatch.bench.record:run",
+    "referee": "simatch.bench.referee:run",
     "web": "simatch.bench.web:run",
 }

@@ -17,6 +17,7 @@ SUBCOMMANDS = [
     "simatch.cli.scenes",
     "simatch.cli.replay",
     "simatch.cli.export",
+    "simatch.cli.coach",
     "simatch.cli.serve",
 ]
 

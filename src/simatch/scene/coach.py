@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
-from .commands import MatchMode, SET_PIECES
+from .commands import SET_PIECES, MatchMode, parse
 
 
 class Coach(Node):
@@ -35,10 +35,11 @@ class Coach(Node):
         self.pub_events = ctx.bus.publisher(topics.EVENTS, msgs.GameEvent)
 
     # --- commands ---------------------------------------------------------------------------------------
-    def send(self, cmd: int, **fields) -> None:
-        """Give a command (from this team's point of view); extra CoachInfo fields (points, ids, test mode,
-        max_vel, max_w) may be given too. Takes effect at the coach's next tick."""
-        cmd = MatchMode(cmd)
+    def send(self, cmd: int | str, **fields) -> None:
+        """Give a command (from this team's point of view): a MatchMode, its number, or words such as
+        ``"freekick"``, ``"opp corner"`` (see `commands.parse`); extra CoachInfo fields (points, ids, test
+        mode, max_vel, max_w) may be given too. Takes effect at the coach's next tick."""
+        cmd = parse(cmd) if isinstance(cmd, str) else MatchMode(cmd)
         if cmd in SET_PIECES:
             self.match_type = cmd
         elif cmd == MatchMode.TEST:
