@@ -185,11 +185,14 @@ class Encirclement(Judge):
 
     def _publish_game(self, now: float) -> None:
         n = len(self.captured)
-        score = [n if t == self.params.chasers else 0 for t in self.teams]
+        score = np.array([n if t == self.params.chasers else 0 for t in self.teams], dtype=np.int32)
+        none = np.zeros(len(self.teams), dtype=np.int32)          # no cards, no fouls in this game
         self.pub_game.put(msgs.new(
-            msgs.GameState, stamp=now, stage="ended" if self.done else "encirclement", clock=now,
+            msgs.GameState, stamp=now, stage="ended" if self.done else "encirclement",
+            phase="ended" if self.done else "play", clock=now,
             stage_time_left=max(0.0, self.params.time_limit - now), command=int(self._command()),
-            teams=list(self.teams), score=np.array(score, dtype=np.int32), result=json.dumps(self.result())))
+            teams=list(self.teams), score=score, yellow_cards=none, red_cards=none, fouls=none,
+            result=json.dumps(self.result())))
         self._published = now
         self._dirty = False
 
