@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 SIMATCH = [sys.executable, "-m", "simatch"]
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "evaluate_encirclement.py"
 
@@ -47,3 +49,13 @@ def test_the_evaluation_script_measures_both_series():
     assert any(line.startswith("| herding | 0 | 7/7 |") for line in lines)
     assert any(line.startswith("| still | 0 | 0/7 |") for line in lines)
     assert lines[-1] == "PASS"
+
+
+def test_the_benchmark_reports_the_scene_speed():
+    from simatch.bench.encirclement import run as bench
+
+    out = bench(1.0)                                  # one whole run (and the warm-up)
+    assert out["encirclement_runs"] == 1 and out["encirclement_all_captured"] == 1
+    assert out["encirclement_rtf"] > 0
+    # the run stops one physics step after the judge saw the last capture
+    assert out["encirclement_sim_seconds"] == pytest.approx(out["encirclement_capture_time_median_s"] + 0.005)
