@@ -7,7 +7,9 @@ import pytest
 import simatch
 from simatch.record import Recorder
 
-NOISY = {"perception.position_noise": 0.05, "perception.ball_dropout": 0.2}
+#: these recordings drive the match through the teams' coaches: no referee
+COACHED = {"judge.kind": "none"}
+NOISY = {**COACHED, "perception.position_noise": 0.05, "perception.ball_dropout": 0.2}
 
 
 def play_a_little(sim) -> None:

@@ -22,7 +22,7 @@ KILLED_CHILD = textwrap.dedent('''
     import sys, time
     import simatch
     from simatch.record import Recorder
-    sim = simatch.Simulation("msl_5v5", seed=2)
+    sim = simatch.Simulation("msl_5v5", seed=2, overrides={"judge.kind": "none"})
     Recorder.for_run(sim, sys.argv[1])
     for coach in sim.coaches.values():
         coach.start_play()
