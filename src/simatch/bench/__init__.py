@@ -10,4 +10,8 @@ from __future__ import annotations
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
     "match": "simatch.bench.match:run",
+    "record": "simatch.bench.record:run",
+    "referee": "simatch.bench.referee:run",
+    "web": "simatch.bench.web:run",
+    "encirclement": "simatch.bench.encirclement:run",
 }

@@ -15,6 +15,10 @@ SUBCOMMANDS = [
     "simatch.cli.run",
     "simatch.cli.bench",
     "simatch.cli.scenes",
+    "simatch.cli.replay",
+    "simatch.cli.export",
+    "simatch.cli.coach",
+    "simatch.cli.serve",
 ]
 
 

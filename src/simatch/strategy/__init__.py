@@ -18,6 +18,8 @@ SHIPPED = {
     "startpose": "simatch.strategy.scripted:StartPose",
     "nubot": "simatch.strategy.nubot:NubotTeam",
     "simple": "simatch.strategy.simple:SimpleRobot",
+    "encircle": "simatch.strategy.encirclement:Chaser",
+    "flee": "simatch.strategy.encirclement:Target",
 }
 
 #: strategies that create no node in the run that loads the scene
