@@ -14,7 +14,8 @@ BENCH_Y = 8.2          # beyond the 1 m margin: a benched robot is not "valid" (
 
 
 def scenario(cyan: str = "nubot", magenta: str = "none", seed: int = 0, **overrides) -> simatch.Simulation:
-    ov = {"teams.cyan.strategy": cyan, "teams.magenta.strategy": magenta}
+    """msl_5v5 with these strategies and no referee: the test gives the game commands (coaches)."""
+    ov = {"teams.cyan.strategy": cyan, "teams.magenta.strategy": magenta, "judge.kind": "none"}
     ov.update(overrides)
     return simatch.Simulation("msl_5v5", seed=seed, overrides=ov)
 

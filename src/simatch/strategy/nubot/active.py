@@ -37,6 +37,7 @@ from .picture import Picture
 from .positions import Areas
 
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
+PASS_KEEP = 1.5         # a pass being lined up keeps its receiver unless another is this much better
 TASTE = 0.3             # spread of a possession's taste for each receiver (position value units)
 LEAN = 0.15             # weight of a possession's preferred dribbling side
 AIM_SPREAD = 0.25       # a shot aims this fraction of the open width either side of its middle
@@ -199,7 +200,7 @@ class BallPlayer:
             for value, rid, cx, cy, v in self.passes(obs):
                 late = self.turn_time(obs, cx, cy) > threat
                 keep = prev is not None and prev[0] == "pass" and prev[4] == rid
-                score = value - (2.0 if late else 0.0) + (0.6 if keep else 0.0)
+                score = value - (2.0 if late else 0.0) + (PASS_KEEP if keep else 0.0)
                 if score > best_score:
                     best, best_score = (value, rid, cx, cy, v, keep), score
             if best is not None:

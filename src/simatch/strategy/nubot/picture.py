@@ -31,6 +31,8 @@ from .setpieces import formation, spread
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
 OPP_CONTROL = 0.45
+#: we keep attacking (defending) until the opponents (we) reach the ball this much sooner [s]
+ATTACK_HYSTERESIS = 0.4
 #: set-piece slots change hands easily while robots run to them, and never once START is given [m]
 SETUP_HYSTERESIS = 0.5
 RESTART_HYSTERESIS = 50.0
@@ -203,7 +205,11 @@ class Analyst:
             pic.active = active.id
             pic.roles[active.id] = Role.ACTIVE if pic.receiver != active.id else Role.CATCHOFPASS
         our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
-        pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - 0.3)
+        # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
+        said = [m.attacking for m in mates if m.attacking >= 0]
+        before = 2 * sum(said) > len(said) if said else False
+        margin = -ATTACK_HYSTERESIS if before else ATTACK_HYSTERESIS
+        pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
         rest = [m for m in field if m is not active]
         if not rest:
             return

@@ -135,6 +135,7 @@ class NubotRobot(RobotStrategy):
                 cmd = self.hold_slot(obs, pic, role)
         if cmd.pass_intent is None:
             cmd.pass_intent = self.player.pass_intent(obs)
+        cmd.user = (1.0 if pic.attacking else 0.0,)     # told to the team: the attack hysteresis
         self.role = cmd.role
         self.steady = None
         if (phase in (Phase.PLAY, Phase.SETUP) and cmd.action in STEADY_ACTIONS and cmd.pass_intent is None
@@ -161,8 +162,14 @@ class NubotRobot(RobotStrategy):
             return None
         if len(v.obstacles.distance) and v.obstacles.distance.min() < STEADY_ROBOT_DISTANCE:
             return None
+        # one of the two field robots nearest to the ball may become the active robot any tick: it decides
+        mine = (b.x - me.x) ** 2 + (b.y - me.y) ** 2
+        closer = sum(1 for r in v.robots if r.id != me.id and r.id != world.goalkeeper and r.valid
+                     and (b.x - r.x) ** 2 + (b.y - r.y) ** 2 < mine)
+        if closer < 2:
+            return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
-        return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent)
+        return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
     def hold_slot(self, obs: Observation, pic: Picture, role: int) -> Command:
