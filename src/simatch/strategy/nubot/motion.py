@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from .avoidance import sub_target
+from .avoidance import no_charging, sub_target
 from .geometry import wrap
 from .observation import Observation
 from .params import NubotParams
@@ -44,6 +44,7 @@ class Motion:
         self.last = (0.0, 0.0, 0.0)  # the last course: team-frame velocity and turn rate
         self.clearance = 2.0 * params.robot_radius + 0.3           # robot to robot centres
         self.ball_clearance = params.robot_radius + 0.11 + 0.12      # robot centre to ball centre
+        self.touch = 2.0 * params.robot_radius + 0.05               # robots closer than this touch
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
 
@@ -57,21 +58,6 @@ class Motion:
             if c.max_w > 0.0:
                 wmax = min(wmax, c.max_w)
         return vmax, wmax
-
-    def obstacles(self, obs: Observation, ball: bool | float = False) -> list[tuple[float, float, float]]:
-        """Every other robot (where it will be in LOOK_AHEAD seconds: a robot cannot swerve at once) and the
-        ball if asked (True for the usual clearance, or a distance to keep from it), with the clearance to
-        keep from each."""
-        me = obs.me
-        c = self.clearance
-        k = LOOK_AHEAD
-        out = [(o[0] + k * o[2], o[1] + k * o[3], c) for o in obs.opps]
-        for m in obs.mates:
-            if m is not me:
-                out.append((m.x + k * m.vx, m.y + k * m.vy, c))
-        if ball:
-            out.append((obs.bx, obs.by, self.ball_clearance if ball is True else float(ball)))
-        return out
 
     def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
            avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
@@ -99,7 +85,9 @@ class Motion:
             if boxes:
                 sx, sy = self.areas.route(me.x, me.y, tx, ty, boxes)
             if avoid:
-                sx, sy, self.side = sub_target(me.x, me.y, sx, sy, self.obstacles(obs, ball_obstacle), self.side)
+                ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
+                sx, sy, self.side = sub_target(me.x, me.y, sx, sy, obs.opp_array, obs.mate_array, me.id, obs.bx,
+                                               obs.by, ball, self.clearance, LOOK_AHEAD, self.side)
             a = self.p.braking if brake is None else brake
             speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
             ex, ey = sx - me.x, sy - me.y
@@ -111,8 +99,9 @@ class Motion:
         n = math.hypot(vx, vy)
         if n > vmax:
             vx, vy = vx / n * vmax, vy / n * vmax
-        if gentle:
-            vx, vy = self.no_charging(obs, vx, vy)
+        if gentle and obs.opps:
+            vx, vy = no_charging(me.x, me.y, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed,
+                                 CHARGE_BRAKING)
         if fence is not None:
             vx, vy = self.keep_out_of_circle(me.x, me.y, vx, vy, *fence)
         if max_x is not None:
@@ -134,40 +123,6 @@ class Motion:
         a = abs(err)
         w = min(wmax, math.sqrt(2.0 * self.p.turn_acceleration * a), HEADING_GAIN * a)
         return w if err >= 0.0 else -w
-
-    def no_charging(self, obs: Observation, vx: float, vy: float) -> tuple[float, float]:
-        """Cap the velocity towards every opponent so that the robot could still slow to the contact speed
-        before it touches it. The drive changes velocity slowly (wheel acceleration limits): a robot
-        already closing in too fast is commanded its current velocity with the closing part cut hard, so
-        that all the wheels' effort goes into braking along that line, not into turning its course."""
-        me = obs.me
-        touch = 2.0 * self.p.robot_radius + 0.05
-        vc = self.p.contact_speed
-        a = CHARGE_BRAKING
-        worst, brake = 0.0, None
-        for ox, oy, ovx, ovy in obs.opps:
-            rx, ry = ox - me.x, oy - me.y
-            d = math.hypot(rx, ry)
-            if d > 3.5 or d < 1e-6:
-                continue
-            nx, ny = rx / d, ry / d
-            now = me.vx * nx + me.vy * ny
-            # an opponent coming towards us shortens the way we have to slow down in
-            towards_me = max(0.0, -(ovx * nx + ovy * ny))
-            mine = max(now, 0.2)
-            gap = max(0.0, d - touch) * mine / (mine + towards_me)
-            allowed = math.sqrt(vc * vc + 2.0 * a * gap)
-            if now > allowed and now - allowed > worst:
-                worst, brake = now - allowed, (nx, ny, allowed)
-            closing = vx * nx + vy * ny
-            if closing > allowed:
-                vx -= (closing - allowed) * nx
-                vy -= (closing - allowed) * ny
-        if brake is not None:
-            nx, ny, allowed = brake
-            cut = me.vx * nx + me.vy * ny - max(-1.5, allowed - 2.0 * worst)
-            vx, vy = me.vx - cut * nx, me.vy - cut * ny
-        return vx, vy
 
     @staticmethod
     def keep_out_of_circle(x: float, y: float, vx: float, vy: float, cx: float, cy: float,

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
@@ -43,7 +45,7 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "infos", "mates", "by_id")
+    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array")
 
     def __init__(self):
         self.tick = -1
@@ -51,14 +53,15 @@ class TeamView:
         self.infos: tuple = ()
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
+        self.array = np.zeros((0, 5))         # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
 
-    def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate]]:
+    def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
         strategies = world.strategies
         infos = self.infos
         if (self.tick == world.tick and self.robots is robots and len(infos) == len(strategies)
                 and all(a is b for a, b in zip(infos, strategies.values()))):
-            return self.mates, self.by_id
+            return self.mates, self.by_id, self.array
         gk = world.goalkeeper
         mates = []
         for r in robots:
@@ -73,19 +76,20 @@ class TeamView:
             mates.append(m)
         self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
         self.mates, self.by_id = mates, {m.id: m for m in mates}
-        return self.mates, self.by_id
+        self.array = np.array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], dtype=float).reshape(-1, 5)
+        return self.mates, self.by_id, self.array
 
 
 class Observation:
-    __slots__ = ("t", "tick", "me", "mates", "by_id", "bx", "by", "bz", "bvx", "bvy", "bvz", "ball_seen",
-                 "ball_age", "opps", "mode", "mtype", "coach", "goalie_id")
+    __slots__ = ("t", "tick", "me", "mates", "by_id", "mate_array", "bx", "by", "bz", "bvx", "bvy", "bvz",
+                 "ball_seen", "ball_age", "opps", "_opp_array", "mode", "mtype", "coach", "goalie_id")
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
         v = world.vision
         self.t = world.time
         self.tick = world.tick
         self.goalie_id = world.goalkeeper
-        mates, by_id = (view or TeamView()).get(world)
+        mates, by_id, self.mate_array = (view or TeamView()).get(world)
         me = by_id.get(world.id)
         if me is None:
             raise LookupError(f"robot {world.id} is missing from its own perception")
@@ -104,10 +108,18 @@ class Observation:
             self.ball_seen = b is v.ball
             self.ball_age = 0.0 if self.ball_seen else b.age
         self.opps = opponents(v.obstacles, mates)
+        self._opp_array = None
         c = world.coach
         self.coach = c
         self.mode = c.match_mode if c is not None else 0
         self.mtype = c.match_type if c is not None else 0
+
+    @property
+    def opp_array(self) -> np.ndarray:
+        """(M, 4): the opponents as an array (x, y, vx, vy), for kernels."""
+        if self._opp_array is None:
+            self._opp_array = np.array(self.opps, dtype=float).reshape(-1, 4)
+        return self._opp_array
 
     @property
     def ball_speed(self) -> float:
