@@ -141,8 +141,11 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
             slots.append((role, ox, oy, bx, by))
     slots = [_legal(kind, s, areas, bx, by, p) for s in slots]
     out: list[tuple] = []
-    for s in spread(slots, bx, by):
-        out.append(_legal(kind, s, areas, bx, by, p, taken=[(o[1], o[2]) for o in out]))
+    for s, moved in zip(spread(slots, bx, by), slots):
+        taken = [(o[1], o[2]) for o in out]
+        if s is not moved or any(math.hypot(s[1] - x, s[2] - y) < SLOT_GAP - 1e-6 for x, y in taken):
+            s = _legal(kind, s, areas, bx, by, p, taken=taken)     # spread moved it, or it clashes
+        out.append(s)
     return out
 
 
@@ -150,7 +153,11 @@ def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> l
     """Slots (listed by priority) moved apart so that no two robots are sent to the same place: a slot too
     close to an earlier one slides sideways, across the direction of the ball."""
     out: list[tuple] = []
-    for role, x, y, fx, fy in slots:
+    for slot in slots:
+        role, x, y, fx, fy = slot
+        if all(math.hypot(x - o[1], y - o[2]) >= gap for o in out):
+            out.append(slot)                       # unchanged (the same object: callers can tell)
+            continue
         for _ in range(3):
             clash = next(((ox, oy) for _, ox, oy, _, _ in out if math.hypot(x - ox, y - oy) < gap), None)
             if clash is None:
