@@ -14,15 +14,15 @@ tick (see `TeamMemo`) without any robot deciding on anything but its own observa
 
 from __future__ import annotations
 
-import itertools
 import math
 
+import numba
 import numpy as np
 
 from ..roles import Role
 from .ballpath import BallPath, intercepts
 from .gameflow import GameFlow, Phase
-from .geometry import segment_distance, wrap
+from .geometry import wrap
 from .observation import Observation
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
@@ -91,24 +91,65 @@ def assign(robots: list, slots: list[tuple], hysteresis: float,
     if n == 0:
         return {}
     slots = slots[:n] if len(slots) >= n else slots
+    if not slots:
+        return {}
+    r = np.array([(m.x, m.y, m.role) for m in robots], dtype=float)
+    q = np.array([(sl[1], sl[2], sl[0]) for sl in slots], dtype=float)
+    cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
+    best = _assign(r, q, hysteresis, cx, cy, cr)
+    return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
 
-    def way(m, s) -> float:
-        d = math.hypot(m.x - s[1], m.y - s[2])
-        if around is not None:
-            gap, _ = segment_distance(around[0], around[1], m.x, m.y, s[1], s[2])
-            d += 2.0 * max(0.0, around[2] - gap)
-        return d
 
-    cost = [[way(m, s) - (hysteresis if m.role == s[0] else 0.0) for s in slots] for m in robots]
-    best, best_c = None, math.inf
-    k = min(n, len(slots))
-    for perm in itertools.permutations(range(len(slots)), k):
-        c = 0.0
-        for i in range(k):
-            c += cost[i][perm[i]]
-        if c < best_c - 1e-9:
-            best, best_c = perm, c
-    return {robots[i].id: best[i] for i in range(k)}
+@numba.njit(cache=True, nogil=True)
+def _assign(robots, slots, hysteresis, cx, cy, cr):
+    """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
+    slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""
+    n, m = robots.shape[0], slots.shape[0]
+    k = min(n, m)
+    cost = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            dx, dy = slots[j, 0] - robots[i, 0], slots[j, 1] - robots[i, 1]
+            d = math.sqrt(dx * dx + dy * dy)
+            if cr > 0.0:
+                ll = dx * dx + dy * dy
+                t = 0.0
+                if ll > 1e-12:
+                    t = min(max(((cx - robots[i, 0]) * dx + (cy - robots[i, 1]) * dy) / ll, 0.0), 1.0)
+                gap = math.sqrt((robots[i, 0] + t * dx - cx) ** 2 + (robots[i, 1] + t * dy - cy) ** 2)
+                d += 2.0 * max(0.0, cr - gap)
+            if robots[i, 2] == slots[j, 2]:
+                d -= hysteresis
+            cost[i, j] = d
+    best = np.zeros(k, dtype=np.int64)
+    perm = np.zeros(k, dtype=np.int64)
+    used = np.zeros(m, dtype=np.bool_)
+    best_c = 1e18
+    # depth-first over the slots in increasing order: permutations come in lexicographic order
+    depth = 0
+    perm[0] = -1
+    acc = np.zeros(k + 1)
+    while depth >= 0:
+        j = perm[depth] + 1
+        if perm[depth] >= 0:
+            used[perm[depth]] = False
+        while j < m and used[j]:
+            j += 1
+        if j >= m:
+            perm[depth] = -1
+            depth -= 1
+            continue
+        perm[depth] = j
+        used[j] = True
+        acc[depth + 1] = acc[depth] + cost[depth, j]
+        if depth == k - 1:
+            if acc[k] < best_c - 1e-9:
+                best_c = acc[k]
+                best[:] = perm
+        else:
+            depth += 1
+            perm[depth] = -1
+    return best
 
 
 class Analyst:
@@ -134,6 +175,10 @@ class Analyst:
         opps = obs.opps
         if pic.holder == 0:
             pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
+        self._passes(obs, pic)
+        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
+            self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
+            return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         turn = 0.7 / p.max_turn
@@ -147,11 +192,7 @@ class Analyst:
             if opps:
                 t, x, y = min(res[n_us:])
                 pic.their_t, pic.their_xy = (0.0 if pic.opp_holds else t), (x, y)
-        self._passes(obs, pic)
-        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
-            self._set_piece(obs, flow, pic, mates)
-        else:
-            self._play(obs, flow, pic, mates)
+        self._play(obs, flow, pic, mates)
         return pic
 
     # --- passes announced by team-mates ---------------------------------------------------------------
