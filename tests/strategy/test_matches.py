@@ -44,10 +44,10 @@ def test_the_same_seed_gives_the_same_match():
     digests = []
     for _ in range(2):
         with simatch.Simulation("msl_5v5", seed=7) as sim:
-            sim.run(seconds=15.0)
+            sim.run(seconds=30.0)
             digests.append(sim.state_digest())
     with simatch.Simulation("msl_5v5", seed=8) as sim:
-        sim.run(seconds=15.0)
+        sim.run(seconds=30.0)
         other = sim.state_digest()
     assert digests[0] == digests[1]
     assert other != digests[0]                             # the seed varies the play (the strategies' rng)

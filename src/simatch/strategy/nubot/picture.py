@@ -31,6 +31,8 @@ from .setpieces import formation, spread
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
 OPP_CONTROL = 0.45
+#: the points of positional roles stay this far inside the lines [m]
+SLOT_INSIDE = 0.5
 #: we keep attacking (defending) until the opponents (we) reach the ball this much sooner [s]
 ATTACK_HYSTERESIS = 0.4
 #: set-piece slots change hands easily while robots run to them, and never once START is given [m]
@@ -281,6 +283,7 @@ class Analyst:
                 x, y = passive_point(areas, bx, by, pic.attacking)
             else:
                 x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
+            x, y = areas.inside_field(x, y, SLOT_INSIDE)
             slots.append((role, x, y, bx, by))
         slots = spread(slots, bx, by)
         for rid, i in assign(rest, slots, p.role_hysteresis).items():

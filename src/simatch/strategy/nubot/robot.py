@@ -37,9 +37,9 @@ from .testmodes import TestModes
 PARK_OUTSIDE = 0.7
 PARK_SPACING = 1.3
 #: a steady robot decides again at once when the ball, or another robot, is this close [m]
-STEADY_BALL_DISTANCE = 3.0
-STEADY_ROBOT_DISTANCE = 1.5
-STEADY_ACTIONS = (Action.POSITIONED, Action.CATCH_BALL)
+STEADY_BALL_DISTANCE = 2.0
+STEADY_SET_PIECE_DISTANCE = 4.0         # (at a set piece: near the circle the rules keep clear)
+STEADY_ROBOT_DISTANCE = 1.0
 #: at a kick-off, robots in their own half keep this far from the half-way line [m]
 KICKOFF_LINE_MARGIN = 0.15
 #: after taking a restart, the taker keeps this far from the ball until another robot has touched it [m]
@@ -88,6 +88,7 @@ class NubotRobot(RobotStrategy):
         self.role = Role.NOROLE
         self.picture: Picture | None = None
         self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
+        self.picture_tick = -1
 
     # -----------------------------------------------------------------------------------------------------
     def team_picture(self, obs: Observation) -> Picture:
@@ -102,21 +103,31 @@ class NubotRobot(RobotStrategy):
         return pic
 
     def decide(self, world: WorldModel) -> Command:
-        again = self.repeat(world)
-        if again is not None:
-            return again
+        # The team thinks at half rate: on even ticks every robot decides from a fresh team picture; on odd
+        # ticks a robot only taking its place keeps its course, and the others (the ball's robots, the
+        # goalkeeper, robots close to another) act again on a fresh observation but keep the picture of
+        # the tick before. Roles therefore change only on even ticks, for everybody at once (what robots
+        # tell each other stays coherent), and each robot relies only on what it saw itself.
+        odd = world.tick % 2 == 1
+        if odd:
+            again = self.repeat(world)
+            if again is not None:
+                return again
         obs = Observation(world, self.shared.view)
         flow = self.flow
         flow.update(obs)
         self.player.track(obs)
         me = obs.me
         phase = flow.phase
+        self.steady = None
         if phase == Phase.STOP:
             return Command(role=self.role, action=Action.NO_ACTION)
         if phase == Phase.PARK:
             return self.park(obs)
-        pic = self.team_picture(obs)
-        self.picture = pic
+        pic = self.picture
+        if not (odd and pic is not None and pic.phase == phase and self.picture_tick == obs.tick - 1):
+            pic = self.team_picture(obs)
+            self.picture, self.picture_tick = pic, obs.tick
         if phase == Phase.TEST:
             cmd = self.tests.decide(obs, pic)
         else:
@@ -137,18 +148,15 @@ class NubotRobot(RobotStrategy):
             cmd.pass_intent = self.player.pass_intent(obs)
         cmd.user = (1.0 if pic.attacking else 0.0,)     # told to the team: the attack hysteresis
         self.role = cmd.role
-        self.steady = None
-        if (phase in (Phase.PLAY, Phase.SETUP) and cmd.action in STEADY_ACTIONS and cmd.pass_intent is None
-                and pic.receiver != me.id and not me.holding):
-            # a robot taking its place (or running to a ball far away) decides at half rate; in between it
-            # keeps its course
+        if (not odd and phase in (Phase.PLAY, Phase.SETUP) and cmd.action == Action.POSITIONED
+                and cmd.pass_intent is None and pic.receiver != me.id and not me.holding):
             self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
         return cmd
 
     def repeat(self, world: WorldModel) -> Command | None:
-        """The last command again, with the course kept in the team frame, when this robot decided last
-        tick, only to take its place, and nothing that concerns it changed since (same game command, the
-        ball still far away and not coming at it)."""
+        """The last command again, with the course kept in the team frame, when this robot decided on the
+        tick before only to take its place and nothing that concerns it changed since: the same game
+        command, the ball and the other robots still away from it."""
         steady = self.steady
         if steady is None:
             return None
@@ -158,15 +166,10 @@ class NubotRobot(RobotStrategy):
             return None
         v = world.vision
         me, b = world.me, v.ball
-        if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < STEADY_BALL_DISTANCE ** 2:
+        near = STEADY_SET_PIECE_DISTANCE if 1 <= mode <= 13 else STEADY_BALL_DISTANCE
+        if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < near * near:
             return None
         if len(v.obstacles.distance) and v.obstacles.distance.min() < STEADY_ROBOT_DISTANCE:
-            return None
-        # one of the two field robots nearest to the ball may become the active robot any tick: it decides
-        mine = (b.x - me.x) ** 2 + (b.y - me.y) ** 2
-        closer = sum(1 for r in v.robots if r.id != me.id and r.id != world.goalkeeper and r.valid
-                     and (b.x - r.x) ** 2 + (b.y - r.y) ** 2 < mine)
-        if closer < 2:
             return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
