@@ -21,7 +21,7 @@ class Mate:
     """One robot of my team (me included), team frame."""
 
     __slots__ = ("id", "x", "y", "yaw", "vx", "vy", "w", "holding", "valid", "stuck", "role", "action",
-                 "pass_info", "is_goalie", "attacking")
+                 "pass_info", "is_goalie", "attacking", "role_time")
 
     def __init__(self, info, is_goalie: bool):
         self.id = info.id
@@ -35,6 +35,7 @@ class Mate:
         self.pass_info = None
         self.is_goalie = is_goalie
         self.attacking = -1      # whether its team picture said "we attack" last tick (1/0), -1 if unknown
+        self.role_time = 1e9     # how long it has had its announced role [s]
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
@@ -71,8 +72,8 @@ class TeamView:
                 m.role, m.action = s.role, s.action
                 if s.pass_cmd.is_valid:
                     m.pass_info = s.pass_cmd
-                if len(s.user):
-                    m.attacking = int(s.user[0])
+                if len(s.user) >= 2:
+                    m.attacking, m.role_time = int(s.user[0]), float(s.user[1])
             mates.append(m)
         self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
         self.mates, self.by_id = mates, {m.id: m for m in mates}

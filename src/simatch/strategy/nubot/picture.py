@@ -31,6 +31,11 @@ from .setpieces import formation, spread
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
 OPP_CONTROL = 0.45
+#: a robot that has just become the active one stays so at least this long (unless another holds the ball) [s]
+MIN_ACTIVE_TIME = 0.6
+#: a robot that took its role less than MIN_ROLE_TIME ago keeps it unless another way saves NEW_ROLE_HOLD more
+MIN_ROLE_TIME = 0.6
+NEW_ROLE_HOLD = 3.0
 #: the points of positional roles stay this far inside the lines [m]
 SLOT_INSIDE = 0.5
 #: we keep attacking (defending) until the opponents (we) reach the ball this much sooner [s]
@@ -95,15 +100,17 @@ def assign(robots: list, slots: list[tuple], hysteresis: float,
     slots = slots[:n] if len(slots) >= n else slots
     if not slots:
         return {}
-    r = np.array([(m.x, m.y, m.role) for m in robots], dtype=float)
+    # a robot that took its role only a moment ago holds on to it harder (roles last a while)
+    r = np.array([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+                  for m in robots], dtype=float)
     q = np.array([(sl[1], sl[2], sl[0]) for sl in slots], dtype=float)
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-    best = _assign(r, q, hysteresis, cx, cy, cr)
+    best = _assign(r, q, cx, cy, cr)
     return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
 
 
 @numba.njit(cache=True, nogil=True)
-def _assign(robots, slots, hysteresis, cx, cy, cr):
+def _assign(robots, slots, cx, cy, cr):
     """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
     slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""
     n, m = robots.shape[0], slots.shape[0]
@@ -121,7 +128,7 @@ def _assign(robots, slots, hysteresis, cx, cy, cr):
                 gap = math.sqrt((robots[i, 0] + t * dx - cx) ** 2 + (robots[i, 1] + t * dy - cy) ** 2)
                 d += 2.0 * max(0.0, cr - gap)
             if robots[i, 2] == slots[j, 2]:
-                d -= hysteresis
+                d -= robots[i, 3]               # the robot's hysteresis for keeping its role
             cost[i, j] = d
     best = np.zeros(k, dtype=np.int64)
     perm = np.zeros(k, dtype=np.int64)
@@ -238,6 +245,10 @@ class Analyst:
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
+            fresh = next((m for m in field if m.role == Role.ACTIVE and m.role_time < MIN_ACTIVE_TIME
+                          and m.id != flow.taker), None)
+            if fresh is not None:
+                best, active = -math.inf, fresh      # a robot that just took the ball on keeps it a moment
             for m in field:
                 if m.id == flow.taker:
                     continue
@@ -266,13 +277,6 @@ class Analyst:
                  else [Role.PASSIVE, Role.MIDFIELD, Role.ASSISTANT])
         if n_assist == 2:
             order = [Role.ASSISTANT, Role.ASSISTANT] + [r for r in order if r != Role.ASSISTANT]
-        if receiver is not None:
-            # the announced receiver waits at the catch point, facing the passer; the others share the rest
-            info = pic.pass_info
-            pic.roles[receiver.id] = Role.ASSISTANT
-            pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
-            rest = [m for m in rest if m is not receiver]
-            order.remove(Role.ASSISTANT)
         slots: list[tuple] = []
         used = 0
         for role in order[:len(rest)]:
@@ -290,6 +294,10 @@ class Analyst:
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
+        if receiver is not None and receiver.id in pic.slots:
+            # the announced receiver keeps its role and waits at the catch point, facing the passer
+            info = pic.pass_info
+            pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
 
     def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
         cx, cy = self.spots

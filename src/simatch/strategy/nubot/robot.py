@@ -89,6 +89,7 @@ class NubotRobot(RobotStrategy):
         self.picture: Picture | None = None
         self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
         self.picture_tick = -1
+        self.role_since = 0.0
 
     # -----------------------------------------------------------------------------------------------------
     def team_picture(self, obs: Observation) -> Picture:
@@ -146,8 +147,11 @@ class NubotRobot(RobotStrategy):
                 cmd = self.hold_slot(obs, pic, role)
         if cmd.pass_intent is None:
             cmd.pass_intent = self.player.pass_intent(obs)
-        cmd.user = (1.0 if pic.attacking else 0.0,)     # told to the team: the attack hysteresis
+        if cmd.role != self.role:
+            self.role_since = obs.t
         self.role = cmd.role
+        # told to the team, for the hysteresis of attacking and of the active role
+        cmd.user = (1.0 if pic.attacking else 0.0, obs.t - self.role_since)
         if (not odd and phase in (Phase.PLAY, Phase.SETUP) and cmd.action == Action.POSITIONED
                 and cmd.pass_intent is None and pic.receiver != me.id and not me.holding):
             self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
