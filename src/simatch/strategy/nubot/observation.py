@@ -46,7 +46,7 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array")
+    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array", "spots")
 
     def __init__(self):
         self.tick = -1
@@ -55,6 +55,7 @@ class TeamView:
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
         self.array = np.zeros((0, 5))         # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        self.spots: set = set()               # where the team-mates are, to tell them among obstacles
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
@@ -78,6 +79,7 @@ class TeamView:
         self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = np.array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], dtype=float).reshape(-1, 5)
+        self.spots = {(m.x, m.y) for m in mates}
         return self.mates, self.by_id, self.array
 
 
@@ -90,7 +92,8 @@ class Observation:
         self.t = world.time
         self.tick = world.tick
         self.goalie_id = world.goalkeeper
-        mates, by_id, self.mate_array = (view or TeamView()).get(world)
+        view = view or TeamView()
+        mates, by_id, self.mate_array = view.get(world)
         me = by_id.get(world.id)
         if me is None:
             raise LookupError(f"robot {world.id} is missing from its own perception")
@@ -108,7 +111,7 @@ class Observation:
             self.bvx, self.bvy, self.bvz = b.vx, b.vy, b.vz
             self.ball_seen = b is v.ball
             self.ball_age = 0.0 if self.ball_seen else b.age
-        self.opps = opponents(v.obstacles, mates)
+        self.opps = opponents(v.obstacles, mates, view.spots)
         self._opp_array = None
         c = world.coach
         self.coach = c
@@ -131,14 +134,13 @@ class Observation:
         return [m for m in self.mates if m.valid and not m.is_goalie]
 
 
-def opponents(o, mates: list[Mate]) -> list[tuple[float, float, float, float]]:
+def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, float, float]]:
     """(x, y, vx, vy) of the obstacles that are not team-mates. With exact perception a team-mate's
     obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of one."""
     n = len(o.x)
     if n == 0:
         return []
     xs, ys, vxs, vys = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
-    spots = {(m.x, m.y) for m in mates}
     found = 0
     rest = []
     for k in range(n):
