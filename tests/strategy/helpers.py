@@ -3,12 +3,10 @@ others benched off the field, and watchers of what happened to the ball."""
 
 from __future__ import annotations
 
-import math
-
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode, mirror
+from simatch.scene.commands import mirror
 
 BENCH_Y = 8.2          # beyond the 1 m margin: a benched robot is not "valid" (not on the field)
 

@@ -24,10 +24,9 @@ import math
 
 import numpy as np
 
-from ...scene.commands import MatchMode
 from ..base import Command, PassIntent
 from ..roles import Action, Role
-from .evaluate import lane_clear, pass_speed, position_value, pressure, shot_window
+from .evaluate import lane_clear, pass_speed, position_value, shot_window
 from .gameflow import GameFlow, Phase
 from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion

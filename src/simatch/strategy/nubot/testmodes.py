@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from ...scene.commands import TestMode
-from ..base import Command, PassIntent
+from ..base import Command
 from ..roles import Action, Role
 from .active import BallPlayer
 from .evaluate import pass_speed
