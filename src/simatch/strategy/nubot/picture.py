@@ -177,7 +177,10 @@ class Analyst:
         pic.phase = flow.phase
         pic.path = path = BallPath(obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, p.ball_deceleration,
                                    BALL_RADIUS, self.xlim, self.ylim)
-        mates = [m for m in obs.mates if m.valid]
+        # a robot off the field beyond the margin (it followed the ball) still plays; one not valid within
+        # the margin has been taken off (sent off: parked and disabled beside the field)
+        xl, yl = self.areas.L2 + 1.0, self.areas.W2 + 1.0
+        mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
         for m in mates:
             if m.holding:
                 pic.holder = m.id

@@ -99,11 +99,12 @@ class RestartTaker:
             # behind it: close in along the line, converging onto it; drive through the ball only when lined
             # up, with the kicker armed (it fires as the ball enters the mouth, before any push)
             armed = off < ON_LINE and err < ALIGNED
-            s_back = (MOUTH - 0.12 if armed else MOUTH + 0.16) + 2.5 * off
+            s_back = (MOUTH - 0.12 if armed else MOUTH + 0.3) + 2.5 * off
             tx, ty = bx - s_back * ux, by - s_back * uy
-            vmax = 0.7 if behind < 0.9 else p.max_speed
+            vmax = 0.7 if behind < 1.2 else p.max_speed
+            # brake early: touching the ball before the kick would be the taker's touch (then no second one)
             vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, avoid=False,
-                                       end_speed=0.4 if armed else 0.0, gentle=False)
+                                       end_speed=0.4 if armed else 0.0, gentle=False, brake=1.5)
             if armed:
                 kick = speed
                 action = Action.STATIC_PASS if receiver is not None else Action.AT_SHOOT_SITUATION

@@ -42,6 +42,9 @@ STEADY_SET_PIECE_DISTANCE = 4.0         # (at a set piece: near the circle the r
 STEADY_ROBOT_DISTANCE = 1.0
 #: at a kick-off, robots in their own half keep this far from the half-way line [m]
 KICKOFF_LINE_MARGIN = 0.15
+#: a robot that must not touch the ball steps this far aside when it rolls within DODGE_WIDTH of it [m]
+DODGE_STEP = 1.2
+DODGE_WIDTH = 0.8
 #: after taking a restart, the taker keeps this far from the ball until another robot has touched it [m]
 TAKER_BALL_CLEARANCE = 0.9
 #: a robot going round the ball's circle at a restart heads this far (in angle) along it [rad]
@@ -191,18 +194,36 @@ class NubotRobot(RobotStrategy):
         keep = self.keep_from_ball(obs)
         fence = None
         if keep is not None:
-            x, y = self.round_the_ball(obs, x, y, keep)
-            if math.hypot(x - obs.bx, y - obs.by) >= keep:
+            taker = role == Role.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MatchMode.DROPBALL
+            x, y = self.round_the_ball(obs, x, y, keep, taker)
+            if not taker:
                 fence = (obs.bx, obs.by, keep)
         ball = True
         if self.flow.taker == me.id:
             ball = TAKER_BALL_CLEARANCE          # the restart's taker must not touch the ball again yet
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
+            x, y = self.out_of_the_way(obs, x, y)
         kickoff = keep is not None and self.flow.kind in (MatchMode.OUR_KICKOFF, MatchMode.OPP_KICKOFF)
         vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=ball,
                                    boxes=self.areas.forbidden(False), fence=fence,
                                    max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None)
         return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
+
+    def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
+        """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
+        step aside, across the ball's path."""
+        me = obs.me
+        speed = obs.ball_speed
+        if speed < 0.2:
+            return x, y
+        ux, uy = obs.bvx / speed, obs.bvy / speed
+        rx, ry = me.x - obs.bx, me.y - obs.by
+        along = rx * ux + ry * uy
+        across = rx * uy - ry * ux
+        if along <= 0.0 or along > 2.0 * speed or abs(across) > DODGE_WIDTH:
+            return x, y
+        side = 1.0 if across >= 0.0 else -1.0
+        return me.x + side * uy * DODGE_STEP, me.y - side * ux * DODGE_STEP
 
     def keep_from_ball(self, obs: Observation) -> float | None:
         """The distance the rules keep this robot from the ball while a restart is being set up or taken
@@ -216,7 +237,8 @@ class NubotRobot(RobotStrategy):
             return p.opponent_distance
         return None
 
-    def round_the_ball(self, obs: Observation, x: float, y: float, keep: float) -> tuple[float, float]:
+    def round_the_ball(self, obs: Observation, x: float, y: float, keep: float,
+                       taker: bool = False) -> tuple[float, float]:
         """The next point on the way to (x, y) that respects the circle of radius ``keep`` round the ball: a
         robot inside it leaves it straight away, a robot whose straight way would cut through it follows the
         circle round."""
@@ -224,7 +246,13 @@ class NubotRobot(RobotStrategy):
         bx, by = obs.bx, obs.by
         d = math.hypot(me.x - bx, me.y - by)
         if math.hypot(x - bx, y - by) < keep - 0.05:
-            return x, y                                # a slot inside the circle (the taker's)
+            if taker:
+                return x, y                            # the taker's slot, behind the ball
+            # any other place inside the circle is moved out of it, away from the ball
+            ex, ey = x - bx, y - by
+            e = math.hypot(ex, ey)
+            ux, uy = (ex / e, ey / e) if e > 1e-6 else (-1.0, 0.0)
+            x, y = bx + ux * (keep + 0.3), by + uy * (keep + 0.3)
         if d < keep - 0.25:
             ux, uy = ((me.x - bx) / d, (me.y - by) / d) if d > 1e-6 else (-1.0, 0.0)
             return bx + ux * (keep + 0.4), by + uy * (keep + 0.4)
