@@ -15,6 +15,9 @@ SUBCOMMANDS = [
     "simatch.cli.run",
     "simatch.cli.bench",
     "simatch.cli.scenes",
+    "simatch.cli.server",
+    "simatch.cli.team",
+    "simatch.cli.robot",
 ]
 
 
