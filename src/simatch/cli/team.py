@@ -49,5 +49,8 @@ def main(args, robots: list[int] | None = None) -> int:
         except KeyboardInterrupt:
             proc.say(f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
             return 130
-    proc.say(f"{proc.what}: the server ended the run ({reason}) after {proc.ticks} ticks")
+    stats = proc.stats
+    proc.say(f"{proc.what}: the server ended the run ({reason}) after {proc.ticks} ticks"
+             + (f", {proc.skipped} skipped" if proc.skipped else "")
+             + (f"; dropped {stats.malformed} malformed sample(s)" if stats.malformed else ""))
     return 0

@@ -56,11 +56,13 @@ class TeamProcess:
         self.say = say
         self.proc = protocol.new_proc_id()
         self.ticks = 0
+        self.skipped = 0              # ticks skipped because a newer one was already there
         self.ended: str | None = None
         self.joined = False
         self._server_alive = False
         self._server_lost_at: float | None = None
         self.bus: ZenohBus | None = None
+        self.stats = None             # the bus's counters (kept after it closes)
         self.clock: LockstepClock | None = None
 
     @property
@@ -78,6 +80,7 @@ class TeamProcess:
         except TransportError as exc:
             raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
         self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), eager=True)
+        self.stats = self.bus.stats
         try:
             self._setup()
         except BaseException:
@@ -144,7 +147,9 @@ class TeamProcess:
             for ok, payload in self.bus.query(protocol.JOIN, protocol.dumps(req), timeout=5.0):
                 if ok:
                     self.joined = True
-                    self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode})")
+                    where = "; its team's StrategyPub runs on the server" if protocol.loads(payload).get(
+                        "strategy_pub_on_server") else ""
+                    self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{where})")
                     return
                 try:
                     why = protocol.loads(payload, "error")["error"]
@@ -186,11 +191,21 @@ class TeamProcess:
         """Answer the server's ticks until it ends the run (returns its reason); ClientError if it vanishes."""
         bus = self.bus
         while not self.ended:
-            bus.pump(0.25)
+            bus.deliver(self._latest_tick_only(bus.take(0.25)))
             lost = self._server_lost_at
             if lost is not None and time.monotonic() - lost > self.server_timeout:
                 raise ClientError(f"lost the server at {self.connect} (gone for {self.server_timeout:g} s)")
         return self.ended
+
+    def _latest_tick_only(self, items: list) -> list:
+        """A process that fell behind (it was stopped, or slow) skips the ticks the server has already
+        closed: of several queued ticks only the newest is answered (every input is still delivered)."""
+        ticks = [n for n, item in enumerate(items) if item[1] == protocol.TICK]
+        if len(ticks) < 2:
+            return items
+        self.skipped += len(ticks) - 1
+        stale = set(ticks[:-1])
+        return [item for n, item in enumerate(items) if n not in stale]
 
     def close(self) -> None:
         """Leave (saying so while the server is there to hear it) and close the session."""

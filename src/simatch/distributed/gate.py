@@ -66,6 +66,7 @@ class LockstepGate(Node):
         if proc is not None and msg["tick"] == self._tick and proc.id in self._waiting:
             self._waiting.discard(proc.id)
             self.latencies.append(arrival - self._opened)
+            proc.streak = 0
 
     def _absorb(self, items, pending: list) -> None:
         """Protocol samples (acks, joins, liveliness) are handled at once; data waits to be sorted."""

@@ -30,6 +30,7 @@ class Proc:
     joined_step: int
     state: ProcState = ProcState.ACTIVE
     missed: int = 0                 # ticks it did not answer in time
+    streak: int = 0                 # ... in a row
     answered: int = 0
     host: str = ""
 

@@ -55,6 +55,9 @@ class Server:
         self.team_timeout = team_timeout
         self.say = say
         self.mode = protocol.REALTIME if realtime else protocol.LOCKSTEP
+        #: ticks in a row a process may miss before the server stops waiting for it: in real time a late
+        #: answer is normal (it applies at the next tick) and only a silent process should stop being waited for
+        self.late_after = 4 if realtime else 1
         teams = {t: spec.teams[t].robot_ids() for t in spec.teams}
         self.credentials_dir = Path(credentials_dir) if credentials_dir else credentials.default_dir(run)
         self.creds = credentials.ensure(self.credentials_dir, [*teams, credentials.ADMIN])
@@ -77,7 +80,7 @@ class Server:
             self.gate = clock.add(LockstepGate(spec.control.period, deadline, realtime, self.registry.active,
                                                self._on_ack, self._on_missed, self._order))
             self.world_service = clock.add(WorldService(self.sim, self.emit))
-            self.pacer = clock.add(Pacer(spec.physics.timestep)) if realtime else None
+            self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
             self.strategy_pubs: dict[str, StrategyPub] = {}
             self.bus.serve(protocol.SCENE, self._on_scene)
             self.bus.serve(protocol.JOIN, self._on_join)
@@ -172,10 +175,13 @@ class Server:
             proc = self.registry.procs.get(pid)
             if proc is None or proc.state is not ProcState.ACTIVE:
                 continue
-            proc.state = ProcState.LATE
             proc.missed += 1
+            proc.streak += 1
+            if proc.streak < self.late_after:
+                continue
+            proc.state = ProcState.LATE
             self.emit("process_late", team=proc.team, value=self.gate.deadline,
-                      detail=f"{proc.label} did not answer tick {self.gate._tick} in time: not waited for "
+                      detail=f"{proc.label} did not answer {proc.streak} tick(s) in time: not waited for "
                              f"until it answers again")
             self.say(f"{proc.label} is late: not waiting for it")
 
