@@ -9,4 +9,7 @@ from __future__ import annotations
 #: name -> "module:function", in the order they run
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
+    "distributed_rtt": "simatch.bench.distributed:rtt",
+    "distributed_lockstep": "simatch.bench.distributed:lockstep",
+    "distributed_realtime": "simatch.bench.distributed:realtime",
 }

@@ -114,16 +114,18 @@ def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh
 class _RemoteSub:
     """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
 
-    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "__weakref__")
+    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes",
+                 "__weakref__")
 
     def __init__(self, topic: str, msgtype: Any, callback, any_type: bool = False, raw: bool = False,
-                 verify: bool = True):
+                 verify: bool = True, wakes: bool = True):
         self.topic = topic
         self.msgtype = None if msgtype is None else msgs.msgtype_name(msgtype)
         self.callback = callback
         self.any_type = any_type
         self.raw = raw
         self.verify = verify
+        self.wakes = wakes
         self.closed = False
         self.zsub = None
 
@@ -209,13 +211,17 @@ class ZenohBus:
     ``eager`` sends every message to the network even when no remote subscriber is known yet, and counts
     every publisher as active: right after a publisher is declared, Zenoh may not yet know the subscribers
     of other processes, and a client (a team) must not lose its first commands to that race. A server,
-    whose publishers (model states at 200 Hz...) mostly have no remote subscriber, is not eager."""
+    whose publishers (model states at 200 Hz...) mostly have no remote subscriber, is not eager.
+
+    ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
+    a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
+    switch on a machine where cores are scarce."""
 
     def __init__(self, session: zenoh.Session, run: str = "default", *, signer: Signer | None = None,
                  verifier: Verifier | None = None,
                  on_refused: Callable[[str, str], None] | None = None,
                  on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
-                 owns_session: bool = True):
+                 wake_on_data: bool = True, owns_session: bool = True):
         self.run = check_run_name(run)
         self.session = session
         self.stats = BusStats()
@@ -225,6 +231,7 @@ class ZenohBus:
         self.on_refused = on_refused
         self.on_malformed = on_malformed
         self.eager = eager
+        self.wake_on_data = wake_on_data
         self.prefix = f"{_topics.PREFIX}/{run}/"
         self._owns = owns_session
         self._inbox: deque = deque()
@@ -345,13 +352,16 @@ class ZenohBus:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
         clock = time.perf_counter
         with_encoding = rsub.any_type
+        if not rsub.raw:
+            rsub.wakes = self.wake_on_data
 
         def on_sample(sample) -> None:
             att = sample.attachment
             inbox.append((rsub, str(sample.key_expr)[n:], sample.payload.to_bytes(),
                           att.to_bytes() if att is not None else None,
                           str(sample.encoding) if with_encoding else "", clock()))
-            wake.set()
+            if rsub.wakes:
+                wake.set()
 
         rsub.zsub = self.session.declare_subscriber(self.key(rsub.topic), _ZCallback(on_sample, indirect=False),
                                                     allowed_origin=zenoh.Locality.REMOTE)
@@ -369,7 +379,8 @@ class ZenohBus:
                     pass
 
     def wait(self, timeout: float | None) -> bool:
-        """Block until a remote sample is queued (True) or ``timeout`` seconds pass (False)."""
+        """Block until a remote sample that wakes is queued (True; see ``wake_on_data``) or ``timeout``
+        seconds pass (False)."""
         if self._inbox:
             return True
         self._wake.clear()

@@ -79,7 +79,8 @@ class TeamProcess:
             session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
         except TransportError as exc:
             raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
-        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), eager=True)
+        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), eager=True,
+                            wake_on_data=False)
         self.stats = self.bus.stats
         try:
             self._setup()
