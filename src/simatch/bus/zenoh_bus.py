@@ -309,7 +309,7 @@ class ZenohBus:
 
         def on_sample(sample) -> None:
             alive = b"+" if sample.kind == zenoh.SampleKind.PUT else b"-"
-            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.perf_counter()))
+            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.perf_counter(), None))
             wake.set()
 
         rsub.zsub = self.session.liveliness().declare_subscriber(self.key(pattern), _ZCallback(on_sample,
@@ -330,7 +330,7 @@ class ZenohBus:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
 
         def on_query(query) -> None:
-            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.perf_counter()))
+            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.perf_counter(), None))
             wake.set()
 
         self._declared.append(self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False),
@@ -352,14 +352,18 @@ class ZenohBus:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
         clock = time.perf_counter
         with_encoding = rsub.any_type
+        prepare = None if rsub.raw else self._prepare
         if not rsub.raw:
             rsub.wakes = self.wake_on_data
 
         def on_sample(sample) -> None:
             att = sample.attachment
-            inbox.append((rsub, str(sample.key_expr)[n:], sample.payload.to_bytes(),
-                          att.to_bytes() if att is not None else None,
-                          str(sample.encoding) if with_encoding else "", clock()))
+            topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
+            attachment = att.to_bytes() if att is not None else None
+            encoding = str(sample.encoding) if with_encoding else ""
+            # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
+            pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
+            inbox.append((rsub, topic, payload, attachment, encoding, clock(), pre))
             if rsub.wakes:
                 wake.set()
 
@@ -367,6 +371,19 @@ class ZenohBus:
                                                     allowed_origin=zenoh.Locality.REMOTE)
         self._remote.append(rsub)
         return rsub
+
+    def _prepare(self, rsub: _RemoteSub, topic: str, payload: bytes, attachment, encoding: str):
+        """(why refused or None, message or None, decoding error or None) of a data sample."""
+        try:
+            if self.verifier is not None and rsub.verify:
+                why = self.verifier(topic, payload, attachment)
+                if why is not None:
+                    return (why, None, None)
+            return (None, msgs.decode(rsub.msgtype or _type_of(encoding), payload), None)
+        except msgs.MessageError as exc:
+            return (None, None, exc)
+        except Exception:          # never fail in Zenoh's thread: the owner will try again and report
+            return None
 
     def _drop_remote(self, rsub: _RemoteSub) -> None:
         rsub.closed = True
@@ -402,26 +419,29 @@ class ZenohBus:
         """Check, decode and hand samples (from `take`) to their callbacks, in the given order."""
         n = 0
         stats = self.stats
-        verifier = self.verifier
-        for rsub, topic, payload, attachment, encoding, arrival in items:
+        for rsub, topic, payload, attachment, encoding, arrival, pre in items:
             if rsub.closed:
                 continue
-            if verifier is not None and rsub.verify:
-                why = verifier(topic, payload, attachment)
-                if why is not None:
-                    stats.refused += 1
-                    if self.on_refused is not None:
-                        self.on_refused(topic, why)
-                    else:
-                        log.warning("refused a sample on %s: %s", topic, why)
-                    continue
             if rsub.raw:
+                if rsub.verify and self.verifier is not None:
+                    why = self.verifier(topic, payload, attachment)
+                    if why is not None:
+                        self._refused(topic, why)
+                        continue
                 rsub.callback(topic, payload, attachment, arrival)
                 n += 1
                 continue
+            if pre is None:
+                pre = self._prepare(rsub, topic, payload, attachment, encoding) or (None, None, None)
+            why, msg, error = pre
+            if why is not None:
+                self._refused(topic, why)
+                continue
             try:
-                msgtype = rsub.msgtype or _type_of(encoding)
-                msg = msgs.decode(msgtype, payload)
+                if error is not None:
+                    raise error
+                if msg is None:
+                    msg = msgs.decode(rsub.msgtype or _type_of(encoding), payload)
                 if rsub.any_type:
                     rsub.callback(topic, msg)
                 else:
@@ -432,6 +452,13 @@ class ZenohBus:
             stats.delivered += 1
             n += 1
         return n
+
+    def _refused(self, topic: str, why: str) -> None:
+        self.stats.refused += 1
+        if self.on_refused is not None:
+            self.on_refused(topic, why)
+        else:
+            log.warning("refused a sample on %s: %s", topic, why)
 
     def _malformed(self, topic: str, exc: Exception) -> None:
         stats = self.stats
