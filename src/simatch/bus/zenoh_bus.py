@@ -146,15 +146,14 @@ class _Subscription:
 
 
 class _Publisher:
-    __slots__ = ("topic", "msgtype", "_local", "_z", "_bus", "_key", "matching", "_listener")
+    __slots__ = ("topic", "msgtype", "_local", "_z", "_bus", "matching", "_listener")
 
-    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub, key: str):
+    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub):
         self.topic = topic
         self.msgtype = msgtype
         self._bus = bus
         self._local = local
         self._z = zpub
-        self._key = key
         #: whether a subscriber in another process matches (kept up to date by Zenoh's matching listener)
         self.matching = False
 
@@ -256,7 +255,7 @@ class ZenohBus:
             self.key(topic), encoding=zenoh.Encoding(_ENCODING_PREFIX + name),
             congestion_control=zenoh.CongestionControl.BLOCK, reliability=zenoh.Reliability.RELIABLE,
             allowed_destination=zenoh.Locality.REMOTE)
-        pub = _Publisher(self, topic, msgtype, local, zpub, self.key(topic))
+        pub = _Publisher(self, topic, msgtype, local, zpub)
         self._pubs[topic] = pub
         return pub
 
