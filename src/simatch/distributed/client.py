@@ -79,8 +79,7 @@ class TeamProcess:
             session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
         except TransportError as exc:
             raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
-        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), eager=True,
-                            wake_on_data=False)
+        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), wake_on_data=False)
         self.stats = self.bus.stats
         try:
             self._setup()
@@ -147,6 +146,9 @@ class TeamProcess:
             why = "no answer"
             for ok, payload in self.bus.query(protocol.JOIN, protocol.dumps(req), timeout=5.0):
                 if ok:
+                    # the server's subscriptions (and one it made for this join, e.g. a StrategyPub) were
+                    # declared to this session before the answer: from now on, what matches is known
+                    self.bus.refresh_matching()
                     self.joined = True
                     where = "; its team's StrategyPub runs on the server" if protocol.loads(payload).get(
                         "strategy_pub_on_server") else ""
