@@ -207,10 +207,14 @@ class ZenohBus:
     sample received (the server's fair play); ``on_refused(topic, why)`` and ``on_malformed(topic, what)``
     hear about dropped samples (to log them).
 
-    ``eager`` sends every message to the network even when no remote subscriber is known yet, and counts
-    every publisher as active: right after a publisher is declared, Zenoh may not yet know the subscribers
-    of other processes, and a client (a team) must not lose its first commands to that race. A server,
-    whose publishers (model states at 200 Hz...) mostly have no remote subscriber, is not eager.
+    A message is encoded and sent only while a remote subscriber matches (Zenoh's matching status, kept up
+    to date by a listener). Right after a publisher is declared Zenoh may not know yet who listens: a
+    process that must not lose its first messages either waits for a point where it knows (the lockstep
+    client calls `refresh_matching` once it has joined) or is ``eager``: it sends everything and counts
+    every publisher as active (fine for a short-lived tool).
+
+    ``drop_when_congested``: a sample for a process that does not read (stopped, hung) is dropped after a
+    short wait instead of blocking the sender: a server must never be stalled by one team.
 
     ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
     a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
@@ -220,7 +224,7 @@ class ZenohBus:
                  verifier: Verifier | None = None,
                  on_refused: Callable[[str, str], None] | None = None,
                  on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
-                 wake_on_data: bool = True, owns_session: bool = True):
+                 wake_on_data: bool = True, drop_when_congested: bool = False, owns_session: bool = True):
         self.run = check_run_name(run)
         self.session = session
         self.stats = BusStats()
@@ -231,6 +235,7 @@ class ZenohBus:
         self.on_malformed = on_malformed
         self.eager = eager
         self.wake_on_data = wake_on_data
+        self.congestion = zenoh.CongestionControl.DROP if drop_when_congested else zenoh.CongestionControl.BLOCK
         self.prefix = f"{_topics.PREFIX}/{run}/"
         self._owns = owns_session
         self._inbox: deque = deque()
@@ -253,7 +258,7 @@ class ZenohBus:
         name = msgs.msgtype_name(msgtype)
         zpub = self.session.declare_publisher(
             self.key(topic), encoding=zenoh.Encoding(_ENCODING_PREFIX + name),
-            congestion_control=zenoh.CongestionControl.BLOCK, reliability=zenoh.Reliability.RELIABLE,
+            congestion_control=self.congestion, reliability=zenoh.Reliability.RELIABLE,
             allowed_destination=zenoh.Locality.REMOTE)
         pub = _Publisher(self, topic, msgtype, local, zpub)
         self._pubs[topic] = pub
@@ -288,8 +293,7 @@ class ZenohBus:
     def put_raw(self, topic: str, payload: bytes) -> None:
         """Send bytes to the other processes (signed like every sample of this process)."""
         attachment = self.signer(topic, payload) if self.signer is not None else None
-        self.session.put(self.key(topic), payload, attachment=attachment,
-                         congestion_control=zenoh.CongestionControl.BLOCK,
+        self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
                          allowed_destination=zenoh.Locality.REMOTE)
         self.stats.published += 1
 
