@@ -3,11 +3,12 @@ processes, over Zenoh on loopback.
 
 * ``distributed_rtt``: the command round trip between the server and one robot process (lockstep): from
   the server opening a tick (perception and game command sent) to the robot's commands and answer being
-  back, p50/p99.
+  back, p50/p99; and the transit of the commands alone (answer sent -> received).
 * ``distributed_lockstep``: the real-time factor of a 5v5 lockstep run with two team processes, against the
   same run embedded (same scene, seed and interventions: the digests must be equal).
 * ``distributed_realtime``: a 5v5 ``--realtime`` run with one process per robot (11 processes): the
-  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max.
+  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and the
+  commands' transit alone.
 
 The load: msl_5v5 with the plumbing strategy (``startpose``) in play, every robot thrown across the field every
 4 s so that all ten keep driving back to their start poses. (A team strategy that plays the ball will be a
@@ -104,7 +105,8 @@ def rtt(seconds: float | None = None) -> dict:
         _play(server.sim, seconds)
         st = server.stats()
     return {"distributed_rtt_p50_ms": st["latency_p50_ms"], "distributed_rtt_p99_ms": st["latency_p99_ms"],
-            "distributed_rtt_samples": st["answers"]}
+            "distributed_rtt_transit_p50_ms": st["transit_p50_ms"],
+            "distributed_rtt_transit_p99_ms": st["transit_p99_ms"], "distributed_rtt_samples": st["answers"]}
 
 
 def lockstep(seconds: float | None = None) -> dict:
@@ -140,6 +142,8 @@ def realtime(seconds: float | None = None) -> dict:
     return {"distributed_realtime_processes": 1 + st["processes"], "distributed_realtime_rtf": round(seconds / wall, 4),
             "distributed_realtime_latency_p50_ms": st["latency_p50_ms"],
             "distributed_realtime_latency_p99_ms": st["latency_p99_ms"],
-            "distributed_realtime_latency_max_ms": st["latency_max_ms"], "distributed_realtime_missed": st["missed"],
+            "distributed_realtime_latency_max_ms": st["latency_max_ms"],
+            "distributed_realtime_transit_p50_ms": st["transit_p50_ms"],
+            "distributed_realtime_transit_p99_ms": st["transit_p99_ms"], "distributed_realtime_missed": st["missed"],
             "distributed_realtime_late_steps": st["realtime_late_steps"],
             "distributed_realtime_max_lag_ms": st["realtime_max_lag_ms"]}

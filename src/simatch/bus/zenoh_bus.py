@@ -288,7 +288,8 @@ class ZenohBus:
     def subscribe_raw(self, topic: str, callback: Callable[[str, bytes, Optional[bytes], float], None],
                       verify: bool = True) -> _Subscription:
         """Remote samples on ``topic`` as ``callback(topic, payload, attachment, arrival)``, delivered in
-        order with every other sample (``arrival``: this process's perf_counter when it came in)."""
+        order with every other sample (``arrival``: `time.monotonic()` when it came in: the
+        same clock in every process of a machine)."""
         return _Subscription(self, topic, None, self._declare_remote(_RemoteSub(topic, None, callback, raw=True,
                                                                                  verify=verify)))
 
@@ -314,7 +315,7 @@ class ZenohBus:
 
         def on_sample(sample) -> None:
             alive = b"+" if sample.kind == zenoh.SampleKind.PUT else b"-"
-            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.perf_counter(), None))
+            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.monotonic(), None))
             wake.set()
 
         rsub.zsub = self.session.liveliness().declare_subscriber(self.key(pattern), _ZCallback(on_sample,
@@ -335,7 +336,7 @@ class ZenohBus:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
 
         def on_query(query) -> None:
-            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.perf_counter(), None))
+            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.monotonic(), None))
             wake.set()
 
         self._declared.append(self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False),
@@ -355,7 +356,7 @@ class ZenohBus:
     # --- receiving ------------------------------------------------------------------------------------------
     def _declare_remote(self, rsub: _RemoteSub) -> _RemoteSub:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
-        clock = time.perf_counter
+        clock = time.monotonic
         with_encoding = rsub.any_type
         prepare = None if rsub.raw else self._prepare
         if not rsub.raw:

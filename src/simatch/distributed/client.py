@@ -176,7 +176,8 @@ class TeamProcess:
         clock = self.clock
         clock.step_index = step
         clock.step()
-        self.bus.put_raw(protocol.ack_topic(self.team), protocol.dumps({"proc": self.proc, "tick": tick}))
+        self.bus.put_raw(protocol.ack_topic(self.team),
+                         protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
         self.ticks += 1
 
     def _on_end(self, topic: str, payload: bytes, attachment, arrival: float) -> None:

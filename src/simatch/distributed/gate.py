@@ -41,6 +41,7 @@ class LockstepGate(Node):
         self._on_missed = on_missed
         self._order = order
         self.latencies: list[float] = []      # tick opened -> ack arrived [s], every answer in time
+        self.transits: list[float] = []       # ack sent -> ack arrived [s] (same machine: the same clock)
         self.ticks = 0
         self.missed = 0
         self._tick = -1
@@ -66,6 +67,9 @@ class LockstepGate(Node):
         if proc is not None and msg["tick"] == self._tick and proc.id in self._waiting:
             self._waiting.discard(proc.id)
             self.latencies.append(arrival - self._opened)
+            sent = msg.get("sent")
+            if isinstance(sent, float) and 0.0 <= arrival - sent < 60.0:
+                self.transits.append(arrival - sent)
             proc.streak = 0
 
     def _absorb(self, items, pending: list) -> None:
@@ -85,10 +89,10 @@ class LockstepGate(Node):
         self._tick = step // self.control_steps
         self._waiting = {p.id for p in self._active()}
         bus.put_raw(protocol.TICK, protocol.dumps({"step": step, "tick": self._tick}))
-        self._opened = opened = time.perf_counter()
+        self._opened = opened = time.monotonic()
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
         while self._waiting:
-            left = limit - time.perf_counter()
+            left = limit - time.monotonic()
             if left <= 0:
                 break
             self._absorb(bus.take(left), pending)

@@ -7,7 +7,8 @@ payloads are small JSON objects so that a client in any language can speak them:
     lockstep/scene         query   -> the scene offer: scene text, overrides, seed, mode (no registration)
     lockstep/join          query   -> register a process serving some robots: {"ok": true, "step"} or an error
     lockstep/tick          server  -> {"step", "tick"}: every input of this control tick has been sent; answer it
-    <team>/lockstep/ack    client  -> {"proc", "tick"}: this process has sent its commands for that tick
+    <team>/lockstep/ack    client  -> {"proc", "tick", "sent"}: this process has sent its commands for that
+                                     tick (``sent``, optional: its monotonic clock, to measure the transit)
     <team>/lockstep/bye    client  -> {"proc"}: this process leaves on purpose
     lockstep/end           server  -> {"reason"}: the run is over; every client exits
     lockstep/alive/server, <team>/lockstep/alive/<proc>   liveliness tokens (vanish when a process dies)

@@ -276,8 +276,12 @@ class Server:
         return self.sim.result()
 
     def stats(self) -> dict:
-        """How the distributed run went: processes, answers, command latency (tick opened -> ack), lateness."""
+        """How the distributed run went: processes, answers, lateness, and two latencies of the commands:
+        ``latency`` from the tick opening (perception and game command sent) to the answer arriving (the
+        whole round trip, the robot's decision included), ``transit`` from the answer leaving the process
+        (after its commands) to its arrival (the bus alone; meaningful when both run on one machine)."""
         lat = np.array(self.gate.latencies) * 1e3
+        transit = np.array(self.gate.transits) * 1e3
         out = {
             "mode": self.mode,
             "ticks": self.gate.ticks,
@@ -287,6 +291,8 @@ class Server:
             "latency_p50_ms": round(float(np.percentile(lat, 50)), 3) if lat.size else None,
             "latency_p99_ms": round(float(np.percentile(lat, 99)), 3) if lat.size else None,
             "latency_max_ms": round(float(lat.max()), 3) if lat.size else None,
+            "transit_p50_ms": round(float(np.percentile(transit, 50)), 3) if transit.size else None,
+            "transit_p99_ms": round(float(np.percentile(transit, 99)), 3) if transit.size else None,
             "refused": self.bus.stats.refused,
             "malformed": self.bus.stats.malformed,
         }
