@@ -56,6 +56,8 @@ def test_teams_are_confined_to_their_own_robots(procs):
         push = rogue.publisher("apply_wrench", msgs.ApplyWrench)
         own = rogue.key("cyan/2/VelCmd")
         organise = admin.publisher("set_model_state", msgs.ModelState)
+        relink = admin.publisher("set_link_state", msgs.LinkState)
+        shove = admin.publisher("apply_wrench", msgs.ApplyWrench)
         poison = admin.key("cyan/2/OmniVisionInfo")
         for k in range(20):
             steal.put(msgs.new(msgs.VelCmd, vx=2.0))
@@ -67,6 +69,8 @@ def test_teams_are_confined_to_their_own_robots(procs):
             admin.session.put(poison, b"junk", attachment=admin.signer("cyan/2/OmniVisionInfo", b"junk"))
             if k == 5:
                 organise.put(msgs.new(msgs.ModelState, name="magenta/5", x=6.0, y=-4.0))
+                relink.put(msgs.new(msgs.LinkState, name="magenta/1/base", x=9.0, y=1.0))
+                shove.put(msgs.new(msgs.ApplyWrench, name="nobody", fx=1.0, duration=0.1))   # refused by the world
             admin.pump(0.02)
             rogue.pump(0.02)
         out = procs.result(server)
@@ -94,6 +98,9 @@ def test_teams_are_confined_to_their_own_robots(procs):
             assert math.hypot(p[i, 0] - start[0], p[i, 1] - start[1]) < 1e-6, robot
     ball = names.index("ball")
     assert all(abs(s.pose.reshape(len(names), -1)[ball, 0] - 10.0) > 1.0 for s in states)
-    i5 = names.index("magenta/5")
+    i5, i1 = names.index("magenta/5"), names.index("magenta/1")
     assert pose[i5, 0] == pytest.approx(6.0, abs=1e-6) and pose[i5, 1] == pytest.approx(-4.0, abs=1e-6)
+    assert pose[i1, 0] == pytest.approx(9.0, abs=1e-6) and pose[i1, 1] == pytest.approx(1.0, abs=1e-6)
+    bad = [e for e in out["events"] if e["type"] == "bad_request"]
+    assert len(bad) == 1 and "apply_wrench('nobody')" in bad[0]["detail"]
     assert spied == [] and mine                               # its own perception only
