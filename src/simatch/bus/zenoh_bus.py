@@ -218,6 +218,11 @@ class ZenohBus:
     ``drop_when_congested``: a sample for a process that does not read (stopped, hung) is dropped after a
     short wait instead of blocking the sender: a server must never be stalled by one team.
 
+    ``prepare_on_arrival``: check and decode each data sample in Zenoh's receiving thread as it arrives
+    (while the owner waits for the rest: a lockstep server decodes one team's commands while the other
+    team still thinks), rather than when the owner delivers it (which leaves the cores to the teams while
+    they answer: better for the latency of a real-time run with many processes).
+
     ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
     a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
     switch on a machine where cores are scarce."""
@@ -226,7 +231,8 @@ class ZenohBus:
                  verifier: Verifier | None = None,
                  on_refused: Callable[[str, str], None] | None = None,
                  on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
-                 wake_on_data: bool = True, drop_when_congested: bool = False, owns_session: bool = True):
+                 wake_on_data: bool = True, drop_when_congested: bool = False, prepare_on_arrival: bool = True,
+                 owns_session: bool = True):
         self.run = check_run_name(run)
         self.session = session
         self.stats = BusStats()
@@ -237,6 +243,7 @@ class ZenohBus:
         self.on_malformed = on_malformed
         self.eager = eager
         self.wake_on_data = wake_on_data
+        self.prepare_on_arrival = prepare_on_arrival
         self.congestion = zenoh.CongestionControl.DROP if drop_when_congested else zenoh.CongestionControl.BLOCK
         self.prefix = f"{_topics.PREFIX}/{run}/"
         self._owns = owns_session
@@ -358,7 +365,7 @@ class ZenohBus:
         inbox, wake, n = self._inbox, self._wake, len(self.prefix)
         clock = time.monotonic
         with_encoding = rsub.any_type
-        prepare = None if rsub.raw else self._prepare
+        prepare = None if rsub.raw or not self.prepare_on_arrival else self._prepare
         if not rsub.raw:
             rsub.wakes = self.wake_on_data
 

@@ -68,7 +68,8 @@ class Server:
                             access_control=self.fair.access_control())
         session = open_session(conf, what=f"listening on {', '.join(listen)}")
         self.bus = ZenohBus(session, run, verifier=self.fair.check, on_refused=self._refused,
-                            on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True)
+                            on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True,
+                            prepare_on_arrival=not realtime)
         self.registry = Registry(spec)
         self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}   # rate limit of refusal/malformed events
         self.ended = False
