@@ -32,7 +32,7 @@ def game_events(result: dict) -> list:
 
 @pytest.mark.slow
 def test_one_process_per_team_equals_embedded(procs):
-    server = procs.server(SCENE, *SETTINGS)
+    server = procs.server(SCENE, *SETTINGS, "--deadline", "120")     # never give up on a slow process here
     teams = [procs.team("cyan"), procs.team("magenta")]
     dist = procs.result(server)
     for t in teams:
@@ -49,7 +49,7 @@ def test_one_process_per_team_equals_embedded(procs):
 
 @pytest.mark.slow
 def test_one_process_per_robot_equals_embedded(procs):
-    server = procs.server(SCENE, *SETTINGS)
+    server = procs.server(SCENE, *SETTINGS, "--deadline", "120")
     robots = [procs.robot(f"{team}/{rid}") for team in ("cyan", "magenta") for rid in range(1, 6)]
     dist = procs.result(server)
     for r in robots:

@@ -46,7 +46,8 @@ def test_stopping_the_server_ends_every_process(procs, sig):
 def test_stopping_a_team_process_ends_it_and_the_match_goes_on(procs, sig):
     server = procs.server("msl_5v5", *chaser_overrides("cyan", "magenta"), "--realtime", "--duration", "4")
     teams = [procs.team("cyan"), procs.team("magenta")]
-    procs.wait_for_line(teams[0], "joined run")
+    procs.wait_for_line(server, "(cyan/1,2,3,4,5) joined")
+    procs.wait_for_line(server, "(magenta/1,2,3,4,5) joined")        # the match is on
     time.sleep(1.0)
     teams[0].send_signal(sig)
     assert procs.wait(teams[0], timeout=30) == 130

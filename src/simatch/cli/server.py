@@ -34,9 +34,10 @@ def add_parser(sub) -> None:
                    help=f"Zenoh endpoint to listen on (repeatable; default {DEFAULT_ENDPOINT}, loopback only; "
                         f"e.g. tcp/0.0.0.0:7447 to accept other machines)")
     add_network_options(p, "name of this run on the network")
-    p.add_argument("--deadline", type=float, default=1.0, metavar="S",
-                   help="lockstep: longest wait for a process's commands of one tick, wall seconds (default 1); "
-                        "a process that misses it is not waited for until it answers again")
+    p.add_argument("--deadline", type=float, default=5.0, metavar="S",
+                   help="lockstep: longest wait for a process's commands of one tick, wall seconds (default 5; a "
+                        "process that dies is noticed at once); a process that misses it is not waited for until "
+                        "it answers again, and the run is no longer bit-exact")
     p.add_argument("--team-timeout", type=float, default=30.0, metavar="S",
                    help="how long to wait for the teams to connect before playing without the missing ones "
                         "(default 30 s)")

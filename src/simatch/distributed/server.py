@@ -44,7 +44,7 @@ def _stderr(text: str) -> None:
 
 class Server:
     def __init__(self, scene: LoadedScene, seed: int = 0, *, listen: Sequence[str] = (DEFAULT_ENDPOINT,),
-                 run: str = "default", realtime: bool = False, deadline: float = 1.0, team_timeout: float = 30.0,
+                 run: str = "default", realtime: bool = False, deadline: float = 5.0, team_timeout: float = 30.0,
                  credentials_dir: str | Path | None = None, say: Callable[[str], None] = _stderr):
         from ..simulation import Simulation
 
