@@ -12,8 +12,8 @@ from simatch.scene.loader import load_scene
 
 
 def empty_field(**overrides):
-    """The msl_5v5 world with every robot idle (no strategies) unless overrides say otherwise."""
-    base = {"teams.cyan.strategy": "none", "teams.magenta.strategy": "none"}
+    """The msl_5v5 world with every robot idle (no strategies, no referee) unless overrides say otherwise."""
+    base = {"teams.cyan.strategy": "none", "teams.magenta.strategy": "none", "judge.kind": "none"}
     base.update(overrides)
     return base
 

@@ -12,6 +12,7 @@ scene and seed give the same run, bit for bit.
 
 from __future__ import annotations
 
+import json
 import time as _time
 from typing import Any, Callable, Mapping
 
@@ -40,6 +41,13 @@ def event_dict(ev) -> dict:
     if ev.detail:
         out["detail"] = ev.detail
     return out
+
+
+def _plain(value: Any) -> Any:
+    """JSON for numpy scalars and arrays handed to the API (exact: float32 widens to float64 exactly)."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    return repr(value)        # never fails the caller; the simulator refuses such values anyway
 
 
 class ManualDriver(Node):
@@ -88,6 +96,8 @@ class Simulation:
         self._wall = 0.0
         self._closed = False
         self._sub_events = self.bus.subscribe(topics.EVENTS, msgs.GameEvent, self._on_event)
+        self._pub_operator = self.bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
+        self._stepping = False             # inside a physics step (nodes at work) rather than between steps
         check_models(self.scene)
         self.simulator = Simulator(spec, self.seed)
         self._sensor = self.clock.add(SimulatorNode(self.simulator))
@@ -116,6 +126,20 @@ class Simulation:
     # --- events ------------------------------------------------------------------------------------------
     def _on_event(self, ev) -> None:
         self._events.append(ev)
+        if ev.type == "coach_command" and ev.team in self.coaches:
+            # a run has coaches only where no judge gives commands: their commands come from outside
+            coach = self.coaches[ev.team]
+            self._operator("coach", ev.team, cmd=int(ev.value), max_vel=coach.max_vel, max_w=coach.max_w,
+                           **coach.extra)
+
+    # --- operator commands ------------------------------------------------------------------------------------
+    def _operator(self, call: str, target: str, **args: Any) -> None:
+        """Publish an intervention from outside the run's nodes on the ``operator`` topic (when anybody, e.g.
+        a recorder, listens), so that the run can be re-simulated from its recording."""
+        if self._pub_operator.active:
+            self._pub_operator.put(msgs.OperatorCommand(
+                stamp=self.time, step=self.simulator.step_index, during_step=self._stepping, call=call,
+                target=target, args=json.dumps(args, default=_plain)))
 
     @property
     def events(self) -> list[dict]:
@@ -145,8 +169,12 @@ class Simulation:
         """Advance by ``n`` physics steps; every node and the judge run in lockstep."""
         t0 = _time.perf_counter()
         step = self.clock.step
-        for _ in range(n):
-            step()
+        self._stepping = True
+        try:
+            for _ in range(n):
+                step()
+        finally:
+            self._stepping = False
         self._wall += _time.perf_counter() - t0
 
     def run(self, seconds: float | None = None, until_done: bool = True,
@@ -167,10 +195,14 @@ class Simulation:
         done = 0
         while done < steps and not (until_done and self.judge.done):
             n = min(chunk, steps - done)
-            for _ in range(n):
-                step()
-                if until_done and self.judge.done:
-                    break
+            self._stepping = True
+            try:
+                for _ in range(n):
+                    step()
+                    if until_done and self.judge.done:
+                        break
+            finally:
+                self._stepping = False
             done += n
             if progress is not None:
                 progress(self.time)
@@ -197,14 +229,17 @@ class Simulation:
 
     def set_model_state(self, name: str, **state: float) -> None:
         self.simulator.set_model_state(name, **state)
+        self._operator("set_model_state", name, **state)
         self._sensor.flush_events()
 
     def set_link_state(self, name: str, **state: float) -> None:
         self.simulator.set_link_state(name, **state)
+        self._operator("set_link_state", name, **state)
         self._sensor.flush_events()
 
     def apply_wrench(self, name: str, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0), duration: float = 0.0) -> None:
         self.simulator.apply_wrench(name, force, torque, duration)
+        self._operator("apply_wrench", name, force=list(force), torque=list(torque), duration=duration)
 
     # --- driving robots by hand -------------------------------------------------------------------------------
     def take_control(self, name: str) -> None:
@@ -219,6 +254,7 @@ class Simulation:
         driver = ManualDriver(team, rid, self.scene.spec.control.period)
         self.clock.add(driver)
         self._manual[name] = driver
+        self._operator("take_control", name)
 
     def release_control(self, name: str) -> None:
         driver = self._manual.pop(name, None)
@@ -227,6 +263,8 @@ class Simulation:
         node = self.robot_nodes.get(name)
         if node is not None:
             node.detached = False
+        if driver is not None:
+            self._operator("release_control", name)
 
     def _driver(self, name: str) -> ManualDriver:
         try:
@@ -238,12 +276,14 @@ class Simulation:
         """Body-frame velocity command for a robot under manual control (applies at once)."""
         d = self._driver(name)
         d.vel = (vx, vy, w)
+        self._operator("send_vel", name, vx=vx, vy=vy, w=w)
         d.send_now(self.time)
 
     def send_action(self, name: str, dribble: bool = False, kick: float = 0.0, lob: bool = False) -> None:
         """Dribbler on/off and a kick (speed in m/s, ground or lob) for a robot under manual control."""
         d = self._driver(name)
         d.dribble, d.kick, d.lob = bool(dribble), float(kick), bool(lob)
+        self._operator("send_action", name, dribble=d.dribble, kick=d.kick, lob=d.lob)
         d.send_now(self.time)
 
     # --- results -------------------------------------------------------------------------------------------

@@ -63,7 +63,7 @@ def test_what_a_team_may_send(creds):
     refusal = check("cyan", "magenta/2/VelCmd")
     assert refusal.who == "cyan" and "may not command magenta/2" in refusal
     assert "has no robot 7" in check("cyan", "cyan/7/VelCmd")
-    for topic in ("set_model_state", "set_link_state", "apply_wrench"):
+    for topic in ("set_model_state", "set_link_state", "apply_wrench", "referee_command"):
         assert "only the organiser's admin credential" in check("cyan", topic)
         assert check("admin", topic) is None
     assert "may not publish on magenta/TeamStrategy" in check("cyan", "magenta/TeamStrategy")

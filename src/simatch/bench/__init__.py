@@ -9,6 +9,10 @@ from __future__ import annotations
 #: name -> "module:function", in the order they run
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
+    "record": "simatch.bench.record:run",
+    "referee": "simatch.bench.referee:run",
+    "web": "simatch.bench.web:run",
+    "encirclement": "simatch.bench.encirclement:run",
     "distributed_rtt": "simatch.bench.distributed:rtt",
     "distributed_lockstep": "simatch.bench.distributed:lockstep",
     "distributed_realtime": "simatch.bench.distributed:realtime",

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import enum
 import hashlib
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -92,6 +93,7 @@ class LockstepClock:
         self.step_index = 0
         self._nodes: list[Node] = []
         self._schedule: list[tuple[Node, int]] = []   # (node, period in steps), sorted by phase
+        self._table: list[list] = [[]]               # tick methods due at step k: _table[k % len(_table)]
         self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=lambda: self.step_index)
 
     def now(self) -> float:
@@ -108,20 +110,37 @@ class LockstepClock:
             period = self.context.steps(node.period, f"period of {node.name}")
             self._schedule.append((node, period))
             self._schedule.sort(key=lambda item: item[0].phase)   # stable: keeps insertion order in a phase
+            self._rebuild()
         return node
+
+    def _rebuild(self) -> None:
+        """Precompute, for each step of the hyperperiod, the tick methods due at it, in phase order."""
+        length = 1
+        for _, period in self._schedule:
+            length = math.lcm(length, period)
+        if length > 10_000:      # periods without a small common multiple: check them one by one
+            self._table = []
+            return
+        self._table = [[node.tick for node, period in self._schedule if k % period == 0] for k in range(length)]
 
     def remove(self, node: Node) -> None:
         if node in self._nodes:
             self._nodes.remove(node)
             self._schedule = [(n, p) for n, p in self._schedule if n is not node]
+            self._rebuild()
             node.stop()
 
     def step(self) -> None:
         k = self.step_index
         now = k * self.dt
-        for node, period in self._schedule:
-            if k % period == 0:
-                node.tick(now)
+        table = self._table
+        if table:
+            for tick in table[k % len(table)]:
+                tick(now)
+        else:
+            for node, period in self._schedule:
+                if k % period == 0:
+                    node.tick(now)
         self.step_index = k + 1
 
     def close(self) -> None:
@@ -129,3 +148,4 @@ class LockstepClock:
             node.stop()
         self._nodes.clear()
         self._schedule.clear()
+        self._table = [[]]

@@ -30,6 +30,8 @@ BALL_CONTACTS = "ball_contacts"
 # scene
 GAME_STATE = "game_state"
 EVENTS = "events"
+OPERATOR = "operator"          # OperatorCommand: interventions from outside the run's nodes (API, operators)
+REFEREE_COMMAND = "referee_command"
 
 
 def robot_name(team: str, rid: int) -> str:

@@ -16,10 +16,13 @@ from ..scene.loader import load_scene, parse_override
 from . import UsageError
 
 #: run extensions: "module:Class" with add_arguments(parser) and attach(sim, args) -> context manager
-EXTENSIONS: list[str] = []
+EXTENSIONS: list[str] = [
+    "simatch.record.extension:RecordExtension",
+    "simatch.web.view:ViewExtension",
+]
 
 
-def add_run_options(p) -> None:
+def add_run_options(p, with_extensions: bool = True) -> None:
     p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
     p.add_argument("--duration", type=float, metavar="S",
                    help="simulated seconds to run (default: until the judge ends the run)")
@@ -29,7 +32,7 @@ def add_run_options(p) -> None:
     p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    for ext in extensions():
+    for ext in (extensions() if with_extensions else ()):
         ext.add_arguments(p)
 
 
@@ -88,19 +91,31 @@ class Progress:
             self.bar.close()
 
 
+def _readable(value: Any) -> Any:
+    """Floats rounded to 6 significant digits, for people (the JSON output keeps every digit)."""
+    if isinstance(value, float):
+        return float(f"{value:.6g}")
+    if isinstance(value, dict):
+        return {k: _readable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_readable(v) for v in value]
+    return value
+
+
 def print_summary(out: dict, file=sys.stdout) -> None:
     print(f"scene {out['scene']}  seed {out['seed']}", file=file)
-    print(f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall "
-          f"(real-time factor {out['rtf']})", file=file)
+    rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
+    print(f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})",
+          file=file)
     print(f"state digest {out['state_digest']}", file=file)
     print("result:", file=file)
     for key, value in out["result"].items():
-        print(f"  {key}: {json.dumps(value)}", file=file)
+        print(f"  {key}: {json.dumps(_readable(value))}", file=file)
     events = out["events"]
     print(f"events: {len(events)}", file=file)
     for ev in events[-30:]:
         rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
-        print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(rest) if rest else ''}", file=file)
+        print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(_readable(rest)) if rest else ''}", file=file)
     if len(events) > 30:
         print(f"  ... ({len(events) - 30} earlier events: use --json for all)", file=file)
 

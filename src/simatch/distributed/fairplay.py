@@ -24,8 +24,8 @@ from .credentials import ADMIN, Credential, Verifier
 
 #: robot topics a team sends (server-side consumers only)
 ROBOT_OUTPUTS = (topics.VEL_CMD, topics.ACTION_CMD, topics.STRATEGY_INFO)
-#: the Gazebo-like calls only the organiser may make
-PRIVILEGED = (topics.SET_MODEL_STATE, topics.SET_LINK_STATE, topics.APPLY_WRENCH)
+#: the Gazebo-like calls and the referee's operator requests: only the organiser may make them
+PRIVILEGED = (topics.SET_MODEL_STATE, topics.SET_LINK_STATE, topics.APPLY_WRENCH, topics.REFEREE_COMMAND)
 #: event types a team may add to the run's log (about itself)
 TEAM_EVENT_TYPES = frozenset({"strategy_error"})
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
-from .commands import MatchMode, SET_PIECES
+from .commands import SET_PIECES, MatchMode, parse
 
 
 class Coach(Node):
@@ -35,10 +35,11 @@ class Coach(Node):
         self.pub_events = ctx.bus.publisher(topics.EVENTS, msgs.GameEvent)
 
     # --- commands ---------------------------------------------------------------------------------------
-    def send(self, cmd: int, **fields) -> None:
-        """Give a command (from this team's point of view); extra CoachInfo fields (points, ids, test mode,
-        max_vel, max_w) may be given too. Takes effect at the coach's next tick."""
-        cmd = MatchMode(cmd)
+    def send(self, cmd: int | str, **fields) -> None:
+        """Give a command (from this team's point of view): a MatchMode, its number, or words such as
+        ``"freekick"``, ``"opp corner"`` (see `commands.parse`); extra CoachInfo fields (points, ids, test
+        mode, max_vel, max_w) may be given too. Takes effect at the coach's next tick."""
+        cmd = parse(cmd) if isinstance(cmd, str) else MatchMode(cmd)
         if cmd in SET_PIECES:
             self.match_type = cmd
         elif cmd == MatchMode.TEST:
@@ -67,8 +68,13 @@ class Coach(Node):
         self.send(MatchMode.PARKINGROBOT)
 
     def info(self, now: float):
-        return msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(self.match_mode), match_type=int(self.match_type),
-                        max_vel=self.max_vel, max_w=self.max_w, **self.extra)
+        if self.extra:
+            return msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(self.match_mode),
+                            match_type=int(self.match_type), max_vel=self.max_vel, max_w=self.max_w, **self.extra)
+        return msgs.CoachInfo(stamp=now, match_mode=int(self.match_mode), match_type=int(self.match_type), test_mode=0,
+                              point_a_x=0.0, point_a_y=0.0, point_b_x=0.0, point_b_y=0.0, angle_a=0.0, angle_b=0.0,
+                              id_a=0, id_b=0, kick_force=0.0, max_vel=self.max_vel, max_w=self.max_w, ball_x=0.0,
+                              ball_y=0.0)
 
     def tick(self, now: float) -> None:
         self.pub.put(self.info(now))

@@ -73,3 +73,69 @@ def name(cmd: int) -> str:
         return MatchMode(cmd).name
     except ValueError:
         return f"UNKNOWN_{cmd}"
+
+
+#: set pieces by restart kind: the OUR_x command of the team that takes it (the dropped ball is neutral)
+RESTART_COMMANDS = {
+    "kickoff": MatchMode.OUR_KICKOFF,
+    "throw_in": MatchMode.OUR_THROWIN,
+    "penalty": MatchMode.OUR_PENALTY,
+    "goal_kick": MatchMode.OUR_GOALKICK,
+    "corner_kick": MatchMode.OUR_CORNERKICK,
+    "free_kick": MatchMode.OUR_FREEKICK,
+    "dropped_ball": MatchMode.DROPBALL,
+}
+RESTART_OF_COMMAND = {int(cmd): kind for kind, cmd in RESTART_COMMANDS.items()}
+
+#: words a person may type for a command (the CLI coach, the operator console), besides the enum names
+ALIASES = {
+    "stop": MatchMode.STOPROBOT, "start": MatchMode.STARTROBOT, "park": MatchMode.PARKINGROBOT,
+    "parking": MatchMode.PARKINGROBOT, "test": MatchMode.TEST, "dropball": MatchMode.DROPBALL,
+    "drop": MatchMode.DROPBALL, "dropped_ball": MatchMode.DROPBALL,
+    "kickoff": MatchMode.OUR_KICKOFF, "throwin": MatchMode.OUR_THROWIN, "throw_in": MatchMode.OUR_THROWIN,
+    "penalty": MatchMode.OUR_PENALTY, "goalkick": MatchMode.OUR_GOALKICK, "goal_kick": MatchMode.OUR_GOALKICK,
+    "corner": MatchMode.OUR_CORNERKICK, "cornerkick": MatchMode.OUR_CORNERKICK,
+    "corner_kick": MatchMode.OUR_CORNERKICK, "freekick": MatchMode.OUR_FREEKICK,
+    "free_kick": MatchMode.OUR_FREEKICK,
+}
+
+
+def restart_kind(cmd: int) -> str | None:
+    """``"free_kick"`` for OUR_FREEKICK and OPP_FREEKICK, ``"dropped_ball"`` for DROPBALL, None otherwise."""
+    cmd = int(cmd)
+    if 1 <= cmd <= 12:
+        return RESTART_OF_COMMAND[cmd if cmd % 2 == 1 else cmd - 1]
+    return RESTART_OF_COMMAND.get(cmd)
+
+
+def parse(words: str | list[str]) -> MatchMode:
+    """A command from what a person types: a number (``11``), an enum name (``OUR_FREEKICK``), or an alias
+    with an optional ``opp``/``our`` (``freekick``, ``opp corner``, ``corner opp``). ValueError if unknown."""
+    parts = words.split() if isinstance(words, str) else list(words)
+    low = [p.lower() for p in parts]
+    side = "our"
+    for s in ("opp", "our"):
+        if s in low:
+            side = s
+            low.remove(s)
+    if len(low) != 1:
+        raise ValueError(f"expected one command, got {' '.join(parts)!r}")
+    word = low[0]
+    if word.isdigit():
+        try:
+            cmd = MatchMode(int(word))
+        except ValueError:
+            raise ValueError(f"no game command numbered {word}") from None
+    elif word.upper() in MatchMode.__members__:
+        cmd = MatchMode[word.upper()]
+    elif word in ALIASES:
+        cmd = ALIASES[word]
+    else:
+        known = ", ".join(sorted(ALIASES))
+        raise ValueError(f"unknown game command {word!r} (a number, a name like OUR_FREEKICK, or one of: {known})")
+    if side == "opp":
+        if not 1 <= cmd <= 12:
+            raise ValueError(f"{cmd.name} belongs to no team: 'opp' does not apply")
+        if is_ours(cmd):
+            cmd = mirror(cmd)
+    return cmd

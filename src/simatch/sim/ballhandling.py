@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .kernels import catch_candidate, equality_force
+from .kernels import catch_candidate, equality_force, keep_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -197,22 +197,13 @@ class BallHandling:
         if not (self.dribble_on[i] and enabled[i]):
             self.release("dribbler_off")
             return
-        eq = self.ix.dribble_eq[i]
-        anchor = self.m.eq_data[eq, 0:3]
-        target = self.mouth[i]
-        dx, dy = target[0] - anchor[0], target[1] - anchor[1]
-        gap = math.hypot(dx, dy)
-        if gap > 1e-9:
-            f = min(1.0, self.pull_step / gap)
-            anchor[0] += f * dx
-            anchor[1] += f * dy
-        if step - self.hold_since >= self.settle_steps:
-            force = self._grip_force(eq)
-            if force > self.grip:
-                self.release("grip_exceeded", value=force, limit=self.grip, step=step)
-                return
-        bx, by, _ = self._ball_in_robot_frame(i)
-        if math.hypot(bx - anchor[0], by - anchor[1]) > 0.1:
+        d = self.d
+        status, force = keep_ball(self.m.eq_data, self.ix.dribble_eq[i], d.qpos, self._robot_q0, self.ix.ball_qpos, i,
+                                  self.mouth[i, 0], self.pull_step, step - self.hold_since >= self.settle_steps,
+                                  d.efc_type, d.efc_id, d.efc_force, d.nefc, self._eq_rows_type, self.grip)
+        if status == 1:
+            self.release("grip_exceeded", value=force, limit=self.grip, step=step)
+        elif status == 2:
             self.release("pulled_away", step=step)
 
     def _grip_force(self, eq: int) -> float:

@@ -152,3 +152,39 @@ def catch_candidate(qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, ho
         best_f = fwd
         best_l = -s * dx + c * dy
     return best, best_f, best_l, nearest
+
+
+@numba.njit(cache=True, nogil=True)
+def keep_ball(eq_data, eq, qpos, robot_q, ball_q, robot, target_x, pull_step, check_grip, efc_type, efc_id,
+              efc_force, nefc, eq_type, grip):
+    """One physics step of a held ball: draw the dribble constraint's anchor (robot frame) towards the mouth
+    point at the rollers' speed, then measure the constraint's horizontal force. Returns (status, force):
+    status 0 = still held, 1 = the force exceeds the grip, 2 = the ball was pulled away from the anchor."""
+    ax = eq_data[eq, 0]
+    ay = eq_data[eq, 1]
+    dx = target_x - ax
+    dy = -ay
+    gap = (dx * dx + dy * dy) ** 0.5
+    if gap > 1e-9:
+        f = min(1.0, pull_step / gap)
+        ax += f * dx
+        ay += f * dy
+        eq_data[eq, 0] = ax
+        eq_data[eq, 1] = ay
+    force = 0.0
+    if check_grip:
+        force = equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type)
+        if force > grip:
+            return 1, force
+    x = qpos[robot_q + 3 * robot]
+    y = qpos[robot_q + 3 * robot + 1]
+    yaw = qpos[robot_q + 3 * robot + 2]
+    bx = qpos[ball_q] - x
+    by = qpos[ball_q + 1] - y
+    c = np.cos(yaw)
+    s = np.sin(yaw)
+    fx = c * bx + s * by
+    fy = -s * bx + c * by
+    if ((fx - ax) ** 2 + (fy - ay) ** 2) ** 0.5 > 0.1:
+        return 2, force
+    return 0, force

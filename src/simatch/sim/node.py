@@ -59,7 +59,7 @@ class SimulatorNode(Node):
         sim = self.sim
         k = sim.step_index
         perception = sim.perception
-        if perception.needs_history:
+        if perception.delay_steps:
             perception.record(sim.snapshot())
         if k % self.control_steps == 0:
             tick = k // self.control_steps
@@ -86,7 +86,8 @@ class SimulatorNode(Node):
                     holder=names[holder] if holder >= 0 else "", kicker=names[kicker] if kicker >= 0 else "",
                     kick_speed=sim.ball.kicked_speed if kicker >= 0 else 0.0,
                     lob=bool(sim.ball.kicked_lob) if kicker >= 0 else False))
-        self.flush_events()
+        if sim.events:
+            self.flush_events()
 
     def flush_events(self) -> None:
         for ev in self.sim.take_events():

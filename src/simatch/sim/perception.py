@@ -61,6 +61,9 @@ class Perception:
         self.history: deque[Snapshot] = deque(maxlen=self.delay_steps + 1)
         n = self.n
         self.others = np.array([[j for j in range(n) if j != i] for i in range(n)], dtype=int).reshape(n, max(n - 1, 0))
+        self._turn = np.where(self.sign > 0, 0.0, np.pi)
+        self._ids = self.ids.tolist()
+        self._nw = [int(k) for k in n_wheels]
         self.exact = (spec.position_noise == 0 and spec.velocity_noise == 0 and spec.heading_noise == 0
                       and spec.ball_dropout == 0 and spec.obstacle_dropout == 0)
 
@@ -95,19 +98,20 @@ class Perception:
         if spec.velocity_noise > 0:
             vx = vx + rng.normal(0.0, spec.velocity_noise, n)
             vy = vy + rng.normal(0.0, spec.velocity_noise, n)
-        yaw_team = wrap(yaw + np.where(s > 0, 0.0, np.pi))
+        yaw_team = wrap(yaw + self._turn)
 
+        # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
+        tx, ty, tyaw = (s * px).tolist(), (s * py).tolist(), yaw_team.tolist()
+        tvx, tvy, tw = (s * vx).tolist(), (s * vy).tolist(), w.tolist()
+        valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
+        wheels = snap.wheels
+        ids = self._ids
         team_infos = {}
         for team, idx in self.members.items():
-            infos = []
-            for i in idx:
-                si = s[i]
-                infos.append(_RobotInfo(
-                    id=int(self.ids[i]), x=float(si * px[i]), y=float(si * py[i]), yaw=float(yaw_team[i]),
-                    vx=float(si * vx[i]), vy=float(si * vy[i]), w=float(w[i]), valid=bool(snap.valid[i]),
-                    stuck=bool(snap.stuck[i]), holding_ball=snap.holder == i,
-                    wheel_speeds=snap.wheels[i, : self.n_wheels[i]].copy()))
-            team_infos[team] = infos
+            team_infos[team] = [_RobotInfo(
+                id=ids[i], x=tx[i], y=ty[i], yaw=tyaw[i], vx=tvx[i], vy=tvy[i], w=tw[i], valid=valid[i],
+                stuck=stuck[i], holding_ball=snap.holder == i, wheel_speeds=wheels[i, : self._nw[i]])
+                for i in idx]
 
         # ball seen by each robot
         bxs = np.full(n, bx)
@@ -139,31 +143,35 @@ class Perception:
         o_ang = wrap(np.arctan2(ody, odx) - yaw[:, None])
         o_dist = np.hypot(odx, ody)
         sc = s[:, None]
-        tx, ty, tvx, tvy = sc * ox, sc * oy, sc * ovx, sc * ovy
+        tx_o, ty_o, tvx_o, tvy_o = sc * ox, sc * oy, sc * ovx, sc * ovy
         orad = self.radii[o]
         keep = None
         if spec.obstacle_dropout > 0 and n > 1:
             keep = rng.random(ox.shape) >= spec.obstacle_dropout
 
+        sx, sy, svx, svy = (s * bxs).tolist(), (s * bys).tolist(), (s * bvxs).tolist(), (s * bvys).tolist()
+        bang, bdist, seen_l = b_ang.tolist(), b_dist.tolist(), seen.tolist()
+        bz, bvz = float(bz), float(bvz)
         out = []
         for i in range(n):
-            si = s[i]
-            if seen[i]:
-                ball = _BallInfo(state=1, x=float(si * bxs[i]), y=float(si * bys[i]), z=float(bz),
-                                 vx=float(si * bvxs[i]), vy=float(si * bvys[i]), vz=float(bvz),
-                                 angle=float(b_ang[i]), distance=float(b_dist[i]), pos_known=True,
-                                 velocity_known=True)
+            if seen_l[i]:
+                ball = _BallInfo(state=1, x=sx[i], y=sy[i], z=bz, vx=svx[i], vy=svy[i], vz=bvz, angle=bang[i],
+                                 distance=bdist[i], pos_known=True, velocity_known=True)
             else:
                 ball = _BallInfo(state=0, x=0.0, y=0.0, z=0.0, vx=0.0, vy=0.0, vz=0.0, angle=0.0, distance=0.0,
                                  pos_known=False, velocity_known=False)
             if n > 1:
-                sel = slice(None) if keep is None else keep[i]
-                obstacles = _ObstaclesInfo(x=tx[i][sel], y=ty[i][sel], vx=tvx[i][sel], vy=tvy[i][sel],
-                                           angle=o_ang[i][sel], distance=o_dist[i][sel], radius=orad[i][sel])
+                if keep is None:
+                    obstacles = _ObstaclesInfo(x=tx_o[i], y=ty_o[i], vx=tvx_o[i], vy=tvy_o[i], angle=o_ang[i],
+                                               distance=o_dist[i], radius=orad[i])
+                else:
+                    sel = keep[i]
+                    obstacles = _ObstaclesInfo(x=tx_o[i][sel], y=ty_o[i][sel], vx=tvx_o[i][sel], vy=tvy_o[i][sel],
+                                               angle=o_ang[i][sel], distance=o_dist[i][sel], radius=orad[i][sel])
             else:
                 obstacles = _ObstaclesInfo(x=_EMPTY, y=_EMPTY, vx=_EMPTY, vy=_EMPTY, angle=_EMPTY,
                                            distance=_EMPTY, radius=_EMPTY)
-            out.append(_OmniVisionInfo(stamp=stamp, tick=tick, robot_id=int(self.ids[i]), ball=ball,
+            out.append(_OmniVisionInfo(stamp=stamp, tick=tick, robot_id=ids[i], ball=ball,
                                        obstacles=obstacles, robots=team_infos[self.team_of[i]]))
         return out
 

@@ -112,6 +112,9 @@ class Simulator:
         self._refused_since_report = np.zeros(self.n, dtype=np.int64)
         self.stuck = np.zeros(self.n, dtype=bool)
         self._slow_since = np.full(self.n, -1, dtype=np.int64)
+        self._stuck_steps = round(0.5 / self.dt)
+        # robots within 1 m of the lines count as on the field ("valid" in their perception)
+        self._valid_box = np.array([self.field.half_length + 1.0, self.field.half_width + 1.0])
         self._wrenches: list[tuple[int, np.ndarray, int]] = []    # (body, 6-vector, until step)
         self._wheel_r = np.array([rm.params.wheel_radius for rm in self.robot_models])[:, None]
         self.touching: list[int] = []                 # robots touching the ball after the last step
@@ -146,6 +149,7 @@ class Simulator:
         self._geom_robot = np.full(self.m.ngeom, -1, dtype=np.int64)
         for g, i in self.ix.robot_of_geom.items():
             self._geom_robot[g] = i
+        self._geom_robot_list = self._geom_robot.tolist()
         self.perception = Perception(robots, self.signs, self.radii, self.drive.n_wheels, scene.perception,
                                      self.dt, np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]))
         self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
@@ -364,19 +368,26 @@ class Simulator:
         self._wrenches = keep
 
     def ball_touches(self) -> list[int]:
-        """Robots whose mouth touches the ball right now (from the engine's contacts)."""
+        """Robots whose mouth touches the ball right now (from the engine's contacts).
+
+        Called every physics step while anybody listens to ``ball_contacts``: a scan of plain ints (the
+        contacts are few) costs a few microseconds where NumPy calls on such small arrays cost tens."""
         d = self.d
         n = d.ncon
         if n == 0:
             return []
-        geoms = d.contact.geom[:n]
+        flat = d.contact.geom[:n].ravel().tolist()
         bg = self.ix.ball_geom
-        rows = (geoms[:, 0] == bg) | (geoms[:, 1] == bg)
-        if not rows.any():
+        if bg not in flat:
             return []
-        other = np.where(geoms[rows, 0] == bg, geoms[rows, 1], geoms[rows, 0])
-        robots = self._geom_robot[other]
-        return sorted({int(r) for r in robots if r >= 0})
+        robot_of = self._geom_robot_list
+        robots = set()
+        for k in range(0, 2 * n, 2):
+            a, b = flat[k], flat[k + 1]
+            r = robot_of[b] if a == bg else robot_of[a] if b == bg else -1
+            if r >= 0:
+                robots.add(r)
+        return sorted(robots)
 
     # --- states --------------------------------------------------------------------------------------------
     def robot_positions(self) -> np.ndarray:
@@ -411,19 +422,16 @@ class Simulator:
         pose = np.zeros((n + 1, 7))
         twist = np.zeros((n + 1, 6))
         q, v = self.d.qpos, self.d.qvel
-        rp = q[self._rq]
+        rp, rv = self._qpos3, self._qvel3          # views of the robots' joints (x, y, yaw)
         half = 0.5 * rp[:, 2]
-        pose[:n, 0] = rp[:, 0]
-        pose[:n, 1] = rp[:, 1]
+        pose[:n, 0:2] = rp[:, 0:2]
         pose[:n, 3] = np.cos(half)
         pose[:n, 6] = np.sin(half)
-        rv = v[self._rv]
-        twist[:n, 0] = rv[:, 0]
-        twist[:n, 1] = rv[:, 1]
+        twist[:n, 0:2] = rv[:, 0:2]
         twist[:n, 5] = rv[:, 2]
         pose[n] = q[self._bq:self._bq + 7]
         twist[n, :3] = v[self._bv:self._bv + 3]
-        twist[n, 3:] = self._ball_angular_world()
+        mujoco.mju_rotVecQuat(twist[n, 3:], v[self._bv + 3:self._bv + 6], q[self._bq + 3:self._bq + 7])
         return self.model_names, pose, twist
 
     def model_states(self) -> dict[str, ModelStateView]:
@@ -434,15 +442,20 @@ class Simulator:
             out[name] = ModelStateView(name, *p[:3], _yaw_of(*p[3:]), *p[3:], *t)
         return out
 
-    def robot_body_velocity(self) -> np.ndarray:
+    def robot_body_velocity(self, R: np.ndarray | None = None) -> np.ndarray:
         """(N, 3): each robot's velocity in its own body frame (vx forward, vy left, w)."""
-        q, v = self.d.qpos[self._rq], self.d.qvel[self._rv]
-        c, s = np.cos(q[:, 2]), np.sin(q[:, 2])
-        return np.stack((c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1], v[:, 2]), axis=1)
+        if R is None:
+            R = self.robot_array()
+        c, s = np.cos(R[:, 2]), np.sin(R[:, 2])
+        out = np.empty((self.n, 3))
+        out[:, 0] = c * R[:, 3] + s * R[:, 4]
+        out[:, 1] = c * R[:, 4] - s * R[:, 3]
+        out[:, 2] = R[:, 5]
+        return out
 
-    def measured_wheel_speeds(self) -> np.ndarray:
+    def measured_wheel_speeds(self, R: np.ndarray | None = None) -> np.ndarray:
         """(N, W): rim speeds that follow from each robot's actual motion (what wheel encoders measure)."""
-        return np.einsum("nwk,nk->nw", self.drive.M, self.robot_body_velocity())
+        return np.einsum("nwk,nk->nw", self.drive.M, self.robot_body_velocity(R))
 
     def link_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
         """Every link: each robot's base and wheels, and the ball. Same layout as model states.
@@ -487,19 +500,20 @@ class Simulator:
         """The current world for perception (also updates each robot's 'stuck' flag)."""
         R = self.robot_array()
         self._update_stuck(R)
-        F = self.field
-        valid = (np.abs(R[:, 0]) <= F.half_length + 1.0) & (np.abs(R[:, 1]) <= F.half_width + 1.0) & self.enabled
+        valid = (np.abs(R[:, :2]) <= self._valid_box).all(axis=1)
+        valid &= self.enabled
         return Snapshot(step=self.step_index, robots=R, ball=self.ball_array(), holder=self.ball.holder,
-                        wheels=self.measured_wheel_speeds(), valid=valid, stuck=self.stuck.copy())
+                        wheels=self.measured_wheel_speeds(R), valid=valid, stuck=self.stuck.copy())
 
     def _update_stuck(self, R: np.ndarray) -> None:
         """Stuck: commanded to move (> 0.2 m/s) but moving at less than half of it for 0.5 s or more."""
         V = self._act3
-        cmd = np.hypot(V[:, 0], V[:, 1])
-        slow = (cmd > 0.2) & (np.hypot(R[:, 3], R[:, 4]) < 0.5 * cmd)
-        since = np.where(slow, np.where(self._slow_since < 0, self.step_index, self._slow_since), -1)
-        self._slow_since = since
-        self.stuck = slow & (self.step_index - since >= round(0.5 / self.dt))
+        cmd2 = V[:, 0] ** 2 + V[:, 1] ** 2
+        slow = (cmd2 > 0.04) & (R[:, 3] ** 2 + R[:, 4] ** 2 < 0.25 * cmd2)
+        since = self._slow_since
+        since[~slow] = -1
+        since[slow & (since < 0)] = self.step_index
+        self.stuck = slow & (self.step_index - since >= self._stuck_steps)
 
     def digest(self) -> str:
         """Hex SHA-256 of every model's state: equal digests mean the same run, bit for bit."""

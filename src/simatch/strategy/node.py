@@ -19,6 +19,11 @@ from .worldmodel import WorldModel
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
+_VelCmd, _ActionCmd, _StrategyInfo = msgs.VelCmd, msgs.ActionCmd, msgs.StrategyInfo
+_MOVE, _NO_ACTION = msgs.ActionCmd.MOVE, msgs.ActionCmd.NO_ACTION
+_LOB, _GROUND = msgs.ActionCmd.KICK_LOB, msgs.ActionCmd.KICK_GROUND
+#: the "no pass" entry shared by every StrategyInfo without a pass (messages are read-only)
+_NO_PASS = msgs.new(msgs.PassCommands)
 
 
 class RobotNode(Node):
@@ -42,6 +47,7 @@ class RobotNode(Node):
             bus.subscribe(topics.robot_topic(t, r, topics.OMNI_VISION), msgs.OmniVisionInfo, w.on_vision),
             bus.subscribe(topics.team_topic(t, topics.TEAM_STRATEGY), msgs.TeamStrategy, w.on_team),
             bus.subscribe(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, w.on_coach),
+            bus.subscribe(topics.GAME_STATE, msgs.GameState, w.on_game),
         ]
         self.pub_vel = bus.publisher(topics.robot_topic(t, r, topics.VEL_CMD), msgs.VelCmd)
         self.pub_action = bus.publisher(topics.robot_topic(t, r, topics.ACTION_CMD), msgs.ActionCmd)
@@ -80,30 +86,32 @@ class RobotNode(Node):
         return vx, vy, w
 
     def publish(self, now: float, tick: int, cmd: Command, vx: float, vy: float, w: float) -> None:
-        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=tick, vx=float(vx), vy=float(vy), w=float(w)))
-        A = msgs.ActionCmd
-        tx, ty = cmd.target if cmd.target is not None else (0.0, 0.0)
-        self.pub_action.put(A(
-            stamp=now, tick=tick, move_action=A.MOVE if cmd.target is not None else A.NO_ACTION,
-            rotate_action=A.MOVE if cmd.target_ori is not None else A.NO_ACTION, rotate_mode=A.ROTATE_SHORTEST,
-            target_x=float(tx), target_y=float(ty), target_ori=float(cmd.target_ori or 0.0),
-            target_vx=float(cmd.target_vel[0]), target_vy=float(cmd.target_vel[1]), max_vel=float(cmd.max_vel),
-            max_w=float(cmd.max_w), dribble=bool(cmd.dribble), kick_speed=float(cmd.kick_speed),
-            kick_type=A.KICK_LOB if cmd.lob else A.KICK_GROUND))
+        self.pub_vel.put(_VelCmd(stamp=now, tick=tick, vx=vx, vy=vy, w=w))
+        target, ori = cmd.target, cmd.target_ori
+        tx, ty = target if target is not None else (0.0, 0.0)
+        self.pub_action.put(_ActionCmd(
+            stamp=now, tick=tick, move_action=_MOVE if target is not None else _NO_ACTION,
+            rotate_action=_MOVE if ori is not None else _NO_ACTION, rotate_mode=0, target_x=tx, target_y=ty,
+            target_ori=ori if ori is not None else 0.0, target_vx=cmd.target_vel[0], target_vy=cmd.target_vel[1],
+            max_vel=cmd.max_vel, max_w=cmd.max_w, dribble=cmd.dribble, kick_speed=cmd.kick_speed,
+            kick_type=_LOB if cmd.lob else _GROUND))
         if self.pub_info.active:
             self.pub_info.put(self.strategy_info(now, tick, cmd))
 
     def strategy_info(self, now: float, tick: int, cmd: Command):
         p = cmd.pass_intent
-        pass_cmd = msgs.PassCommands(
-            pass_id=self.rid if p else 0, catch_id=p.catch_id if p else 0, pass_x=p.pass_x if p else 0.0,
-            pass_y=p.pass_y if p else 0.0, catch_x=p.catch_x if p else 0.0, catch_y=p.catch_y if p else 0.0,
-            is_passout=bool(p and p.kicked), is_dynamic_pass=bool(p and p.dynamic),
-            is_static_pass=bool(p and p.static), is_valid=p is not None)
-        ix, iy = cmd.intent if cmd.intent is not None else (cmd.target if cmd.target is not None else (math.nan, math.nan))
-        return msgs.StrategyInfo(
-            stamp=now, tick=tick, agent_id=self.rid, role=int(cmd.role), action=int(cmd.action),
-            is_dribble=bool(self._holding()), is_kickoff=False, role_time=0.0, target_x=float(ix), target_y=float(iy),
+        if p is None:
+            pass_cmd = _NO_PASS
+        else:
+            pass_cmd = msgs.PassCommands(
+                pass_id=self.rid, catch_id=p.catch_id, pass_x=p.pass_x, pass_y=p.pass_y, catch_x=p.catch_x,
+                catch_y=p.catch_y, is_passout=bool(p.kicked), is_dynamic_pass=bool(p.dynamic),
+                is_static_pass=bool(p.static), is_valid=True)
+        intent = cmd.intent if cmd.intent is not None else cmd.target
+        ix, iy = intent if intent is not None else (math.nan, math.nan)
+        return _StrategyInfo(
+            stamp=now, tick=tick, agent_id=self.rid, role=cmd.role, action=cmd.action, is_dribble=self._holding(),
+            is_kickoff=False, role_time=0.0, target_x=ix, target_y=iy,
             target_num=np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32,
             static_pass_num=0, static_catch_num=0, pass_cmd=pass_cmd,
             user=np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64)

@@ -1,8 +1,9 @@
 """The WorldModel of one robot: everything it knows, in its team frame (its team attacks +x).
 
 It is fed only by topics: its own perception (OmniVisionInfo), its team's fused strategy picture
-(TeamStrategy, from StrategyPub) and the game command (CoachInfo on receive_from_coach). A strategy reads
-it and never touches the simulator.
+(TeamStrategy, from StrategyPub), the game command (CoachInfo on receive_from_coach) and the judge's public
+picture of the game (GameState on game_state: stage, clock, the judge-specific result). A strategy reads it
+and never touches the simulator.
 """
 
 from __future__ import annotations
@@ -50,10 +51,12 @@ class WorldModel:
         self.goalkeeper = goalkeeper
         self.vision = None              # latest OmniVisionInfo
         self.coach = None               # latest CoachInfo
+        self.game = None                # latest GameState from the judge (None if it publishes none)
         self.strategies: dict = {}      # teammate id -> latest StrategyInfo (from the team picture)
         self.time = 0.0
         self.tick = 0
         self._ball: Ball | None = None
+        self._last_ball = None          # the BallInfo of the last observation that saw the ball
         self._last_seen = -math.inf
 
     # --- inputs (bus callbacks) -------------------------------------------------------------------------
@@ -61,22 +64,19 @@ class WorldModel:
         self.vision = msg
         self.time = msg.stamp
         self.tick = msg.tick
-        b = msg.ball
-        if b.pos_known:
+        if msg.ball.pos_known:
             self._last_seen = msg.stamp
-            self._ball = Ball(b.x, b.y, b.z, b.vx, b.vy, b.vz, b.angle, b.distance, True, 0.0)
-        elif self._ball is not None:
-            me = self.me
-            dx, dy = self._ball.x - me.x, self._ball.y - me.y
-            self._ball = Ball(self._ball.x, self._ball.y, self._ball.z, 0.0, 0.0, 0.0,
-                              math.remainder(math.atan2(dy, dx) - me.yaw, 2 * math.pi), math.hypot(dx, dy),
-                              False, msg.stamp - self._last_seen)
+            self._last_ball = msg.ball
+        self._ball = None            # built on first use this tick
 
     def on_team(self, msg) -> None:
         self.strategies = {s.agent_id: s for s in msg.strategies}
 
     def on_coach(self, msg) -> None:
         self.coach = msg
+
+    def on_game(self, msg) -> None:
+        self.game = msg
 
     # --- what a strategy reads ---------------------------------------------------------------------------
     @property
@@ -103,6 +103,18 @@ class WorldModel:
 
     @property
     def ball(self) -> Ball | None:
+        """The ball seen in the latest observation, else where it was last seen (not moving); None before
+        it has ever been seen."""
+        if self._ball is None and self.vision is not None:
+            b = self.vision.ball
+            if b.pos_known:
+                self._ball = Ball(b.x, b.y, b.z, b.vx, b.vy, b.vz, b.angle, b.distance, True, 0.0)
+            elif self._last_ball is not None:
+                last, me = self._last_ball, self.me
+                dx, dy = last.x - me.x, last.y - me.y
+                self._ball = Ball(last.x, last.y, last.z, 0.0, 0.0, 0.0,
+                                  math.remainder(math.atan2(dy, dx) - me.yaw, 2 * math.pi), math.hypot(dx, dy),
+                                  False, self.time - self._last_seen)
         return self._ball
 
     @property

@@ -1,0 +1,247 @@
+"""Reproduction check (``simatch replay FILE --verify``): re-simulate a recorded run and compare.
+
+The recording holds the scene file's text, the overrides and the seed (metadata) and every intervention
+from outside the run's nodes (``operator`` topic: Python API calls, commands given to a coach by hand,
+operator actions on a judge). A new embedded `Simulation` of that scene and seed is stepped in lockstep
+with the recording; before each physics step the operator commands recorded for that step are applied
+again, and the model states the simulator publishes are compared with the recorded ones, byte for byte
+(CDR), at every physics step. The first step where they differ is reported with the model, the field and
+both values.
+
+Operator commands name what they did (`OperatorCommand.call`): a `Simulation` method of the Python API
+(`WORLD_CALLS`), ``coach`` (a command given to ``sim.coaches[target]``), or ``judge.<method>`` for a judge
+that lists ``<method>`` in its ``operator_calls`` (how a referee makes its manual actions reproducible).
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .. import msgs
+from ..bus import Node, Phase, topics
+from .cdr import Encoders
+from .reader import Recording, RecordingError
+from .recorder import simatch_version
+
+#: Simulation methods that an operator command may name (called as method(target, **args))
+WORLD_CALLS = {"set_model_state", "set_link_state", "apply_wrench", "take_control", "release_control", "send_vel",
+               "send_action"}
+POSE_FIELDS = ("x", "y", "z", "qw", "qx", "qy", "qz")
+TWIST_FIELDS = ("vx", "vy", "vz", "wx", "wy", "wz")
+_STEP = struct.Struct("<4xdQ")           # CDR header, then ModelStates.stamp and .step
+
+
+class VerifyError(Exception):
+    """A recording that cannot be re-simulated (the message says why)."""
+
+
+@dataclass
+class Difference:
+    t: float
+    step: int
+    model: str
+    field: str
+    recorded: float | str
+    simulated: float | str
+    differing_values: int
+
+    def describe(self) -> str:
+        return (f"first difference at t={self.t:.3f} s (physics step {self.step}): {self.model} {self.field} "
+                f"recorded {self.recorded!r}, re-simulated {self.simulated!r} "
+                f"({self.differing_values} value(s) of that step differ)")
+
+
+@dataclass
+class Verdict:
+    identical: bool
+    compared: int                         # model-state samples compared
+    until: float                          # simulated time of the last one [s]
+    first_difference: Difference | None = None
+    operator_commands: int = 0
+    problems: list[str] = field(default_factory=list)
+    complete: bool = True                 # the whole run was recorded and compared (file intact, finalised)
+
+    def describe(self) -> str:
+        if self.identical:
+            head = (f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
+                    f"{self.operator_commands} operator command(s) re-applied")
+            if not self.complete:
+                head += "; the recording is incomplete, so only what it holds was checked"
+        else:
+            head = f"NOT reproduced: {self.first_difference.describe()}" if self.first_difference else "NOT reproduced"
+        return "\n".join([head] + [f"note: {p}" for p in self.problems])
+
+    def as_dict(self) -> dict:
+        out = {"identical": self.identical, "compared": self.compared, "until": self.until,
+               "operator_commands": self.operator_commands, "complete": self.complete, "problems": self.problems,
+               "first_difference": None}
+        if self.first_difference:
+            out["first_difference"] = dict(self.first_difference.__dict__)
+        return out
+
+
+def apply_operator(sim, op) -> None:
+    """Carry out one recorded operator command on ``sim`` again."""
+    try:
+        args = json.loads(op.args) if op.args else {}
+    except json.JSONDecodeError as exc:
+        raise VerifyError(f"operator command {op.call} at t={op.stamp:.3f} s has unreadable arguments: {exc}") from None
+    call, target = op.call, op.target
+    if call in WORLD_CALLS:
+        getattr(sim, call)(target, **args)
+    elif call == "coach":
+        coach = sim.coaches.get(target)
+        if coach is None:
+            raise VerifyError(f"operator command at t={op.stamp:.3f} s gives a command to the coach of {target!r}, "
+                              f"which this run does not have")
+        cmd = args.pop("cmd")
+        coach.send(cmd, **args)
+    elif call.startswith("judge."):
+        method = call.partition(".")[2]
+        if method not in getattr(sim.judge, "operator_calls", ()):
+            raise VerifyError(f"operator command {call!r} at t={op.stamp:.3f} s: the judge does not offer it")
+        getattr(sim.judge, method)(**args)
+    else:
+        raise VerifyError(f"unknown operator command {call!r} at t={op.stamp:.3f} s")
+
+
+def verify(path: str | Path, progress: Callable[[float], None] | None = None) -> Verdict:
+    """Re-simulate the recording at ``path`` and compare its model states step by step."""
+    from ..simulation import Simulation      # the embedded run: composes every subsystem
+
+    rec = Recording(path)
+    meta = rec.metadata
+    if not rec.is_simatch:
+        raise VerifyError(f"{rec.path} is not a simatch recording (no simatch metadata): nothing to re-simulate")
+    if int(meta.get("first_step", "0")) != 0:
+        raise VerifyError(f"{rec.path}: the recording started at t={int(meta['first_step']) * float(meta['dt']):.3f} s, "
+                          f"after the run began; a run can only be re-simulated from a recording of its start")
+    problems = []
+    if meta.get("simatch_version") != simatch_version():
+        problems.append(f"recorded with simatch {meta.get('simatch_version')}, re-simulated with {simatch_version()}: "
+                        f"a different version may simulate differently")
+    scene = rec.scene()
+    external = [t for t, spec in scene.spec.teams.items() if spec.strategy == "external"]
+    if external:
+        raise VerifyError(f"{rec.path}: team(s) {', '.join(external)} ran outside the simulator process "
+                          f"(strategy 'external'): their decisions cannot be re-simulated")
+    with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
+        return _compare(rec, sim, problems, progress)
+
+
+class _DuringStep(Node):
+    """Applies the operator commands that were made while a step's nodes ran (a viewer's control node),
+    at the same point: in the JUDGE phase, after the run's own judge and coaches."""
+
+    phase = Phase.JUDGE
+    name = "replay/operator"
+
+    def __init__(self, sim, verdict: Verdict):
+        self.sim, self.verdict = sim, verdict
+        self.period = sim.dt
+        self.due: list = []
+
+    def tick(self, now: float) -> None:
+        for op in self.due:
+            apply_operator(self.sim, op)
+            self.verdict.operator_commands += 1
+        self.due = []
+
+
+def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
+    encode = Encoders(msgs.typestore)
+    latest: list = [None]
+    verdict = Verdict(identical=True, compared=0, until=0.0)
+    during = sim.clock.add(_DuringStep(sim, verdict))
+    sub = sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m))
+    pending: list = []
+    last_report = -1.0
+
+    def step_to(step: int) -> None:
+        """Advance the re-simulation through physics step ``step`` with the commands recorded for it."""
+        while sim.simulator.step_index <= step:
+            k = sim.simulator.step_index
+            while pending and pending[0].step <= k:
+                op = pending.pop(0)
+                if op.during_step and op.step == k:
+                    during.due.append(op)
+                else:
+                    apply_operator(sim, op)
+                    verdict.operator_commands += 1
+            latest[0] = None
+            sim.step()
+
+    try:
+        # a sample is compared once the next one is read: the commands made during its step come after it
+        held: tuple[int, bytes] | None = None
+        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR}):
+            if topic == topics.OPERATOR:
+                op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
+                if op is not None:
+                    pending.append(op)
+                continue
+            _, step = _STEP.unpack_from(data)
+            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim):
+                held = None
+                break
+            held = (step, bytes(data)) if step >= sim.simulator.step_index else None
+            if progress is not None and verdict.until - last_report >= 1.0:
+                last_report = verdict.until
+                progress(verdict.until)
+        if held is not None:
+            _check(held, step_to, latest, encode, verdict, rec, sim)
+    finally:
+        sub.close()
+    if verdict.compared == 0:
+        raise VerifyError(f"{rec.path} holds no model states to compare")
+    verdict.problems = problems + rec.problems
+    verdict.complete = rec.finalised and not rec.problems
+    return verdict
+
+
+def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim) -> bool:
+    """Re-simulate the held sample's step and compare; False at the first difference."""
+    step, data = held
+    step_to(step)
+    mine = latest[0]
+    if mine is None:
+        raise VerifyError("the re-simulation published no model states")
+    verdict.compared += 1
+    verdict.until = step * sim.dt
+    if encode(mine) != data:
+        verdict.identical = False
+        verdict.first_difference = _difference(rec, data, mine, sim.dt)
+        return False
+    return True
+
+
+def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
+    theirs = rec.decode("simatch_msgs/msg/ModelStates", data, topics.MODEL_STATES)
+    step = int(theirs.step) if theirs is not None else int(mine.step)
+    t = step * dt
+    if theirs is None:
+        return Difference(t, step, "?", "?", "undecodable", "", 0)
+    if list(theirs.name) != list(mine.name):
+        return Difference(t, step, "(models)", "name", ", ".join(theirs.name), ", ".join(mine.name), 1)
+    for what, fields, a, b in (("pose", POSE_FIELDS, theirs.pose, mine.pose),
+                               ("twist", TWIST_FIELDS, theirs.twist, mine.twist)):
+        a = np.asarray(a, dtype=float).reshape(-1, len(fields))
+        b = np.asarray(b, dtype=float).reshape(-1, len(fields))
+        diff = a.view(np.uint64) != b.view(np.uint64)           # bit for bit (also tells -0.0 from 0.0)
+        if diff.any():
+            row, col = map(int, np.argwhere(diff)[0])
+            total = int((np.asarray(theirs.pose).view(np.uint64) != np.asarray(mine.pose).view(np.uint64)).sum()
+                        + (np.asarray(theirs.twist).view(np.uint64) != np.asarray(mine.twist).view(np.uint64)).sum())
+            return Difference(t, step, theirs.name[row], fields[col], float(a[row, col]), float(b[row, col]), total)
+    if theirs.stamp != mine.stamp:
+        return Difference(t, step, "(header)", "stamp", theirs.stamp, mine.stamp, 1)
+    return Difference(t, step, "(message)", "bytes", "differ", "differ", 0)
+
+
+__all__ = ["Difference", "RecordingError", "Verdict", "VerifyError", "apply_operator", "verify"]

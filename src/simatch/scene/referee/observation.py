@@ -1,0 +1,146 @@
+"""What the referee sees: the exact model states from the simulation interface.
+
+The referee is fed only by topics (``model_states`` every physics step, ``ball_contacts`` when something
+touches the ball), so it judges a live run and a replayed recording alike. `Observation` keeps the latest
+ModelStates message (a reference, no copy, every physics step) and, once per control period, `refresh`
+turns it into plain Python lists: with ten robots, a loop over floats costs less than the many small NumPy
+calls the rules would otherwise make. It also knows what never changes during a match: who is in which
+team, which robot keeps goal, which way each team attacks.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...bus import topics
+
+
+class Observation:
+    def __init__(self, scene, robot_radius: float):
+        spec = scene.spec
+        self.teams: list[str] = list(spec.teams)
+        self.sign = {t: spec.team_sign(t) for t in self.teams}       # +1: attacks +x
+        self.field = f = spec.world.geometry()
+        self.ball_radius = spec.ball.radius
+        names = spec.robot_names()
+        self.names: list[str] = names
+        self.n = n = len(names)
+        self.index = {name: i for i, name in enumerate(names)}
+        split = [topics.split_robot_name(nm) for nm in names]
+        self.team_of: list[str] = [t for t, _ in split]
+        self.rid: list[int] = [r for _, r in split]
+        self.team_ix: list[int] = [self.teams.index(t) for t in self.team_of]
+        self.attack_sign: list[int] = [self.sign[t] for t in self.team_of]
+        self.own_side: list[int] = [-s for s in self.attack_sign]        # side of the goal each robot defends
+        self.is_goalkeeper: list[bool] = [spec.teams[t].goalkeeper == r for t, r in split]
+        self.radius: list[float] = [float(spec.teams[t].model_params.get("radius", robot_radius))
+                                    for t in self.team_of]
+        self.members: dict[str, list[int]] = {t: [i for i in range(n) if self.team_of[i] == t] for t in self.teams}
+        self.active: list[bool] = [True] * n                   # not sent off
+        # area bounds: |x| >= *_x and |y| <= *_y (the areas extend behind the goal line)
+        self._pen_x = f.half_length - f.penalty_area_depth
+        self._pen_y = 0.5 * f.penalty_area_width
+        self._goal_x = f.half_length - f.goal_area_depth
+        self._goal_y = 0.5 * f.goal_area_width
+        self.msg = None
+        self._rows: list[int] | None = None                    # message row of each robot and of the ball
+        self.stamp = 0.0
+        self.step = -1
+        self.X = [0.0] * n
+        self.Y = [0.0] * n
+        self.VX = [0.0] * n
+        self.VY = [0.0] * n
+        self.bx = self.by = self.bz = 0.0
+        self.bvx = self.bvy = 0.0
+        self.penalty_area = [0] * n     # side of the penalty area the robot is in (-1, +1), 0 if none
+        self.goal_area = [0] * n
+
+    # --- input -------------------------------------------------------------------------------------------
+    def set_message(self, msg) -> None:
+        """The latest ModelStates (every physics step: keeps a reference only)."""
+        self.msg = msg
+
+    def refresh(self) -> None:
+        """Read the latest message into lists and classify every robot's area (once per control period)."""
+        msg = self.msg
+        if self._rows is None:
+            self._rows = self._find_rows(list(msg.name))
+        P = msg.pose.tolist()
+        T = msg.twist.tolist()
+        rows = self._rows
+        n = self.n
+        X, Y, VX, VY = self.X, self.Y, self.VX, self.VY
+        pen, goal = self.penalty_area, self.goal_area
+        px, py, gx, gy = self._pen_x, self._pen_y, self._goal_x, self._goal_y
+        for i in range(n):
+            r = rows[i]
+            x = P[7 * r]
+            y = P[7 * r + 1]
+            X[i] = x
+            Y[i] = y
+            VX[i] = T[6 * r]
+            VY[i] = T[6 * r + 1]
+            ax, ay = abs(x), abs(y)
+            side = 1 if x > 0 else -1
+            pen[i] = side if ax >= px and ay <= py else 0
+            goal[i] = side if ax >= gx and ay <= gy else 0
+        b = rows[n]
+        self.bx, self.by, self.bz = P[7 * b], P[7 * b + 1], P[7 * b + 2]
+        self.bvx, self.bvy = T[6 * b], T[6 * b + 1]
+        self.stamp = msg.stamp
+        self.step = msg.step
+
+    def _find_rows(self, names: list[str]) -> list[int]:
+        expected = self.names + ["ball"]
+        missing = [nm for nm in expected if nm not in names]
+        if missing:
+            raise ValueError(f"model_states lacks {', '.join(missing)}")
+        return [names.index(nm) for nm in expected]
+
+    def ball_row(self) -> int:
+        if self._rows is None:
+            self._rows = self._find_rows(list(self.msg.name))
+        return self._rows[self.n]
+
+    def xy_now(self, i: int) -> tuple[float, float]:
+        """Robot i's position in the latest message (physics rate, without a refresh)."""
+        if self._rows is None:
+            self._rows = self._find_rows(list(self.msg.name))
+        r = 7 * self._rows[i]
+        pose = self.msg.pose
+        return (float(pose[r]), float(pose[r + 1]))
+
+    # --- geometry ----------------------------------------------------------------------------------------
+    def yaw(self, i: int) -> float:
+        r = 7 * self._rows[i]
+        pose = self.msg.pose
+        return 2.0 * math.atan2(float(pose[r + 6]), float(pose[r + 3]))
+
+    def ball_distance(self, i: int) -> float:
+        return math.hypot(self.X[i] - self.bx, self.Y[i] - self.by)
+
+    def distance_to(self, i: int, x: float, y: float) -> float:
+        return math.hypot(self.X[i] - x, self.Y[i] - y)
+
+    @property
+    def xy(self) -> np.ndarray:
+        """(N, 2) robot positions as of the last refresh."""
+        return np.column_stack((self.X, self.Y))
+
+    def own_goal_side(self, team: str) -> int:
+        """-1 if the team defends the goal at -x (cyan), +1 otherwise."""
+        return -self.sign[team]
+
+    def defender_of(self, side: int) -> str:
+        """The team whose goal is at ``side``."""
+        return self.teams[0] if -self.sign[self.teams[0]] == side else self.teams[1]
+
+    def other(self, team: str) -> str:
+        """The opponent of ``team`` (two-team matches)."""
+        return self.teams[1] if team == self.teams[0] else self.teams[0]
+
+    def in_opponent_half(self, i: int, x: float) -> bool:
+        """Robot i at ``x`` is strictly past the half-way line, towards its attack."""
+        return self.attack_sign[i] * x > 0.0

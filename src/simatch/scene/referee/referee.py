@@ -1,0 +1,483 @@
+"""The automatic MSL referee (``judge.kind = "msl_referee"``): an explicit state machine fed by what it
+observes, judging the RoboCup MSL rules, explaining every decision in an append-only event log.
+
+Inputs are topics only: ``model_states`` (every physics step), ``ball_contacts`` (steps where a robot
+touches the ball) and ``referee_command`` (an operator). Outputs: each team's game command (CoachInfo on
+``<team>/receive_from_coach``, mirrored per team, re-sent every control period), ``game_state`` and the
+event log on ``events``. It acts on the world only to place the ball and to park or bring back robots.
+
+Cost: what must be exact in time — the ball wholly over a line, every touch of the ball — is judged at the
+physics rate with a few float comparisons; everything else (positions, areas, dribbling, contacts between
+robots, timers) at the control period, on plain lists read from the latest model states.
+
+The operator's side (pause, commands, cards, ...) is in `takeover.py`, what it reports in `report.py`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import replace
+from typing import Optional
+
+from ... import msgs
+from ...bus import NodeContext, topics
+from ..commands import SET_PIECES, MatchMode, for_team, name as command_name
+from ..judges.base import Judge
+from ..loader import SceneError
+from . import report
+from .discipline import Discipline
+from .log import EventLog
+from .observation import Observation
+from .params import RefereeParams
+from .restarts import NAMES, Restart, Spots
+from .rules import CONTROL_RULES, BallOutRule, Call, GoalRule, PositionRule
+from .shootout import ShootOut
+from .state import LIVE, Game, Phase, schedule
+from .takeover import OperatorTakeover
+from .touches import Touches
+
+
+class Match:
+    """What the rules read: the observation, the game state, the ball touches, the spots and settings."""
+
+    def __init__(self, scene, params: RefereeParams):
+        spec = scene.spec
+        self.params = params
+        self.dt = spec.physics.timestep
+        self.control_steps = max(1, round(spec.control.period / self.dt))
+        self.control_dt = self.control_steps * self.dt
+        self.obs = Observation(scene, params.robot_radius)
+        self.game = Game(teams=list(spec.teams), stages=schedule(spec.match), dt=self.dt)
+        self.touches = Touches(self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt))
+        self.spots = Spots(self.obs.field, params, spec.ball.radius)
+
+    def restart_name(self) -> str:
+        r = self.game.restart
+        return NAMES[r.kind] if r is not None else "restart"
+
+
+class MslReferee(OperatorTakeover, Judge):
+    Params = RefereeParams
+    name = "msl_referee"
+    gives_commands = True
+
+    def __init__(self, scene, params: RefereeParams, world):
+        super().__init__(scene, params, world)
+        spec = scene.spec
+        if len(spec.teams) != 2:
+            raise SceneError(f"{scene.source}: judge.kind: msl_referee judges two teams, the scene has "
+                             f"{len(spec.teams)}")
+        a, b = spec.teams
+        if spec.team_sign(a) == spec.team_sign(b):
+            raise SceneError(f"{scene.source}: teams.{b}.attacks: {a} and {b} both attack "
+                             f"{'+x' if spec.team_sign(a) > 0 else '-x'}; a referee needs them to attack "
+                             f"opposite goals")
+        self.m = m = Match(scene, params)
+        self.p = params
+        self.dt = m.dt
+        self.period = m.dt
+        self.control_steps = m.control_steps
+        self.teams = m.game.teams
+        self.match_spec = spec.match
+        disabled = set(params.disabled_rules)
+        self.rules = [cls(m) for cls in CONTROL_RULES if cls.name not in disabled]
+        self.position_rules = [r for r in self.rules if isinstance(r, PositionRule)]
+        self.goal_rule = GoalRule(m) if "goal" not in disabled else None
+        self.out_rule = BallOutRule(m) if "ball_out" not in disabled else None
+        self.log = EventLog()
+        self.discipline = Discipline(m.obs, params, world, self._log_robot)
+        self.shootout: Optional[ShootOut] = None
+        f = m.obs.field
+        self._xlim = f.half_length + m.obs.ball_radius
+        self._ylim = f.half_width + m.obs.ball_radius
+        self._states = None
+        self._ball_row = -1
+        self._out_latched = False
+        self._ops: deque = deque()
+        self._begun = False
+        self.coach_info: dict[str, object] = {}
+        self._published = (-1, -math.inf)           # (game version, time) of the last GameState
+        self._last_replace = -math.inf
+        self._settle_spot = False
+        self._kick_step = 0                           # step of the last START
+        self._cause = ""                              # why play stopped (explains the restart called next)
+        self.goals: list[dict] = []
+
+    # --- the run ---------------------------------------------------------------------------------------
+    @property
+    def duration(self) -> float:
+        """Regular time plus the longest shoot-out (the run ends as soon as the match does)."""
+        spec, p = self.match_spec, self.p
+        total = spec.halves * spec.half_duration + (spec.halves - 1) * spec.half_time
+        if spec.penalty_shootout:
+            kick = p.stop_time + p.prepare_time + p.shootout_shot_time + 1.0
+            total += 2 * (p.shootout_kicks + p.shootout_max_rounds) * kick
+        return total + self.m.control_dt
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        bus = ctx.bus
+        self.pub_coach = {t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo)
+                          for t in self.teams}
+        self.pub_state = bus.publisher(topics.GAME_STATE, msgs.GameState)
+        pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+        self.log = EventLog(pub_events.put)
+        self.subs = [
+            bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_states),
+            bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
+            bus.subscribe(topics.REFEREE_COMMAND, msgs.RefereeCommand, self._on_operator),
+        ]
+
+    def stop(self) -> None:
+        for sub in getattr(self, "subs", []):
+            sub.close()
+
+    def _on_states(self, msg) -> None:
+        self._states = msg
+        self.m.obs.msg = msg
+
+    def _on_contacts(self, msg) -> None:
+        if self._begun:
+            self.m.touches.on_contacts(msg)
+
+    def _on_operator(self, msg) -> None:
+        self._ops.append(msg)
+
+    # --- every physics step ----------------------------------------------------------------------------------
+    def tick(self, now: float) -> None:
+        msg = self._states
+        if msg is None:
+            return
+        g = self.m.game
+        if not self._begun:
+            self._begin(now)
+        if self._ops:
+            self._operator_queue(now)
+        if g.phase is Phase.ENDED:
+            return
+        if g.phase is not Phase.PAUSED:
+            d = g.stage.duration
+            if d is not None and g.stage_steps * self.dt >= d - 1e-9:
+                self._end_stage(now)
+                if g.phase is Phase.ENDED:
+                    return
+            g.stage_steps += 1
+            g.phase_steps += 1
+            pose = msg.pose
+            b = self._ball_row
+            bx, by = pose[b], pose[b + 1]
+            if bx > self._xlim or bx < -self._xlim or by > self._ylim or by < -self._ylim:
+                if g.phase in LIVE and not self._out_latched:
+                    self._boundary(now, float(bx), float(by), float(pose[b + 2]))
+            elif self._out_latched:
+                self._out_latched = False
+        if self.ctx.step() % self.control_steps == 0:
+            self._control(now)
+
+    def _begin(self, now: float) -> None:
+        self._begun = True
+        self._ball_row = 7 * self.m.obs.ball_row()
+        self.m.obs.refresh()
+        g = self.m.game
+        g.kickoff_team = self.match_spec.kickoff
+        self._log(now, "stage", detail=f"{g.stage.name} begins", value=g.stage.duration or 0.0)
+        self._stop(now, self.m.spots.kickoff(g.kickoff_team), "the match begins")
+
+    # --- every control period ------------------------------------------------------------------------------
+    def _control(self, now: float) -> None:
+        m = self.m
+        g = m.game
+        obs = m.obs
+        obs.refresh()
+        if g.phase is Phase.STOPPED or g.phase is Phase.PREPARE:
+            for i in self.discipline.due(now):
+                self.discipline.bring_back(i, "its time off is over and the ball is dead")
+        if g.phase is Phase.STOPPED:
+            self._stopped(now)
+        elif g.phase is Phase.PREPARE:
+            self._prepare(now)
+        elif g.phase is Phase.TAKING:
+            r = g.restart
+            moved = math.hypot(obs.bx - r.x, obs.by - r.y)
+            if moved >= self.p.in_play_distance:
+                self._log(now, "ball_in_play", team=r.team, x=obs.bx, y=obs.by, value=moved,
+                          limit=self.p.in_play_distance,
+                          detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play")
+                g.go(Phase.PLAY)
+        if g.phase in (Phase.TAKING, Phase.PLAY) and g.stage.kind == "shootout":
+            self._shootout_check(now)
+        if g.phase not in (Phase.PAUSED, Phase.ENDED):
+            phase = g.phase
+            shootout = g.stage.kind == "shootout"
+            for rule in self.rules:
+                if phase not in rule.phases or (shootout and rule.name not in ("set_piece_distance", "charging")):
+                    continue
+                calls = rule.check()
+                if calls is None:
+                    continue
+                for call in (calls if isinstance(calls, list) else (calls,)):
+                    self._enact(now, call)
+                if g.phase is not phase:
+                    break
+        self._publish(now)
+
+    def _stopped(self, now: float) -> None:
+        g = self.m.game
+        if g.hold or not g.auto or g.stage.kind not in ("half", "shootout"):
+            return
+        if g.phase_time >= self.p.stop_time - 1e-9 and g.next_restart is not None:
+            self._call_restart(now, g.next_restart, self._cause)
+
+    def _prepare(self, now: float) -> None:
+        m = self.m
+        g, obs, r = m.game, m.obs, m.game.restart
+        bx, by = obs.bx, obs.by
+        off = math.hypot(bx - r.x, by - r.y)
+        if self._settle_spot:
+            self._settle_spot = False
+            if 1e-6 < off < 0.6:          # placed against a robot: the simulator moved it out; that is the spot
+                g.restart = r = replace(r, x=bx, y=by)
+                off = 0.0
+        if off > self.p.replace_distance and now - self._last_replace >= 1.0:
+            self._last_replace = now
+            self._place_ball(r.x, r.y)
+            self._log(now, "ball_placed", team=r.team, x=r.x, y=r.y, value=off, limit=self.p.replace_distance,
+                      detail=f"the ball had moved {off:.2f} m off the spot of the {NAMES[r.kind]}: put back")
+        if not g.auto:
+            return
+        t = g.phase_time
+        longest = self.p.kickoff_prepare_time if r.kind == "kickoff" else self.p.prepare_time
+        if t >= longest - 1e-9 or (t >= self.p.prepare_min_time - 1e-9 and all(rl.ready() for rl in self.position_rules)):
+            self._start(now)
+
+    # --- transitions -----------------------------------------------------------------------------------------
+    def _call_restart(self, now: float, r: Restart, reason: str) -> None:
+        """Place the ball and call the restart (stopped -> prepare)."""
+        m = self.m
+        g = m.game
+        self._place_ball(r.x, r.y)
+        self._settle_spot = True
+        self._last_replace = now
+        self._log(now, "ball_placed", team=r.team, x=r.x, y=r.y, detail=f"ball placed for the {r.describe()}")
+        g.restart = r
+        g.next_restart = None
+        g.hold = False
+        m.touches.on_restart()
+        for rule in self.rules:
+            rule.on_restart()
+        g.go(Phase.PREPARE)
+        self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team,
+                   f"{r.describe()} ({reason})")
+
+    def _start(self, now: float) -> None:
+        """START: log who is out of position, then the set piece is taken (a dropped ball is in play)."""
+        m = self.m
+        g = m.game
+        for rule in self.position_rules:
+            for call in rule.at_start():
+                self._enact(now, call)
+        r = g.restart
+        m.touches.on_restart()
+        if r.kind != "dropped_ball":
+            m.touches.arm_taker()
+        self._kick_step = self.ctx.step()
+        g.go(Phase.PLAY if r.kind == "dropped_ball" else Phase.TAKING)
+        self._send(now, MatchMode.STARTROBOT, "", f"START: the {r.describe()}")
+
+    def _stop(self, now: float, restart: Restart, reason: str) -> None:
+        """Stop play (STOP to every team); ``restart`` follows when the stoppage is over."""
+        g = self.m.game
+        if g.phase is Phase.PAUSED:
+            g.paused_phase = Phase.STOPPED
+        else:
+            g.go(Phase.STOPPED)
+        g.next_restart = restart
+        g.hold = False
+        self._cause = reason
+        self._send(now, MatchMode.STOPROBOT, "", f"{reason}; next: {restart.describe()}")
+
+    def _boundary(self, now: float, bx: float, by: float, bz: float) -> None:
+        """The ball is wholly over a line (physics rate)."""
+        self._out_latched = True
+        self.m.obs.refresh()
+        over_x = abs(bx) - self._xlim
+        over_y = abs(by) - self._ylim
+        side = 1 if bx > 0 else -1
+        call = None
+        in_goal = over_x > 0 and self.goal_rule is not None and self.goal_rule.in_goal(by, bz)
+        if self.m.game.stage.kind == "shootout":
+            self._shootout_result(now, in_goal, "the ball went in" if in_goal else "the ball left the field")
+            return
+        if in_goal:
+            call = self.goal_rule.crossed(side, bx, by, bz)
+        elif self.out_rule is not None:
+            if over_x > 0 and over_x >= over_y:
+                call = self.out_rule.crossed_goal_line(side, bx, by, bz)
+            else:
+                call = self.out_rule.crossed_side_line(bx, by)
+        if call is not None:
+            self._enact(now, call)
+
+    def _end_stage(self, now: float) -> None:
+        m = self.m
+        g = m.game
+        ended = g.stage
+        self._log(now, "stage", value=g.clock, limit=ended.duration or 0.0, detail=f"{ended.name} is over")
+        nxt = g.next_stage()
+        if nxt.kind == "shootout" and g.score[self.teams[0]] != g.score[self.teams[1]]:
+            nxt = g.next_stage()
+        if nxt.kind == "ended":
+            self._end_match(now)
+            return
+        self._log(now, "stage", value=nxt.duration or 0.0, detail=f"{nxt.name} begins")
+        if nxt.kind == "shootout":
+            self.shootout = ShootOut(m.obs, self.p, m.spots, self.match_spec.kickoff)
+            restart = self.shootout.next_restart()
+            reason = "penalty shoot-out"
+        else:
+            half = next((s.half for s in g.stages[g.stage_index:] if s.kind == "half"), 1)
+            first = self.match_spec.kickoff
+            g.kickoff_team = first if half % 2 == 1 else m.obs.other(first)
+            restart = m.spots.kickoff(g.kickoff_team)
+            reason = "half time" if nxt.kind == "break" else f"{nxt.name}"
+        self._stop(now, restart, reason)
+
+    def _end_match(self, now: float) -> None:
+        g = self.m.game
+        winner = report.winner(self)
+        score = ", ".join(f"{t} {g.score[t]}" for t in self.teams)
+        extra = ""
+        if self.shootout is not None:
+            extra = " (shoot-out " + ", ".join(f"{t} {self.shootout.goals(t)}" for t in self.teams) + ")"
+        self._send(now, MatchMode.STOPROBOT, "", "the match is over")
+        g.stage_index = len(g.stages) - 1
+        g.go(Phase.ENDED)
+        g.version += 1
+        self._log(now, "match_end", team=winner or "", detail=f"final score {score}{extra}: "
+                                                             + (f"{winner} wins" if winner else "a draw"))
+        self.done = True
+        self._publish(now, force=True)
+
+    # --- decisions ----------------------------------------------------------------------------------------------
+    def _enact(self, now: float, call: Call) -> None:
+        m = self.m
+        g = m.game
+        obs = m.obs
+        rid = obs.rid[call.robot] if call.robot >= 0 else 0
+        if not g.auto:
+            self._log(now, "proposal", team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
+                      limit=call.limit, detail=f"{call.type} (not enforced: manual mode): {call.detail}")
+            return
+        if g.stage.kind == "shootout" and call.restart is not None and g.restart is not None:
+            # in a shoot-out a foul does not restart play: the kicking team's misses the kick, the
+            # defending team's has the kick taken again
+            self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
+                      limit=call.limit, detail=call.detail)
+            if call.card and call.robot >= 0:
+                self.discipline.card(call.robot, call.card, now, call.detail)
+            if call.team == g.restart.team:
+                self._shootout_result(now, False, f"{call.type} by {obs.names[call.robot]}" if call.robot >= 0
+                                      else call.type)
+            else:
+                self._stop(now, g.restart, f"{call.type}: the penalty is taken again")
+            return
+        self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value, limit=call.limit,
+                  detail=call.detail)
+        if call.goal_for:
+            g.score[call.goal_for] += 1
+            g.version += 1
+            self.goals.append({"t": round(now, 6), "team": call.goal_for,
+                               "robot": obs.names[call.robot] if call.robot >= 0 else ""})
+        if call.card and call.robot >= 0:
+            self.discipline.card(call.robot, call.card, now, call.detail)
+        if call.in_play and g.phase is Phase.TAKING:
+            g.go(Phase.PLAY)
+        if call.restart is not None:
+            self._stop(now, call.restart, call.detail)
+
+    # --- the penalty shoot-out -------------------------------------------------------------------------------------
+    def _shootout_check(self, now: float) -> None:
+        m = self.m
+        touches, obs, r = m.touches, m.obs, m.game.restart
+        k = obs.teams.index(r.team)
+        taker = touches.taker
+        if touches.retouch is not None or any(i != taker for i in touches.touched_by(k)):
+            self._shootout_result(now, False, "the kicking team touched the ball again")
+        elif (self.ctx.step() - self._kick_step) * self.dt >= self.p.shootout_shot_time - 1e-9:
+            self._shootout_result(now, False, f"no goal {self.p.shootout_shot_time:.0f} s after START")
+
+    def _shootout_result(self, now: float, scored: bool, why: str) -> None:
+        m = self.m
+        so, r = self.shootout, m.game.restart
+        so.record(r.team, scored)
+        taker = m.touches.taker
+        rid = m.obs.rid[taker] if taker >= 0 else 0
+        tally = ", ".join(f"{t} {so.goals(t)}/{len(so.kicks[t])}" for t in self.teams)
+        self._log(now, "shootout_kick", team=r.team, robot=rid, x=m.obs.bx, y=m.obs.by,
+                  value=1.0 if scored else 0.0, limit=1.0,
+                  detail=f"{r.team}'s penalty {'scored' if scored else 'missed'}: {why} (shoot-out: {tally})")
+        m.game.version += 1
+        if so.decided():
+            self._end_match(now)
+        else:
+            self._stop(now, so.next_restart(), "shoot-out: next kick")
+
+    # --- commands to the teams ---------------------------------------------------------------------------------------
+    def _send(self, now: float, cmd: MatchMode, team: str, reason: str) -> None:
+        """Give ``cmd`` (from ``team``'s point of view; "" for a neutral command) to every team."""
+        g = self.m.game
+        g.command, g.command_team, g.reason = MatchMode(cmd), team, reason
+        g.version += 1
+        r = g.restart if cmd != MatchMode.STOPROBOT else (g.next_restart or g.restart)
+        for t in self.teams:
+            mode = for_team(cmd, team, t) if team else MatchMode(cmd)
+            if mode in SET_PIECES:
+                g.match_type[t] = mode
+            sign = self.m.obs.sign[t]
+            bx, by = (sign * r.x, sign * r.y) if r is not None else (0.0, 0.0)
+            info = msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(mode), match_type=int(g.match_type[t]),
+                            max_vel=self.p.max_vel, max_w=self.p.max_w, ball_x=bx, ball_y=by)
+            self.coach_info[t] = info
+            self.pub_coach[t].put(info)            # at once; and again every control period
+        self._log(now, "command", team=team, value=float(cmd), detail=f"{command_name(cmd)}"
+                  + (f" for {team}" if team else "") + f": {reason}")
+
+    def _publish(self, now: float, force: bool = False) -> None:
+        for t, pub in self.pub_coach.items():
+            info = self.coach_info.get(t)
+            if info is not None:
+                pub.put(info)
+        g = self.m.game
+        version, last = self._published
+        if force or g.version != version or now - last >= self.p.game_state_period - 1e-9:
+            self._published = (g.version, now)
+            if self.pub_state.active:
+                self.pub_state.put(self.game_state(now))
+
+    # --- ball and log helpers -----------------------------------------------------------------------------------------
+    def _place_ball(self, x: float, y: float) -> None:
+        self.world.set_model_state("ball", x=x, y=y, z=self.m.obs.ball_radius, vx=0.0, vy=0.0, vz=0.0, wx=0.0,
+                                   wy=0.0, wz=0.0)
+        self._out_latched = False
+
+    def _log(self, now: float, type: str, **fields):
+        return self.log.add(now, type, **fields)
+
+    def _log_robot(self, type: str, i: int, value: float, limit: float, detail: str) -> None:
+        obs = self.m.obs
+        self.log.add(self.ctx.now(), type, team=obs.team_of[i], robot=obs.rid[i], x=obs.X[i], y=obs.Y[i],
+                     value=value, limit=limit, detail=detail)
+
+    # --- what the referee reports (see report.py) ------------------------------------------------------------
+    def winner(self) -> Optional[str]:
+        return report.winner(self)
+
+    def game(self) -> dict:
+        return report.game(self)
+
+    def result(self) -> dict:
+        return report.result(self)
+
+    def game_state(self, now: float):
+        return report.game_state(self, now)

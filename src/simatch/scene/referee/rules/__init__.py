@@ -1,0 +1,30 @@
+"""The rules the referee judges, one per file (see `base.py` for what a rule is).
+
+`CONTROL_RULES` run at the control period, in this order (the first call that stops play wins; the
+others of the same period are still logged). Goals and the ball leaving the field are judged at the
+physics rate by the referee itself, with `GoalRule` and `BallOutRule` deciding what a crossing means.
+"""
+
+from __future__ import annotations
+
+from .ball_out import BallOutRule
+from .base import Call, Rule
+from .charging import ChargingRule
+from .double_touch import DoubleTouchRule
+from .dribbling import DribblingRule
+from .dropped_ball_distance import DroppedBallDistanceRule
+from .goal import GoalRule
+from .goal_area import GoalAreaRule
+from .kickoff_half import KickoffHalfRule
+from .no_progress import NoProgressRule
+from .penalty_area import PenaltyAreaRule
+from .positions import PositionRule
+from .restart_timeout import RestartTimeoutRule
+from .set_piece_distance import SetPieceDistanceRule
+
+CONTROL_RULES: tuple[type[Rule], ...] = (
+    DoubleTouchRule, SetPieceDistanceRule, KickoffHalfRule, DroppedBallDistanceRule, RestartTimeoutRule,
+    ChargingRule, DribblingRule, GoalAreaRule, PenaltyAreaRule, NoProgressRule,
+)
+
+__all__ = ["BallOutRule", "CONTROL_RULES", "Call", "GoalRule", "PositionRule", "Rule"]

@@ -1,0 +1,58 @@
+"""The ball out of the field (MSL RC-15, RC-16, and the corner kick), decided by the last touch.
+
+The ball is out once it has wholly crossed a side line or a goal line (outside the goal), judged at the
+physics rate. Over a side line: a throw-in for the team that did not touch it last, ``throw_in_inset``
+inside the line where the ball crossed. Over a goal line: a goal kick when the attacking team touched it
+last, a corner kick when the defending team did. When nobody has touched the ball, a dropped ball.
+"""
+
+from __future__ import annotations
+
+from ..state import LIVE
+from .base import Call, Rule
+
+
+class BallOutRule(Rule):
+    name = "ball_out"
+    phases = LIVE
+
+    def crossed_side_line(self, x: float, y: float) -> Call:
+        obs, spots = self.m.obs, self.m.spots
+        over = abs(y) - obs.field.half_width
+        last = self.m.touches.last
+        where = f"over the side line at x = {x:.2f} m"
+        if last < 0:
+            r = spots.throw_in("", x, y)
+            restart = spots.at_ball("dropped_ball", "", r.x, r.y)
+            return Call("ball_out", x=x, y=y, value=over, limit=obs.ball_radius,
+                        detail=f"ball out {where}; nobody touched it: dropped ball", restart=restart)
+        team = obs.other(obs.team_of[last])
+        return Call("ball_out", team=obs.team_of[last], robot=last, x=x, y=y, value=over, limit=obs.ball_radius,
+                    detail=f"ball out {where}, last touched by {obs.names[last]}: throw-in for {team}",
+                    restart=spots.throw_in(team, x, y))
+
+    def crossed_goal_line(self, side: int, x: float, y: float, z: float) -> Call:
+        obs, spots = self.m.obs, self.m.spots
+        f = obs.field
+        over = side * x - f.half_length
+        defending = obs.defender_of(side)
+        attacking = obs.other(defending)
+        last = self.m.touches.last
+        if f.goals and abs(y) < 0.5 * f.goal_width:
+            where = f"over {defending}'s goal line above the bar (ball centre at {z:.2f} m)"
+        else:
+            where = f"over {defending}'s goal line at y = {y:.2f} m, outside the posts"
+        if last < 0:
+            px, py = spots.restart_point(side, y)
+            return Call("ball_out", x=x, y=y, value=over, limit=obs.ball_radius,
+                        detail=f"ball out {where}; nobody touched it: dropped ball",
+                        restart=spots.at_ball("dropped_ball", "", px, py))
+        toucher = obs.team_of[last]
+        if toucher == attacking:
+            restart = spots.goal_kick(defending, side, y)
+            then = f"goal kick for {defending}"
+        else:
+            restart = spots.corner(attacking, side, y)
+            then = f"corner kick for {attacking}"
+        return Call("ball_out", team=toucher, robot=last, x=x, y=y, value=over, limit=obs.ball_radius,
+                    detail=f"ball out {where}, last touched by {obs.names[last]}: {then}", restart=restart)

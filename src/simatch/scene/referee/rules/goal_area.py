@@ -1,0 +1,32 @@
+"""Illegal defence and attack, goal area (MSL RC-12.3.4/5): only a team's own goalkeeper may be in its
+goal area. A robot is inside when its centre is on or over the area's lines (the area extends behind the
+goal line, into the goal). Judged while the ball is in play; the opponents get a free kick.
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+from ..state import Phase
+from .base import Call, Rule
+
+
+class GoalAreaRule(Rule):
+    name = "goal_area"
+    phases = frozenset({Phase.PLAY})
+
+    def check(self) -> Optional[Call]:
+        obs = self.m.obs
+        area = obs.goal_area
+        for i in range(obs.n):
+            side = area[i]
+            if not side or not obs.active[i] or (obs.is_goalkeeper[i] and obs.own_side[i] == side):
+                continue
+            f = obs.field
+            depth = side * obs.X[i] - (f.half_length - f.goal_area_depth)
+            owner = obs.defender_of(side)
+            whose = "its own" if obs.team_of[i] == owner else f"{owner}'s"
+            return self.call("goal_area", i, depth, 0.0,
+                             f"{obs.names[i]} is in {whose} goal area ({depth:.2f} m over its line), which only "
+                             f"{owner}'s goalkeeper may enter", restart=self.free_kick_against(i))
+        return None

@@ -1,0 +1,84 @@
+"""What the set-piece position rules share: the spot, the kicker, and a list of offenders judged once
+when START is given (logged, play goes on) and then whenever a robot newly breaks the rule before the ball
+is in play (the restart is retaken when the defending team did it, the opponents get a free kick when the
+kicking team did)."""
+
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from ..restarts import NAMES
+from ..state import Phase
+from .base import Call, Rule
+
+
+class PositionRule(Rule):
+    phases = frozenset({Phase.TAKING})
+    kinds: frozenset[str] = frozenset()
+
+    def __init__(self, match):
+        super().__init__(match)
+        self.flagged: set[int] = set()
+
+    def applies(self) -> bool:
+        r = self.m.game.restart
+        return r is not None and r.kind in self.kinds and self.m.game.phase in (Phase.PREPARE, Phase.TAKING)
+
+    def spot_distances(self) -> list[float]:
+        r = self.m.game.restart
+        obs = self.m.obs
+        X, Y, x, y = obs.X, obs.Y, r.x, r.y
+        return [math.hypot(X[i] - x, Y[i] - y) for i in range(obs.n)]
+
+    def designated_kicker(self, d: list[float]) -> int:
+        """The taker if it touched the ball already, else the kicking team's robot nearest to the spot."""
+        m = self.m
+        if m.touches.armed and m.touches.taker >= 0:
+            return m.touches.taker
+        team = m.game.restart.team
+        if not team:
+            return -1
+        mates = [i for i in m.obs.members[team] if m.obs.active[i]]
+        return min(mates, key=lambda i: d[i]) if mates else -1
+
+    def offenders(self) -> list[tuple[int, float, float, str]]:
+        """(robot, measured, limit, what) for every robot out of position now."""
+        raise NotImplementedError
+
+    def ready(self) -> bool:
+        return not self.applies() or not self.offenders()
+
+    def on_restart(self) -> None:
+        self.flagged.clear()
+
+    def at_start(self) -> list[Call]:
+        if not self.applies():
+            return []
+        calls = []
+        for i, value, limit, what in self.offenders():
+            self.flagged.add(i)
+            calls.append(self.call(self.name, i, value, limit, f"at START of the {self.what()}: {what}"))
+        return calls
+
+    def check(self) -> Optional[Call]:
+        if not self.applies():
+            return None
+        for i, value, limit, what in self.offenders():
+            if i in self.flagged:
+                continue
+            self.flagged.add(i)
+            r = self.m.game.restart
+            obs = self.m.obs
+            if r.team and obs.team_of[i] == r.team:
+                then = f"free kick for {obs.other(r.team)}"
+                restart = self.m.spots.at_ball("free_kick", obs.other(r.team), r.x, r.y)
+            else:
+                then = f"the {self.what()} is taken again"
+                restart = r
+            return self.call(self.name, i, value, limit, f"before the ball was in play: {what}; {then}",
+                             restart=restart)
+        return None
+
+    def what(self) -> str:
+        return NAMES[self.m.game.restart.kind]

@@ -1,0 +1,139 @@
+"""Who touched the ball, step by step, from the simulator's ``ball_contacts`` (its ball bumper).
+
+Kept at the physics rate, because a deflection lasts a step or two:
+
+* the last robot to touch the ball (ball out: who gets the restart), and where it stood then (a goal's
+  shooter must stand in the opponent half);
+* every robot that touched the ball since the last restart, in order (no direct goal from a set piece);
+* the taker of a set piece, and whether it touched the ball again after letting it go, before any other
+  robot did (double touch);
+* possession for the dribbling rule: the robot in sole contact with the ball and the point where it took
+  the ball; another robot alone on the ball takes possession over, a duel of two keeps it with the robot
+  that had it, and the possession ends when the ball is ``dribble_release_distance`` away from the robot.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .observation import Observation
+
+
+class Touches:
+    def __init__(self, obs: Observation, release_distance: float, double_touch_gap_steps: int):
+        self.obs = obs
+        n = obs.n
+        self.release = release_distance
+        self.gap_steps = max(1, double_touch_gap_steps)
+        self.last = -1                       # robot index of the last touch
+        self.last_step = -1
+        self.touch_x = [0.0] * n             # each robot's position at its last touch
+        self.touch_y = [0.0] * n
+        self.touch_step = [-1] * n           # and the step of it
+        self.since_restart: list[int] = []   # robots that touched since the restart, by first touch
+        self._seen = [False] * n
+        self.contact: tuple[int, ...] = ()   # robots in contact at `contact_step`
+        self.contact_step = -1
+        self.holder = -1
+        # the set piece's taker (double touch)
+        self.armed = False
+        self.taker = -1
+        self.taker_last_contact = -1
+        self.retouch: tuple[int, float, float, int] | None = None   # (step, x, y, steps let go) of a 2nd touch
+        self.others_touched = False
+        # possession (dribbling)
+        self.possessor = -1
+        self.start_xy = (0.0, 0.0)
+        self.prev_xy = (0.0, 0.0)
+        self.backward = 0.0
+
+    # --- restarts ----------------------------------------------------------------------------------------
+    def on_restart(self) -> None:
+        """The ball was placed for a restart: history since the restart begins again."""
+        self.since_restart.clear()
+        self._seen = [False] * self.obs.n
+        self.armed = False
+        self.taker = -1
+        self.retouch = None
+        self.others_touched = False
+        self.possessor = -1
+
+    def arm_taker(self) -> None:
+        """START of a set piece: the first robot to touch the ball now is its taker."""
+        self.armed = True
+        self.taker = -1
+        self.retouch = None
+        self.others_touched = False
+
+    # --- input (physics rate) -------------------------------------------------------------------------------
+    def on_contacts(self, msg) -> None:
+        index = self.obs.index
+        step = int(msg.step)
+        robots = [index[nm] for nm in msg.touching if nm in index]
+        for extra in (msg.holder, msg.kicker):
+            if extra and extra in index and index[extra] not in robots:
+                robots.append(index[extra])
+        self.holder = index.get(msg.holder, -1) if msg.holder else -1
+        if not robots:
+            return
+        self.contact = tuple(robots)
+        self.contact_step = step
+        xy_now = self.obs.xy_now
+        for i in robots:
+            self.last = i
+            self.last_step = step
+            self.touch_x[i], self.touch_y[i] = xy_now(i)
+            self.touch_step[i] = step
+            if not self._seen[i]:
+                self._seen[i] = True
+                self.since_restart.append(i)
+            if self.armed:
+                self._taker_touch(i, step)
+        self._possession(robots)
+
+    def _taker_touch(self, i: int, step: int) -> None:
+        if self.taker < 0:
+            self.taker = i
+        elif i == self.taker:
+            if (not self.others_touched and self.retouch is None
+                    and step - self.taker_last_contact >= self.gap_steps):
+                x, y = self.obs.xy_now(i)
+                self.retouch = (step, x, y, step - self.taker_last_contact)
+        else:
+            self.others_touched = True
+            self.armed = False
+        if i == self.taker:
+            self.taker_last_contact = step
+
+    def _possession(self, robots: list[int]) -> None:
+        if len(robots) == 1:
+            j = robots[0]
+            if j != self.possessor:
+                self.possessor = j
+                self.start_xy = self.prev_xy = self.obs.xy_now(j)
+                self.backward = 0.0
+        elif self.possessor not in robots:
+            self.possessor = -1
+
+    # --- control rate -----------------------------------------------------------------------------------
+    def update_possession(self) -> None:
+        """End a possession whose ball has gone, and add up the possessor's backward travel."""
+        i = self.possessor
+        if i < 0:
+            return
+        obs = self.obs
+        x, y = obs.X[i], obs.Y[i]
+        if math.hypot(obs.bx - x, obs.by - y) > self.release:
+            self.possessor = -1
+            return
+        yaw = obs.yaw(i)
+        dx, dy = x - self.prev_xy[0], y - self.prev_xy[1]
+        along = dx * math.cos(yaw) + dy * math.sin(yaw)
+        if along < 0.0:
+            self.backward -= along
+        self.prev_xy = (x, y)
+
+    def touched_by(self, team_ix: int) -> list[int]:
+        """Robots of team ``team_ix`` that touched the ball since the restart, in order."""
+        t = self.obs.team_ix
+        return [i for i in self.since_restart if t[i] == team_ix]

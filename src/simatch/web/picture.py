@@ -1,0 +1,149 @@
+"""The pictures the pages draw, as JSON-able dicts built from what the `RunObserver` gathered.
+
+* `Picture.world(i)`: the exact world at Timeline sample ``i`` (referee console, replay page): every
+  robot and the ball, with the game state of that moment.
+* `Picture.team(team, t)`: what one team knows at time ``t`` (its coach page): its robots as they
+  perceive themselves, with their wheel speeds, role, action and flags; the obstacles each one sees;
+  the ball as seen by the robot nearest to it (as the original coach fused it); pass lines; the command
+  the team is playing.
+
+Everything is in the world frame; a team's perception is turned back from its team frame here.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .. import frames
+from ..scene.commands import name as command_name
+from .observer import RunObserver
+
+#: role and action names of StrategyInfo (the original's numbering)
+ROLE_NAMES = ["GOALIE", "ACTIVE", "PASSIVE", "MIDFIELD", "ASSISTANT", "ACIDPASSIVE", "GAZER", "BLOCK", "NOROLE",
+              "CATCHOFPASS", "PASSOFPASS"]
+ACTION_NAMES = ["Stucked", "Penalty", "CanNotSeeBall", "SeeNotDribbleBall", "TurnForShoot", "TurnForShoot_Robot",
+                "AtShootSituation", "TurnToPass", "TurnToPass_Robot", "StaticPass", "AvoidObs", "Catch_Positioned",
+                "Positioned", "Positioned_Static", "KickCoop", "KickCoop_turn", "CatchBall", "CatchBall_slow",
+                "CircleTest", "MoveWithBall", "TeleopJoy", "No_Action"]
+
+
+def _r(v: float, digits: int = 3) -> float | None:
+    v = float(v)
+    return round(v, digits) if math.isfinite(v) else None
+
+
+def _name(table: list[str], k: int) -> str:
+    return table[k] if 0 <= k < len(table) else str(k)
+
+
+class Picture:
+    def __init__(self, observer: RunObserver, spec, sent_off=lambda: ()):
+        self.obs = observer
+        self.spec = spec
+        self.teams = list(spec.teams)
+        self.signs = {team: spec.team_sign(team) for team in self.teams}
+        self.ids = {team: spec.teams[team].robot_ids() for team in self.teams}
+        self.sent_off = sent_off
+
+    def robots_meta(self) -> list[dict]:
+        out = []
+        for team in self.teams:
+            radius = float(self.spec.teams[team].model_params.get("radius", 0.25))
+            for rid in self.ids[team]:
+                out.append({"name": f"{team}/{rid}", "team": team, "id": rid, "radius": radius,
+                            "goalkeeper": rid == self.spec.teams[team].goalkeeper})
+        return out
+
+    def _off(self, game: dict | None) -> list[str]:
+        return sorted(set(self.sent_off()) | set(game["sent_off"] if game else ()))
+
+    def _commands(self) -> dict:
+        out = {}
+        for team, info in list(self.obs.coach.items()):
+            out[team] = {"mode": command_name(info.match_mode), "type": command_name(info.match_type),
+                         "max_vel": _r(info.max_vel, 2), "max_w": _r(info.max_w, 2)}
+        return out
+
+    # --- the exact world ----------------------------------------------------------------------------------
+    def world(self, i: int) -> dict:
+        tl = self.obs.timeline
+        t = tl.time(i)
+        s = tl.sample(i)
+        robots, ball = [], None
+        for k, name in enumerate(tl.names):
+            x, y, z, yaw, vx, vy = (float(v) for v in s[k])
+            if name == "ball":
+                ball = {"x": _r(x), "y": _r(y), "z": _r(z), "vx": _r(vx, 2), "vy": _r(vy, 2)}
+            else:
+                team, _, rid = name.partition("/")
+                robots.append({"name": name, "team": team, "id": int(rid), "x": _r(x), "y": _r(y),
+                               "yaw": _r(yaw), "vx": _r(vx, 2), "vy": _r(vy, 2)})
+        game = self.obs.game_at(t)
+        return {"type": "frame", "t": _r(t), "robots": robots, "ball": ball, "game": game,
+                "commands": self._commands(), "sent_off": self._off(game)}
+
+    # --- what one team knows --------------------------------------------------------------------------------
+    def team(self, team: str, t: float) -> dict:
+        sign = self.signs[team]
+        robots, obstacles, passes = [], {}, []
+        best_ball, best_dist = None, math.inf
+        game = self.obs.game_at(t)
+        off = set(self._off(game))
+        for rid in self.ids[team]:
+            vision = self.obs.vision_at(team, rid, t)
+            intent = self.obs.intent_at(team, rid, t)
+            entry: dict = {"id": rid, "name": f"{team}/{rid}", "sent_off": f"{team}/{rid}" in off, "seen": False}
+            me = None
+            if vision is not None:
+                for r in vision.robots:
+                    if r.id == rid:
+                        me = r
+                        break
+            if me is not None:
+                x, y = frames.point(sign, me.x, me.y)
+                vx, vy = frames.point(sign, me.vx, me.vy)
+                entry.update(seen=True, x=_r(x), y=_r(y), yaw=_r(frames.yaw(sign, me.yaw)), vx=_r(vx, 2),
+                             vy=_r(vy, 2), w=_r(me.w, 2), speed=_r(math.hypot(me.vx, me.vy), 2),
+                             wheels=[_r(u, 2) for u in me.wheel_speeds], valid=bool(me.valid), stuck=bool(me.stuck),
+                             holding=bool(me.holding_ball))
+                obstacles[rid] = self._obstacles(vision, sign, team)
+                b = vision.ball
+                if b.pos_known and b.distance < best_dist:
+                    best_dist = b.distance
+                    bx, by = frames.point(sign, b.x, b.y)
+                    bvx, bvy = frames.point(sign, b.vx, b.vy)
+                    best_ball = {"x": _r(bx), "y": _r(by), "z": _r(b.z), "vx": _r(bvx, 2), "vy": _r(bvy, 2),
+                                 "seen_by": rid}
+            if intent is not None:
+                entry.update(role=_name(ROLE_NAMES, intent.role), action=_name(ACTION_NAMES, intent.action),
+                             dribble=bool(intent.is_dribble))
+                tx, ty = float(intent.target_x), float(intent.target_y)
+                if math.isfinite(tx) and math.isfinite(ty):
+                    wx, wy = frames.point(sign, tx, ty)
+                    entry["target"] = [_r(wx), _r(wy)]
+                p = intent.pass_cmd
+                if p.is_valid and me is not None:
+                    cx, cy = frames.point(sign, p.catch_x, p.catch_y)
+                    passes.append({"passer": rid, "catcher": int(p.catch_id), "from": [entry["x"], entry["y"]],
+                                   "to": [_r(cx), _r(cy)], "kicked": bool(p.is_passout)})
+            robots.append(entry)
+        info = self.obs.coach.get(team)
+        command = None
+        if info is not None:
+            command = {"mode": command_name(info.match_mode), "type": command_name(info.match_type),
+                       "test_mode": int(info.test_mode), "max_vel": _r(info.max_vel, 2), "max_w": _r(info.max_w, 2)}
+        return {"type": "frame", "t": _r(t), "team": team, "robots": robots, "ball": best_ball,
+                "obstacles": obstacles, "passes": passes, "command": command, "game": game}
+
+    @staticmethod
+    def _obstacles(vision, sign: int, team: str) -> list[list[float]]:
+        o = vision.obstacles
+        out = []
+        mates = [(r.x, r.y) for r in vision.robots]
+        for k in range(len(o.x)):
+            ox, oy = float(o.x[k]), float(o.y[k])
+            if any(math.hypot(ox - mx, oy - my) < 0.1 for mx, my in mates):
+                continue                       # a teammate, not an obstacle to avoid (as the original's oppinfo)
+            wx, wy = frames.point(sign, ox, oy)
+            out.append([_r(wx), _r(wy), _r(float(o.radius[k]) if len(o.radius) > k else 0.25, 2)])
+        return out

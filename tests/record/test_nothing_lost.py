@@ -1,0 +1,130 @@
+"""Nothing lost: real processes killed (SIGKILL), interrupted (Ctrl-C) or terminated (SIGTERM) while
+recording, and truncated or damaged files given to replay."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from simatch.record import Recording, verify
+
+SIMATCH = [sys.executable, "-m", "simatch"]
+
+KILLED_CHILD = textwrap.dedent('''
+    import sys, time
+    import simatch
+    from simatch.record import Recorder
+    sim = simatch.Simulation("msl_5v5", seed=2, overrides={"judge.kind": "none"})
+    Recorder.for_run(sim, sys.argv[1])
+    for coach in sim.coaches.values():
+        coach.start_play()
+    sim.set_model_state("cyan/4", x=0.0, y=2.0)
+    sim.run(seconds=3.5)
+    print("at", sim.time, flush=True)
+    time.sleep(120)
+''')
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait(timeout=30)
+
+
+def test_sigkill_leaves_every_second_but_the_last(tmp_path):
+    path = tmp_path / "killed.mcap"
+    proc = subprocess.Popen([sys.executable, "-c", KILLED_CHILD, str(path)], stdout=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("at "), line
+        killed_at = float(line.split()[1])
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        _stop(proc)
+    rec = Recording(path)
+    assert not rec.finalised and any("not finalised" in p for p in rec.problems)
+    steps = [m.step for _, _, m in rec.messages(topics={"model_states"})]
+    assert steps == list(range(len(steps)))                    # intact from the start, no gap
+    assert steps[-1] * 0.005 >= killed_at - 1.0
+    verdict = verify(path)                                      # what is there re-simulates bit for bit
+    assert verdict.identical and not verdict.complete and verdict.compared == len(steps)
+
+
+def _run_until_recording(path, *extra):
+    proc = subprocess.Popen(SIMATCH + ["run", "msl_5v5", "--duration", "120", "--realtime", "--quiet", "--seed", "3",
+                                       "--record", str(path), *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if path.exists() and len(Recording(path).chunks) >= 3:     # two simulated seconds on disk
+            return proc
+        time.sleep(0.2)
+    _stop(proc)
+    raise AssertionError(f"the run did not start recording: {proc.stderr.read()}")
+
+
+@pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
+                                                (signal.SIGTERM, 128 + signal.SIGTERM, "terminated")])
+def test_ctrl_c_and_sigterm_finalise_the_file(tmp_path, sig, code, status):
+    path = tmp_path / "stopped.mcap"
+    proc = _run_until_recording(path)
+    try:
+        proc.send_signal(sig)
+        proc.wait(timeout=60)
+    finally:
+        _stop(proc)
+    assert proc.returncode == code, proc.stderr.read()
+    rec = Recording(path)
+    assert rec.finalised and not rec.problems
+    assert rec.end["status"] == status and rec.duration >= 1.9
+    assert verify(path).identical
+
+
+def _replay(*args):
+    return subprocess.run(SIMATCH + ["replay", *map(str, args)], capture_output=True, text=True, timeout=300)
+
+
+def test_a_truncated_file_plays_what_is_intact(recording, tmp_path):
+    path, _ = recording
+    cut = tmp_path / "cut.mcap"
+    data = path.read_bytes()
+    cut.write_bytes(data[: int(len(data) * 0.7)])
+    proc = _replay(cut, "--speed", "max")
+    assert proc.returncode == 0, proc.stderr
+    assert "breaks off at byte" in proc.stderr and "Traceback" not in proc.stderr
+    played_until = float(proc.stdout.split("..")[1].split()[0])
+    assert 0.9 <= played_until < 1.995
+    out = json.loads(_replay(cut, "--verify", "--json").stdout)
+    assert out["identical"] and not out["complete"] and out["until"] == pytest.approx(played_until)
+
+
+def test_a_damaged_chunk_is_skipped_and_named(recording, tmp_path):
+    path, _ = recording
+    bad = tmp_path / "bad.mcap"
+    shutil.copy(path, bad)
+    chunk = next(c for c in Recording(path).chunks if c.start < 500_000_000 < c.end)    # the first second
+    with open(bad, "r+b") as f:
+        f.seek(chunk.offset + 2000)
+        f.write(bytes(64))
+    proc = _replay(bad, "--speed", "max")
+    assert proc.returncode == 0, proc.stderr
+    assert f"the chunk at byte {chunk.offset}" in proc.stderr and "is damaged" in proc.stderr
+    assert "t=" in proc.stdout and proc.stdout.strip().split("..")[1].startswith("1.995")
+
+
+def test_not_a_recording_is_refused_clearly(tmp_path):
+    junk = tmp_path / "junk.mcap"
+    junk.write_text("this is not a recording")
+    proc = _replay(junk)
+    assert proc.returncode == 2 and "is not an MCAP recording" in proc.stderr and "Traceback" not in proc.stderr
+    proc = _replay(tmp_path / "missing.mcap")
+    assert proc.returncode == 2 and "no such recording" in proc.stderr

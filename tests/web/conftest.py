@@ -1,0 +1,96 @@
+"""Browser tests of the web UI: real runs, a real server, Debian's chromium driven by Playwright.
+
+The run stays in the test's thread: a test acts in the page, then advances the simulation until the
+effect shows (`run_until`), so nothing races. Screenshots go to test-artifacts/web/ (ignored by git).
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+import simatch
+from simatch.web import LiveView
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "web"
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """One headless chromium for the session (Playwright gives each launch a fresh, empty profile)."""
+    from playwright import sync_api
+    if not Path(CHROMIUM).exists():
+        pytest.fail("Debian's chromium is missing: run scripts/install-system-deps.sh")
+    with sync_api.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, timeout=60_000)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+@pytest.fixture
+def live():
+    """``live(**overrides)``: a Simulation of msl_5v5 with the web UI on a free loopback port; a coach per team
+    and no referee, unless the overrides name a judge."""
+    made = []
+
+    def make(scene: str = "msl_5v5", seed: int = 0, **overrides):
+        if scene == "msl_5v5":
+            overrides = {"judge.kind": "none", **overrides}
+        sim = simatch.Simulation(scene, seed=seed, overrides=overrides)
+        view = LiveView(sim, port=0).start()
+        made.append((sim, view))
+        return sim, view
+
+    yield make
+    for sim, view in made:
+        view.close()
+        sim.close()
+
+
+@pytest.fixture
+def open_page(browser, request):
+    """``open_page(url)``: a new page that has received its first frame; page errors fail the test."""
+    pages = []
+    errors: list[str] = []
+
+    def make(url: str, width: int = 1400, height: int = 850):
+        page = browser.new_page(viewport={"width": width, "height": height})
+        page.on("pageerror", lambda exc: errors.append(str(exc)))
+        page.goto(url)
+        pages.append(page)
+        return page
+
+    yield make
+    for page in pages:
+        page.close()
+    assert not errors, f"errors in the page: {errors}"
+
+
+def shot(page, name: str) -> Path:
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    path = ARTIFACTS / f"{name}.png"
+    page.screenshot(path=str(path))
+    return path
+
+
+def run_until(sim, condition, timeout: float = 10.0, chunk: float = 0.05) -> None:
+    """Advance the run in small chunks until ``condition()`` holds (wall-clock ``timeout``)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError("the condition did not come true in time")
+        sim.run(seconds=chunk)
+
+
+def wait_frame(page, sim_time: float, timeout: float = 10_000) -> None:
+    """Wait until the page shows the world at ``sim_time`` (or later)."""
+    page.wait_for_function("t => window.simatch && window.simatch.frame && window.simatch.frame.t >= t",
+                           arg=round(sim_time - 0.02, 3), timeout=timeout)

@@ -1,0 +1,69 @@
+"""The page protocol, the tokens and the timeline, without a browser (fast)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from simatch.scene.commands import MatchMode
+from simatch.web import protocol as P
+from simatch.web.access import Access, Grant
+from simatch.web.observer import Timeline
+
+
+def test_commands_are_read_by_name_or_number():
+    assert P.parse('{"type": "command", "cmd": "stoprobot"}', "coach").cmd == MatchMode.STOPROBOT
+    assert P.parse('{"type": "command", "cmd": 15, "id": 7}', "coach").cmd == MatchMode.STARTROBOT
+
+
+@pytest.mark.parametrize("text, role, why", [
+    ("{nope", "coach", "not JSON"),
+    ("[1, 2]", "coach", "JSON object"),
+    ('{"type": "command", "cmd": "WIN"}', "coach", "unknown game command"),
+    ('{"type": "command", "cmd": 14}', "coach", "unknown game command number"),
+    ('{"type": "command", "cmd": true}', "coach", "name"),
+    ('{"type": "command", "cmd": 0, "extra": 1}', "coach", "extra"),
+    ('{"type": "limits", "max_vel": NaN, "max_w": 3}', "coach", "max_vel"),
+    ('{"type": "limits", "max_vel": 1e9, "max_w": 3}', "coach", "max_vel"),
+    ('{"type": "test", "mode": "fly"}', "coach", "mode"),
+    ('{"type": "place_ball", "x": 0, "y": 0}', "coach", "may not send"),
+    ('{"type": "command", "cmd": 0}', "replay", "may not send"),
+    ('{"type": "teleport"}', "referee", "type"),
+    ('{"type": "timeline", "action": "rewind"}', "replay", "action"),
+    ('"' + "x" * 20000 + '"', "coach", "too long"),
+])
+def test_malformed_or_forbidden_messages_are_refused_with_a_reason(text, role, why):
+    with pytest.raises(P.ProtocolError, match=why):
+        P.parse(text, role)
+
+
+def test_an_unreadable_message_still_gets_its_answer_id():
+    assert P.message_id('{"type": "x", "id": 42}') == 42
+    assert P.message_id("{broken") is None
+    assert P.message_id('{"id": true}') is None
+
+
+def test_each_page_has_its_own_token():
+    access = Access(["cyan", "magenta"])
+    tokens = set(access.tokens.values())
+    assert len(tokens) == 4 and all(len(t) >= 16 for t in tokens)
+    assert access.grant(access.token("coach", "cyan")) == Grant("coach", "cyan")
+    assert access.grant(access.token("referee")) == Grant("referee")
+    assert access.grant("") is None and access.grant("guess") is None
+    urls = access.urls("http://127.0.0.1:1")
+    assert urls["magenta coach"] == f"http://127.0.0.1:1/coach/magenta?token={access.token('coach', 'magenta')}"
+    assert set(Access(["cyan"], live=False).tokens) == {Grant("replay")}
+
+
+def test_timeline_finds_the_sample_at_any_time_across_chunks():
+    tl = Timeline(["a", "ball"])
+    tl.CHUNK = 8
+    for k in range(30):
+        tl.append(k * 0.5, np.full((2, 6), k))
+    assert tl.count == 30 and tl.start == 0.0 and tl.end == 14.5
+    assert tl.index_at(-1.0) == 0
+    assert tl.index_at(3.9) == 7 and tl.sample(7)[0, 0] == 7
+    assert tl.index_at(4.0) == 8 and tl.index_at(99.0) == 29
+    assert json.dumps(float(tl.sample(29)[1, 5])) == "29.0"
