@@ -58,3 +58,21 @@ def test_one_process_per_robot_equals_embedded(procs):
     # one process per robot: each team's StrategyPub runs on the server, and the robots are told so
     assert all("StrategyPub runs on the server" in procs.stderr(r) for r in robots)
     assert sum(e["type"] == "process_joined" for e in dist["events"]) == 10
+
+
+@pytest.mark.slow
+def test_a_server_takes_the_options_of_run_such_as_recording(procs):
+    from simatch.record import Recording
+
+    mcap = procs.tmp / "match.mcap"
+    server = procs.server(SCENE, *chaser_overrides("cyan"), "--set", "teams.magenta.strategy=none", "--duration", "1",
+                          "--record", str(mcap))
+    team = procs.team("cyan")
+    out = procs.result(server)
+    assert procs.wait(team) == 0
+    rec = Recording(mcap)
+    topics = rec.topics()
+    assert "cyan/2/VelCmd" in topics and "cyan/2/OmniVisionInfo" in topics    # what the team sent, recorded
+    assert not any("lockstep" in t for t in topics)                             # the protocol is not data
+    assert sum(1 for _ in rec.raw(topics=["cyan/2/VelCmd"])) == 40              # every tick of 1 s
+    assert out["sim_seconds"] == 1.0

@@ -10,6 +10,7 @@ import textwrap
 import time
 
 import pytest
+import zenoh
 
 from simatch import msgs
 from simatch.bus import InProcessBus, LockstepClock
@@ -79,13 +80,14 @@ def test_bad_samples_are_dropped_and_counted_never_raised(pair):
     server.session.put(key("cyan/2/OmniVisionInfo"), b"\x00\x01\x00\x00garbage")          # does not decode
     server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(msgs.new(msgs.VelCmd)))   # another type
     server.session.put(key("cyan/3/OmniVisionInfo"), msgs.encode(msgs.new(msgs.OmniVisionInfo)))   # node fails
-    server.session.put(key("other/x"), b"no type")                                           # no encoding
+    server.session.put(key("other/x"), b"no type")                      # not a message: left out, not counted
+    server.session.put(key("other/y"), b"\x00\x01\x00\x00", encoding=zenoh.Encoding("application/cdr;nope"))
     good = msgs.new(msgs.OmniVisionInfo, tick=7)
     server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(good))
     pump_until(client, lambda: len(got) == 1)
     assert got[0].tick == 7
     assert client.stats.malformed == 4
-    assert client.stats.malformed_by_topic == {"cyan/2/OmniVisionInfo": 2, "cyan/3/OmniVisionInfo": 1, "other/x": 1}
+    assert client.stats.malformed_by_topic == {"cyan/2/OmniVisionInfo": 2, "cyan/3/OmniVisionInfo": 1, "other/y": 1}
 
 
 def test_a_verifier_refuses_samples_before_anybody_sees_them(pair):

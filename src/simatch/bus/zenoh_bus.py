@@ -278,6 +278,8 @@ class ZenohBus:
         return _Subscription(self, topic, local, self._declare_remote(_RemoteSub(topic, msgtype, callback)))
 
     def subscribe_all(self, pattern: str, callback: AnyCallback) -> _Subscription:
+        """Every message on topics matching ``pattern``, typed by its encoding; remote samples that are not
+        messages (plain bytes, as the lockstep protocol sends) are left out."""
         local = self.local.subscribe_all(pattern, callback)
         return _Subscription(self, pattern, local,
                              self._declare_remote(_RemoteSub(pattern, None, callback, any_type=True)))
@@ -374,6 +376,8 @@ class ZenohBus:
             topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
             attachment = att.to_bytes() if att is not None else None
             encoding = str(sample.encoding) if with_encoding else ""
+            if with_encoding and not encoding.startswith(_ENCODING_PREFIX):
+                return                                   # not a message (e.g. a lockstep protocol sample)
             # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
             pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
             inbox.append((rsub, topic, payload, attachment, encoding, clock(), pre))
