@@ -63,7 +63,8 @@ class FieldGeometry:
         for a in self.areas:
             if a.name == name:
                 return a
-        raise KeyError(f"the field has no area named {name!r}")
+        names = ", ".join(a.name for a in self.areas) or "none"
+        raise KeyError(f"the world has no area named {name!r} (world.areas: {names})")
 
     # --- soccer regions (side = -1 for the goal at -x, cyan's; +1 for magenta's) ---------------------
     def in_field(self, x: float, y: float, margin: float = 0.0) -> bool:

@@ -122,3 +122,20 @@ def test_frozen_robots_do_not_move_and_disabled_ones_ignore_commands(field_sim):
     sim.send_vel("magenta/2", 3.0, 0.0, 0.0)
     sim.run(seconds=0.5)
     assert abs(sim.model_states()["magenta/2"].x - x) < 0.05
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7, -1.3, 2.5])
+def test_a_frozen_robot_holds_against_a_full_traction_push(field_sim, angle):
+    sim = field_sim()
+    park_everyone_but(sim, ["cyan/2", "magenta/2"])
+    sim.set_model_state("cyan/2", x=0.0, y=0.0, yaw=0.3)
+    sim.set_model_state("magenta/2", x=0.6 * math.cos(angle), y=0.6 * math.sin(angle) + 0.05, yaw=angle + math.pi)
+    sim.simulator.set_frozen("cyan/2", True)
+    sim.take_control("magenta/2")
+    sim.send_vel("magenta/2", 3.0, 0.0, 0.0)
+    sim.run(seconds=1.0)
+    first = sim.model_states()["cyan/2"]
+    sim.run(seconds=4.0)
+    last = sim.model_states()["cyan/2"]
+    assert math.hypot(last.x, last.y) < 0.002 and abs(last.yaw - 0.3) < 0.002        # held within 2 mm
+    assert math.hypot(last.x - first.x, last.y - first.y) < 0.0005                  # and not creeping

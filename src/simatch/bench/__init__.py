@@ -12,4 +12,5 @@ BENCHMARKS: dict[str, str] = {
     "record": "simatch.bench.record:run",
     "referee": "simatch.bench.referee:run",
     "web": "simatch.bench.web:run",
+    "encirclement": "simatch.bench.encirclement:run",
 }

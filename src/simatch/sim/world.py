@@ -211,7 +211,8 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
                           name1=entry.name, name2=BALL_NAME, active=False,
                           solref=[0.02, 1.0])
         spec.add_equality(name=f"{entry.name}/freeze", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1=entry.name, name2="world", active=False)
+                          name1=entry.name, name2="world", active=False,
+                          solref=[2.0 * scene.physics.timestep, 1.0])   # as stiff as the step allows
 
     model = spec.compile()
     data = mujoco.MjData(model)

@@ -16,6 +16,8 @@ from .worldmodel import WorldModel
 SHIPPED = {
     "constant": "simatch.strategy.scripted:ConstantVelocity",
     "startpose": "simatch.strategy.scripted:StartPose",
+    "encircle": "simatch.strategy.encirclement:Chaser",
+    "flee": "simatch.strategy.encirclement:Target",
 }
 
 #: strategies that create no node in the run that loads the scene

@@ -47,6 +47,7 @@ class RobotNode(Node):
             bus.subscribe(topics.robot_topic(t, r, topics.OMNI_VISION), msgs.OmniVisionInfo, w.on_vision),
             bus.subscribe(topics.team_topic(t, topics.TEAM_STRATEGY), msgs.TeamStrategy, w.on_team),
             bus.subscribe(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, w.on_coach),
+            bus.subscribe(topics.GAME_STATE, msgs.GameState, w.on_game),
         ]
         self.pub_vel = bus.publisher(topics.robot_topic(t, r, topics.VEL_CMD), msgs.VelCmd)
         self.pub_action = bus.publisher(topics.robot_topic(t, r, topics.ACTION_CMD), msgs.ActionCmd)

@@ -1,8 +1,9 @@
 """The WorldModel of one robot: everything it knows, in its team frame (its team attacks +x).
 
 It is fed only by topics: its own perception (OmniVisionInfo), its team's fused strategy picture
-(TeamStrategy, from StrategyPub) and the game command (CoachInfo on receive_from_coach). A strategy reads
-it and never touches the simulator.
+(TeamStrategy, from StrategyPub), the game command (CoachInfo on receive_from_coach) and the judge's public
+picture of the game (GameState on game_state: stage, clock, the judge-specific result). A strategy reads it
+and never touches the simulator.
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ class WorldModel:
         self.goalkeeper = goalkeeper
         self.vision = None              # latest OmniVisionInfo
         self.coach = None               # latest CoachInfo
+        self.game = None                # latest GameState from the judge (None if it publishes none)
         self.strategies: dict = {}      # teammate id -> latest StrategyInfo (from the team picture)
         self.time = 0.0
         self.tick = 0
@@ -72,6 +74,9 @@ class WorldModel:
 
     def on_coach(self, msg) -> None:
         self.coach = msg
+
+    def on_game(self, msg) -> None:
+        self.game = msg
 
     # --- what a strategy reads ---------------------------------------------------------------------------
     @property

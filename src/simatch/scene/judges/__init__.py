@@ -10,6 +10,7 @@ SHIPPED = {
     "none": "simatch.scene.judges.base:NoJudge",
     "locomotion_test": "simatch.scene.judges.locomotion:LocomotionTest",
     "msl_referee": "simatch.scene.referee:MslReferee",
+    "encirclement": "simatch.scene.judges.encirclement:Encirclement",
 }
 
 

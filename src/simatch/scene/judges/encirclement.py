@@ -1,0 +1,226 @@
+"""The encirclement judge (paper section VII-C): chasers drive targets into a prison area.
+
+A target whose centre is in the prison (a named area of the world, ``world.areas``) is captured: the judge
+freezes it where it stands (``set_frozen``: nothing can move it any more), logs a ``capture`` event and
+tells everybody on ``game_state`` (the GameState's ``result`` lists every capture, with where it stands).
+The run ends when every target is captured (an ``all_captured`` event) or at the time limit. The judge looks
+at the world every control period, as often as the robots decide.
+
+It gives the game commands itself (STARTROBOT to both teams from the start, STOPROBOT at the end), so a
+run needs no coach. With ``scatter`` it also sets up each run: the targets start at random places of a
+rectangle, drawn from the run's seed, so that every seed is another encirclement.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Optional
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from ... import msgs
+from ...field import Area
+from ...bus import NodeContext, topics
+from ..commands import MatchMode
+from ..loader import SceneError
+from .base import Judge
+
+#: GameState is re-published at least this often even when nothing changes [s]
+GAME_STATE_PERIOD = 1.0
+
+
+class EncirclementParams(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    chasers: str = Field("cyan", description="the team that rounds the targets up")
+    targets: str = Field("magenta", description="the team whose robots are captured in the prison")
+    prison: str = Field("prison", description="name of the world area that is the prison")
+    time_limit: float = Field(300.0, gt=0.0, le=86400.0, description="the run ends after this long [s]")
+    scatter: Optional[tuple[float, float, float, float]] = Field(
+        None, description="x0, y0, x1, y1 (world frame): the targets start at random places in this rectangle, "
+                          "drawn from the run's seed, scatter_spacing or more from the prison (each axis); none: "
+                          "at their start poses")
+    scatter_spacing: float = Field(1.2, gt=0.0, le=20.0,
+                                   description="least distance between a scattered target and any other robot [m]")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.chasers == self.targets:
+            raise ValueError("chasers and targets must be different teams")
+        if self.scatter is not None:
+            x0, y0, x1, y1 = self.scatter
+            if not (x0 < x1 and y0 < y1):
+                raise ValueError("scatter: expected x0 < x1 and y0 < y1")
+        return self
+
+
+class Encirclement(Judge):
+    Params = EncirclementParams
+    name = "encirclement"
+    gives_commands = True
+
+    def __init__(self, scene, params: EncirclementParams, world):
+        super().__init__(scene, params, world)
+        spec = scene.spec
+        for key in ("chasers", "targets"):
+            team = getattr(params, key)
+            if team not in spec.teams:
+                raise SceneError(f"{scene.source}: judge.{key}: the scene has no team {team!r} "
+                                 f"(teams: {', '.join(spec.teams)})")
+        geometry = spec.world.geometry()
+        try:
+            self.prison = geometry.area(params.prison)
+        except KeyError as exc:
+            raise SceneError(f"{scene.source}: judge.prison: {exc.args[0]}") from None
+        if params.scatter is not None:
+            x0, y0, x1, y1 = params.scatter
+            reach_x, reach_y = geometry.half_length + geometry.margin, geometry.half_width + geometry.margin
+            if x0 < -reach_x or x1 > reach_x or y0 < -reach_y or y1 > reach_y:
+                raise SceneError(f"{scene.source}: judge.scatter: {list(params.scatter)} is not inside the arena "
+                                 f"(|x| <= {reach_x:g}, |y| <= {reach_y:g})")
+        # the judge looks at the world as often as the robots decide (reading the model states at every
+        # physics step would cost as much as a third of the physics)
+        self.period = spec.control.period
+        self.teams = list(spec.teams)
+        tspec = spec.teams[params.targets]
+        self.target_names = [f"{params.targets}/{rid}" for rid in tspec.robot_ids()]
+        self.team_of = {name: name.partition("/")[0] for name in spec.robot_names()}
+        self.top_speed = {team: 0.0 for team in self.teams}
+        self.captures: list[dict] = []
+        self.captured: set[str] = set()
+        self._published = -math.inf
+        self._dirty = True
+
+    @property
+    def duration(self) -> float:
+        return self.params.time_limit
+
+    # --- set-up -----------------------------------------------------------------------------------------------
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        bus = ctx.bus
+        self.pub_coach = {t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo)
+                          for t in self.teams}
+        self.pub_game = bus.publisher(topics.GAME_STATE, msgs.GameState)
+        self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+        if self.params.scatter is not None:
+            self._scatter(ctx.rng("judge", "scatter"))
+
+    def _scatter(self, rng: np.random.Generator) -> None:
+        """Place every target at a random free spot of the scatter rectangle (seeded by the run)."""
+        x0, y0, x1, y1 = self.params.scatter
+        spacing = self.params.scatter_spacing
+        p = self.prison
+        keep_out = Area("", p.x0 - spacing, p.y0 - spacing, p.x1 + spacing, p.y1 + spacing)
+        spec = self.scene.spec
+        placed = [(x, y) for team, tspec in spec.teams.items() if team != self.params.targets
+                  for x, y, _ in tspec.start]
+        for name in self.target_names:
+            for _ in range(10000):
+                x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
+                if not keep_out.contains(x, y) and all(math.hypot(x - px, y - py) >= spacing for px, py in placed):
+                    break
+            else:
+                raise SceneError(f"{self.scene.source}: judge.scatter: no room for {len(self.target_names)} targets "
+                                 f"{spacing:g} m apart in {list(self.params.scatter)}")
+            placed.append((x, y))
+            self.world.set_model_state(name, x=float(x), y=float(y), yaw=float(rng.uniform(-math.pi, math.pi)),
+                                       vx=0.0, vy=0.0, wz=0.0)
+
+    # --- judging ---------------------------------------------------------------------------------------------
+    def tick(self, now: float) -> None:
+        if not self.done:
+            states = self.world.model_states()
+            self._measure_speeds(states)
+            prison = self.prison
+            for name in self.target_names:
+                if name not in self.captured:
+                    st = states[name]
+                    if prison.contains(st.x, st.y):
+                        self._capture(now, name, st.x, st.y)
+            if len(self.captured) == len(self.target_names):
+                self._end(now)
+        self._publish_commands(now)
+        if self._dirty or now - self._published >= GAME_STATE_PERIOD - 1e-9:
+            self._publish_game(now)
+
+    def _measure_speeds(self, states: dict) -> None:
+        """Each team's top speed so far (captured targets excluded), so every run shows the speed ratio."""
+        top = self.top_speed
+        for name, team in self.team_of.items():
+            if name not in self.captured:
+                st = states[name]
+                v = math.hypot(st.vx, st.vy)
+                if v > top[team]:
+                    top[team] = v
+
+    def _capture(self, now: float, name: str, x: float, y: float) -> None:
+        self.world.set_frozen(name, True)
+        self.captured.add(name)
+        self.captures.append({"robot": name, "t": round(now, 6), "x": round(x, 4), "y": round(y, 4)})
+        team, rid = topics.split_robot_name(name)
+        n, total = len(self.captured), len(self.target_names)
+        self.pub_events.put(msgs.GameEvent(stamp=now, type="capture", team=team, robot=rid, x=x, y=y,
+                                           value=float(n), limit=float(total),
+                                           detail=f"{name} captured in the {self.prison.name} ({n} of {total})"))
+        self._dirty = True
+
+    def _end(self, now: float) -> None:
+        self.done = True
+        n = len(self.target_names)
+        self.pub_events.put(msgs.GameEvent(stamp=now, type="all_captured", team=self.params.targets, robot=0, x=0.0,
+                                           y=0.0, value=round(now, 6), limit=self.params.time_limit,
+                                           detail=f"all {n} targets captured in {now:.2f} s"))
+        self._dirty = True
+
+    # --- what the judge tells ---------------------------------------------------------------------------------
+    def _command(self) -> MatchMode:
+        return MatchMode.STOPROBOT if self.done else MatchMode.STARTROBOT
+
+    def _publish_commands(self, now: float) -> None:
+        cmd = int(self._command())
+        for pub in self.pub_coach.values():
+            pub.put(msgs.new(msgs.CoachInfo, stamp=now, match_mode=cmd, match_type=cmd))
+
+    def _publish_game(self, now: float) -> None:
+        n = len(self.captured)
+        score = np.array([n if t == self.params.chasers else 0 for t in self.teams], dtype=np.int32)
+        none = np.zeros(len(self.teams), dtype=np.int32)          # no cards, no fouls in this game
+        self.pub_game.put(msgs.new(
+            msgs.GameState, stamp=now, stage="ended" if self.done else "encirclement",
+            phase="ended" if self.done else "play", clock=now,
+            stage_time_left=max(0.0, self.params.time_limit - now), command=int(self._command()),
+            teams=list(self.teams), score=score, yellow_cards=none, red_cards=none, fouls=none,
+            result=json.dumps(self.result())))
+        self._published = now
+        self._dirty = False
+
+    def game(self) -> dict:
+        return {"stage": "ended" if self.done else "encirclement", "command": self._command().name,
+                "captured": len(self.captured), "targets": len(self.target_names),
+                "time_left_s": max(0.0, self.params.time_limit - self.ctx.now()) if hasattr(self, "ctx") else None}
+
+    def _end_reason(self) -> str | None:
+        if self.done:
+            return "all_captured"
+        if hasattr(self, "ctx") and self.ctx.now() >= self.params.time_limit - 1e-9:
+            return "time_limit"
+        return None
+
+    def result(self) -> dict:
+        last = self.captures[-1]["t"] if self.captures and len(self.captured) == len(self.target_names) else None
+        p = self.prison
+        return {
+            "targets": len(self.target_names),
+            "captured": len(self.captured),
+            "capture_time_s": last,
+            "time_limit_s": self.params.time_limit,
+            "chasers": self.params.chasers,
+            "target_team": self.params.targets,
+            "prison": {"name": p.name, "x0": p.x0, "y0": p.y0, "x1": p.x1, "y1": p.y1},
+            "captures": list(self.captures),
+            "top_speed_m_s": {team: round(v, 3) for team, v in self.top_speed.items()},
+            "end": self._end_reason(),
+        }
+
