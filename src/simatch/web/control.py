@@ -113,6 +113,7 @@ class RunControl:
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self.ended = False
         self.referee = RefereeLink(sim.bus, lambda: sim.time) if self.has_referee else None
+        self.judge_commands = bool(getattr(sim.judge, "gives_commands", False))
         self.node = sim.clock.add(ControlNode(self, sim.dt))
 
     # --- any thread ----------------------------------------------------------------------------------------
@@ -125,15 +126,16 @@ class RunControl:
 
     @property
     def has_referee(self) -> bool:
-        return bool(getattr(self.sim.judge, "gives_commands", False))
+        """The run's judge takes an operator's requests on the bus (the automatic referee does)."""
+        return getattr(self.sim.judge, "operator_topic", None) == topics.REFEREE_COMMAND
 
     def capabilities(self, grant) -> dict:
         """What a page can do in this run (it greys out the rest)."""
         ref = self.has_referee
         if grant.role == "coach":
             return {"commands": grant.team in self.sim.coaches, "referee": ref}
-        return {"referee": ref, "commands": True, "resume": ref, "auto_referee": ref, "cards": ref,
-                "award_goal": ref, "place_ball": True, "send_off": True}
+        return {"referee": ref, "commands": ref or bool(self.sim.coaches), "resume": ref, "auto_referee": ref,
+                "cards": ref, "award_goal": ref, "place_ball": True, "send_off": True}
 
     # --- the run's thread ------------------------------------------------------------------------------------
     def apply_pending(self) -> None:
@@ -189,8 +191,12 @@ class RunControl:
     def _coach(self, team: str):
         coach = self.sim.coaches.get(team)
         if coach is None:
-            raise ControlError(f"the referee gives the commands in this run: the {team} coach page only watches"
-                               if self.has_referee else f"team {team} has no coach in this run")
+            if self.has_referee:
+                raise ControlError(f"the referee gives the commands in this run: the {team} coach page only watches")
+            if self.judge_commands:
+                raise ControlError(f"the judge ({self.spec.judge.kind}) gives the commands in this run and takes "
+                                   f"no operator's requests")
+            raise ControlError(f"team {team} has no coach in this run")
         return coach
 
     @staticmethod
@@ -309,6 +315,9 @@ class RunControl:
         if off == (name in self.sent_off):
             raise ControlError(f"{name} is already {'off' if off else 'on'} the field")
         f = self.field
+        radius = float(self.spec.teams[team].model_params.get("radius", 0.25))
+        if off and 0.5 * f.margin < radius + 0.05:
+            raise ControlError(f"this field has no room beside it to park a robot (margin {f.margin:g} m)")
         slot = self.ids[team].index(rid) + 1
         x = -self.spec.team_sign(team) * (0.5 + 0.8 * slot)
         sim = self.sim

@@ -128,7 +128,7 @@ class MslReferee(OperatorTakeover, Judge):
         self.subs = [
             bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_states),
             bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
-            bus.subscribe(topics.REFEREE_COMMAND, msgs.RefereeCommand, self._on_operator),
+            bus.subscribe(self.operator_topic, msgs.RefereeCommand, self._on_operator),
         ]
 
     def stop(self) -> None:

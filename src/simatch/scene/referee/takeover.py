@@ -14,6 +14,7 @@ import json
 from dataclasses import replace
 
 from ... import msgs
+from ...bus import topics
 from ..commands import MatchMode, is_ours, parse, restart_kind
 from .operator import OperatorError, OperatorRequest, check, from_message
 from .restarts import Restart
@@ -23,6 +24,8 @@ from .state import Phase, TransitionError
 class OperatorTakeover:
     """Mixed into `MslReferee`: pause, any command, the ball, cards, sending off, automatic judging."""
 
+    #: the topic on which it takes an operator's requests (RefereeCommand), e.g. from the web referee console
+    operator_topic = topics.REFEREE_COMMAND
     #: the methods a recorded operator command may name (``judge.<method>``), for ``simatch replay --verify``
     operator_calls = ("pause", "resume", "command", "place_ball", "send_off", "return_robot", "card", "award_goal",
                       "set_auto", "request")

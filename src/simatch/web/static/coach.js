@@ -25,7 +25,8 @@ startPage(page, {
     page.commands = Boolean(h.capabilities && h.capabilities.commands);
     document.querySelectorAll(".command button, .command input, .command select").forEach((el) => { el.disabled = !page.commands; });
     $("cmdnote").textContent = page.commands ? "" : !h.capabilities ? "a recording: this page watches, nothing can be commanded"
-      : h.capabilities.referee ? "the referee gives the commands in this run: this page watches" : "this team has no coach in this run";
+      : h.capabilities.referee ? "the referee gives the commands in this run: this page watches"
+      : "the judge gives the commands in this run: this page watches";
     runStatus(h.status);
   },
   render,

@@ -89,7 +89,11 @@ function capabilities(caps) {
     $("auto").textContent = "–";
     return;
   }
-  $("mode-note").textContent = caps.referee ? "the referee's operator: every request goes to the automatic referee" : "no automatic referee: commands go to the coaches";
+  $("mode-note").textContent = caps.referee ? "the referee's operator: every request goes to the automatic referee"
+    : caps.commands ? "no automatic referee: commands go to the coaches"
+    : "the judge gives the commands in this run: the console places the ball and sends robots off";
+  ["pause", "start"].forEach((id) => { $(id).disabled = !caps.commands; });
+  document.querySelectorAll("[data-cmd]").forEach((b) => { b.disabled = !caps.commands; });
   $("resume").disabled = true;               // enabled while the referee's pause holds the game
   $("auto").disabled = !caps.auto_referee;
   $("auto").textContent = caps.auto_referee ? "on" : "none in this run";
