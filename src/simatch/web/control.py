@@ -30,7 +30,7 @@ from typing import Any, Callable
 
 from .. import frames, msgs
 from ..bus import Node, Phase, topics
-from ..scene.commands import SET_PIECES, MatchMode, TestMode, for_team
+from ..scene.commands import NEUTRAL, MatchMode, TestMode, for_team
 from . import protocol as P
 
 log = logging.getLogger(__name__)
@@ -236,7 +236,7 @@ class RunControl:
         if isinstance(m, P.Command):
             team = m.team or self.teams[0]
             self._team(team)
-            send(reply, "command", command=int(m.cmd), team=team if m.cmd in SET_PIECES else "")
+            send(reply, "command", command=int(m.cmd), team="" if m.cmd in NEUTRAL else team)
         elif isinstance(m, P.Pause):
             send(reply, "pause")
         elif isinstance(m, P.Resume):
