@@ -82,46 +82,52 @@ def linger(view: Hosted, what: str) -> None:
     view.finish()
 
 
-class ViewExtension:
-    """Registered in ``simatch.cli.run.EXTENSIONS``."""
+class _ViewOption:
+    """The ``--view`` option of a command: it adds the options and wraps what the command runs."""
+
+    group = "web UI"
+    help = ""
+    what = "the run"             # what has ended, in the last message
+    any_page = False             # whether a replay page alone is a viewer to wait for
 
     def add_arguments(self, parser) -> None:
-        group = parser.add_argument_group("live view (web UI)")
-        group.add_argument("--view", action="store_true",
-                           help="serve the coach pages, the referee console and the replay page while the "
-                                "scene runs; the run goes at real time while a page is open")
+        group = parser.add_argument_group(self.group)
+        group.add_argument("--view", action="store_true", help=self.help)
         add_view_options(group)
 
+    def start(self, target, args) -> Hosted:
+        raise NotImplementedError
+
     @contextlib.contextmanager
-    def attach(self, sim, args):
+    def attach(self, target, args):
         if not getattr(args, "view", False):
             yield None
             return
-        with start_view(sim, args.view_host, args.view_port) as view:
+        with self.start(target, args) as view:
             print_urls(view)
-            wait_for_page(view, args.view_wait)
+            wait_for_page(view, args.view_wait, any_page=self.any_page)
             yield view
-            linger(view, "the run")
+            linger(view, self.what)
 
 
-class ReplayViewExtension:
+class ViewExtension(_ViewOption):
+    """Registered in ``simatch.cli.run.EXTENSIONS``: ``simatch run SCENE --view``."""
+
+    group = "live view (web UI)"
+    help = ("serve the coach pages, the referee console and the replay page while the scene runs; the run goes "
+            "at real time while a page is open")
+
+    def start(self, sim, args) -> Hosted:
+        return start_view(sim, args.view_host, args.view_port)
+
+
+class ReplayViewExtension(_ViewOption):
     """Registered in ``simatch.cli.replay.EXTENSIONS``: ``simatch replay FILE.mcap --view``."""
 
-    def add_arguments(self, parser) -> None:
-        group = parser.add_argument_group("web UI")
-        group.add_argument("--view", action="store_true",
-                           help="serve the web UI while the recording plays: the coach pages and the referee "
-                                "console watch the replayed bus, the replay page goes through the whole "
-                                "recording (play, pause, speed, seek)")
-        add_view_options(group)
+    help = ("serve the web UI while the recording plays: the coach pages and the referee console watch the "
+            "replayed bus, the replay page goes through the whole recording (play, pause, speed, seek)")
+    what = "the playback"
+    any_page = True
 
-    @contextlib.contextmanager
-    def attach(self, player, args):
-        if not getattr(args, "view", False):
-            yield None
-            return
-        with start_recording_view(player, args.view_host, args.view_port) as view:
-            print_urls(view)
-            wait_for_page(view, args.view_wait, any_page=True)
-            yield view
-            linger(view, "the playback")
+    def start(self, player, args) -> Hosted:
+        return start_recording_view(player, args.view_host, args.view_port)
