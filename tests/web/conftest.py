@@ -86,7 +86,7 @@ def run_until(sim, condition, timeout: float = 10.0, chunk: float = 0.05) -> Non
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError(f"the condition did not come true in time (t={sim.time:.3f}; last events: "
+            raise AssertionError(f"the condition did not come true in time (t={sim.time:.3f}, pace {sim.pace}; last events: "
                                  f"{sim.events[-4:]})")
         sim.run(seconds=chunk)
 
@@ -100,6 +100,7 @@ def wait_frame(page, sim_time: float, timeout: float = 10_000) -> None:
 def drag_ball(page, sim, x: float, y: float) -> None:
     """Drag the ball on the page's field from where the simulator has it to (x, y), with the mouse."""
     ball = sim.model_states()["ball"]
+    wait_frame(page, sim.time)                   # the page shows the present (nothing moves on it any more)
     page.wait_for_function("([x, y]) => { const b = window.simatch.frame && window.simatch.frame.ball;"
                            " return b && Math.hypot(b.x - x, b.y - y) < 0.05; }", arg=[ball.x, ball.y])
     a = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [ball.x, ball.y])
