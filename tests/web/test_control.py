@@ -67,3 +67,30 @@ def test_the_referees_answer_reaches_the_page_that_asked():
         control.submit(REFEREE, P.parse('{"type": "pause"}', "referee"), waiting.append)
         control.close()                          # the run ends before the referee could answer
         assert waiting == ["the run has ended"]
+
+
+def test_the_referees_operator_requests_are_recorded_and_made_again(tmp_path):
+    """Requests from the console (on the bus, within steps) and from a script (the Python API, between steps)
+    are recorded by the referee and made again by verification at the same point."""
+    from simatch.record import Recorder, Recording, verify
+
+    path = tmp_path / "operated.mcap"
+    with simatch.Simulation("msl_5v5", seed=2) as sim, Recorder.for_run(sim, path):
+        control = RunControl(sim)
+        sim.run(seconds=0.5)
+        assert ask(sim, control, REFEREE, '{"type": "place_ball", "x": 3.0, "y": 1.0}') is None
+        assert ask(sim, control, REFEREE, '{"type": "send_off", "robot": "cyan/2"}') is None
+        sim.run(seconds=0.5)
+        sim.judge.pause()
+        sim.run(seconds=0.3)
+        sim.judge.resume()
+        sim.judge.place_ball(-2.0, 2.5)
+        sim.run(seconds=0.5)
+        assert ask(sim, control, REFEREE, '{"type": "send_off", "robot": "cyan/2", "off": false}') is None
+        sim.run(seconds=1.0)
+        control.close()
+    calls = [(m.call, m.during_step) for _, _, m in Recording(path).messages(topics={"operator"})]
+    assert calls == [("judge.request", False)] * 2 + [("judge.pause", False), ("judge.resume", False),
+                                                      ("judge.place_ball", False), ("judge.request", False)]
+    verdict = verify(path)
+    assert verdict.identical and verdict.operator_commands == 6, verdict.describe()
