@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from pathlib import Path
+from typing import Callable
 
 from ..bus import InProcessBus, topics
 from .observer import RunObserver
@@ -25,8 +25,14 @@ TOPICS = (topics.MODEL_STATES, topics.EVENTS, topics.GAME_STATE)
 
 
 class RecordingArchive:
-    def __init__(self, path: str | Path, robots: dict[str, list[int]], control_period: float):
-        self.path = Path(path)
+    """``open_recording()`` gives a reader of the file of its own (`simatch.record.Recording`'s interface:
+    ``topics()``, ``raw(topics)``, ``decode(type, data, topic)``), which the loader uses in its thread while the
+    player reads the same file in another."""
+
+    def __init__(self, open_recording: Callable[[], object], robots: dict[str, list[int]], control_period: float,
+                 name: str = "the recording"):
+        self.open_recording = open_recording
+        self.name = name
         self.bus = InProcessBus("archive")
         self.observer = RunObserver(self.bus, robots, control_period)
         self.error: str | None = None
@@ -46,10 +52,8 @@ class RecordingArchive:
         return self._done.wait(timeout)
 
     def _load(self) -> None:
-        from ..record.reader import Recording, RecordingError
-
         try:
-            rec = Recording(self.path)          # its own reader: the player reads the same file meanwhile
+            rec = self.open_recording()
             types = rec.topics()
             wanted = [t for t in TOPICS if t in types]
             pubs = {t: self.bus.publisher(t, types[t]) for t in wanted}
@@ -70,9 +74,9 @@ class RecordingArchive:
             last = rec.decode(types[topics.MODEL_STATES], skipped, topics.MODEL_STATES) if skipped else None
             if last is not None:
                 self.observer.add_states(last)
-        except (RecordingError, OSError) as exc:
+        except Exception as exc:          # a damaged file must not bring the server down: the page shows less
             self.error = str(exc)
-            log.warning("the replay page cannot load %s: %s", self.path, exc)
+            log.warning("the replay page cannot load %s: %s", self.name, exc)
         finally:
             self._done.set()
 

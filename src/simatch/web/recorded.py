@@ -35,7 +35,8 @@ class RecordingView(Hosted):
         robots = {team: spec.teams[team].robot_ids() for team in spec.teams}
         self.observer = RunObserver(player.bus, robots, spec.control.period)
         self.picture = Picture(self.observer, spec)
-        self.archive = RecordingArchive(player.recording.path, robots, spec.control.period)
+        rec = player.recording
+        self.archive = RecordingArchive(lambda: type(rec)(rec.path), robots, spec.control.period, name=str(rec.path))
         archive = Archive(self.archive.observer, Picture(self.archive.observer, spec), lambda: self.archive.complete)
         self.access = access or Access(list(spec.teams))
         name = player.recording.path.name
