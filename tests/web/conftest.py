@@ -86,7 +86,8 @@ def run_until(sim, condition, timeout: float = 10.0, chunk: float = 0.05) -> Non
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError("the condition did not come true in time")
+            raise AssertionError(f"the condition did not come true in time (t={sim.time:.3f}, pace {sim.pace}; last events: "
+                                 f"{sim.events[-4:]})")
         sim.run(seconds=chunk)
 
 
@@ -94,3 +95,31 @@ def wait_frame(page, sim_time: float, timeout: float = 10_000) -> None:
     """Wait until the page shows the world at ``sim_time`` (or later)."""
     page.wait_for_function("t => window.simatch && window.simatch.frame && window.simatch.frame.t >= t",
                            arg=round(sim_time - 0.02, 3), timeout=timeout)
+
+
+def drag_ball(page, sim, x: float, y: float) -> None:
+    """Drag the ball on the page's field from where the simulator has it to (x, y), with the mouse."""
+    ball = sim.model_states()["ball"]
+    wait_frame(page, sim.time)                   # the page shows the present (nothing moves on it any more)
+    page.wait_for_function("([x, y]) => { const b = window.simatch.frame && window.simatch.frame.ball;"
+                           " return b && Math.hypot(b.x - x, b.y - y) < 0.05; }", arg=[ball.x, ball.y])
+    a = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [ball.x, ball.y])
+    b = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [x, y])
+    box = page.locator("#field").bounding_box()
+    page.mouse.move(box["x"] + a[0], box["y"] + a[1])
+    page.mouse.down()
+    page.mouse.move(box["x"] + (a[0] + b[0]) / 2, box["y"] + (a[1] + b[1]) / 2, steps=5)
+    page.mouse.move(box["x"] + b[0], box["y"] + b[1], steps=5)
+    page.mouse.up()
+
+
+def start_request(page, message: dict) -> None:
+    """Send ``message`` from the page without waiting (the run must step for the answer to come); the answer
+    lands in ``window.answer`` ("ok" or the error's text), read it with `answer`."""
+    page.evaluate("""m => { window.answer = null;
+        window.simatch.conn.request(m).then(() => { window.answer = "ok"; }, (e) => { window.answer = e.message; }); }""",
+                  message)
+
+
+def answer(page):
+    return page.evaluate("window.answer")

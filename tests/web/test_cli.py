@@ -108,3 +108,14 @@ def test_a_busy_port_is_a_clear_error():
         out, err = _finish(proc, timeout=120)
     assert proc.returncode == 2
     assert f"cannot serve the web UI on 127.0.0.1:{port}" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv, why", [
+    (["serve", "/nowhere/match.mcap"], "no such recording"),
+    (["serve", "msl_5v5", "--speed", "2"], "--speed is for a recording"),
+    (["serve", "match.mcap", "--set", "ball.mass=1"], "--set: a recording is shown as it was recorded"),
+])
+def test_serve_refuses_what_does_not_fit_a_scene_or_a_recording(argv, why):
+    proc = _start(*argv, "--view-port", "0")
+    out, err = _finish(proc, timeout=60)
+    assert proc.returncode == 2 and why in err and "Traceback" not in err, err

@@ -6,11 +6,9 @@ import math
 
 import pytest
 
-from simatch import msgs
-from simatch.bus import topics
 from simatch.scene.commands import MatchMode
 
-from .conftest import run_until, shot, wait_frame
+from .conftest import drag_ball, run_until, shot, wait_frame
 
 TEAM_RGB = {"cyan": (0x19, 0xC6, 0xDA), "magenta": (0xE0, 0x35, 0x9C)}
 
@@ -126,32 +124,6 @@ def test_stop_button_and_space_key_stop_the_team_in_the_simulation(live, open_pa
                for e in sim.events) == 2
 
 
-def test_a_goal_shows_in_the_referee_console(live, open_page):
-    sim, view = live()
-    sim.run(seconds=0.1)
-    page = open_page(view.urls["referee"])
-    wait_frame(page, sim.time)
-    # what a referee publishes when cyan scores (the console reads game_state and events from the bus)
-    sim.set_model_state("ball", x=11.3, y=0.2, vx=0.0)
-    sim.run(seconds=0.1)
-    pub_state = sim.bus.publisher(topics.GAME_STATE, msgs.GameState)
-    pub_event = sim.bus.publisher(topics.EVENTS, msgs.GameEvent)
-    pub_event.put(msgs.GameEvent(stamp=sim.time, type="goal", team="cyan", robot=2, x=11.3, y=0.2, value=0.0,
-                                 limit=0.0, detail="cyan scores: shot by cyan/2 from (6.10, -1.20)"))
-    pub_state.put(msgs.new(msgs.GameState, stamp=sim.time, stage="first_half", clock=sim.time,
-                           command=int(MatchMode.STOPROBOT), next_command=int(MatchMode.OPP_KICKOFF),
-                           command_team="magenta", teams=["cyan", "magenta"], score=[1, 0], yellow_cards=[0, 0],
-                           red_cards=[0, 0], fouls=[0, 0], sent_off=[], last_touch="cyan"))
-    sim.run(seconds=0.2)
-    wait_frame(page, sim.time)
-    page.wait_for_function("document.querySelector('.scoreboard .score').textContent.trim() === '1 : 0'")
-    goal = page.locator("#events li.goal")
-    goal.wait_for()
-    assert "cyan" in goal.inner_text() and "shot by cyan/2" in goal.inner_text()
-    assert page.inner_text("#stage") == "first_half"
-    shot(page, "goal_in_console")
-
-
 def test_a_coach_token_cannot_command_the_other_team(live, open_page):
     sim, view = live()
     sim.run(seconds=0.1)
@@ -179,31 +151,26 @@ def test_a_coach_token_cannot_command_the_other_team(live, open_page):
     shot(bad, "refused_token")
 
 
-def test_referee_drags_the_ball_and_sends_a_robot_off(live, open_page):
+def test_without_a_referee_the_console_places_the_ball_and_sends_a_robot_off(live, open_page):
     sim, view = live()
     sim.run(seconds=0.1)
     page = open_page(view.urls["referee"])
     wait_frame(page, sim.time)
-    ball = sim.model_states()["ball"]
-    a = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [ball.x, ball.y])
-    b = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [4.0, -3.0])
-    box = page.locator("#field").bounding_box()
-    page.mouse.move(box["x"] + a[0], box["y"] + a[1])
-    page.mouse.down()
-    page.mouse.move(box["x"] + (a[0] + b[0]) / 2, box["y"] + (a[1] + b[1]) / 2, steps=5)
-    page.mouse.move(box["x"] + b[0], box["y"] + b[1], steps=5)
-    page.mouse.up()
+    assert page.locator("#auto").is_disabled() and page.locator("#resume").is_disabled()
+    assert "no automatic referee" in page.inner_text("#mode-note")
+    drag_ball(page, sim, 4.0, -3.0)
     run_until(sim, lambda: math.hypot(sim.model_states()["ball"].x - 4.0, sim.model_states()["ball"].y + 3.0) < 0.1)
-    page.click("button[data-robot='cyan/3']")
+    off = "#robots-table tr[data-robot='cyan/3'] button.sendoff"
+    page.click(off)
     run_until(sim, lambda: "cyan/3" in view.control.sent_off)
     sim.run(seconds=0.3)
     s = sim.model_states()["cyan/3"]
     assert abs(s.y) > 7.0, "a robot sent off stands beside the field"
     wait_frame(page, sim.time)
-    page.wait_for_selector("button[data-robot='cyan/3'].off")
-    page.locator("#events li.sent_off").wait_for()
+    page.wait_for_selector("#robots-table tr.off[data-robot='cyan/3']")
+    page.locator("#events li.send_off").wait_for()
     shot(page, "ball_placed_robot_sent_off")
-    page.click("button[data-robot='cyan/3']")
+    page.click(off)
     run_until(sim, lambda: "cyan/3" not in view.control.sent_off)
     assert abs(sim.model_states()["cyan/3"].y) < 7.0
 

@@ -18,6 +18,13 @@ def test_commands_are_read_by_name_or_number():
     assert P.parse('{"type": "command", "cmd": 15, "id": 7}', "coach").cmd == MatchMode.STARTROBOT
 
 
+def test_the_referee_operators_requests_are_read():
+    assert P.parse('{"type": "card", "robot": "magenta/4", "card": "yellow"}', "referee").card == "yellow"
+    assert P.parse('{"type": "send_off", "robot": "cyan/3", "seconds": 30}', "referee").seconds == 30.0
+    assert isinstance(P.parse('{"type": "resume", "id": 3}', "referee"), P.Resume)
+    assert P.parse('{"type": "award_goal", "team": "cyan"}', "referee").team == "cyan"
+
+
 @pytest.mark.parametrize("text, role, why", [
     ("{nope", "coach", "not JSON"),
     ("[1, 2]", "coach", "JSON object"),
@@ -33,6 +40,11 @@ def test_commands_are_read_by_name_or_number():
     ('{"type": "teleport"}', "referee", "type"),
     ('{"type": "timeline", "action": "rewind"}', "replay", "action"),
     ('"' + "x" * 20000 + '"', "coach", "too long"),
+    ('{"type": "card", "robot": "cyan/2", "card": "blue"}', "referee", "card"),
+    ('{"type": "card", "robot": "cyan/2", "card": "red"}', "coach", "may not send"),
+    ('{"type": "resume"}', "coach", "may not send"),
+    ('{"type": "award_goal"}', "referee", "team"),
+    ('{"type": "send_off", "robot": "cyan/2", "seconds": -5}', "referee", "seconds"),
 ])
 def test_malformed_or_forbidden_messages_are_refused_with_a_reason(text, role, why):
     with pytest.raises(P.ProtocolError, match=why):

@@ -24,6 +24,7 @@ MODEL_STATES = "model_states"
 LINK_STATES = "link_states"
 SET_MODEL_STATE = "set_model_state"
 SET_LINK_STATE = "set_link_state"
+APPLY_WRENCH = "apply_wrench"
 BALL_CONTACTS = "ball_contacts"
 
 # scene

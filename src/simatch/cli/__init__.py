@@ -19,6 +19,9 @@ SUBCOMMANDS = [
     "simatch.cli.export",
     "simatch.cli.coach",
     "simatch.cli.serve",
+    "simatch.cli.server",
+    "simatch.cli.team",
+    "simatch.cli.robot",
 ]
 
 

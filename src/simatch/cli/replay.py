@@ -21,7 +21,9 @@ from .run import Progress
 
 #: replay extensions: "module:Class" with add_arguments(parser) and attach(player, args) -> context manager;
 #: ``player`` is a `simatch.record.player.Player` (bus, scene, time, duration, pace, done, stop())
-EXTENSIONS: list[str] = []
+EXTENSIONS: list[str] = [
+    "simatch.web.view:ReplayViewExtension",
+]
 
 
 def extensions() -> list[Any]:

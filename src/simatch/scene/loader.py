@@ -168,6 +168,11 @@ def _model_of(annotation) -> Any:
 def load_scene(name_or_path: str, overrides: Mapping[str, Any] | None = None) -> LoadedScene:
     """Read, override and validate a scene. Raises ``SceneError`` naming the file and the key."""
     source, text = resolve(name_or_path)
+    return scene_from_text(text, source, overrides)
+
+
+def scene_from_text(text: str, source: str, overrides: Mapping[str, Any] | None = None) -> LoadedScene:
+    """Validate a scene given as TOML text (e.g. received from a server); ``source`` names it in errors."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

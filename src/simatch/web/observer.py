@@ -6,7 +6,7 @@ StrategyInfo, each team's CoachInfo, game_state, events) and keeps, with their s
 * a `Timeline` of the exact world (every model's x, y, z, yaw, vx, vy) sampled at about 66 Hz of
   simulated time, for the whole run: live pages draw from it, the replay page seeks through it;
 * the last second of every robot's perception and intentions, for the coach pages;
-* every event and every change of the game state.
+* every event and every change of the game state, and the cards each robot was shown.
 
 Bus callbacks run in the simulation's thread and only append; the server's thread reads. Appends of
 whole objects and reads of filled slots need no lock, so the simulation never waits for a viewer.
@@ -119,7 +119,8 @@ def game_record(msg) -> dict:
         return {team: int(v) for team, v in zip(teams, values)}
 
     return {
-        "t": round(float(msg.stamp), 3), "stage": msg.stage, "clock": round(float(msg.clock), 2),
+        "t": round(float(msg.stamp), 3), "stage": msg.stage, "phase": msg.phase, "paused": bool(msg.paused),
+        "reason": msg.reason, "clock": round(float(msg.clock), 2),
         "stage_time_left": round(float(msg.stage_time_left), 2), "command": int(msg.command),
         "next_command": int(msg.next_command), "command_name": command_name(msg.command),
         "next_command_name": command_name(msg.next_command), "command_team": msg.command_team, "teams": teams,
@@ -142,6 +143,7 @@ class RunObserver:
         self.timeline: Timeline | None = None
         self.events: list[dict] = []
         self.games: list[tuple[float, dict]] = []
+        self.cards: dict[str, list[int]] = {}      # robot -> [yellow, red] cards shown so far
         keep = max(4, int(math.ceil(self.RECENT / control_period)) + 1)
         self.vision: dict[tuple[str, int], deque] = {}
         self.intent: dict[tuple[str, int], deque] = {}
@@ -171,6 +173,11 @@ class RunObserver:
         if t < self._next_sample:
             return
         self._next_sample = t + self.SAMPLE_PERIOD - 1e-9
+        self.add_states(msg)
+
+    def add_states(self, msg) -> None:
+        """Append a ModelStates sample whatever the sampling rate (e.g. a recording's very last one)."""
+        t = float(msg.stamp)
         if self.timeline is None:
             self.timeline = Timeline(list(msg.name))
         m = len(msg.name)
@@ -184,6 +191,9 @@ class RunObserver:
 
     def _on_event(self, ev) -> None:
         self.events.append(event_record(ev))
+        if ev.type in ("yellow_card", "red_card") and ev.team:
+            counts = self.cards.setdefault(f"{ev.team}/{int(ev.robot)}", [0, 0])
+            counts[ev.type == "red_card"] += 1
 
     def _on_game(self, msg) -> None:
         self.games.append((float(msg.stamp), game_record(msg)))

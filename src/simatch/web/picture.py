@@ -65,7 +65,9 @@ class Picture:
         return out
 
     # --- the exact world ----------------------------------------------------------------------------------
-    def world(self, i: int) -> dict:
+    def world(self, i: int, live: bool = False) -> dict:
+        """The exact world at Timeline sample ``i``; ``live`` adds what only the present has (each robot's
+        cards so far)."""
         tl = self.obs.timeline
         t = tl.time(i)
         s = tl.sample(i)
@@ -79,8 +81,11 @@ class Picture:
                 robots.append({"name": name, "team": team, "id": int(rid), "x": _r(x), "y": _r(y),
                                "yaw": _r(yaw), "vx": _r(vx, 2), "vy": _r(vy, 2)})
         game = self.obs.game_at(t)
-        return {"type": "frame", "t": _r(t), "robots": robots, "ball": ball, "game": game,
-                "commands": self._commands(), "sent_off": self._off(game)}
+        out = {"type": "frame", "t": _r(t), "robots": robots, "ball": ball, "game": game,
+               "commands": self._commands(), "sent_off": self._off(game)}
+        if live:
+            out["cards"] = {name: list(c) for name, c in list(self.obs.cards.items())}
+        return out
 
     # --- what one team knows --------------------------------------------------------------------------------
     def team(self, team: str, t: float) -> dict:

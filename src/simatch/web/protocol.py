@@ -90,13 +90,38 @@ class PlaceBall(_Msg):
 
 
 class SendOff(_Msg):
+    """Send a robot off (``off``: true) or bring it back. With a referee, ``seconds`` limits the time off
+    (default: until brought back)."""
+
     type: Literal["send_off"]
-    robot: str = Field(min_length=3, max_length=64)
+    robot: str = Field(min_length=3, max_length=64, description="TEAM/ID, e.g. cyan/3")
     off: bool = True
+    seconds: Optional[float] = Field(None, gt=0.0, le=86400.0)
 
 
 class Pause(_Msg):
+    """Halt the game (with a referee: its pause, the clock stands still; without: STOP to every team)."""
+
     type: Literal["pause"]
+
+
+class Resume(_Msg):
+    """Carry on where the referee's pause halted the game (a run with a referee)."""
+
+    type: Literal["resume"]
+
+
+class Card(_Msg):
+    type: Literal["card"]
+    robot: str = Field(min_length=3, max_length=64, description="TEAM/ID")
+    card: Literal["yellow", "red"]
+
+
+class AwardGoal(_Msg):
+    """A goal the operator awards (a correction the referee logs as such)."""
+
+    type: Literal["award_goal"]
+    team: str = Field(min_length=1, max_length=64)
 
 
 class AutoReferee(_Msg):
@@ -112,14 +137,15 @@ class Timeline(_Msg):
     value: float = Field(0.0, ge=-1e9, le=1e9)
 
 
-ClientMessage = Annotated[Union[Command, Limits, Test, PlaceBall, SendOff, Pause, AutoReferee, Timeline],
+ClientMessage = Annotated[Union[Command, Limits, Test, PlaceBall, SendOff, Pause, Resume, Card, AwardGoal, AutoReferee,
+                                Timeline],
                           Field(discriminator="type")]
 _adapter = TypeAdapter(ClientMessage)
 
 #: what each page may send
 ALLOWED = {
     "coach": {"command", "limits", "test"},
-    "referee": {"command", "limits", "place_ball", "send_off", "pause", "auto_referee"},
+    "referee": {"command", "limits", "place_ball", "send_off", "pause", "resume", "card", "award_goal", "auto_referee"},
     "replay": {"timeline"},
 }
 

@@ -13,6 +13,7 @@ those bursts into smooth motion.
 from __future__ import annotations
 
 import asyncio
+import bisect
 import json
 import logging
 import socket
@@ -44,7 +45,9 @@ class ReplayCursor:
     speed: float = 1.0
     playing: bool = True
 
-    def apply(self, m: P.Timeline, start: float, end: float) -> None:
+    def apply(self, m: P.Timeline, start: float, end: float, follow: float | None = None) -> None:
+        """Carry out a timeline request; ``live`` jumps to ``follow`` (the moment the live pages show) or,
+        without live pages, to the end."""
         if m.action == "play":
             if self.t >= end:
                 self.t = start
@@ -54,7 +57,8 @@ class ReplayCursor:
         elif m.action == "seek":
             self.t = min(max(m.value, start), end)
         elif m.action == "live":
-            self.t, self.playing, self.speed = end, True, 1.0
+            t = end if follow is None else follow
+            self.t, self.playing, self.speed = min(max(t, start), end), True, 1.0
         elif m.action == "speed":
             if not 0.05 <= m.value <= 32.0:
                 raise P.ProtocolError("speed must be between 0.05 and 32")
@@ -66,6 +70,16 @@ class ReplayCursor:
             if self.t >= end and not growing:
                 self.playing = False
         self.t = max(self.t, start)
+
+
+@dataclass
+class Archive:
+    """What the replay pages go through: the timeline of the whole run and its pictures — the live run's
+    own observer, or one loaded from a recording (``complete`` says when it stops growing)."""
+
+    observer: RunObserver
+    picture: Picture
+    complete: Callable[[], bool]
 
 
 @dataclass(eq=False)
@@ -84,16 +98,20 @@ class Client:
 
 class ViewServer:
     """Serves the pages of one run. ``control`` carries out commands (None: a run that cannot be
-    commanded from here, e.g. a recording); ``on_viewers(n)`` hears how many live pages are open."""
+    commanded from here, e.g. a recording, and ``read_only`` says why); ``archive`` is what replay pages go
+    through (default: the live observer's timeline); ``on_viewers(n)`` hears how many live pages are open."""
 
     def __init__(self, observer: RunObserver, picture: Picture, access: Access, hello: dict,
                  control=None, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
-                 on_viewers: Callable[[int], None] | None = None):
+                 on_viewers: Callable[[int], None] | None = None, archive: Archive | None = None,
+                 read_only: str = "this server shows a run it does not command"):
         self.observer = observer
         self.picture = picture
         self.access = access
         self.hello = hello
         self.control = control
+        self.read_only = read_only
+        self.archive = archive or Archive(observer, picture, lambda: self.status == "ended")
         self.host, self.port = host, port
         self.fps = fps
         self.on_viewers = on_viewers
@@ -246,26 +264,35 @@ class ViewServer:
             if role == "coach":
                 pic = self.picture.team(team, self.live_t)
             else:
-                pic = self.picture.world(tl.index_at(self.live_t))
+                pic = self.picture.world(tl.index_at(self.live_t), live=True)
             pic["status"] = self.status
             frames[(role, team)] = json.dumps(pic, separators=(",", ":"))
         self._live = frames
         self._seq += 1
 
     def _replay_frame(self, c: Client, dt: float) -> str | None:
-        tl = self.observer.timeline
+        archive = self.archive
+        tl = archive.observer.timeline
         if tl is None or tl.count == 0:
             return None
         cur = c.cursor
-        cur.advance(dt, tl.start, tl.end, growing=self.status != "ended")
-        pic = self.picture.world(tl.index_at(cur.t))
-        events = self.observer.events
-        n = len(events)
-        recent = [e for e in events[max(0, n - 2000):n] if e["t"] <= cur.t + 1e-6][-RECENT_EVENTS:]
+        complete = archive.complete()
+        cur.advance(dt, tl.start, tl.end, growing=not complete)
+        pic = archive.picture.world(tl.index_at(cur.t))
+        events = archive.observer.events
+        n = bisect.bisect_right(events, cur.t + 1e-6, key=lambda e: e["t"])
+        recent = events[max(0, n - RECENT_EVENTS):n]
         pic.update(status=self.status, events=recent,
                    timeline={"start": round(tl.start, 3), "end": round(tl.end, 3), "t": round(cur.t, 3),
-                             "speed": cur.speed, "playing": cur.playing})
+                             "speed": cur.speed, "playing": cur.playing, "complete": complete,
+                             "follow": None if self.live_t is None else round(self.live_t, 3)})
         return json.dumps(pic, separators=(",", ":"))
+
+    def _timeline(self, c: Client, m: P.Timeline) -> None:
+        tl = self.archive.observer.timeline
+        start, end = (tl.start, tl.end) if tl is not None else (0.0, 0.0)
+        c.cursor.apply(m, start, end, follow=self.live_t)
+        c.wake.set()
 
     # --- one page --------------------------------------------------------------------------------------------
     async def _ws(self, request):
@@ -279,14 +306,14 @@ class ViewServer:
             return ws
         c = Client(ws, grant)
         if grant.role == "replay":
-            tl = self.observer.timeline
+            tl = self.archive.observer.timeline
             c.cursor = ReplayCursor(t=tl.start if tl is not None else 0.0)
         self.clients.add(c)
         self._viewers_changed()
         sender = asyncio.create_task(self._send_loop(c))
         try:
             hello = dict(self.hello, type="hello", role=grant.role, team=grant.team, status=self.status,
-                         capabilities=self.control.capabilities() if self.control is not None else None)
+                         capabilities=self.control.capabilities(grant) if self.control is not None else None)
             await ws.send_str(json.dumps(hello))
             c.wake.set()
             async for msg in ws:
@@ -349,12 +376,10 @@ class ViewServer:
             m = P.parse(text, c.grant.role)
             P.authorize(m, c.grant.role, c.grant.team)
             if isinstance(m, P.Timeline):
-                tl = self.observer.timeline
-                c.cursor.apply(m, tl.start if tl else 0.0, tl.end if tl else 0.0)
-                c.wake.set()
+                self._timeline(c, m)
                 error = None
             elif self.control is None:
-                error = "this server shows a run it does not command"
+                error = self.read_only
             else:
                 error = await self._submit(c.grant, m)
         except P.ProtocolError as exc:

@@ -95,6 +95,7 @@ class MslReferee(OperatorTakeover, Judge):
         self._ball_row = -1
         self._out_latched = False
         self._ops: deque = deque()
+        self._ticked = -1                             # the step of the last tick
         self._begun = False
         self.coach_info: dict[str, object] = {}
         self._published = (-1, -math.inf)           # (game version, time) of the last GameState
@@ -122,11 +123,12 @@ class MslReferee(OperatorTakeover, Judge):
                           for t in self.teams}
         self.pub_state = bus.publisher(topics.GAME_STATE, msgs.GameState)
         pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+        self.pub_operator = bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
         self.log = EventLog(pub_events.put)
         self.subs = [
             bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_states),
             bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
-            bus.subscribe(topics.REFEREE_COMMAND, msgs.RefereeCommand, self._on_operator),
+            bus.subscribe(self.operator_topic, msgs.RefereeCommand, self._on_operator),
         ]
 
     def stop(self) -> None:
@@ -141,11 +143,9 @@ class MslReferee(OperatorTakeover, Judge):
         if self._begun:
             self.m.touches.on_contacts(msg)
 
-    def _on_operator(self, msg) -> None:
-        self._ops.append(msg)
-
     # --- every physics step ----------------------------------------------------------------------------------
     def tick(self, now: float) -> None:
+        self._ticked = self.ctx.step()
         msg = self._states
         if msg is None:
             return

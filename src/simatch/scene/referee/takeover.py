@@ -1,12 +1,20 @@
 """Operator takeover, the referee's side: the Python API an operator calls (``sim.judge.pause()``, ...), the
 requests that come on the bus, and what each does to the match. Requests are checked in `operator.py`;
 every one is logged as an ``operator`` event naming who made it, before it takes effect.
+
+Every request is also published as an `OperatorCommand` on the ``operator`` topic (when somebody, e.g. a
+recorder, listens), so that ``simatch replay --verify`` can make it again at the same point of the run:
+an API call as ``judge.<method>``, a request from the bus as ``judge.request`` with the RefereeCommand's
+fields, stamped with the step at whose referee tick it is carried out.
 """
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
+from ... import msgs
+from ...bus import topics
 from ..commands import MatchMode, is_ours, parse, restart_kind
 from .operator import OperatorError, OperatorRequest, check, from_message
 from .restarts import Restart
@@ -16,12 +24,20 @@ from .state import Phase, TransitionError
 class OperatorTakeover:
     """Mixed into `MslReferee`: pause, any command, the ball, cards, sending off, automatic judging."""
 
+    #: the topic on which it takes an operator's requests (RefereeCommand), e.g. from the web referee console
+    operator_topic = topics.REFEREE_COMMAND
+    #: the methods a recorded operator command may name (``judge.<method>``), for ``simatch replay --verify``
+    operator_calls = ("pause", "resume", "command", "place_ball", "send_off", "return_robot", "card", "award_goal",
+                      "set_auto", "request")
+
     def pause(self, source: str = "api") -> None:
         """Halt the game: robots STOP, the clock stands still, until `resume`."""
         self.operate(OperatorRequest("pause", source=source))
+        self._record("pause", source=source)
 
     def resume(self, source: str = "api") -> None:
         self.operate(OperatorRequest("resume", source=source))
+        self._record("resume", source=source)
 
     def command(self, cmd: int | str, team: str = "", spot: tuple[float, float] | None = None,
                 source: str = "api") -> None:
@@ -30,26 +46,62 @@ class OperatorTakeover:
         mode = parse(cmd) if isinstance(cmd, str) else MatchMode(cmd)
         x, y = spot if spot is not None else (None, None)
         self.operate(OperatorRequest("command", team=team, command=mode, x=x, y=y, source=source))
+        self._record("command", cmd=int(mode), team=team, spot=None if spot is None else [x, y], source=source)
 
     def place_ball(self, x: float, y: float, source: str = "api") -> None:
         self.operate(OperatorRequest("place_ball", x=float(x), y=float(y), source=source))
+        self._record("place_ball", x=float(x), y=float(y), source=source)
 
     def send_off(self, robot: str, seconds: float | None = None, source: str = "api") -> None:
         """Send ``robot`` (e.g. ``"cyan/3"``) off for ``seconds`` (None: until `return_robot`)."""
         self.operate(OperatorRequest("send_off", robot=robot, seconds=seconds, source=source))
+        self._record("send_off", robot=robot, seconds=seconds, source=source)
 
     def return_robot(self, robot: str, source: str = "api") -> None:
         self.operate(OperatorRequest("return", robot=robot, source=source))
+        self._record("return_robot", robot=robot, source=source)
 
     def card(self, robot: str, colour: str, source: str = "api") -> None:
         self.operate(OperatorRequest("card", robot=robot, card=colour, source=source))
+        self._record("card", robot=robot, colour=colour, source=source)
 
     def award_goal(self, team: str, source: str = "api") -> None:
         self.operate(OperatorRequest("goal", team=team, source=source))
+        self._record("award_goal", team=team, source=source)
 
     def set_auto(self, on: bool, source: str = "api") -> None:
         """Automatic judging on, or off (manual mode: the referee only proposes, the operator commands)."""
         self.operate(OperatorRequest("auto", on=bool(on), source=source))
+        self._record("set_auto", on=bool(on), source=source)
+
+    def request(self, **fields) -> None:
+        """Take a request as if it came on the bus (RefereeCommand fields): carried out at the next tick.
+        This is how ``simatch replay --verify`` makes a recorded bus request again."""
+        self._ops.append(msgs.new(msgs.RefereeCommand, **fields))
+
+    def _on_operator(self, msg) -> None:
+        """A RefereeCommand from the bus: queued for the next tick (and recorded as ``judge.request``)."""
+        self._ops.append(msg)
+        pub = getattr(self, "pub_operator", None)
+        if pub is not None and pub.active:
+            fields = {k: getattr(msg, k) for k in msgs.RefereeCommand.__dataclass_fields__
+                      if k != "stamp" and not k.startswith("__")}
+            step = self.ctx.step()
+            if self._ticked == step:          # after this step's tick: carried out at the next one
+                step += 1
+            self._publish_operator("request", step, _plain(fields))
+
+    def _record(self, method: str, **args) -> None:
+        """Publish an API request that was carried out (when anybody listens), made between two steps or by a
+        node that ticks after the referee within a step."""
+        pub = getattr(self, "pub_operator", None)
+        if pub is not None and pub.active:
+            step = self.ctx.step()
+            self._publish_operator(method, step, args, during_step=self._ticked == step)
+
+    def _publish_operator(self, method: str, step: int, args: dict, during_step: bool = False) -> None:
+        self.pub_operator.put(msgs.OperatorCommand(stamp=self.ctx.now(), step=step, during_step=during_step,
+                                                   call=f"judge.{method}", target="", args=json.dumps(args)))
 
     @property
     def auto(self) -> bool:
@@ -177,3 +229,13 @@ class OperatorTakeover:
         g = self.m.game
         g.auto = req.on
         g.version += 1
+
+
+def _plain(fields: dict) -> dict:
+    """Message fields as JSON values (numpy scalars and bytes become numbers and text)."""
+    out = {}
+    for k, v in fields.items():
+        if hasattr(v, "item"):
+            v = v.item()
+        out[k] = v
+    return out

@@ -1,5 +1,5 @@
 // The coach machine of one team (paper section V-A): command area, display area, status area.
-import { EventLog, FieldView, clock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
+import { EventLog, FieldView, clock, gameClock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, test: { mode: "move", point: null } };
@@ -22,6 +22,11 @@ startPage(page, {
     } else {
       page.view.hello = h;
     }
+    page.commands = Boolean(h.capabilities && h.capabilities.commands);
+    document.querySelectorAll(".command button, .command input, .command select").forEach((el) => { el.disabled = !page.commands; });
+    $("cmdnote").textContent = page.commands ? "" : !h.capabilities ? "a recording: this page watches, nothing can be commanded"
+      : h.capabilities.referee ? "the referee gives the commands in this run: this page watches"
+      : "the judge gives the commands in this run: this page watches";
     runStatus(h.status);
   },
   render,
@@ -38,7 +43,7 @@ setPieceButtons($("setpieces"));
 document.querySelectorAll("[data-cmd]").forEach((b) => { b.onclick = () => command(b.dataset.cmd); });
 document.addEventListener("keydown", (ev) => {
   // Space stops the team, always (as the original coach), unless typing in a field
-  if (ev.code === "Space" && !["INPUT", "SELECT", "TEXTAREA"].includes(document.activeElement.tagName)) {
+  if (ev.code === "Space" && page.commands && !["INPUT", "SELECT", "TEXTAREA"].includes(document.activeElement.tagName)) {
     ev.preventDefault();
     command("STOPROBOT");
   }
@@ -93,7 +98,7 @@ function render(f) {
     $("mtype").textContent = f.command.type !== f.command.mode ? `(after ${f.command.type})` : "";
   }
   const g = f.game;
-  $("gamebox").innerHTML = g ? `score <b>${g.teams.map((t) => g.score[t]).join(" : ")}</b> · ${g.stage} <b>${clock(g.clock)}</b>` : "";
+  $("gamebox").innerHTML = g ? `score <b>${g.teams.map((t) => g.score[t]).join(" : ")}</b> · ${g.stage} <b>${clock(gameClock(g, f.t))}</b>` : "";
   const rows = f.robots.map((r) => {
     const tr = document.createElement("tr");
     tr.dataset.robot = r.id;

@@ -1,5 +1,5 @@
 // The replay page: a timeline to play, pause, change speed and seek through the run.
-import { EventLog, FieldView, clock, startPage, teamColor } from "/static/simatch.js";
+import { EventLog, FieldView, clock, gameClock, startPage, teamColor } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, seeking: false };
@@ -8,7 +8,11 @@ const log = new EventLog($("events"), 50);
 startPage(page, {
   onHello(h) {
     page.hello = h;
-    $("scene").textContent = h.scene;
+    $("scene").textContent = h.source === "recording" ? `${h.scene} · ${h.recording}` : h.scene;
+    if (h.source === "recording") {
+      $("live").textContent = "Now playing";
+      $("live").title = "jump to the moment the live pages show (the recording playing on the bus)";
+    }
     if (!page.view) page.view = new FieldView($("field"), h);
     else page.view.hello = h;
   },
@@ -41,8 +45,9 @@ function render(f) {
   const seek = $("seek");
   seek.min = tl.start; seek.max = tl.end;
   if (!page.seeking) seek.value = tl.t;
-  $("runstatus").textContent = f.status === "ended" ? "recording complete" : "run in progress";
-  $("stage").textContent = g ? `${g.stage} ${clock(g.clock)}` : "–";
+  $("runstatus").textContent = h.source === "recording" ? (tl.complete ? "recording" : "loading the recording…")
+    : (tl.complete ? "run complete" : "run in progress");
+  $("stage").textContent = g ? `${g.stage} ${clock(gameClock(g, f.t))}` : "–";
   const teams = h.teams.map((t) => t.name);
   const score = (t) => (g && g.score[t] !== undefined ? g.score[t] : 0);
   $("scoreboard").innerHTML = teams.length === 2

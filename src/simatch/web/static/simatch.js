@@ -95,6 +95,12 @@ export function clock(t) {
   return `${m}:${s.toFixed(1).padStart(4, "0")}`;
 }
 
+// The match clock at frame time t: the referee publishes its game state on every change and once a second;
+// its clock runs on in between (in stoppages too), except while the operator's pause holds it.
+export function gameClock(g, t) {
+  return g.paused ? g.clock : g.clock + Math.max(0, t - g.t);
+}
+
 export function teamColor(hello, team) {
   const t = hello.teams.find((x) => x.name === team);
   const c = t ? t.color : team;

@@ -1,0 +1,149 @@
+"""Distributed benchmarks (``simatch bench``): the server runs in this process, teams and robots in their own
+processes, over Zenoh on loopback.
+
+* ``distributed_rtt``: the command round trip between the server and one robot process (lockstep): from
+  the server opening a tick (perception and game command sent) to the robot's commands and answer being
+  back, p50/p99; and the transit of the commands alone (answer sent -> received).
+* ``distributed_lockstep``: the real-time factor of a 5v5 lockstep run with two team processes, against the
+  same run embedded (same scene, seed and interventions: the digests must be equal).
+* ``distributed_realtime``: a 5v5 ``--realtime`` run with one process per robot (11 processes): the
+  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and the
+  commands' transit alone.
+
+The load: msl_5v5 with the plumbing strategy (``startpose``) in play, every robot thrown across the field every
+4 s so that all ten keep driving back to their start poses. (A team strategy that plays the ball will be a
+heavier load for the strategies, not for the bus.)
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from ..scene.loader import load_scene
+
+SCENE = "msl_5v5"
+OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose",
+             "perception.position_noise": 0.02}
+SCATTER_EVERY = 4.0
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _scatter(sim, k: int) -> None:
+    """Throw every robot somewhere else (deterministic), so that they all drive back."""
+    rng = np.random.default_rng(k)
+    for name in sim.simulator.robot_names:
+        sim.set_model_state(name, x=float(rng.uniform(-9, 9)), y=float(rng.uniform(-6, 6)),
+                            yaw=float(rng.uniform(-math.pi, math.pi)), vx=0.0, vy=0.0, wz=0.0)
+
+
+def _play(sim, seconds: float) -> float:
+    """Start the coaches and run ``seconds``, scattering the robots every few seconds; returns wall seconds."""
+    for coach in sim.coaches.values():
+        coach.start_play()
+    wall = 0.0
+    k = 0
+    while sim.time < seconds - 1e-9:
+        _scatter(sim, k)
+        t0 = time.perf_counter()
+        sim.run(seconds=min(SCATTER_EVERY, seconds - sim.time))
+        wall += time.perf_counter() - t0
+        k += 1
+    return wall
+
+
+@contextlib.contextmanager
+def _server(realtime: bool = False, overrides: dict | None = None):
+    from ..distributed.server import Server
+
+    folder = tempfile.TemporaryDirectory(prefix="simatch-bench-")
+    endpoint = f"tcp/127.0.0.1:{_port()}"
+    run = f"bench{os.getpid()}"
+    server = Server(load_scene(SCENE, {**OVERRIDES, **(overrides or {})}), seed=0, listen=[endpoint], run=run,
+                    realtime=realtime, team_timeout=120, credentials_dir=folder.name, say=lambda text: None)
+    procs: list[subprocess.Popen] = []
+
+    def launch(kind: str, who: str) -> None:
+        team = who.split("/")[0]
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "simatch", kind, who, "--connect", endpoint, "--run", run, "--key",
+             os.path.join(folder.name, f"{team}.key")], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+
+    try:
+        yield server, launch
+    finally:
+        server.finish(linger=2.0)
+        server.close()
+        for p in procs:
+            try:
+                p.wait(10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait(10)
+        folder.cleanup()
+
+
+def rtt(seconds: float | None = None) -> dict:
+    seconds = seconds or 20.0
+    only_one = {"teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]], "teams.magenta.strategy": "none"}
+    with _server(overrides=only_one) as (server, launch):
+        launch("robot", "cyan/2")
+        server.wait_for_teams()
+        _play(server.sim, seconds)
+        st = server.stats()
+    return {"distributed_rtt_p50_ms": st["latency_p50_ms"], "distributed_rtt_p99_ms": st["latency_p99_ms"],
+            "distributed_rtt_transit_p50_ms": st["transit_p50_ms"],
+            "distributed_rtt_transit_p99_ms": st["transit_p99_ms"], "distributed_rtt_samples": st["answers"]}
+
+
+def lockstep(seconds: float | None = None) -> dict:
+    from ..simulation import Simulation
+
+    seconds = seconds or 20.0
+    with Simulation(load_scene(SCENE, OVERRIDES), seed=0) as sim:
+        embedded_wall = _play(sim, seconds)
+        embedded_digest = sim.state_digest()
+    with _server() as (server, launch):
+        launch("team", "cyan")
+        launch("team", "magenta")
+        server.wait_for_teams()
+        wall = _play(server.sim, seconds)
+        digest = server.sim.state_digest()
+        st = server.stats()
+    rtf, emb = seconds / wall, seconds / embedded_wall
+    return {"distributed_lockstep_rtf": round(rtf, 2), "distributed_lockstep_embedded_rtf": round(emb, 2),
+            "distributed_lockstep_ratio": round(rtf / emb, 3), "distributed_lockstep_digest_equal": digest == embedded_digest,
+            "distributed_lockstep_latency_p50_ms": st["latency_p50_ms"],
+            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"], "distributed_lockstep_missed": st["missed"]}
+
+
+def realtime(seconds: float | None = None) -> dict:
+    seconds = seconds or 30.0
+    with _server(realtime=True) as (server, launch):
+        for team in ("cyan", "magenta"):
+            for rid in range(1, 6):
+                launch("robot", f"{team}/{rid}")
+        server.wait_for_teams()
+        wall = _play(server.sim, seconds)
+        st = server.stats()
+    return {"distributed_realtime_processes": 1 + st["processes"], "distributed_realtime_rtf": round(seconds / wall, 4),
+            "distributed_realtime_latency_p50_ms": st["latency_p50_ms"],
+            "distributed_realtime_latency_p99_ms": st["latency_p99_ms"],
+            "distributed_realtime_latency_max_ms": st["latency_max_ms"],
+            "distributed_realtime_transit_p50_ms": st["transit_p50_ms"],
+            "distributed_realtime_transit_p99_ms": st["transit_p99_ms"], "distributed_realtime_missed": st["missed"],
+            "distributed_realtime_late_steps": st["realtime_late_steps"],
+            "distributed_realtime_max_lag_ms": st["realtime_max_lag_ms"]}

@@ -1,0 +1,541 @@
+"""The Zenoh transport: the bus interface across processes and machines (eclipse-zenoh).
+
+A `ZenohBus` is an in-process bus for the nodes of this process plus a bridge to the other processes of the
+run, over one Zenoh session. Topics become key expressions ``simatch/<run>/<topic>``; messages travel as CDR
+(the same bytes as rosbag2/ROS 2, written and read by `cdr`), with the type in the Zenoh encoding
+(``application/cdr;<type>``).
+
+* Local delivery is exactly the in-process bus: synchronous, in subscription order, no serialisation. A
+  message is encoded only when a subscriber in another process matches it.
+* Remote samples never run a node's callback in a Zenoh thread. They are queued, in the order they arrived
+  (callbacks run directly in the network thread, so one link keeps its order), and the owner of the bus
+  delivers them from its own thread with `pump` (or `take` and `deliver`, to look at them first, as the
+  lockstep server does). Node code therefore needs no locks, and a run stays deterministic.
+* A payload that does not decode, or that makes the receiving callback fail, is dropped and counted
+  (`BusStats.malformed`); a sample the `verifier` refuses (fair play) is dropped and counted (`refused`).
+  Neither ever stops the process.
+
+Safe defaults (`zenoh_config`): multicast and gossip scouting off, explicit endpoints only, and Zenoh's
+shared memory off (a process that is killed would leave segments in /dev/shm). Sessions are always closed,
+also at interpreter exit: a session left open with subscribers hangs the interpreter.
+"""
+
+from __future__ import annotations
+
+import atexit
+import json
+import logging
+import re
+import threading
+import time
+import weakref
+from collections import deque
+from typing import Any, Callable, Iterable, Optional, Sequence
+
+import zenoh
+from zenoh.handlers import Callback as _ZCallback
+
+from .. import msgs
+from . import cdr
+from . import topics as _topics
+from .base import AnyCallback, BusStats, Callback
+from .inproc import InProcessBus
+
+log = logging.getLogger(__name__)
+
+#: the endpoint a server listens on and a team connects to when none is given: loopback only
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+_RUN_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")
+_ENCODING_PREFIX = "application/cdr;"
+
+#: (topic, payload, attachment) -> None if acceptable, else why it is refused
+Verifier = Callable[[str, bytes, Optional[bytes]], Optional[str]]
+#: (topic, payload) -> attachment that proves who sent it
+Signer = Callable[[str, bytes], bytes]
+
+
+class TransportError(RuntimeError):
+    """The Zenoh session could not be opened or used (e.g. nothing listens at the endpoint)."""
+
+
+def check_run_name(run: str) -> str:
+    if not _RUN_NAME.match(run or ""):
+        raise ValueError(f"run name {run!r}: use letters, digits, '_', '-' or '.' (it becomes a key chunk)")
+    return run
+
+
+def zenoh_config(mode: str = "peer", listen: Sequence[str] = (), connect: Sequence[str] = (),
+                 user: str | None = None, password: str | None = None, users_file: str | None = None,
+                 access_control: dict | None = None) -> zenoh.Config:
+    """A Zenoh configuration with simatch's safe defaults: no scouting, only the endpoints given, no shared
+    memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'."""
+    conf = zenoh.Config()
+
+    def put(key: str, value: Any) -> None:
+        conf.insert_json5(key, json.dumps(value))
+
+    put("mode", mode)
+    put("scouting/multicast/enabled", False)
+    put("scouting/gossip/enabled", False)
+    put("listen/endpoints", list(listen))
+    put("connect/endpoints", list(connect))
+    put("transport/shared_memory/enabled", False)
+    if user is not None or users_file is not None:
+        usrpwd: dict[str, Any] = {"user": user, "password": password}
+        if users_file is not None:
+            usrpwd["dictionary_file"] = users_file
+        put("transport/auth/usrpwd", usrpwd)
+    if access_control is not None:
+        put("access_control", access_control)
+    return conf
+
+
+_SESSIONS: "weakref.WeakSet[ZenohBus]" = weakref.WeakSet()
+
+
+@atexit.register
+def _close_all() -> None:
+    for bus in list(_SESSIONS):
+        bus.close()
+
+
+def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh.Session:
+    """Open a session, retrying for up to ``wait`` seconds (e.g. while the server starts)."""
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            return zenoh.open(conf)
+        except zenoh.ZError as exc:
+            if time.monotonic() >= deadline:
+                first = str(exc).split(" at ", 1)[0]
+                raise TransportError(f"cannot open the Zenoh session{' ' + what if what else ''}: {first}") from None
+            time.sleep(0.2)
+
+
+class _RemoteSub:
+    """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
+
+    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes",
+                 "__weakref__")
+
+    def __init__(self, topic: str, msgtype: Any, callback, any_type: bool = False, raw: bool = False,
+                 verify: bool = True, wakes: bool = True):
+        self.topic = topic
+        self.msgtype = None if msgtype is None else msgs.msgtype_name(msgtype)
+        self.callback = callback
+        self.any_type = any_type
+        self.raw = raw
+        self.verify = verify
+        self.wakes = wakes
+        self.closed = False
+        self.zsub = None
+
+
+class _Subscription:
+    __slots__ = ("topic", "_local", "_remote", "_bus")
+
+    def __init__(self, bus: "ZenohBus", topic: str, local, remote: _RemoteSub):
+        self.topic = topic
+        self._bus = bus
+        self._local = local
+        self._remote = remote
+
+    def close(self) -> None:
+        if self._local is not None:
+            self._local.close()
+        self._bus._drop_remote(self._remote)
+
+
+class _Publisher:
+    __slots__ = ("topic", "msgtype", "_local", "_z", "_bus", "matching", "_listener")
+
+    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub):
+        self.topic = topic
+        self.msgtype = msgtype
+        self._bus = bus
+        self._local = local
+        self._z = zpub
+        #: whether a subscriber in another process matches (kept up to date by Zenoh's matching listener)
+        self.matching = False
+
+        def on_status(status) -> None:
+            self.matching = status.matching
+
+        self._listener = zpub.declare_matching_listener(_ZCallback(on_status, indirect=False))
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Ask Zenoh now whether remote subscribers match (the listener may not have spoken yet)."""
+        try:
+            self.matching = self._z.matching_status.matching
+        except zenoh.ZError:           # the session is closing
+            self.matching = False
+
+    @property
+    def active(self) -> bool:
+        return self.matching or self._bus.eager or self._local.active
+
+    def put(self, msg: Any) -> None:
+        local = self._local
+        if local._callbacks:
+            local.put(msg)
+        bus = self._bus
+        if self.matching or bus.eager:
+            data = cdr.encode(msg)
+            signer = bus.signer
+            try:
+                if signer is None:
+                    self._z.put(data)
+                else:
+                    self._z.put(data, attachment=signer(self.topic, data))
+            except zenoh.ZError as exc:
+                log.debug("put on %s failed: %s", self.topic, exc)
+                return
+            bus.stats.published += 1
+
+    def close(self) -> None:
+        for thing in (self._listener, self._z):
+            try:
+                thing.undeclare()
+            except zenoh.ZError:
+                pass
+
+
+class ZenohBus:
+    """Publish/subscribe between the nodes of this process and, over Zenoh, every other process of ``run``.
+
+    ``signer`` adds to each sample this process sends the proof of who sent it; ``verifier`` checks each
+    sample received (the server's fair play); ``on_refused(topic, why)`` and ``on_malformed(topic, what)``
+    hear about dropped samples (to log them).
+
+    A message is encoded and sent only while a remote subscriber matches (Zenoh's matching status, kept up
+    to date by a listener). Right after a publisher is declared Zenoh may not know yet who listens: a
+    process that must not lose its first messages either waits for a point where it knows (the lockstep
+    client calls `refresh_matching` once it has joined) or is ``eager``: it sends everything and counts
+    every publisher as active (fine for a short-lived tool).
+
+    ``drop_when_congested``: a sample for a process that does not read (stopped, hung) is dropped after a
+    short wait instead of blocking the sender: a server must never be stalled by one team.
+
+    ``prepare_on_arrival``: check and decode each data sample in Zenoh's receiving thread as it arrives
+    (while the owner waits for the rest: a lockstep server decodes one team's commands while the other
+    team still thinks), rather than when the owner delivers it (which leaves the cores to the teams while
+    they answer: better for the latency of a real-time run with many processes).
+
+    ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
+    a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
+    switch on a machine where cores are scarce."""
+
+    def __init__(self, session: zenoh.Session, run: str = "default", *, signer: Signer | None = None,
+                 verifier: Verifier | None = None,
+                 on_refused: Callable[[str, str], None] | None = None,
+                 on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
+                 wake_on_data: bool = True, drop_when_congested: bool = False, prepare_on_arrival: bool = True,
+                 owns_session: bool = True):
+        self.run = check_run_name(run)
+        self.session = session
+        self.stats = BusStats()
+        self.local = InProcessBus(run)
+        self.signer = signer
+        self.verifier = verifier
+        self.on_refused = on_refused
+        self.on_malformed = on_malformed
+        self.eager = eager
+        self.wake_on_data = wake_on_data
+        self.prepare_on_arrival = prepare_on_arrival
+        self.congestion = zenoh.CongestionControl.DROP if drop_when_congested else zenoh.CongestionControl.BLOCK
+        self.prefix = f"{_topics.PREFIX}/{run}/"
+        self._owns = owns_session
+        self._inbox: deque = deque()
+        self._wake = threading.Event()
+        self._remote: list[_RemoteSub] = []
+        self._pubs: dict[str, _Publisher] = {}
+        self._declared: list[Any] = []        # tokens, queryables, liveliness subscribers
+        self._closed = False
+        _SESSIONS.add(self)
+
+    # --- the Bus interface -------------------------------------------------------------------------------
+    def key(self, topic: str) -> str:
+        return self.prefix + topic
+
+    def publisher(self, topic: str, msgtype: Any) -> _Publisher:
+        pub = self._pubs.get(topic)
+        local = self.local.publisher(topic, msgtype)     # raises TypeError on a type clash
+        if pub is not None:
+            return pub
+        name = msgs.msgtype_name(msgtype)
+        zpub = self.session.declare_publisher(
+            self.key(topic), encoding=zenoh.Encoding(_ENCODING_PREFIX + name),
+            congestion_control=self.congestion, reliability=zenoh.Reliability.RELIABLE,
+            allowed_destination=zenoh.Locality.REMOTE)
+        pub = _Publisher(self, topic, msgtype, local, zpub)
+        self._pubs[topic] = pub
+        return pub
+
+    def subscribe(self, topic: str, msgtype: Any, callback: Callback) -> _Subscription:
+        local = self.local.subscribe(topic, msgtype, callback)
+        return _Subscription(self, topic, local, self._declare_remote(_RemoteSub(topic, msgtype, callback)))
+
+    def subscribe_all(self, pattern: str, callback: AnyCallback) -> _Subscription:
+        """Every message on topics matching ``pattern``, typed by its encoding; remote samples that are not
+        messages (plain bytes, as the lockstep protocol sends) are left out."""
+        local = self.local.subscribe_all(pattern, callback)
+        return _Subscription(self, pattern, local,
+                             self._declare_remote(_RemoteSub(pattern, None, callback, any_type=True)))
+
+    def topics(self) -> dict[str, str]:
+        return self.local.topics()
+
+    def refresh_matching(self) -> None:
+        """Bring every publisher's knowledge of remote subscribers up to date now (e.g. when a process
+        joins: its subscriptions arrived before its join)."""
+        for pub in self._pubs.values():
+            pub.refresh()
+
+    # --- raw samples (protocols built on the bus, e.g. lockstep) -------------------------------------------
+    def subscribe_raw(self, topic: str, callback: Callable[[str, bytes, Optional[bytes], float], None],
+                      verify: bool = True) -> _Subscription:
+        """Remote samples on ``topic`` as ``callback(topic, payload, attachment, arrival)``, delivered in
+        order with every other sample (``arrival``: `time.monotonic()` when it came in: the
+        same clock in every process of a machine)."""
+        return _Subscription(self, topic, None, self._declare_remote(_RemoteSub(topic, None, callback, raw=True,
+                                                                                 verify=verify)))
+
+    def put_raw(self, topic: str, payload: bytes) -> None:
+        """Send bytes to the other processes (signed like every sample of this process)."""
+        attachment = self.signer(topic, payload) if self.signer is not None else None
+        self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
+                         allowed_destination=zenoh.Locality.REMOTE)
+        self.stats.published += 1
+
+    def declare_token(self, topic: str) -> Any:
+        """A liveliness token: the others see it vanish when this process ends, however it ends."""
+        token = self.session.liveliness().declare_token(self.key(topic))
+        self._declared.append(token)
+        return token
+
+    def watch_liveliness(self, pattern: str, callback: Callable[[str, bool], None]) -> None:
+        """``callback(topic, alive)`` (in order with the other samples) when a token appears or vanishes;
+        tokens present now are reported too."""
+        rsub = _RemoteSub(pattern, None, lambda topic, payload, att, t: callback(topic, payload == b"+"),
+                          raw=True, verify=False)
+        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+
+        def on_sample(sample) -> None:
+            alive = b"+" if sample.kind == zenoh.SampleKind.PUT else b"-"
+            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.monotonic(), None))
+            wake.set()
+
+        rsub.zsub = self.session.liveliness().declare_subscriber(self.key(pattern), _ZCallback(on_sample,
+                                                                                                indirect=False),
+                                                                 history=True)
+        self._remote.append(rsub)
+
+    def serve(self, topic: str, callback: Callable[[Any], None]) -> None:
+        """A queryable on ``topic``: each query is queued and ``callback(query)`` runs in `deliver`, which
+        must answer it (``query.reply(query.key_expr, payload)`` or ``query.reply_err(...)``)."""
+        def answer(topic: str, query, attachment, arrival: float) -> None:
+            try:
+                callback(query)
+            finally:
+                query.drop()           # the query ends once answered
+
+        rsub = _RemoteSub(topic, None, answer, raw=True, verify=False)
+        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+
+        def on_query(query) -> None:
+            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.monotonic(), None))
+            wake.set()
+
+        self._declared.append(self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False),
+                                                             complete=True))
+
+    def query(self, topic: str, payload: bytes, timeout: float = 5.0) -> list[tuple[bool, bytes]]:
+        """Ask the queryables on ``topic``; each answer as (ok, bytes). Blocks up to ``timeout`` seconds."""
+        attachment = self.signer(topic, payload) if self.signer is not None else None
+        out = []
+        for reply in self.session.get(self.key(topic), payload=payload, attachment=attachment, timeout=timeout):
+            if reply.ok is not None:
+                out.append((True, reply.ok.payload.to_bytes()))
+            else:
+                out.append((False, reply.err.payload.to_bytes()))
+        return out
+
+    # --- receiving ------------------------------------------------------------------------------------------
+    def _declare_remote(self, rsub: _RemoteSub) -> _RemoteSub:
+        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+        clock = time.monotonic
+        with_encoding = rsub.any_type
+        prepare = None if rsub.raw or not self.prepare_on_arrival else self._prepare
+        if not rsub.raw:
+            rsub.wakes = self.wake_on_data
+
+        def on_sample(sample) -> None:
+            att = sample.attachment
+            topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
+            attachment = att.to_bytes() if att is not None else None
+            encoding = str(sample.encoding) if with_encoding else ""
+            if with_encoding and not encoding.startswith(_ENCODING_PREFIX):
+                return                                   # not a message (e.g. a lockstep protocol sample)
+            # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
+            pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
+            inbox.append((rsub, topic, payload, attachment, encoding, clock(), pre))
+            if rsub.wakes:
+                wake.set()
+
+        rsub.zsub = self.session.declare_subscriber(self.key(rsub.topic), _ZCallback(on_sample, indirect=False),
+                                                    allowed_origin=zenoh.Locality.REMOTE)
+        self._remote.append(rsub)
+        return rsub
+
+    def _prepare(self, rsub: _RemoteSub, topic: str, payload: bytes, attachment, encoding: str):
+        """(why refused or None, message or None, decoding error or None) of a data sample."""
+        try:
+            if self.verifier is not None and rsub.verify:
+                why = self.verifier(topic, payload, attachment)
+                if why is not None:
+                    return (why, None, None)
+            return (None, cdr.decode(rsub.msgtype or _type_of(encoding), payload), None)
+        except msgs.MessageError as exc:
+            return (None, None, exc)
+        except Exception:          # never fail in Zenoh's thread: the owner will try again and report
+            return None
+
+    def _drop_remote(self, rsub: _RemoteSub) -> None:
+        rsub.closed = True
+        if rsub in self._remote:
+            self._remote.remove(rsub)
+            if rsub.zsub is not None and not self._closed:
+                try:
+                    rsub.zsub.undeclare()
+                except zenoh.ZError:
+                    pass
+
+    def wait(self, timeout: float | None) -> bool:
+        """Block until a remote sample that wakes is queued (True; see ``wake_on_data``) or ``timeout``
+        seconds pass (False)."""
+        if self._inbox:
+            return True
+        self._wake.clear()
+        if self._inbox:
+            return True
+        return self._wake.wait(timeout)
+
+    def take(self, timeout: float | None = 0.0) -> list:
+        """Every queued remote sample, oldest first, waiting up to ``timeout`` seconds for one if none is."""
+        if not self._inbox and timeout != 0.0:
+            self.wait(timeout)
+        inbox = self._inbox
+        out = []
+        while inbox:
+            out.append(inbox.popleft())
+        return out
+
+    def deliver(self, items: Iterable) -> int:
+        """Check, decode and hand samples (from `take`) to their callbacks, in the given order."""
+        n = 0
+        stats = self.stats
+        for rsub, topic, payload, attachment, encoding, arrival, pre in items:
+            if rsub.closed:
+                continue
+            if rsub.raw:
+                if rsub.verify and self.verifier is not None:
+                    why = self.verifier(topic, payload, attachment)
+                    if why is not None:
+                        self._refused(topic, why)
+                        continue
+                rsub.callback(topic, payload, attachment, arrival)
+                n += 1
+                continue
+            if pre is None:
+                pre = self._prepare(rsub, topic, payload, attachment, encoding) or (None, None, None)
+            why, msg, error = pre
+            if why is not None:
+                self._refused(topic, why)
+                continue
+            try:
+                if error is not None:
+                    raise error
+                if msg is None:
+                    msg = cdr.decode(rsub.msgtype or _type_of(encoding), payload)
+                if rsub.any_type:
+                    rsub.callback(topic, msg)
+                else:
+                    rsub.callback(msg)
+            except Exception as exc:     # a bad payload (or one a node cannot use) never stops the process
+                self._malformed(topic, exc)
+                continue
+            stats.delivered += 1
+            n += 1
+        return n
+
+    def _refused(self, topic: str, why: str) -> None:
+        self.stats.refused += 1
+        if self.on_refused is not None:
+            self.on_refused(topic, why)
+        else:
+            log.warning("refused a sample on %s: %s", topic, why)
+
+    def _malformed(self, topic: str, exc: Exception) -> None:
+        stats = self.stats
+        stats.malformed += 1
+        stats.malformed_by_topic[topic] = stats.malformed_by_topic.get(topic, 0) + 1
+        what = str(exc) if isinstance(exc, msgs.MessageError) else f"{type(exc).__name__} while handling it: {exc}"
+        if self.on_malformed is not None:
+            self.on_malformed(topic, what)
+        elif stats.malformed_by_topic[topic] in (1, 10, 100, 1000):
+            log.warning("dropped a malformed sample on %s (%d so far): %s", topic, stats.malformed_by_topic[topic],
+                        what)
+
+    def pump(self, timeout: float | None = 0.0) -> int:
+        """Deliver every queued remote sample (waiting up to ``timeout`` for one); returns how many."""
+        return self.deliver(self.take(timeout))
+
+    # --- lifetime --------------------------------------------------------------------------------------------
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        for rsub in self._remote:
+            rsub.closed = True
+        self.local.close()
+        try:
+            for thing in reversed(self._declared):
+                try:
+                    thing.undeclare()
+                except zenoh.ZError:
+                    pass
+            for rsub in self._remote:
+                if rsub.zsub is not None:
+                    try:
+                        rsub.zsub.undeclare()
+                    except zenoh.ZError:
+                        pass
+            for pub in self._pubs.values():
+                pub.close()
+        finally:
+            self._remote.clear()
+            self._declared.clear()
+            self._pubs.clear()
+            if self._owns:
+                try:
+                    self.session.close()
+                except zenoh.ZError:
+                    pass
+            _SESSIONS.discard(self)
+
+    def __enter__(self) -> "ZenohBus":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _type_of(encoding: str) -> str:
+    if not encoding.startswith(_ENCODING_PREFIX):
+        raise msgs.MessageError(f"sample with encoding {encoding or '(none)'!r}: expected {_ENCODING_PREFIX}<type>")
+    name = encoding[len(_ENCODING_PREFIX):]
+    if name not in msgs.typestore.types:
+        raise msgs.MessageError(f"sample of unknown type {name!r}")
+    return name

@@ -1,0 +1,234 @@
+"""`TeamProcess`: one team's nodes (``simatch team``), or one robot's (``simatch robot``), in their own process.
+
+It needs no scene file: it asks the server for the scene (text, overrides, seed), builds the very nodes
+the embedded run builds (`build_team`: the same RobotNode, WorldModel, strategy and, for a whole team, its
+StrategyPub) and ticks them on a `LockstepClock` whose step follows the server's ``lockstep/tick``
+messages. The nodes talk over a `ZenohBus`, so their code is the embedded code.
+
+A team process may bring its own strategy (``strategy``, ``params``): they override the scene's
+``teams.<team>.strategy`` and ``strategy_params`` here only.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+from ..bus import LockstepClock
+from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_session, zenoh_config
+from ..strategy import NO_NODES
+from ..strategy.team import build_team
+from . import credentials, protocol
+
+log = logging.getLogger(__name__)
+
+
+class ClientError(RuntimeError):
+    """The process cannot take part in the run (no server, refused join, no strategy...)."""
+
+
+def _stderr(text: str) -> None:
+    print(f"simatch: {text}", file=sys.stderr, flush=True)
+
+
+class TeamProcess:
+    def __init__(self, team: str, robots: Sequence[int] | None = None, *, connect: str = DEFAULT_ENDPOINT,
+                 run: str = "default", key: str | Path | None = None, strategy: str | None = None,
+                 params: Mapping[str, Any] | None = None, wait: float = 30.0, server_timeout: float = 5.0,
+                 say: Callable[[str], None] = _stderr):
+        """``robots``: the robot ids to run (None: the whole team, with its StrategyPub); ``wait``: how
+        long to wait for the server (and for a robot held by a dead process to be released)."""
+        self.team = team
+        self.robots = list(robots) if robots is not None else None
+        self.kind = "team" if robots is None else "robot"
+        self.connect = connect
+        self.run_name = run
+        self.key = Path(key) if key else credentials.default_dir(run) / f"{team}.key"
+        self.strategy = strategy
+        self.params = dict(params or {})
+        self.wait = wait
+        self.server_timeout = server_timeout
+        self.say = say
+        self.proc = protocol.new_proc_id()
+        self.ticks = 0
+        self.skipped = 0              # ticks skipped because a newer one was already there
+        self.ended: str | None = None
+        self.joined = False
+        self._server_alive = False
+        self._server_lost_at: float | None = None
+        self.bus: ZenohBus | None = None
+        self.stats = None             # the bus's counters (kept after it closes)
+        self.clock: LockstepClock | None = None
+
+    @property
+    def what(self) -> str:
+        return self.team if self.robots is None else ",".join(f"{self.team}/{r}" for r in self.robots)
+
+    # --- setting up ------------------------------------------------------------------------------------------
+    def open(self) -> None:
+        cred = self._credential()
+        if cred.name not in (self.team, credentials.ADMIN):
+            raise ClientError(f"{self.key} is the credential of {cred.name}, not of team {self.team}")
+        conf = zenoh_config("client", connect=[self.connect], user=cred.name, password=cred.secret)
+        try:
+            session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
+        except TransportError as exc:
+            raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
+        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), wake_on_data=False)
+        self.stats = self.bus.stats
+        try:
+            self._setup()
+        except BaseException:
+            self.close()
+            raise
+
+    def _credential(self) -> credentials.Credential:
+        """This team's credential; the server writes it when it starts, so wait for it a while."""
+        deadline = time.monotonic() + self.wait
+        while True:
+            try:
+                return credentials.read(self.key)
+            except credentials.CredentialError:
+                if self.key.exists() or time.monotonic() >= deadline:
+                    raise
+            time.sleep(0.2)
+
+    def _setup(self) -> None:
+        bus = self.bus
+        offer = self._ask_scene()
+        local: dict[str, Any] = {}
+        if self.strategy:
+            local[f"teams.{self.team}.strategy"] = self.strategy
+        for k, v in self.params.items():
+            local[f"teams.{self.team}.strategy_params.{k}"] = v
+        scene = protocol.scene_from_offer(offer, local)
+        spec = scene.spec
+        if self.team not in spec.teams:
+            raise ClientError(f"the server's scene has no team {self.team!r} (teams: {', '.join(spec.teams)})")
+        if spec.teams[self.team].strategy in NO_NODES:
+            raise ClientError(f"the server's scene does not say which strategy {self.team} plays "
+                              f"(teams.{self.team}.strategy = {spec.teams[self.team].strategy!r}): give --strategy")
+        self.scene = scene
+        self.seed = int(offer["seed"])
+        self.mode = offer.get("mode", protocol.LOCKSTEP)
+        nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
+        self.clock = LockstepClock(bus, spec.physics.timestep, self.seed)
+        for node in nodes:
+            self.clock.add(node)
+        bus.subscribe_raw(protocol.TICK, self._on_tick, verify=False)
+        bus.subscribe_raw(protocol.END, self._on_end, verify=False)
+        bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
+        bus.declare_token(protocol.alive_topic(self.team, self.proc))
+        self._join()
+
+    def _ask_scene(self) -> dict:
+        deadline = time.monotonic() + self.wait
+        while True:
+            replies = self.bus.query(protocol.SCENE, b"{}", timeout=2.0)
+            for ok, payload in replies:
+                if ok:
+                    return protocol.loads(payload, "scene", "seed")
+            if time.monotonic() >= deadline:
+                raise ClientError(f"no simatch server for run {self.run_name!r} answers at {self.connect}")
+            time.sleep(0.2)
+
+    def _join(self) -> None:
+        robots = self.robots if self.robots is not None else self.scene.spec.teams[self.team].robot_ids()
+        req = {"proc": self.proc, "team": self.team, "robots": robots, "kind": self.kind,
+               "strategy_pub": self.robots is None, "host": socket.gethostname(), "pid": os.getpid()}
+        deadline = time.monotonic() + self.wait
+        while True:
+            why = "no answer"
+            for ok, payload in self.bus.query(protocol.JOIN, protocol.dumps(req), timeout=5.0):
+                if ok:
+                    # the server's subscriptions (and one it made for this join, e.g. a StrategyPub) were
+                    # declared to this session before the answer: from now on, what matches is known
+                    self.bus.refresh_matching()
+                    self.joined = True
+                    where = "; its team's StrategyPub runs on the server" if protocol.loads(payload).get(
+                        "strategy_pub_on_server") else ""
+                    self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{where})")
+                    return
+                try:
+                    why = protocol.loads(payload, "error")["error"]
+                except protocol.ProtocolError:
+                    why = payload.decode(errors="replace")
+            retry = why == "no answer" or "already served" in why    # a dead predecessor not yet noticed
+            if not retry or time.monotonic() >= deadline:
+                raise ClientError(f"the server refused {self.what}: {why}")
+            time.sleep(0.25)
+
+    # --- the lockstep protocol ---------------------------------------------------------------------------------
+    def _on_tick(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
+        if not self.joined or self.ended:
+            return
+        try:
+            msg = protocol.loads(payload, "step", "tick")
+            step, tick = int(msg["step"]), int(msg["tick"])
+        except (protocol.ProtocolError, TypeError, ValueError) as exc:
+            log.warning("ignored a bad tick message: %s", exc)
+            return
+        clock = self.clock
+        clock.step_index = step
+        clock.step()
+        self.bus.put_raw(protocol.ack_topic(self.team),
+                         protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+        self.ticks += 1
+
+    def _on_end(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
+        try:
+            self.ended = str(protocol.loads(payload, "reason")["reason"])
+        except protocol.ProtocolError:
+            self.ended = "ended"
+
+    def _on_server(self, topic: str, alive: bool) -> None:
+        self._server_alive = alive
+        self._server_lost_at = None if alive else time.monotonic()
+
+    # --- running -------------------------------------------------------------------------------------------------
+    def serve(self) -> str:
+        """Answer the server's ticks until it ends the run (returns its reason); ClientError if it vanishes."""
+        bus = self.bus
+        while not self.ended:
+            bus.deliver(self._latest_tick_only(bus.take(0.25)))
+            lost = self._server_lost_at
+            if lost is not None and time.monotonic() - lost > self.server_timeout:
+                raise ClientError(f"lost the server at {self.connect} (gone for {self.server_timeout:g} s)")
+        return self.ended
+
+    def _latest_tick_only(self, items: list) -> list:
+        """A process that fell behind (it was stopped, or slow) skips the ticks the server has already
+        closed: of several queued ticks only the newest is answered (every input is still delivered)."""
+        ticks = [n for n, item in enumerate(items) if item[1] == protocol.TICK]
+        if len(ticks) < 2:
+            return items
+        self.skipped += len(ticks) - 1
+        stale = set(ticks[:-1])
+        return [item for n, item in enumerate(items) if n not in stale]
+
+    def close(self) -> None:
+        """Leave (saying so while the server is there to hear it) and close the session."""
+        bus = self.bus
+        if bus is None:
+            return
+        self.bus = None
+        try:
+            if self.joined and self._server_alive:
+                bus.put_raw(protocol.bye_topic(self.team), protocol.dumps({"proc": self.proc}))
+                time.sleep(0.05)      # let the goodbye leave before the session closes
+            if self.clock is not None:
+                self.clock.close()
+        finally:
+            bus.close()
+
+    def run(self) -> str:
+        self.open()
+        try:
+            return self.serve()
+        finally:
+            self.close()

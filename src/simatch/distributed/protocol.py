@@ -1,0 +1,102 @@
+"""The lockstep protocol between the server and the team/robot processes: its keys and messages.
+
+Data flows on the documented topics (OmniVisionInfo, receive_from_coach, TeamStrategy in; VelCmd, ActionCmd,
+StrategyInfo out). On top of them, a few protocol keys (relative to the run, like every topic), whose
+payloads are small JSON objects so that a client in any language can speak them:
+
+    lockstep/scene         query   -> the scene offer: scene text, overrides, seed, mode (no registration)
+    lockstep/join          query   -> register a process serving some robots: {"ok": true, "step"} or an error
+    lockstep/tick          server  -> {"step", "tick"}: every input of this control tick has been sent; answer it
+    <team>/lockstep/ack    client  -> {"proc", "tick", "sent"}: this process has sent its commands for that
+                                     tick (``sent``, optional: its monotonic clock, to measure the transit)
+    <team>/lockstep/bye    client  -> {"proc"}: this process leaves on purpose
+    lockstep/end           server  -> {"reason"}: the run is over; every client exits
+    lockstep/alive/server, <team>/lockstep/alive/<proc>   liveliness tokens (vanish when a process dies)
+
+Zenoh keeps the order of the samples of one session on one link, so an ``ack`` arrives after the commands
+it closes, and ``tick`` after the perception and game command it opens.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import uuid
+from typing import Any, Mapping
+
+from ..scene.loader import LoadedScene, scene_from_text
+
+SCENE = "lockstep/scene"
+JOIN = "lockstep/join"
+TICK = "lockstep/tick"
+END = "lockstep/end"
+SERVER_ALIVE = "lockstep/alive/server"
+ACKS = "*/lockstep/ack"
+BYES = "*/lockstep/bye"
+ALIVE = "*/lockstep/alive/*"
+
+#: how the server paces the run
+LOCKSTEP, REALTIME = "lockstep", "realtime"
+
+
+class ProtocolError(ValueError):
+    """A protocol message that is not what the protocol says."""
+
+
+def ack_topic(team: str) -> str:
+    return f"{team}/lockstep/ack"
+
+
+def bye_topic(team: str) -> str:
+    return f"{team}/lockstep/bye"
+
+
+def alive_topic(team: str, proc: str) -> str:
+    return f"{team}/lockstep/alive/{proc}"
+
+
+def team_of(topic: str) -> str:
+    return topic.split("/", 1)[0]
+
+
+def new_proc_id() -> str:
+    """A process id unique on the network: host, pid and a random part (a restarted node gets a new one)."""
+    host = "".join(c if c.isalnum() or c in "-_" else "-" for c in socket.gethostname())[:24] or "host"
+    return f"{host}-{os.getpid()}-{uuid.uuid4().hex[:6]}"
+
+
+def dumps(obj: Mapping[str, Any]) -> bytes:
+    return json.dumps(obj, separators=(",", ":")).encode()
+
+
+def loads(payload: bytes, *required: str) -> dict:
+    """A protocol message; ProtocolError if it is not a JSON object with the ``required`` keys."""
+    try:
+        obj = json.loads(payload)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ProtocolError(f"not JSON: {exc}") from None
+    if not isinstance(obj, dict):
+        raise ProtocolError("not a JSON object")
+    missing = [k for k in required if k not in obj]
+    if missing:
+        raise ProtocolError(f"missing {', '.join(missing)}")
+    return obj
+
+
+# --- the scene offer: what a team process needs to build its nodes exactly as the embedded run does ----------
+def scene_offer(scene: LoadedScene, seed: int, run: str, mode: str) -> dict:
+    return {"scene": {"text": scene.text, "source": scene.source, "overrides": scene.overrides},
+            "seed": int(seed), "run": run, "mode": mode}
+
+
+def scene_from_offer(offer: Mapping[str, Any], local: Mapping[str, Any] | None = None) -> LoadedScene:
+    """The server's scene, validated here as it was there, with ``local`` overrides on top (a team's own
+    strategy and parameters)."""
+    try:
+        sc = offer["scene"]
+        text, source, overrides = sc["text"], sc["source"], dict(sc["overrides"])
+    except (KeyError, TypeError) as exc:
+        raise ProtocolError(f"scene offer without {exc}") from None
+    overrides.update(local or {})
+    return scene_from_text(text, source, overrides)

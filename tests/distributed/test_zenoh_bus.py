@@ -1,0 +1,160 @@
+"""The Zenoh bus: the bus interface across real Zenoh sessions on loopback (a router, as a server opens, and a
+client, as a team opens), its safe defaults, and what it does with samples it cannot use."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+import zenoh
+
+from simatch import msgs
+from simatch.bus import InProcessBus, LockstepClock
+from simatch.bus.zenoh_bus import ZenohBus, open_session, zenoh_config
+from simatch.strategy.node import StrategyPub
+
+from .cluster import ROOT, free_port
+
+
+@pytest.fixture
+def pair():
+    """(server bus, client bus): two sessions joined over TCP on loopback."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint])), "unit")
+    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint]), wait=10), "unit", eager=True)
+    try:
+        yield server, client
+    finally:
+        client.close()
+        server.close()
+
+
+def pump_until(bus, predicate, timeout: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, "nothing arrived"
+        bus.pump(0.05)
+
+
+def test_remote_delivery_is_in_order_in_the_owners_thread_and_local_delivery_is_synchronous(pair):
+    server, client = pair
+    got = []
+    client.subscribe("cyan/*/VelCmd", msgs.VelCmd, lambda m: got.append(("vel", m.tick)))
+    client.subscribe("cyan/receive_from_coach", msgs.CoachInfo, lambda m: got.append(("coach", m.match_mode)))
+    seen_all = []
+    client.subscribe_all("cyan/**", lambda topic, m: seen_all.append((topic, msgs.msgtype_name(m))))
+    local = []
+    server.subscribe("cyan/2/VelCmd", msgs.VelCmd, lambda m: local.append(m.tick))
+    vel = server.publisher("cyan/2/VelCmd", msgs.VelCmd)
+    coach = server.publisher("cyan/receive_from_coach", msgs.CoachInfo)
+    pump_until(server, lambda: vel.active and vel.matching)
+    for k in range(5):
+        vel.put(msgs.new(msgs.VelCmd, tick=k, vx=0.5))
+        coach.put(msgs.new(msgs.CoachInfo, match_mode=k))
+    assert local == [0, 1, 2, 3, 4]               # at once, in this thread
+    time.sleep(0.2)
+    assert got == []                              # nothing runs in Zenoh's threads: the owner pumps
+    pump_until(client, lambda: len(got) == 10)
+    assert got == [x for k in range(5) for x in (("vel", k), ("coach", k))]
+    assert seen_all[:2] == [("cyan/2/VelCmd", "simatch_msgs/msg/VelCmd"),
+                            ("cyan/receive_from_coach", "simatch_msgs/msg/CoachInfo")]
+    assert client.stats.delivered == 20 and client.stats.malformed == 0
+
+
+def test_bad_samples_are_dropped_and_counted_never_raised(pair):
+    server, client = pair
+    got = []
+    client.subscribe("cyan/2/OmniVisionInfo", msgs.OmniVisionInfo, lambda m: got.append(m))
+
+    def fragile(m):
+        raise LookupError("robot 2 is missing from its own perception")
+
+    client.subscribe("cyan/3/OmniVisionInfo", msgs.OmniVisionInfo, fragile)
+    client.subscribe_all("other/**", lambda topic, m: got.append(m))
+    time.sleep(0.3)
+    key = server.key
+    server.session.put(key("cyan/2/OmniVisionInfo"), b"\x00\x01\x00\x00garbage")          # does not decode
+    server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(msgs.new(msgs.VelCmd)))   # another type
+    server.session.put(key("cyan/3/OmniVisionInfo"), msgs.encode(msgs.new(msgs.OmniVisionInfo)))   # node fails
+    server.session.put(key("other/x"), b"no type")                      # not a message: left out, not counted
+    server.session.put(key("other/y"), b"\x00\x01\x00\x00", encoding=zenoh.Encoding("application/cdr;nope"))
+    good = msgs.new(msgs.OmniVisionInfo, tick=7)
+    server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(good))
+    pump_until(client, lambda: len(got) == 1)
+    assert got[0].tick == 7
+    assert client.stats.malformed == 4
+    assert client.stats.malformed_by_topic == {"cyan/2/OmniVisionInfo": 2, "cyan/3/OmniVisionInfo": 1, "other/y": 1}
+
+
+def test_a_verifier_refuses_samples_before_anybody_sees_them(pair):
+    server, client = pair
+    refused, got = [], []
+    server.verifier = lambda topic, payload, attachment: None if attachment == b"ok" else "not signed"
+    server.on_refused = lambda topic, why: refused.append((topic, why))
+    server.subscribe("cyan/2/VelCmd", msgs.VelCmd, got.append)
+    time.sleep(0.3)
+    data = msgs.encode(msgs.new(msgs.VelCmd, vx=1.0))
+    client.session.put(client.key("cyan/2/VelCmd"), data)
+    client.session.put(client.key("cyan/2/VelCmd"), data, attachment=b"ok")
+    pump_until(server, lambda: got)
+    assert refused == [("cyan/2/VelCmd", "not signed")] and server.stats.refused == 1 and len(got) == 1
+
+
+def test_the_same_node_code_runs_on_both_transports(pair):
+    """A StrategyPub fed over Zenoh publishes exactly what the same node fed in process publishes."""
+    server, client = pair
+
+    def run(bus, feed_bus) -> list:
+        clock = LockstepClock(bus, 0.005, seed=0)
+        clock.add(StrategyPub("cyan", 0.025, 0.1))
+        out = []
+        bus.subscribe("cyan/TeamStrategy", msgs.TeamStrategy, lambda m: out.append(
+            [(s.agent_id, s.stamp, s.target_x) for s in m.strategies]))
+        pubs = [feed_bus.publisher(f"cyan/{rid}/StrategyInfo", msgs.StrategyInfo) for rid in (1, 2)]
+        time.sleep(0.3)
+        for step in range(0, 60, 5):
+            sent = 0
+            for rid, pub in zip((1, 2), pubs):
+                if step < 30 or rid == 1:                     # robot 2 goes silent: it must drop out
+                    pub.put(msgs.new(msgs.StrategyInfo, agent_id=rid, stamp=step * 0.005, target_x=rid + step * 0.1))
+                    sent += 1
+            if bus is not feed_bus:
+                want = bus.stats.delivered + sent
+                pump_until(bus, lambda: bus.stats.delivered >= want)
+            clock.step_index = step
+            clock.step()
+        return out
+
+    local_bus = InProcessBus("unit")
+    assert run(client, server) == run(local_bus, local_bus)
+
+
+def test_safe_defaults():
+    conf = zenoh_config("client", connect=["tcp/127.0.0.1:1"])
+
+    def get(key):
+        return json.loads(conf.get_json(key))
+
+    assert get("scouting/multicast/enabled") is False and get("scouting/gossip/enabled") is False
+    assert get("listen/endpoints") == [] and get("connect/endpoints") == ["tcp/127.0.0.1:1"]
+    assert get("transport/shared_memory/enabled") is False          # killed processes would leave /dev/shm files
+
+
+def test_the_interpreter_exits_even_if_nobody_closes_the_bus():
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    script = textwrap.dedent(f"""
+        from simatch import msgs
+        from simatch.bus.zenoh_bus import ZenohBus, open_session, zenoh_config
+        bus = ZenohBus(open_session(zenoh_config("peer", listen=["{endpoint}"])), "unit")
+        bus.subscribe("x/**", msgs.VelCmd, print)
+        bus.subscribe_raw("y", lambda *a: None)
+        print("open", flush=True)
+    """)
+    t0 = time.monotonic()
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30, cwd=ROOT)
+    assert out.returncode == 0 and "open" in out.stdout, out.stderr
+    assert time.monotonic() - t0 < 20
