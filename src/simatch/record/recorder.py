@@ -1,7 +1,7 @@
 """The recorder: every message of a run's bus into one MCAP file (layout in `simatch.record.layout`).
 
 It listens on the bus, not inside the simulator, so it records an embedded run today and a distributed
-run (a server's bus) the same way. Messages are encoded to CDR on arrival (`cdr.Encoders`) and handed to
+run (a server's bus) the same way. Messages are encoded to CDR on arrival (`simatch.msgs.cdr.Codec`) and handed to
 the MCAP writer of ``foxglove-sdk`` (Rust: chunking, indexes and streaming zstd compression); a
 chunk is closed and written out at the end of every simulated second.
 
@@ -34,7 +34,7 @@ from ..bus import topics
 from ..scene.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
-from .cdr import HEADER, Encoders
+from ..msgs.cdr import Codec
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
 
 log = logging.getLogger(__name__)
@@ -88,7 +88,7 @@ class Recorder:
             self._writer = foxglove.open_mcap(str(self.path), context=self._ctx, writer_options=opts)
         except Exception as exc:      # the SDK reports I/O problems as its own error types
             raise RecordError(f"cannot write the recording {self.path}: {exc}") from None
-        self._encoders = Encoders(msgs.typestore, memo=True)
+        self._codec = Codec(msgs.typestore, memo=True)
         self._lock = threading.Lock()
         self._schemas: dict[str, Any] = {}
         self._channels: dict[str, _Channel | None] = {}
@@ -138,14 +138,8 @@ class Recorder:
         if typename is None or typename not in msgs.typestore.fielddefs:
             self._skip(topic, f"type {typename or type(msg).__name__} is not a simatch message type")
             return None
-        func = self._encoders.func(typename)
-
-        def encode(m, func=func):
-            out = [HEADER]
-            func(m, out, 0)
-            return b"".join(out)
-
-        ch = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename).log, encode)
+        ch = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename).log,
+                      self._codec.encoder(typename))
         self._channels[topic] = ch
         return ch
 
@@ -177,7 +171,7 @@ class Recorder:
         now = step * self.dt_ns
         if now != self._now:
             self._now = now
-            self._encoders.forget()
+            self._codec.forget()
             if now >= self._next_flush:
                 self._writer.flush()          # the second that just ended goes to disk as one chunk
                 self._next_flush = (now // layout.NS + 1) * layout.NS
