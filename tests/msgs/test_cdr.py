@@ -116,11 +116,17 @@ def test_memo_encodes_what_it_meets_again_once_and_right():
              for i in range(1, 6)]
     for info in infos:
         assert codec.encode(info) == _rosbags(msgs.typestore, info)
+    codec.forget()                                 # a control tick later: still known
     for stamp in (0.5, 1.0):                      # the second TeamStrategy reuses the same objects again
         team = msgs.new(msgs.TeamStrategy, stamp=stamp, tick=3, strategies=list(reversed(infos)))
         assert codec.encode(team) == _rosbags(msgs.typestore, team)
     codec.forget()
-    assert not codec._seqs and not codec._objs
+    codec.forget()
+    assert not codec._seqs
+    for k, info in enumerate(infos):               # forgotten: encoded again, right
+        info.agent_id = 10 + k
+    team = msgs.new(msgs.TeamStrategy, stamp=2.0, tick=4, strategies=infos)
+    assert codec.encode(team) == _rosbags(msgs.typestore, team)
     c = msgs.new(msgs.OmniVisionInfo, robot_id=3, robots=[msgs.new(msgs.RobotInfo, id=9)])
     assert codec.encode(c) == _rosbags(msgs.typestore, c)
 

@@ -15,9 +15,10 @@ runs the simulation. ``rosbags`` walks a message field by field (twice when writ
   string or bytes too many raises `MessageError`, never anything else.
 
 With ``memo=True`` (a recorder: messages are read-only once published) it also encodes once what it meets
-again until `forget`: a list of sub-messages that is the same object (the team list that perception gives
-every teammate), a message already encoded on its own and met again inside a sequence (the StrategyInfo a
-robot published, then its team's TeamStrategy), and lists of strings (model names), by value.
+again: a list of sub-messages or of strings that is the same object (the team list that perception gives
+every teammate, the model names) until the next `forget`, and a message already encoded on its own and met
+again inside a sequence until the second `forget` after it (the StrategyInfo a robot published at one
+control tick is in its team's TeamStrategy at the next). Lists of strings are also kept by value.
 
 Output: XCDR1 little endian with the 4-byte encapsulation header, as ROS 2 and rosbag2 write it; a
 big-endian payload is handed to rosbags to read.
@@ -102,12 +103,11 @@ class Codec:
         self._decoders: dict[str, Callable] = {}        # type -> decode(body) -> msg
         self._decoders_at: dict[str, Callable] = {}     # type -> dec(body, pos) -> (msg, pos)
         self._seqs: dict[int, tuple] = {}               # memo: id(list) -> (list, phase, bytes)
-        self._objs: dict[int, tuple] = {}               # memo: id(msg) -> (msg, encoded with header)
         self._strings: dict[tuple, bytes] = {}
         self._elements = self._element_types()
         self._ns: dict[str, Any] = {
             "_LEN": _LEN, "_U32": _U32, "_ZEROS": _ZEROS, "_asb": _as_bytes, "_ndarray": np.ndarray, "_np": np,
-            "_seqs": self._seqs, "_objs": self._objs, "_strings": self._strings, "_LIMIT": _MEMO_LIMIT,
+            "_seqs": self._seqs, "_objs": {}, "_objs_old": {}, "_strings": self._strings, "_LIMIT": _MEMO_LIMIT,
             "_HEADER": HEADER, "Error": MessageError, "_codec": self}
 
     # --- public ------------------------------------------------------------------------------------------
@@ -156,9 +156,11 @@ class Codec:
         return msg
 
     def forget(self) -> None:
-        """Drop what the memo holds by identity (call it whenever producers may build new messages)."""
+        """Start a new memo period: lists met in the last one are forgotten, messages encoded on their own in
+        the period before it too (memo: id(msg) -> (msg, bytes with header), in two generations)."""
         self._seqs.clear()
-        self._objs.clear()
+        self._ns["_objs_old"] = self._ns["_objs"]
+        self._ns["_objs"] = {}
 
     # --- analysis ---------------------------------------------------------------------------------------------
     def _element_types(self) -> set[str]:
@@ -283,15 +285,23 @@ class Codec:
                 if length is not None:
                     lines += [f"    if len(v) != {length}:",
                               f"        raise Error('{e.partition('.')[2]}: expected {length} strings, got %d' % len(v))"]
-                lines += ["    key = (pos & 7, tuple(v))",
-                          "    hit = _strings.get(key)",
-                          "    if hit is None:",
-                          f"        hit = _encode_strings(v, pos & 7, {length is None})",
-                          "        if len(_strings) >= _LIMIT:",
-                          "            _strings.clear()",
-                          "        _strings[key] = hit",
-                          "    app(hit)",
-                          "    pos += len(hit)"]
+                by_value = ["key = (pos & 7, tuple(v))",
+                            "hit = _strings.get(key)",
+                            "if hit is None:",
+                            f"    hit = _encode_strings(v, pos & 7, {length is None})",
+                            "    if len(_strings) >= _LIMIT:",
+                            "        _strings.clear()",
+                            "    _strings[key] = hit"]
+                if self.memo:           # the same list again (the simulator's model names): no tuple, no hash
+                    lines += ["    hit = _seqs.get(id(v))",
+                              "    if hit is None or hit[0] is not v or hit[1] != pos & 7:"]
+                    lines += ["        " + line for line in by_value]
+                    lines += ["        _seqs[id(v)] = (v, pos & 7, hit)",
+                              "    else:",
+                              "        hit = hit[2]"]
+                else:
+                    lines += ["    " + line for line in by_value]
+                lines += ["    app(hit)", "    pos += len(hit)"]
             elif kind == "numbers":
                 base, length = op[2], op[3]
                 size = BASE[base][1]
@@ -345,6 +355,8 @@ class Codec:
         body = ["f = {fkey}.get()".format(fkey=fkey), "for it in v:"]
         if reuse:
             body += ["    hit = _objs.get(id(it))",
+                     "    if hit is None:",
+                     "        hit = _objs_old.get(id(it))",
                      "    if hit is not None and hit[0] is it:",
                      f"        q = pos + (-pos & {align - 1})",
                      "        if not q & 7:",

@@ -187,7 +187,6 @@ class Recorder:
                 self._chunk_start = self._now
             self._chunk_end = self._now
         self._now = now
-        self._codec.forget()
         if now >= self._next_chunk:
             self._end_chunk()
             self._next_chunk = (now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
@@ -204,11 +203,13 @@ class Recorder:
             self._app = self._writer.parts.append
         self._chunk_start = None
         self._mark = 0
+        self._codec.forget()
 
     def _on_clock(self, topic: str, msg) -> None:
         step = _step_of(msg)
         if step is not None:
             self._advance(step)
+        self._codec.forget()          # a control tick: see the memo periods of `Codec`
         self._on_message(topic, msg)
 
     def _on_model_states(self, topic: str, msg) -> None:
