@@ -40,6 +40,11 @@ from rosbags.typesys.base import normalize_fieldname
 
 from . import MessageError
 
+try:                                # the C encoder (setup.py builds it where a compiler is at hand)
+    from ._cdr_accel import encode as _accel_encode
+except ImportError:                 # pragma: no cover - a machine without a C compiler
+    _accel_encode = None
+
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
 
@@ -59,6 +64,12 @@ _U32 = struct.Struct("<I")
 _LEN = [struct.Struct(f"<{p}xI") if p else _U32 for p in range(4)]      # by padding needed
 _ZEROS = [bytes(p) for p in range(8)]
 _MEMO_LIMIT = 4096                  # string lists kept by value
+#: kinds of the C encoder's programs (see _cdr_accel.c)
+_KIND = {"bool": 1, "int8": 2, "uint8": 3, "byte": 3, "char": 3, "octet": 3, "int16": 4, "uint16": 5,
+         "int32": 6, "uint32": 7, "int64": 8, "uint64": 9, "float32": 10, "float64": 11}
+_K_STR, _K_MSG, _K_PSEQ, _K_SSEQ, _K_MSEQ = 20, 21, 22, 23, 24
+#: the C encoder is used when it was built
+ACCELERATED = _accel_encode is not None
 
 
 def _lenpad(size: int) -> list[struct.Struct]:
@@ -95,9 +106,11 @@ def _as_bytes(value: Any, dtype: np.dtype) -> bytes:
 class Codec:
     """Encoders and decoders for every type of a ``rosbags`` type store, generated on first use."""
 
-    def __init__(self, typestore, *, memo: bool = False):
+    def __init__(self, typestore, *, memo: bool = False, accelerate: bool = True):
         self.typestore = typestore
         self.memo = memo
+        self.accelerate = accelerate and ACCELERATED
+        self._programs: dict[str, tuple] = {}
         self._whole: dict[str, Callable] = {}           # type -> encode(msg) -> bytes
         self._parts: dict[str, Callable] = {}           # type -> enc(msg, out, pos) -> pos
         self._decoders: dict[str, Callable] = {}        # type -> decode(body) -> msg
@@ -217,6 +230,48 @@ class Codec:
         return found
 
     def _generate_whole(self, typename: str) -> Callable:
+        func = self._generate_python_whole(typename)
+        if self.accelerate:
+            func = self._accelerated(typename, func)
+        self._whole[typename] = func
+        return func
+
+    def _accelerated(self, typename: str, python: Callable) -> Callable:
+        """The C encoder with its program for ``typename``; what it does not take goes to ``python``."""
+        self._ns[f"_PROG_{_ident(typename)}"] = self._program(typename)
+        self._ns[f"_PY_{_ident(typename)}"] = python
+        self._ns["_accel"] = _accel_encode
+        ident = _ident(typename)
+        lines = [f"def fast_{ident}(m):",
+                 f"    data = _accel(_PROG_{ident}, m)",
+                 f"    return _PY_{ident}(m) if data is None else data"]
+        return self._compile(lines, typename, f"fast_{ident}")
+
+    def _program(self, typename: str) -> tuple:
+        """The C encoder's program of a type: ((kind, attribute, argument), ...), see _cdr_accel.c."""
+        found = self._programs.get(typename)
+        if found is not None:
+            return found
+        ops = []
+        for name, (kind, info) in self._fields(typename):
+            name = sys.intern(name)
+            if kind == Nodetype.BASE:
+                ops.append((_K_STR, name, None) if info[0] == "string" else (_KIND[info[0]], name, None))
+            elif kind == Nodetype.NAME:
+                ops.append((_K_MSG, name, self._program(info)))
+            else:
+                (sub_kind, sub_info), length = info
+                fixed = length if kind == Nodetype.ARRAY else -1
+                if sub_kind == Nodetype.NAME:
+                    ops.append((_K_MSEQ, name, (self._program(sub_info), fixed)))
+                elif sub_info[0] == "string":
+                    ops.append((_K_SSEQ, name, fixed))
+                else:
+                    ops.append((_K_PSEQ, name, (_KIND[sub_info[0]], fixed)))
+        found = self._programs[typename] = tuple(ops)
+        return found
+
+    def _generate_python_whole(self, typename: str) -> Callable:
         ops: list = []
         self._flatten(typename, "m", ops, [0])
         ident = _ident(typename)
@@ -238,9 +293,7 @@ class Codec:
             if self.memo and typename in self._elements:      # may be met again inside a sequence
                 lines.append("    _objs[id(m)] = (m, data)")
             lines.append("    return data")
-        func = self._compile(lines, typename, f"whole_{ident}")
-        self._whole[typename] = func
-        return func
+        return self._compile(lines, typename, f"whole_{ident}")
 
     def _generate_parts(self, typename: str) -> Callable:
         ops: list = []
