@@ -78,6 +78,8 @@ def test_same_bytes_as_rosbags_both_ways(store, name):
         data = _rosbags(store, m)
         for codec in codecs:
             assert codec.encode(m) == data
+            out = bytearray(b"x")
+            assert codec.appender(name)(m, out) == len(data) and out == b"x" + data
         back = codecs[0].decode(name, data)
         assert type(back) is type(m)
         assert _rosbags(store, back) == data                    # every field, bit for bit
@@ -128,15 +130,16 @@ def test_big_endian_payloads_are_read_too():
         assert msgs.encode(msgs.decode(name, big)) == msgs.encode(m)
 
 
-def test_memo_encodes_what_it_meets_again_once_and_right():
+@pytest.mark.parametrize("accelerate", [True, False])
+def test_memo_encodes_what_it_meets_again_once_and_right(accelerate):
     """Teammates share one list of RobotInfo; a team's TeamStrategy holds the StrategyInfo its robots published:
     with the memo each is encoded once (until forget), and the bytes stay rosbags'."""
-    codec = Codec(msgs.typestore, memo=True, accelerate=False)
+    codec = Codec(msgs.typestore, memo=True, accelerate=accelerate)
     robots = [msgs.new(msgs.RobotInfo, id=i, x=float(i), wheel_speeds=np.arange(4.0)) for i in (1, 2)]
     for rid in (1, 2):
         a = msgs.new(msgs.OmniVisionInfo, robot_id=rid, robots=robots)
         assert codec.encode(a) == _rosbags(msgs.typestore, a)
-    assert len(codec._seqs) == 1
+    assert len(codec._seqs if not accelerate else codec._memo[0]) == 1
     infos = [msgs.new(msgs.StrategyInfo, agent_id=i, user=np.arange(float(i)), target_num=np.arange(i, dtype=np.int32))
              for i in range(1, 6)]
     for info in infos:
@@ -147,7 +150,7 @@ def test_memo_encodes_what_it_meets_again_once_and_right():
         assert codec.encode(team) == _rosbags(msgs.typestore, team)
     codec.forget()
     codec.forget()
-    assert not codec._seqs
+    assert not codec._seqs and not any(codec._memo)
     for k, info in enumerate(infos):               # forgotten: encoded again, right
         info.agent_id = 10 + k
     team = msgs.new(msgs.TeamStrategy, stamp=2.0, tick=4, strategies=infos)

@@ -32,6 +32,25 @@ typedef struct {
 
 static Buf buf = {NULL, 0, 0};     /* reused between calls: the GIL is held throughout */
 
+/* numpy arrays without numpy's headers: the leading fields of numpy's array object, whose layout is part of
+ * numpy's ABI (extensions built against old headers run with new numpy). `setup` hands over the ndarray
+ * type and the dtype object of each kind, and checks this reading on a sample array before enabling it;
+ * without it every array goes through the buffer protocol. */
+typedef struct {
+    PyObject_HEAD
+    char *data;
+    int nd;
+    Py_ssize_t *dimensions;
+    Py_ssize_t *strides;
+    PyObject *base;
+    PyObject *descr;
+    int flags;
+} ArrayHead;
+
+#define C_CONTIGUOUS 0x0001
+static PyTypeObject *ndarray = NULL;
+static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous arrays taken as they are */
+
 #define FALLBACK 1                 /* not for the fast path: the caller uses the Python encoder */
 #define FAILED -1                  /* a Python exception is set (memory) */
 
@@ -190,10 +209,27 @@ static int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
 }
 
 static int encode_program(PyObject *program, PyObject *msg);
+static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first);
 
 static int put_primitives(PyObject *v, PyObject *arg) {
     long kind = PyLong_AsLong(PyTuple_GET_ITEM(arg, 0));
     Py_ssize_t fixed = PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1));
+    if (Py_TYPE(v) == ndarray && kind < 16) {
+        ArrayHead *a = (ArrayHead *)v;
+        if (a->nd == 1 && a->descr == dtypes[kind] && (a->flags & C_CONTIGUOUS)) {
+            Py_ssize_t n = a->dimensions[0];
+            int r;
+            if (fixed >= 0) {
+                if (n != fixed)
+                    return FALLBACK;
+            } else if ((r = put_u32(n)) != 0) {
+                return r;
+            }
+            if (n && (align(size_of(kind)) < 0 || put(a->data, n * size_of(kind)) < 0))
+                return FAILED;
+            return 0;
+        }
+    }
     Py_buffer view;
     if (PyObject_GetBuffer(v, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
         PyErr_Clear();
@@ -219,7 +255,55 @@ done:
     return r;
 }
 
-static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program) {
+/* The memo (see simatch.msgs.cdr): two dicts, this period's and the last one's, id(object) -> (object,
+ * phase, bytes): a list met again at the same phase (offset modulo 8), or a message encoded on its own
+ * (phase 0, its body) met again inside a sequence. NULL: no memo. */
+static PyObject *memo_now = NULL, *memo_old = NULL;
+
+static PyObject *memo_find(PyObject *obj, long phase) {
+    PyObject *key = PyLong_FromVoidPtr(obj);
+    if (key == NULL)
+        return NULL;
+    PyObject *hit = PyDict_GetItemWithError(memo_now, key);
+    if (hit == NULL && !PyErr_Occurred() && memo_old != NULL)
+        hit = PyDict_GetItemWithError(memo_old, key);
+    Py_DECREF(key);
+    if (hit == NULL || !PyTuple_Check(hit) || PyTuple_GET_SIZE(hit) != 3 || PyTuple_GET_ITEM(hit, 0) != obj
+        || PyLong_AsLong(PyTuple_GET_ITEM(hit, 1)) != phase)
+        return NULL;
+    return PyTuple_GET_ITEM(hit, 2);            /* borrowed */
+}
+
+static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
+    PyObject *key = PyLong_FromVoidPtr(obj);
+    PyObject *data = PyBytes_FromStringAndSize(buf.p + start, buf.n - start);
+    PyObject *entry = (key && data) ? Py_BuildValue("(OlO)", obj, phase, data) : NULL;
+    int r = entry ? PyDict_SetItem(memo_now, key, entry) : -1;
+    Py_XDECREF(key);
+    Py_XDECREF(data);
+    Py_XDECREF(entry);
+    return r < 0 ? FAILED : 0;
+}
+
+static long phase_now(void) {
+    return (long)((buf.n - 4) & 7);
+}
+
+static int put_bytes_object(PyObject *data) {
+    return put(PyBytes_AS_STRING(data), PyBytes_GET_SIZE(data));
+}
+
+/* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
+static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first) {
+    long phase = phase_now();
+    Py_ssize_t start = buf.n;
+    if (memo_now != NULL) {
+        PyObject *hit = memo_find(v, phase);
+        if (hit != NULL)
+            return put_bytes_object(hit);
+        if (PyErr_Occurred())
+            return FAILED;
+    }
     PyObject *seq = PySequence_Fast(v, "");
     if (seq == NULL) {
         PyErr_Clear();
@@ -232,9 +316,31 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program) {
         return r ? r : FALLBACK;
     }
     PyObject **items = PySequence_Fast_ITEMS(seq);
-    for (Py_ssize_t i = 0; i < n && r == 0; i++)
-        r = program == NULL ? put_string(items[i]) : encode_program(program, items[i]);
+    for (Py_ssize_t i = 0; i < n && r == 0; i++) {
+        if (program == NULL) {
+            r = put_string(items[i]);
+            continue;
+        }
+        if (memo_now != NULL && align_first > 0) {     /* this message encoded on its own before? */
+            Py_ssize_t pad = (align_first - ((buf.n - 4) % align_first)) % align_first;
+            if (((buf.n - 4 + pad) & 7) == 0) {
+                PyObject *hit = memo_find(items[i], 0);
+                if (hit != NULL) {
+                    if ((r = align(align_first)) == 0)
+                        r = put_bytes_object(hit);
+                    continue;
+                }
+                if (PyErr_Occurred()) {
+                    r = FAILED;
+                    break;
+                }
+            }
+        }
+        r = encode_program(program, items[i]);
+    }
     Py_DECREF(seq);
+    if (r == 0 && memo_now != NULL && n > 0)
+        r = memo_keep(v, phase, start);
     return r;
 }
 
@@ -259,9 +365,10 @@ static int encode_program(PyObject *program, PyObject *msg) {
         else if (kind == K_PSEQ)
             r = put_primitives(v, arg);
         else if (kind == K_SSEQ)
-            r = put_items(v, PyLong_AsSsize_t(arg), NULL);
+            r = put_items(v, PyLong_AsSsize_t(arg), NULL, 0);
         else
-            r = put_items(v, PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1)), PyTuple_GET_ITEM(arg, 0));
+            r = put_items(v, PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1)), PyTuple_GET_ITEM(arg, 0),
+                          (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 2)));
         Py_DECREF(v);
         if (r)
             return r;
@@ -269,25 +376,82 @@ static int encode_program(PyObject *program, PyObject *msg) {
     return 0;
 }
 
+/* encode(program, msg[, memo, keep, out]): memo = (this period's dict, the last one's dict) or None; keep:
+ * remember this message's body (it may be met again inside a sequence); out: a bytearray to append the
+ * bytes to (then the number of bytes is returned) instead of returning them as bytes */
 static PyObject *encode(PyObject *self, PyObject *args) {
-    PyObject *program, *msg;
-    if (!PyArg_ParseTuple(args, "O!O", &PyTuple_Type, &program, &msg))
+    PyObject *program, *msg, *memo = Py_None, *out = Py_None;
+    int keep = 0;
+    if (!PyArg_ParseTuple(args, "O!O|OpO", &PyTuple_Type, &program, &msg, &memo, &keep, &out))
         return NULL;
+    if (out != Py_None && !PyByteArray_Check(out)) {
+        PyErr_SetString(PyExc_TypeError, "out: a bytearray or None");
+        return NULL;
+    }
+    memo_now = memo_old = NULL;
+    if (memo != Py_None) {
+        if (!PyTuple_Check(memo) || PyTuple_GET_SIZE(memo) != 2 || !PyDict_Check(PyTuple_GET_ITEM(memo, 0))
+            || !PyDict_Check(PyTuple_GET_ITEM(memo, 1))) {
+            PyErr_SetString(PyExc_TypeError, "memo: (dict, dict) or None");
+            return NULL;
+        }
+        memo_now = PyTuple_GET_ITEM(memo, 0);
+        memo_old = PyTuple_GET_ITEM(memo, 1);
+    }
     buf.n = 0;
     if (reserve(4) < 0)
         return NULL;
     memcpy(buf.p, "\x00\x01\x00\x00", 4);
     buf.n = 4;
     int r = encode_program(program, msg);
+    if (r == 0 && keep && memo_now != NULL)
+        r = memo_keep(msg, 0, 4);
+    memo_now = memo_old = NULL;
     if (r == FAILED)
         return NULL;
     if (r == FALLBACK)
         Py_RETURN_NONE;
-    return PyBytes_FromStringAndSize(buf.p, buf.n);
+    if (out == Py_None)
+        return PyBytes_FromStringAndSize(buf.p, buf.n);
+    Py_ssize_t at = PyByteArray_GET_SIZE(out);
+    if (PyByteArray_Resize(out, at + buf.n) < 0)
+        return NULL;
+    memcpy(PyByteArray_AS_STRING(out) + at, buf.p, buf.n);
+    return PyLong_FromSsize_t(buf.n);
+}
+
+/* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
+static PyObject *setup(PyObject *self, PyObject *args) {
+    PyObject *type, *kinds, *sample;
+    if (!PyArg_ParseTuple(args, "O!O!O", &PyType_Type, &type, &PyDict_Type, &kinds, &sample))
+        return NULL;
+    if (Py_TYPE(sample) != (PyTypeObject *)type || ((PyTypeObject *)type)->tp_basicsize < (Py_ssize_t)sizeof(ArrayHead))
+        Py_RETURN_FALSE;
+    ArrayHead *a = (ArrayHead *)sample;
+    /* the sample is np.arange(3.0): one dimension of 3, contiguous, values 0 1 2 */
+    if (a->nd != 1 || a->dimensions[0] != 3 || !(a->flags & C_CONTIGUOUS) || ((double *)a->data)[2] != 2.0)
+        Py_RETURN_FALSE;
+    PyObject *key, *value;
+    Py_ssize_t pos = 0;
+    while (PyDict_Next(kinds, &pos, &key, &value)) {
+        long k = PyLong_AsLong(key);
+        if (k < 0 || k >= 16) {
+            PyErr_SetString(PyExc_ValueError, "kind out of range");
+            return NULL;
+        }
+        Py_INCREF(value);
+        Py_XSETREF(dtypes[k], value);
+    }
+    if (dtypes[K_F64] != a->descr)
+        Py_RETURN_FALSE;
+    Py_INCREF(type);
+    Py_XSETREF(ndarray, (PyTypeObject *)type);
+    Py_RETURN_TRUE;
 }
 
 static PyMethodDef methods[] = {
     {"encode", encode, METH_VARARGS, "encode(program, msg) -> CDR bytes with the header, or None: use Python"},
+    {"setup", setup, METH_VARARGS, "setup(ndarray, {kind: dtype}, np.arange(3.0)) -> arrays read directly"},
     {NULL, NULL, 0, NULL},
 };
 

@@ -15,10 +15,10 @@ runs the simulation. ``rosbags`` walks a message field by field (twice when writ
   string or bytes too many raises `MessageError`, never anything else.
 
 With ``memo=True`` (a recorder: messages are read-only once published) it also encodes once what it meets
-again: a list of sub-messages or of strings that is the same object (the team list that perception gives
-every teammate, the model names) until the next `forget`, and a message already encoded on its own and met
-again inside a sequence until the second `forget` after it (the StrategyInfo a robot published at one
-control tick is in its team's TeamStrategy at the next). Lists of strings are also kept by value.
+again in the current or the previous memo period (`forget` starts a new one): a list of sub-messages or of
+strings that is the same object (the team list that perception gives every teammate, the model names), and
+a message already encoded on its own and met again inside a sequence (the StrategyInfo a robot published
+at one control tick is in its team's TeamStrategy at the next). Lists of strings are also kept by value.
 
 Output: XCDR1 little endian with the 4-byte encapsulation header, as ROS 2 and rosbag2 write it; a
 big-endian payload is handed to rosbags to read.
@@ -42,8 +42,9 @@ from . import MessageError
 
 try:                                # the C encoder (setup.py builds it where a compiler is at hand)
     from ._cdr_accel import encode as _accel_encode
+    from ._cdr_accel import setup as _accel_setup
 except ImportError:                 # pragma: no cover - a machine without a C compiler
-    _accel_encode = None
+    _accel_encode = _accel_setup = None
 
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
@@ -70,6 +71,9 @@ _KIND = {"bool": 1, "int8": 2, "uint8": 3, "byte": 3, "char": 3, "octet": 3, "in
 _K_STR, _K_MSG, _K_PSEQ, _K_SSEQ, _K_MSEQ = 20, 21, 22, 23, 24
 #: the C encoder is used when it was built
 ACCELERATED = _accel_encode is not None
+#: ... and reads numpy arrays directly when it recognises their layout (otherwise: the buffer protocol)
+DIRECT_ARRAYS = ACCELERATED and _accel_setup(
+    np.ndarray, {k: np.dtype(_DTYPE[b]) for b, k in _KIND.items()}, np.arange(3.0))
 
 
 def _lenpad(size: int) -> list[struct.Struct]:
@@ -111,6 +115,8 @@ class Codec:
         self.memo = memo
         self.accelerate = accelerate and ACCELERATED
         self._programs: dict[str, tuple] = {}
+        self._appenders: dict[str, Callable] = {}
+        self._memo = ({}, {})                           # the C encoder's: this period's, the last one's
         self._whole: dict[str, Callable] = {}           # type -> encode(msg) -> bytes
         self._parts: dict[str, Callable] = {}           # type -> enc(msg, out, pos) -> pos
         self._decoders: dict[str, Callable] = {}        # type -> decode(body) -> msg
@@ -141,6 +147,32 @@ class Codec:
             if typename not in self.typestore.fielddefs:
                 raise MessageError(f"unknown message type {typename!r}")
             found = self._generate_whole(typename)
+        return found
+
+    def appender(self, typename: str) -> Callable[[Any, bytearray], int]:
+        """The function ``append(msg, out)`` that appends a ``typename`` message's CDR bytes to the bytearray
+        ``out`` and returns their number (a writer that frames messages into one buffer: no bytes object per
+        message). On an error nothing is appended."""
+        found = self._appenders.get(typename)
+        if found is None:
+            whole = self.encoder(typename)
+            ident = _ident(typename)
+            self._ns[f"_WH_{ident}"] = whole
+            if self.accelerate and not self._fixed_size(typename):
+                args = "_memo, " + str(typename in self._elements) if self.memo else "None, False"
+                lines = [f"def into_{ident}(m, out):",
+                         f"    n = _accel(_PROG_{ident}, m, {args}, out)",
+                         "    if n is None:",
+                         f"        d = _PY_{ident}(m)",
+                         "        out += d",
+                         "        return len(d)",
+                         "    return n"]
+            else:
+                lines = [f"def into_{ident}(m, out):",
+                         f"    d = _WH_{ident}(m)",
+                         "    out += d",
+                         "    return len(d)"]
+            found = self._appenders[typename] = self._compile(lines, typename, f"into_{ident}")
         return found
 
     def decode(self, typename: str, data: bytes | bytearray | memoryview):
@@ -174,6 +206,8 @@ class Codec:
         self._seqs.clear()
         self._ns["_objs_old"] = self._ns["_objs"]
         self._ns["_objs"] = {}
+        self._memo = ({}, self._memo[0])
+        self._ns["_memo"] = self._memo
 
     # --- analysis ---------------------------------------------------------------------------------------------
     def _element_types(self) -> set[str]:
@@ -231,10 +265,15 @@ class Codec:
 
     def _generate_whole(self, typename: str) -> Callable:
         func = self._generate_python_whole(typename)
-        if self.accelerate:
+        if self.accelerate and not self._fixed_size(typename):    # one struct call beats C's field walk
             func = self._accelerated(typename, func)
         self._whole[typename] = func
         return func
+
+    def _fixed_size(self, typename: str) -> bool:
+        ops: list = []
+        self._flatten(typename, "m", ops, [0])
+        return all(op[0] in ("scalar", "bind") for op in ops)
 
     def _accelerated(self, typename: str, python: Callable) -> Callable:
         """The C encoder with its program for ``typename``; what it does not take goes to ``python``."""
@@ -242,8 +281,14 @@ class Codec:
         self._ns[f"_PY_{_ident(typename)}"] = python
         self._ns["_accel"] = _accel_encode
         ident = _ident(typename)
+        if self.memo:
+            self._ns["_memo"] = self._memo
+            keep = typename in self._elements
+            call = f"_accel(_PROG_{ident}, m, _memo, {keep})"
+        else:
+            call = f"_accel(_PROG_{ident}, m)"
         lines = [f"def fast_{ident}(m):",
-                 f"    data = _accel(_PROG_{ident}, m)",
+                 f"    data = {call}",
                  f"    return _PY_{ident}(m) if data is None else data"]
         return self._compile(lines, typename, f"fast_{ident}")
 
@@ -263,7 +308,7 @@ class Codec:
                 (sub_kind, sub_info), length = info
                 fixed = length if kind == Nodetype.ARRAY else -1
                 if sub_kind == Nodetype.NAME:
-                    ops.append((_K_MSEQ, name, (self._program(sub_info), fixed)))
+                    ops.append((_K_MSEQ, name, (self._program(sub_info), fixed, self._first_alignment(sub_info))))
                 elif sub_info[0] == "string":
                     ops.append((_K_SSEQ, name, fixed))
                 else:
@@ -275,7 +320,7 @@ class Codec:
         ops: list = []
         self._flatten(typename, "m", ops, [0])
         ident = _ident(typename)
-        if all(op[0] in ("scalar", "bind") for op in ops):      # fixed size: one struct, header included
+        if self._fixed_size(typename):                          # one struct, header included
             key = f"_W_{ident}"
             scalars = [op for op in ops if op[0] == "scalar"]
             body = _run_structs([(ch, size) for _, _, ch, size in scalars])[0]

@@ -50,6 +50,8 @@ TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: zstd level of the chunks: the data is mostly float64 noise, higher levels gain 1-4 % for 2-6 times the time
 COMPRESSION_LEVEL = 1
 _OPCODE_MESSAGE = 0x05
+_GAP = bytes(MESSAGE_HEADER.size)
+_pack_header = MESSAGE_HEADER.pack_into
 
 
 class RecordError(Exception):
@@ -100,8 +102,7 @@ class Recorder:
         self._next_chunk = (self._now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
         self._chunk_counts: dict[int, int] = {}
         self._every: list[_Channel] = []              # every channel, the 3D scene's too
-        self._mark = 0                                # len(parts) when the run reached the current step
-        self._app = self._writer.parts.append
+        self._mark = 0                                # len(chunk) when the run reached the current step
         self.first_step = first_step
         self._writer.metadata(layout.META_START, {
             "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": simatch_version(),
@@ -138,7 +139,7 @@ class Recorder:
             self._skip(topic, f"type {typename or type(msg).__name__} is not a simatch message type")
             return None
         ch = self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename)
-        ch.encode = self._codec.encoder(typename)
+        ch.encode = self._codec.appender(typename)
         self._channels[topic] = ch
         return ch
 
@@ -152,8 +153,9 @@ class Recorder:
         now = self._now
         if self._chunk_start is None:
             self._chunk_start = now
-        self._app(MESSAGE_HEADER.pack(_OPCODE_MESSAGE, MESSAGE_FIXED + len(data), ch.id, 0, now, now))
-        self._app(data)
+        chunk = self._writer.chunk
+        chunk += MESSAGE_HEADER.pack(_OPCODE_MESSAGE, MESSAGE_FIXED + len(data), ch.id, 0, now, now)
+        chunk += data
         ch.count += 1
 
     # --- bus callbacks (hot path) --------------------------------------------------------------------------
@@ -163,18 +165,20 @@ class Recorder:
             ch = self._open(topic, msg)
         if ch is None:
             return
+        chunk = self._writer.chunk
+        start = len(chunk)
+        chunk += _GAP                 # the record header, written once the message's size is known
         try:
-            data = ch.encode(msg)
+            n = ch.encode(msg, chunk)
         except Exception as exc:      # a malformed message from a producer: counted, never raised
+            del chunk[start:]
             ch.errors += 1
             if ch.errors == 1:
                 log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
                             topic, exc)
             return
         now = self._now
-        app = self._app
-        app(MESSAGE_HEADER.pack(_OPCODE_MESSAGE, MESSAGE_FIXED + len(data), ch.id, 0, now, now))
-        app(data)
+        _pack_header(chunk, start, _OPCODE_MESSAGE, MESSAGE_FIXED + n, ch.id, 0, now, now)
         ch.count += 1
 
     def _advance(self, step: int) -> None:
@@ -182,7 +186,7 @@ class Recorder:
         now = step * self.dt_ns
         if now == self._now:
             return
-        if len(self._writer.parts) > self._mark:        # messages at the step that ends
+        if len(self._writer.chunk) > self._mark:        # messages at the step that ends
             if self._chunk_start is None:
                 self._chunk_start = self._now
             self._chunk_end = self._now
@@ -190,17 +194,16 @@ class Recorder:
         if now >= self._next_chunk:
             self._end_chunk()
             self._next_chunk = (now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
-        self._mark = len(self._writer.parts)
+        self._mark = len(self._writer.chunk)
 
     def _end_chunk(self) -> None:
         """What was recorded since the last chunk goes to the writer thread as one chunk."""
-        if self._writer.parts:
+        if self._writer.chunk:
             counts = {ch.id: ch.count for ch in self._every}
             delta = {cid: n - self._chunk_counts.get(cid, 0) for cid, n in counts.items()}
             self._chunk_counts = counts
             start = self._chunk_start if self._chunk_start is not None else self._chunk_end
             self._writer.end_chunk(start, self._chunk_end, {c: n for c, n in delta.items() if n})
-            self._app = self._writer.parts.append
         self._chunk_start = None
         self._mark = 0
         self._codec.forget()
@@ -247,7 +250,7 @@ class Recorder:
                "encode_errors": json.dumps(errors, sort_keys=True)}
         for key, value in (summary or {}).items():
             end[key] = value if isinstance(value, str) else json.dumps(value)
-        if len(self._writer.parts) > self._mark:            # messages at the current step
+        if len(self._writer.chunk) > self._mark:            # messages at the current step
             if self._chunk_start is None:
                 self._chunk_start = self._now
             self._chunk_end = self._now

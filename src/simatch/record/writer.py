@@ -8,9 +8,9 @@ rare records (header, schemas, channels, metadata, summary, footer) are written 
 record classes, so the file follows the specification with no hand-made layout beyond the Message and
 Chunk records.
 
-How the work is split: the recorder appends each message's record header and CDR bytes to `parts` (one list
-per chunk); `end_chunk` hands the list to the writer thread, which joins it, computes its CRC, compresses it
-with zstd and writes the chunk. zstd, ``zlib.crc32`` and the file write release the GIL, so on a machine
+How the work is split: the recorder appends each message's record (header and CDR bytes) to `chunk`, one
+bytearray per chunk (no object per message); `end_chunk` hands it to the writer thread, which computes its
+CRC, compresses it with zstd and writes the chunk. zstd, ``zlib.crc32`` and the file write release the GIL, so on a machine
 with a free core that work overlaps the simulation. At most one chunk is in the writer's hands: a process
 killed at any moment loses the chunk being filled and at most the one being written.
 
@@ -52,7 +52,7 @@ class WriterError(Exception):
 
 
 class McapWriter:
-    """Writes one MCAP file; `parts` is the list the current chunk's records are appended to."""
+    """Writes one MCAP file; `chunk` is the bytearray the current chunk's records are appended to."""
 
     def __init__(self, path: str | Path, *, profile: str, library: str, compression_level: int = 1):
         try:
@@ -60,7 +60,7 @@ class McapWriter:
         except OSError as exc:
             raise WriterError(f"cannot write {path}: {exc.strerror or exc}") from None
         self.path = Path(path)
-        self.parts: list = []
+        self.chunk = bytearray()
         self.error: BaseException | None = None
         self._level = compression_level
         self._pos = 0                        # bytes written (by the writer thread)
@@ -86,7 +86,7 @@ class McapWriter:
         record = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
         self._schemas.append(record)
         record.write(self._records)
-        self.parts.append(self._records.end())
+        self.chunk += self._records.end()
         return record.id
 
     def channel(self, topic: str, schema_id: int, message_encoding: str) -> int:
@@ -96,17 +96,17 @@ class McapWriter:
         self._channels.append(record)
         self._counts[record.id] = 0
         record.write(self._records)
-        self.parts.append(self._records.end())
+        self.chunk += self._records.end()
         return record.id
 
     def end_chunk(self, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
         """Hand the records appended since the last chunk (messages from ``start_ns`` to ``end_ns``; ``counts``
-        per channel id) to the writer thread and start a new `parts` list. Waits while the previous chunk is
-        still being written."""
-        parts = self.parts
-        if not parts:
+        per channel id) to the writer thread and start a new `chunk`. Waits while the previous chunk is still
+        being written."""
+        data = self.chunk
+        if not data:
             return
-        self.parts = []
+        self.chunk = bytearray()
         n = 0
         for cid, k in counts.items():
             self._counts[cid] = self._counts.get(cid, 0) + k
@@ -115,7 +115,7 @@ class McapWriter:
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
         self._slot.acquire()
-        self._jobs.put(("chunk", parts, start_ns, end_ns))
+        self._jobs.put(("chunk", data, start_ns, end_ns))
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
         """A Metadata record, written after everything handed over before it."""
@@ -173,8 +173,7 @@ class McapWriter:
         if kind == "raw":
             self._write(job[1])
         elif kind == "chunk":
-            _, parts, start_ns, end_ns = job
-            data = b"".join(parts)
+            _, data, start_ns, end_ns = job
             packed = compressor.compress(data)
             length = 8 + 8 + 8 + 4 + len(_ZSTD) + 8 + len(packed)
             head = _CHUNK_HEADER.pack(Opcode.CHUNK, length, start_ns, end_ns, len(data), zlib.crc32(data))
