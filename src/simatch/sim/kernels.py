@@ -188,3 +188,119 @@ def keep_ball(eq_data, eq, qpos, robot_q, ball_q, robot, target_x, pull_step, ch
     if ((fx - ax) ** 2 + (fy - ay) ** 2) ** 0.5 > 0.1:
         return 2, force
     return 0, force
+
+
+@numba.njit(cache=True, nogil=True)
+def _wrap(a):
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@numba.njit(cache=True, nogil=True)
+def perceive(R, ball, sign, others, own_noise, ball_noise, obs_noise):
+    """The numbers of every robot's perception, in its team frame (see `perception.Perception.observe`).
+
+    R (n, 6) robots' x y yaw vx vy w and ball (6,) x y z vx vy vz, world frame; sign (n,) +1 or -1 per
+    robot's team frame; others (n, n-1) the other robots of each observer; noise added to the observer's own
+    pose (n, 5: x y yaw vx vy), to the ball it sees (n, 4: x y vx vy) and to each obstacle (n, n-1, 4).
+    Returns (own (n, 6): x y yaw vx vy w in the team frame; balls (n, 6): x y vx vy bearing distance;
+    obstacles (6, n, n-1): x y vx vy bearing distance)."""
+    n = R.shape[0]
+    m = others.shape[1]
+    own = np.empty((n, 6))
+    balls = np.empty((n, 6))
+    obs = np.empty((6, n, m))
+    for i in range(n):
+        s = sign[i]
+        px = R[i, 0] + own_noise[i, 0]
+        py = R[i, 1] + own_noise[i, 1]
+        yaw = R[i, 2] + own_noise[i, 2]
+        own[i, 0] = s * px
+        own[i, 1] = s * py
+        own[i, 2] = _wrap(yaw + (0.0 if s > 0 else np.pi))
+        own[i, 3] = s * (R[i, 3] + own_noise[i, 3])
+        own[i, 4] = s * (R[i, 4] + own_noise[i, 4])
+        own[i, 5] = R[i, 5]
+        bx = ball[0] + ball_noise[i, 0]
+        by = ball[1] + ball_noise[i, 1]
+        balls[i, 0] = s * bx
+        balls[i, 1] = s * by
+        balls[i, 2] = s * (ball[3] + ball_noise[i, 2])
+        balls[i, 3] = s * (ball[4] + ball_noise[i, 3])
+        dx = bx - px
+        dy = by - py
+        balls[i, 4] = _wrap(np.arctan2(dy, dx) - yaw)
+        balls[i, 5] = np.hypot(dx, dy)
+        for k in range(m):
+            j = others[i, k]
+            ox = R[j, 0] + obs_noise[i, k, 0]
+            oy = R[j, 1] + obs_noise[i, k, 1]
+            obs[0, i, k] = s * ox
+            obs[1, i, k] = s * oy
+            obs[2, i, k] = s * (R[j, 3] + obs_noise[i, k, 2])
+            obs[3, i, k] = s * (R[j, 4] + obs_noise[i, k, 3])
+            dx = ox - px
+            dy = oy - py
+            obs[4, i, k] = _wrap(np.arctan2(dy, dx) - yaw)
+            obs[5, i, k] = np.hypot(dx, dy)
+    return own, balls, obs
+
+
+@numba.njit(cache=True, nogil=True)
+def robot_flags(R, act, M, n_wheels, enabled, slow_since, step, stuck_steps, half_length, half_width):
+    """Per robot, from its state R (n, 6) and servo set point act (n, 3): measured rim speeds (n, W) from its
+    actual motion (what encoders measure), 'valid' (on the field within 1 m, enabled) and 'stuck'
+    (commanded > 0.2 m/s but moving at less than half of it for stuck_steps); updates slow_since."""
+    n = R.shape[0]
+    W = M.shape[1]
+    wheels = np.zeros((n, W))
+    valid = np.empty(n, dtype=np.bool_)
+    stuck = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        c = np.cos(R[i, 2])
+        s = np.sin(R[i, 2])
+        bvx = c * R[i, 3] + s * R[i, 4]
+        bvy = c * R[i, 4] - s * R[i, 3]
+        w = R[i, 5]
+        for k in range(n_wheels[i]):
+            wheels[i, k] = M[i, k, 0] * bvx + M[i, k, 1] * bvy + M[i, k, 2] * w
+        valid[i] = abs(R[i, 0]) <= half_length + 1.0 and abs(R[i, 1]) <= half_width + 1.0 and enabled[i]
+        cmd2 = act[i, 0] * act[i, 0] + act[i, 1] * act[i, 1]
+        slow = cmd2 > 0.04 and R[i, 3] * R[i, 3] + R[i, 4] * R[i, 4] < 0.25 * cmd2
+        if not slow:
+            slow_since[i] = -1
+        elif slow_since[i] < 0:
+            slow_since[i] = step
+        stuck[i] = slow and step - slow_since[i] >= stuck_steps
+    return wheels, valid, stuck
+
+
+@numba.njit(cache=True, nogil=True)
+def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
+    """Poses (n+1, 7: x y z qw qx qy qz) and twists (n+1, 6) of the robots (planar joints from robot_q/
+    robot_v on) and the ball (free joint at ball_q/ball_v, its angular velocity turned to the world frame)."""
+    pose = np.zeros((n + 1, 7))
+    twist = np.zeros((n + 1, 6))
+    for i in range(n):
+        half = 0.5 * qpos[robot_q + 3 * i + 2]
+        pose[i, 0] = qpos[robot_q + 3 * i]
+        pose[i, 1] = qpos[robot_q + 3 * i + 1]
+        pose[i, 3] = np.cos(half)
+        pose[i, 6] = np.sin(half)
+        twist[i, 0] = qvel[robot_v + 3 * i]
+        twist[i, 1] = qvel[robot_v + 3 * i + 1]
+        twist[i, 5] = qvel[robot_v + 3 * i + 2]
+    for k in range(7):
+        pose[n, k] = qpos[ball_q + k]
+    for k in range(3):
+        twist[n, k] = qvel[ball_v + k]
+    # w_world = R(q) w_local
+    w0, w1, w2 = qvel[ball_v + 3], qvel[ball_v + 4], qvel[ball_v + 5]
+    qw, qx, qy, qz = qpos[ball_q + 3], qpos[ball_q + 4], qpos[ball_q + 5], qpos[ball_q + 6]
+    # v' = v + 2 qw (q x v) + 2 q x (q x v)
+    cx = qy * w2 - qz * w1
+    cy = qz * w0 - qx * w2
+    cz = qx * w1 - qy * w0
+    twist[n, 3] = w0 + 2.0 * (qw * cx + qy * cz - qz * cy)
+    twist[n, 4] = w1 + 2.0 * (qw * cy + qz * cx - qx * cz)
+    twist[n, 5] = w2 + 2.0 * (qw * cz + qx * cy - qy * cx)
+    return pose, twist

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import msgs
+from .kernels import perceive
 
 _BallInfo = msgs.BallInfo
 _ObstaclesInfo = msgs.ObstaclesInfo
@@ -62,6 +63,9 @@ class Perception:
         n = self.n
         self.others = np.array([[j for j in range(n) if j != i] for i in range(n)], dtype=int).reshape(n, max(n - 1, 0))
         self._turn = np.where(self.sign > 0, 0.0, np.pi)
+        m = max(n - 1, 0)
+        self._no_own_noise, self._no_ball_noise, self._no_obs_noise = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4))
+        self._orad = self.radii[self.others] if n > 1 else np.zeros((n, 0))
         self._ids = self.ids.tolist()
         self._nw = [int(k) for k in n_wheels]
         self.exact = (spec.position_noise == 0 and spec.velocity_noise == 0 and spec.heading_noise == 0
@@ -84,25 +88,31 @@ class Perception:
         """One OmniVisionInfo per robot (in robot order)."""
         n = self.n
         spec, rng = self.spec, self.rng
-        R = snap.robots
-        px, py, yaw, vx, vy, w = (R[:, k] for k in range(6))
-        bx, by, bz, bvx, bvy, bvz = snap.ball
-        s = self.sign
-
-        # own pose as each robot believes it (self-localisation noise)
-        if spec.position_noise > 0:
-            px = px + rng.normal(0.0, spec.position_noise, n)
-            py = py + rng.normal(0.0, spec.position_noise, n)
-        if spec.heading_noise > 0:
-            yaw = yaw + rng.normal(0.0, spec.heading_noise, n)
-        if spec.velocity_noise > 0:
-            vx = vx + rng.normal(0.0, spec.velocity_noise, n)
-            vy = vy + rng.normal(0.0, spec.velocity_noise, n)
-        yaw_team = wrap(yaw + self._turn)
+        m = max(n - 1, 0)
+        own_noise, ball_noise, obs_noise = self._no_own_noise, self._no_ball_noise, self._no_obs_noise
+        if not self.exact:
+            pos, vel, head = spec.position_noise, spec.velocity_noise, spec.heading_noise
+            own_noise = np.zeros((n, 5))
+            ball_noise = np.zeros((n, 4))
+            obs_noise = np.zeros((n, m, 4))
+            if pos > 0:        # own pose (self-localisation), the ball and every obstacle
+                own_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
+                ball_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
+                obs_noise[:, :, :2] = rng.normal(0.0, pos, (n, m, 2))
+            if head > 0:
+                own_noise[:, 2] = rng.normal(0.0, head, n)
+            if vel > 0:
+                own_noise[:, 3:] = rng.normal(0.0, vel, (n, 2))
+                ball_noise[:, 2:] = rng.normal(0.0, vel, (n, 2))
+                obs_noise[:, :, 2:] = rng.normal(0.0, vel, (n, m, 2))
+        own, balls, obs = perceive(snap.robots, snap.ball, self.sign, self.others, own_noise, ball_noise, obs_noise)
+        seen = [True] * n if spec.ball_dropout == 0 else (rng.random(n) >= spec.ball_dropout).tolist()
+        keep = None
+        if spec.obstacle_dropout > 0 and n > 1:
+            keep = rng.random((n, m)) >= spec.obstacle_dropout
 
         # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
-        tx, ty, tyaw = (s * px).tolist(), (s * py).tolist(), yaw_team.tolist()
-        tvx, tvy, tw = (s * vx).tolist(), (s * vy).tolist(), w.tolist()
+        tx, ty, tyaw, tvx, tvy, tw = own.T.tolist()
         valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
         wheels = snap.wheels
         ids = self._ids
@@ -112,46 +122,11 @@ class Perception:
                 id=ids[i], x=tx[i], y=ty[i], yaw=tyaw[i], vx=tvx[i], vy=tvy[i], w=tw[i], valid=valid[i],
                 stuck=stuck[i], holding_ball=snap.holder == i, wheel_speeds=wheels[i, : self._nw[i]])
                 for i in idx]
-
-        # ball seen by each robot
-        bxs = np.full(n, bx)
-        bys = np.full(n, by)
-        bvxs = np.full(n, bvx)
-        bvys = np.full(n, bvy)
-        if spec.position_noise > 0:
-            bxs = bxs + rng.normal(0.0, spec.position_noise, n)
-            bys = bys + rng.normal(0.0, spec.position_noise, n)
-        if spec.velocity_noise > 0:
-            bvxs = bvxs + rng.normal(0.0, spec.velocity_noise, n)
-            bvys = bvys + rng.normal(0.0, spec.velocity_noise, n)
-        seen = np.ones(n, dtype=bool) if spec.ball_dropout == 0 else rng.random(n) >= spec.ball_dropout
-        bdx, bdy = bxs - px, bys - py
-        b_ang = wrap(np.arctan2(bdy, bdx) - yaw)
-        b_dist = np.hypot(bdx, bdy)
-
-        # obstacles: every other robot, true positions seen from each (noisy) observer
-        o = self.others
-        ox, oy = R[:, 0][o], R[:, 1][o]                 # (n, n-1) world
-        ovx, ovy = R[:, 3][o], R[:, 4][o]
-        if spec.position_noise > 0 and n > 1:
-            ox = ox + rng.normal(0.0, spec.position_noise, ox.shape)
-            oy = oy + rng.normal(0.0, spec.position_noise, oy.shape)
-        if spec.velocity_noise > 0 and n > 1:
-            ovx = ovx + rng.normal(0.0, spec.velocity_noise, ovx.shape)
-            ovy = ovy + rng.normal(0.0, spec.velocity_noise, ovy.shape)
-        odx, ody = ox - px[:, None], oy - py[:, None]
-        o_ang = wrap(np.arctan2(ody, odx) - yaw[:, None])
-        o_dist = np.hypot(odx, ody)
-        sc = s[:, None]
-        tx_o, ty_o, tvx_o, tvy_o = sc * ox, sc * oy, sc * ovx, sc * ovy
-        orad = self.radii[o]
-        keep = None
-        if spec.obstacle_dropout > 0 and n > 1:
-            keep = rng.random(ox.shape) >= spec.obstacle_dropout
-
-        sx, sy, svx, svy = (s * bxs).tolist(), (s * bys).tolist(), (s * bvxs).tolist(), (s * bvys).tolist()
-        bang, bdist, seen_l = b_ang.tolist(), b_dist.tolist(), seen.tolist()
-        bz, bvz = float(bz), float(bvz)
+        tx_o, ty_o, tvx_o, tvy_o, o_ang, o_dist = obs
+        orad = self._orad
+        sx, sy, svx, svy, bang, bdist = balls.T.tolist()
+        seen_l = seen
+        bz, bvz = float(snap.ball[2]), float(snap.ball[5])
         out = []
         for i in range(n):
             if seen_l[i]:

@@ -24,6 +24,7 @@ from .. import msgs
 from ..scene.schema import Scene
 from .ballhandling import BallHandling
 from .drive import OmniDrive
+from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world
 
@@ -140,6 +141,7 @@ class Simulator:
         assert np.array_equal(self._rq.ravel(), np.arange(q0, q0 + 3 * self.n))
         assert np.array_equal(self._rv.ravel(), np.arange(v0, v0 + 3 * self.n))
         self._qpos3 = self.d.qpos[q0:q0 + 3 * self.n].reshape(self.n, 3)
+        self._q0, self._v0 = q0, v0
         self._qvel3 = self.d.qvel[v0:v0 + 3 * self.n].reshape(self.n, 3)
         self._bq = self.ix.ball_qpos
         self._bv = self.ix.ball_qvel
@@ -418,20 +420,7 @@ class Simulator:
 
     def model_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
         """Names, poses (M, 7: x y z qw qx qy qz) and twists (M, 6: v, w), world frame; ball last."""
-        n = self.n
-        pose = np.zeros((n + 1, 7))
-        twist = np.zeros((n + 1, 6))
-        q, v = self.d.qpos, self.d.qvel
-        rp, rv = self._qpos3, self._qvel3          # views of the robots' joints (x, y, yaw)
-        half = 0.5 * rp[:, 2]
-        pose[:n, 0:2] = rp[:, 0:2]
-        pose[:n, 3] = np.cos(half)
-        pose[:n, 6] = np.sin(half)
-        twist[:n, 0:2] = rv[:, 0:2]
-        twist[:n, 5] = rv[:, 2]
-        pose[n] = q[self._bq:self._bq + 7]
-        twist[n, :3] = v[self._bv:self._bv + 3]
-        mujoco.mju_rotVecQuat(twist[n, 3:], v[self._bv + 3:self._bv + 6], q[self._bq + 3:self._bq + 7])
+        pose, twist = model_poses(self.d.qpos, self.d.qvel, self._q0, self._v0, self.n, self._bq, self._bv)
         return self.model_names, pose, twist
 
     def model_states(self) -> dict[str, ModelStateView]:
@@ -499,11 +488,13 @@ class Simulator:
     def snapshot(self) -> Snapshot:
         """The current world for perception (also updates each robot's 'stuck' flag)."""
         R = self.robot_array()
-        self._update_stuck(R)
-        valid = (np.abs(R[:, :2]) <= self._valid_box).all(axis=1)
-        valid &= self.enabled
+        F = self.field
+        wheels, valid, stuck = robot_flags(R, self._act3, self.drive.M, self.drive.n_wheels, self.enabled,
+                                           self._slow_since, self.step_index, self._stuck_steps,
+                                           F.half_length, F.half_width)
+        self.stuck = stuck
         return Snapshot(step=self.step_index, robots=R, ball=self.ball_array(), holder=self.ball.holder,
-                        wheels=self.measured_wheel_speeds(R), valid=valid, stuck=self.stuck.copy())
+                        wheels=wheels, valid=valid, stuck=stuck.copy())
 
     def _update_stuck(self, R: np.ndarray) -> None:
         """Stuck: commanded to move (> 0.2 m/s) but moving at less than half of it for 0.5 s or more."""
