@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from simatch.record import Player, Recording
-from simatch.record.cdr import Encoders
 from simatch import msgs
 
 
@@ -12,7 +11,7 @@ def test_every_replayed_message_equals_the_recorded_one(recording):
     rec = Recording(path)
     recorded = [(topic, data) for topic, _, data in rec.raw() if not topic.startswith("scene/")]
     player = Player(path, pace=None)
-    encode = Encoders(msgs.typestore)
+    encode = msgs.encode
     seen = []
     sub = player.bus.subscribe_all("**", lambda topic, msg: seen.append((topic, encode(msg))))
     try:

@@ -1,21 +1,24 @@
 """Recording cost (issue 6): how much ``--record`` adds to a run's time, and how large a recorded minute is.
 
-Two runs of the same scene and seed, without and with a recorder, on one core; the figure is the ratio of
-their wall times (recorder finalisation included) and the file size per simulated minute. Both runs must
-end with the same state digest (recording never changes a run), which the benchmark reports too.
+Two runs of the same scene and seed, without and with a recorder; the figures are the ratios of their times
+(recorder finalisation included), the file size per simulated minute and where those bytes go (per topic).
+Both runs must end with the same state digest (recording never changes a run), which is reported too.
 
-Scenes, until the default strategy and the referee land:
+Scenes:
 
-* ``startpose``: ``msl_5v5`` with both coaches started; the robots drive back to their start poses after
-  being placed elsewhere and then mostly stand: the cheapest full stack (perception, strategies, team
-  fusion, coaches) and the most compressible data.
-* ``scripted``: ``msl_5v5`` with `Chaser` robots: the nearest robot of each team chases the ball, takes it
-  and kicks it upfield, the goalkeeper follows the ball along its goal line, the others shadow the ball from
-  their formation places. Everything moves all the time, so the file size is that of a lively match.
+* ``match``: ``msl_5v5`` as shipped (both teams' default strategy, the automatic referee), from the
+  kick-off: the run the issue's targets are about.
+* ``scripted``: ``msl_5v5`` with `Chaser` robots and the coaches giving the commands (no referee): the
+  nearest robot of each team chases the ball, takes it and kicks it upfield, the goalkeeper follows the
+  ball along its goal line, the others shadow the ball from their formation places. Everything moves all
+  the time (the liveliest data, the largest file), and the strategies cost almost nothing, so the
+  recording's own cost weighs most.
 
-The time of a run is the CPU time of this process (all its threads: the MCAP writer's too), which the
-other jobs of a shared machine disturb far less than wall time; each pair is measured three times,
-alternating, and the fastest run of each kind counts. Wall-time figures are reported beside them.
+Times: the CPU time of the process (all threads, the writer's too), which other jobs on a shared machine
+disturb far less than wall time, and the CPU time of the simulation thread alone (``main``): the recording's
+compression and file writes run in a thread of their own, so with a free core that is what the run waits
+for. Each pair is measured three times, alternating, and the fastest run of each kind counts; wall-time
+figures are reported beside them.
 """
 
 from __future__ import annotations
@@ -24,14 +27,17 @@ import math
 import os
 import tempfile
 import time
+from collections import defaultdict
 from pathlib import Path
+
+import zstandard
 
 from ..strategy.base import Command, RobotStrategy
 
 SCENES = {
-    "startpose": {},
+    "match": {},
     "scripted": {"teams.cyan.strategy": "simatch.bench.record:Chaser",
-                 "teams.magenta.strategy": "simatch.bench.record:Chaser"},
+                 "teams.magenta.strategy": "simatch.bench.record:Chaser", "judge.kind": "none"},
 }
 MOVED = {"cyan/2": (1.0, 4.0), "cyan/4": (-8.0, -5.0), "magenta/3": (-1.0, -4.0), "magenta/5": (8.0, 5.0)}
 
@@ -64,48 +70,79 @@ class Chaser(RobotStrategy):
         return Command(target=(tx, ty), target_ori=math.atan2(ball.y - ty, ball.x - tx), max_vel=2.0)
 
 
-def _one(overrides: dict, seconds: float, seed: int, path: Path | None) -> tuple[float, float, str, int]:
-    """CPU and wall seconds (finalisation included), final digest, file size."""
+def _one(label: str, seconds: float, seed: int, path: Path | None) -> tuple[float, float, float, str, int]:
+    """CPU seconds of the process and of this thread, wall seconds (finalisation included), final digest,
+    file size."""
     from ..record.recorder import Recorder
     from ..simulation import Simulation
 
-    with Simulation("msl_5v5", seed=seed, overrides=overrides) as sim:
+    with Simulation("msl_5v5", seed=seed, overrides=SCENES[label]) as sim:
         recorder = Recorder.for_run(sim, path, command_line=["simatch", "bench"]) if path else None
-        for name, (x, y) in MOVED.items():
-            sim.set_model_state(name, x=x, y=y)
-        for coach in sim.coaches.values():
-            coach.start_play()
-        c0, t0 = time.process_time(), time.perf_counter()
-        sim.run(seconds=seconds)
+        if label == "scripted":
+            for name, (x, y) in MOVED.items():
+                sim.set_model_state(name, x=x, y=y)
+            for coach in sim.coaches.values():
+                coach.start_play()
+        c0, m0, t0 = time.process_time(), time.thread_time(), time.perf_counter()
+        sim.run(seconds=seconds, until_done=False)
         if recorder is not None:
             recorder.close()
-        cpu, wall = time.process_time() - c0, time.perf_counter() - t0
-        return cpu, wall, sim.state_digest(), (path.stat().st_size if path else 0)
+        cpu, main, wall = time.process_time() - c0, time.thread_time() - m0, time.perf_counter() - t0
+        return cpu, main, wall, sim.state_digest(), (path.stat().st_size if path else 0)
+
+
+def topic_sizes(path: Path, seconds: float) -> dict[str, float]:
+    """MB per simulated minute of each kind of topic (robot and team topics grouped by their last part),
+    each compressed alone, chunk by chunk, as the recorder compresses: where the bytes of a recording go."""
+    from ..record import Recording
+    from ..record.layout import CHUNK_NS
+    from ..record.recorder import COMPRESSION_LEVEL
+
+    compressor = zstandard.ZstdCompressor(level=COMPRESSION_LEVEL)
+    sizes: dict[str, int] = defaultdict(int)
+    pending: dict[str, list[bytes]] = defaultdict(list)
+    chunk = 0
+
+    def flush() -> None:
+        for kind, items in pending.items():
+            sizes[kind] += len(compressor.compress(b"".join(items)))
+        pending.clear()
+
+    for topic, t, data in Recording(path).raw():
+        if t // CHUNK_NS != chunk:
+            flush()
+            chunk = t // CHUNK_NS
+        pending["scene" if topic.startswith("scene/") else topic.rsplit("/", 1)[-1]].append(bytes(data))
+    flush()
+    per_minute = 60.0 / seconds / 1e6
+    return {kind: round(n * per_minute, 3) for kind, n in sorted(sizes.items(), key=lambda kv: -kv[1])}
 
 
 def run(seconds: float | None = None) -> dict:
     seconds = seconds or 60.0
     out: dict = {}
     with tempfile.TemporaryDirectory(prefix="simatch-bench-record-") as tmp:
-        _one(SCENES["scripted"], 2.0, 9, Path(tmp) / "warm.mcap")      # warm-up: kernels, imports, encoders
-        for label, overrides in SCENES.items():
+        _one("scripted", 2.0, 9, Path(tmp) / "warm.mcap")      # warm-up: kernels, imports, encoders
+        for label in SCENES:
             plain, recorded, size, digests = [], [], 0, set()
             for rep in range(3):
-                cpu, wall, digest, _ = _one(overrides, seconds, 1, None)
-                plain.append((cpu, wall))
+                cpu, main, wall, digest, _ = _one(label, seconds, 1, None)
+                plain.append((cpu, main, wall))
                 digests.add(digest)
                 path = Path(tmp) / f"{label}{rep}.mcap"
-                cpu, wall, digest, size = _one(overrides, seconds, 1, path)
-                recorded.append((cpu, wall))
+                cpu, main, wall, digest, size = _one(label, seconds, 1, path)
+                recorded.append((cpu, main, wall))
                 digests.add(digest)
+                if rep == 0:
+                    out[f"record_{label}_topics_mb_per_sim_minute"] = topic_sizes(path, seconds)
                 os.remove(path)
-            (base, base_wall), (rec, rec_wall) = min(plain), min(recorded)
-            out[f"record_{label}_rtf_plain"] = round(seconds / base, 1)
-            out[f"record_{label}_rtf_recorded"] = round(seconds / rec, 1)
-            out[f"record_{label}_overhead_pct"] = round(100.0 * (rec / base - 1.0), 1)
-            out[f"record_{label}_ms_per_sim_s"] = round(1000.0 * (rec - base) / seconds, 2)
-            out[f"record_{label}_wall_overhead_pct"] = round(100.0 * (min(w for _, w in recorded)
-                                                                      / min(w for _, w in plain) - 1.0), 1)
+            base, rec = [min(r[i] for r in plain) for i in range(3)], [min(r[i] for r in recorded) for i in range(3)]
+            out[f"record_{label}_rtf_plain"] = round(seconds / base[0], 1)
+            out[f"record_{label}_rtf_recorded"] = round(seconds / rec[0], 1)
+            out[f"record_{label}_overhead_pct"] = round(100.0 * (rec[0] / base[0] - 1.0), 1)
+            out[f"record_{label}_main_overhead_pct"] = round(100.0 * (rec[1] / base[1] - 1.0), 1)
+            out[f"record_{label}_wall_overhead_pct"] = round(100.0 * (rec[2] / base[2] - 1.0), 1)
+            out[f"record_{label}_ms_per_sim_s"] = round(1000.0 * (rec[0] - base[0]) / seconds, 2)
             out[f"record_{label}_mb_per_sim_minute"] = round(size / 1e6 * 60.0 / seconds, 2)
             out[f"record_{label}_same_digest"] = len(digests) == 1
     return out

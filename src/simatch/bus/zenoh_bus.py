@@ -2,7 +2,7 @@
 
 A `ZenohBus` is an in-process bus for the nodes of this process plus a bridge to the other processes of the
 run, over one Zenoh session. Topics become key expressions ``simatch/<run>/<topic>``; messages travel as CDR
-(the same bytes as rosbag2/ROS 2, written and read by `cdr`), with the type in the Zenoh encoding
+(the same bytes as rosbag2/ROS 2, written and read by `simatch.msgs`' generated codec), with the type in the Zenoh encoding
 (``application/cdr;<type>``).
 
 * Local delivery is exactly the in-process bus: synchronous, in subscription order, no serialisation. A
@@ -36,7 +36,6 @@ import zenoh
 from zenoh.handlers import Callback as _ZCallback
 
 from .. import msgs
-from . import cdr
 from . import topics as _topics
 from .base import AnyCallback, BusStats, Callback
 from .inproc import InProcessBus
@@ -182,7 +181,7 @@ class _Publisher:
             local.put(msg)
         bus = self._bus
         if self.matching or bus.eager:
-            data = cdr.encode(msg)
+            data = msgs.encode(msg)
             signer = bus.signer
             try:
                 if signer is None:
@@ -396,7 +395,7 @@ class ZenohBus:
                 why = self.verifier(topic, payload, attachment)
                 if why is not None:
                     return (why, None, None)
-            return (None, cdr.decode(rsub.msgtype or _type_of(encoding), payload), None)
+            return (None, msgs.decode(rsub.msgtype or _type_of(encoding), payload), None)
         except msgs.MessageError as exc:
             return (None, None, exc)
         except Exception:          # never fail in Zenoh's thread: the owner will try again and report
@@ -458,7 +457,7 @@ class ZenohBus:
                 if error is not None:
                     raise error
                 if msg is None:
-                    msg = cdr.decode(rsub.msgtype or _type_of(encoding), payload)
+                    msg = msgs.decode(rsub.msgtype or _type_of(encoding), payload)
                 if rsub.any_type:
                     rsub.callback(topic, msg)
                 else:

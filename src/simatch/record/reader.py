@@ -26,6 +26,7 @@ from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from .. import msgs
+from ..msgs.cdr import Codec
 from ..scene.loader import LoadedScene, load_scene
 from . import foxglove_msgs as fg
 from . import layout
@@ -65,6 +66,7 @@ class Recording:
         self.problems: list[str] = []
         self._schemas: dict[int, tuple[str, bytes]] = {}
         self._checked: dict[str, bool] = {}
+        self._codecs: dict[int, Codec] = {}
         self._reported: set[str] = set()
         if not self.path.is_file():
             raise RecordingError(f"{self.path}: no such recording")
@@ -257,7 +259,10 @@ class Recording:
         if store is None:
             return None
         try:
-            return store.deserialize_cdr(data, typename)
+            codec = self._codecs.get(id(store))
+            if codec is None:
+                codec = self._codecs[id(store)] = Codec(store)
+            return codec.decode(typename, data)
         except Exception as exc:
             self._problem(f"decode{topic}", f"{self.path.name}: a message on {topic} does not decode as "
                                             f"{typename} ({_describe(exc)}): such messages are skipped")

@@ -1,9 +1,15 @@
 """The recorder: every message of a run's bus into one MCAP file (layout in `simatch.record.layout`).
 
 It listens on the bus, not inside the simulator, so it records an embedded run today and a distributed
-run (a server's bus) the same way. Messages are encoded to CDR on arrival (`cdr.Encoders`) and handed to
-the MCAP writer of ``foxglove-sdk`` (Rust: chunking, indexes and streaming zstd compression); a
-chunk is closed and written out at the end of every simulated second.
+run (a server's bus) the same way. Each message is encoded to CDR on arrival (`simatch.msgs.cdr.Codec`, with
+its memo: what teammates share and what a team's TeamStrategy repeats is encoded once) and its record is
+appended to the current chunk (`simatch.record.writer`); every half simulated second the chunk goes to the
+writer thread, which compresses and writes it while the simulation goes on.
+
+The hot path is one dictionary look-up, the encoding, one ``struct`` call and two list appends per message:
+measured, everything else (a lock, a call into a writer per message) cost as much as the encoding.
+Bus deliveries come from the thread that runs the bus (the in-process bus calls synchronously; the Zenoh bus
+delivers from its owner's thread), so the hot path takes no lock.
 
 What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics
 step), ball contacts, events, game state and operator commands, plus the two 3D-scene channels. Link
@@ -21,21 +27,19 @@ import datetime as _dt
 import json
 import logging
 import sys
-import threading
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Callable, Iterable
 
-import foxglove
 import numpy as np
-from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
 from .. import msgs
 from ..bus import topics
+from ..msgs.cdr import Codec
 from ..scene.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
-from .cdr import HEADER, Encoders
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
+from .writer import MESSAGE_FIXED, MESSAGE_HEADER, McapWriter, WriterError
 
 log = logging.getLogger(__name__)
 
@@ -43,13 +47,15 @@ log = logging.getLogger(__name__)
 WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.EVENTS, topics.GAME_STATE,
                 topics.OPERATOR)
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
-#: zstd level of the chunks: 1 costs some 2.5 ms less per simulated second of 5v5 than the default (3) and
-#: makes files about 1 % larger (measured); higher levels gain about 2 % for twice the time
+#: zstd level of the chunks: the data is mostly float64 noise, higher levels gain 1-4 % for 2-6 times the time
 COMPRESSION_LEVEL = 1
+_OPCODE_MESSAGE = 0x05
+_GAP = bytes(MESSAGE_HEADER.size)
+_pack_header = MESSAGE_HEADER.pack_into
 
 
 class RecordError(Exception):
-    """A recording that cannot be started (bad path, existing file)."""
+    """A recording that cannot be started (bad path, existing file) or written."""
 
 
 def simatch_version() -> str:
@@ -59,10 +65,10 @@ def simatch_version() -> str:
 
 
 class _Channel:
-    __slots__ = ("log", "encode", "count", "errors")
+    __slots__ = ("id", "encode", "count", "errors")
 
-    def __init__(self, log: Callable, encode: Callable):
-        self.log, self.encode, self.count, self.errors = log, encode, 0, 0
+    def __init__(self, cid: int, encode: Callable):
+        self.id, self.encode, self.count, self.errors = cid, encode, 0, 0
 
 
 class Recorder:
@@ -81,22 +87,24 @@ class Recorder:
         self.scene = scene
         self.dt_ns = layout.ns(dt)
         self.status = "recording"
-        self._ctx = foxglove.Context()
-        opts = MCAPWriteOptions(profile=layout.PROFILE, compression=MCAPCompression.Zstd, chunk_size=1 << 30,
-                                compression_level=compression_level, compression_threads=0)
         try:
-            self._writer = foxglove.open_mcap(str(self.path), context=self._ctx, writer_options=opts)
-        except Exception as exc:      # the SDK reports I/O problems as its own error types
-            raise RecordError(f"cannot write the recording {self.path}: {exc}") from None
-        self._encoders = Encoders(msgs.typestore, memo=True)
-        self._lock = threading.Lock()
-        self._schemas: dict[str, Any] = {}
+            self._writer = McapWriter(self.path, profile=layout.PROFILE, library=f"simatch {simatch_version()}",
+                                      compression_level=compression_level)
+        except WriterError as exc:
+            raise RecordError(f"cannot write the recording: {exc}") from None
+        self._codec = Codec(msgs.typestore, memo=True)
+        self._schemas: dict[str, int] = {}
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
         self._now = first_step * self.dt_ns
-        self._next_flush = (self._now // layout.NS + 1) * layout.NS
+        self._chunk_start: int | None = None          # log time of the current chunk's first message
+        self._chunk_end = self._now
+        self._next_chunk = (self._now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
+        self._chunk_counts: dict[int, int] = {}
+        self._every: list[_Channel] = []              # every channel, the 3D scene's too
+        self._mark = 0                                # len(chunk) when the run reached the current step
         self.first_step = first_step
-        self._writer.write_metadata(layout.META_START, {
+        self._writer.metadata(layout.META_START, {
             "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": simatch_version(),
             "scene_name": scene.name, "scene_source": scene.source, "scene_text": scene.text,
             "overrides": json.dumps(scene.overrides), "seed": str(int(seed)), "run": str(getattr(bus, "run", "")),
@@ -107,45 +115,31 @@ class Recorder:
         })
         self._scene3d = SceneBuilder(scene.spec)
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
-        self._game = self._raw_channel(GAME_TOPIC)
-        self._raw_channel(FIELD_TOPIC).log(self._scene3d.field_update(), self._now, None)
-        self._writer.flush()
-        on = self._on_message
+        self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
+        self._log(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
         self._subs = [bus.subscribe_all(topics.MODEL_STATES, self._on_model_states),
                       bus.subscribe_all(topics.CLOCK, self._on_clock)]
         wanted = [t for t in WORLD_TOPICS if t not in (topics.MODEL_STATES, topics.CLOCK)]
         wanted += [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
-        self._subs += [bus.subscribe_all(pattern, on) for pattern in wanted]
+        self._subs += [bus.subscribe_all(pattern, self._on_message) for pattern in wanted]
 
     # --- channels --------------------------------------------------------------------------------------------
-    def _schema(self, typestore, typename: str):
-        found = self._schemas.get(typename)
-        if found is None:
-            found = foxglove.Schema(name=typename, encoding=layout.SCHEMA_ENCODING,
-                                    data=layout.schema_text(typestore, typename).encode())
-            self._schemas[typename] = found
-        return found
-
-    def _raw_channel(self, channel_topic: str, typestore=None, typename: str | None = None):
-        typestore = typestore or fg.typestore
-        typename = typename or fg.SCENE_UPDATE
-        ch = foxglove.Channel(channel_topic, schema=self._schema(typestore, typename),
-                              message_encoding=layout.MESSAGE_ENCODING, context=self._ctx)
-        return ch.base
+    def _raw_channel(self, channel_topic: str, typestore, typename: str) -> _Channel:
+        sid = self._schemas.get(typename)
+        if sid is None:
+            sid = self._schemas[typename] = self._writer.schema(
+                typename, layout.SCHEMA_ENCODING, layout.schema_text(typestore, typename).encode())
+        ch = _Channel(self._writer.channel(channel_topic, sid, layout.MESSAGE_ENCODING), bytes)
+        self._every.append(ch)
+        return ch
 
     def _open(self, topic: str, msg) -> _Channel | None:
         typename = getattr(msg, "__msgtype__", None)
         if typename is None or typename not in msgs.typestore.fielddefs:
             self._skip(topic, f"type {typename or type(msg).__name__} is not a simatch message type")
             return None
-        func = self._encoders.func(typename)
-
-        def encode(m, func=func):
-            out = [HEADER]
-            func(m, out, 0)
-            return b"".join(out)
-
-        ch = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename).log, encode)
+        ch = self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename)
+        ch.encode = self._codec.appender(typename)
         self._channels[topic] = ch
         return ch
 
@@ -154,53 +148,82 @@ class Recorder:
         self._skipped[topic] = why
         log.warning("recording: not recording topic %s: %s", topic, why)
 
+    def _log(self, ch: _Channel, data: bytes) -> None:
+        """Append a message record of the current time to the current chunk."""
+        now = self._now
+        if self._chunk_start is None:
+            self._chunk_start = now
+        chunk = self._writer.chunk
+        chunk += MESSAGE_HEADER.pack(_OPCODE_MESSAGE, MESSAGE_FIXED + len(data), ch.id, 0, now, now)
+        chunk += data
+        ch.count += 1
+
     # --- bus callbacks (hot path) --------------------------------------------------------------------------
     def _on_message(self, topic: str, msg) -> None:
-        with self._lock:          # uncontended in process; a transport may call from several threads
-            ch = self._channels.get(topic, False)
-            if ch is False:
-                ch = self._open(topic, msg)
-            if ch is None:
-                return
-            try:
-                data = ch.encode(msg)
-            except Exception as exc:      # a malformed message from a producer: counted, never raised
-                ch.errors += 1
-                if ch.errors == 1:
-                    log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
-                                topic, exc)
-                return
-            ch.log(data, self._now, None)
-            ch.count += 1
+        ch = self._channels.get(topic, False)
+        if ch is False:
+            ch = self._open(topic, msg)
+        if ch is None:
+            return
+        chunk = self._writer.chunk
+        start = len(chunk)
+        chunk += _GAP                 # the record header, written once the message's size is known
+        try:
+            n = ch.encode(msg, chunk)
+        except Exception as exc:      # a malformed message from a producer: counted, never raised
+            del chunk[start:]
+            ch.errors += 1
+            if ch.errors == 1:
+                log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
+                            topic, exc)
+            return
+        now = self._now
+        _pack_header(chunk, start, _OPCODE_MESSAGE, MESSAGE_FIXED + n, ch.id, 0, now, now)
+        ch.count += 1
 
     def _advance(self, step: int) -> None:
+        """The run is at physics step ``step``: messages from now on carry its time."""
         now = step * self.dt_ns
-        if now != self._now:
-            self._now = now
-            self._encoders.forget()
-            if now >= self._next_flush:
-                self._writer.flush()          # the second that just ended goes to disk as one chunk
-                self._next_flush = (now // layout.NS + 1) * layout.NS
+        if now == self._now:
+            return
+        if len(self._writer.chunk) > self._mark:        # messages at the step that ends
+            if self._chunk_start is None:
+                self._chunk_start = self._now
+            self._chunk_end = self._now
+        self._now = now
+        if now >= self._next_chunk:
+            self._end_chunk()
+            self._next_chunk = (now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
+        self._mark = len(self._writer.chunk)
 
-    def _track(self, msg) -> int | None:
-        """The physics step a clock or model-states message opens: the recording's time follows it."""
-        with self._lock:
-            step = _step_of(msg)
-            if step is not None:
-                self._advance(step)
-        return step
+    def _end_chunk(self) -> None:
+        """What was recorded since the last chunk goes to the writer thread as one chunk."""
+        if self._writer.chunk:
+            counts = {ch.id: ch.count for ch in self._every}
+            delta = {cid: n - self._chunk_counts.get(cid, 0) for cid, n in counts.items()}
+            self._chunk_counts = counts
+            start = self._chunk_start if self._chunk_start is not None else self._chunk_end
+            self._writer.end_chunk(start, self._chunk_end, {c: n for c, n in delta.items() if n})
+        self._chunk_start = None
+        self._mark = 0
+        self._codec.forget()
 
     def _on_clock(self, topic: str, msg) -> None:
-        self._track(msg)
+        step = _step_of(msg)
+        if step is not None:
+            self._advance(step)
+        self._codec.forget()          # a control tick: see the memo periods of `Codec`
         self._on_message(topic, msg)
 
     def _on_model_states(self, topic: str, msg) -> None:
-        step = self._track(msg)
+        step = _step_of(msg)
+        if step is not None:
+            self._advance(step)
         self._on_message(topic, msg)
         if step is not None and step % self._game_every == 0:
             try:
                 pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
-                self._game.log(self._scene3d.game_update(msg.name, pose), self._now, None)
+                self._log(self._game, self._scene3d.game_update(msg.name, pose))
             except Exception as exc:
                 log.warning("recording: no 3D scene update at step %d: %s", step, exc)
 
@@ -227,11 +250,18 @@ class Recorder:
                "encode_errors": json.dumps(errors, sort_keys=True)}
         for key, value in (summary or {}).items():
             end[key] = value if isinstance(value, str) else json.dumps(value)
-        with self._lock:
+        if len(self._writer.chunk) > self._mark:            # messages at the current step
+            if self._chunk_start is None:
+                self._chunk_start = self._now
+            self._chunk_end = self._now
+        try:
+            self._end_chunk()
+            self._writer.metadata(layout.META_END, end)
+        finally:
             try:
-                self._writer.write_metadata(layout.META_END, end)
-            finally:
                 self._writer.close()
+            except WriterError as exc:
+                raise RecordError(str(exc)) from None
 
     def __enter__(self) -> "Recorder":
         return self

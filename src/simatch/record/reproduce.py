@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Node, Phase, topics
-from .cdr import Encoders
+from ..msgs.cdr import Codec
 from .reader import Recording, RecordingError
 from .recorder import simatch_version
 
@@ -155,7 +155,7 @@ class _DuringStep(Node):
 
 
 def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
-    encode = Encoders(msgs.typestore)
+    encode = Codec(msgs.typestore).encode
     latest: list = [None]
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))

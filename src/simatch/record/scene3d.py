@@ -22,7 +22,7 @@ import numpy as np
 
 from ..scene.schema import Scene
 from . import foxglove_msgs as fg
-from .cdr import Encoders
+from ..msgs.cdr import Codec
 
 FIELD_TOPIC = "/scene/field"
 GAME_TOPIC = "/scene/game"
@@ -59,7 +59,7 @@ class SceneBuilder:
     def __init__(self, scene: Scene):
         self.scene = scene
         self.geometry = scene.world.geometry()
-        self.encode = Encoders(fg.typestore)
+        self.codec = Codec(fg.typestore)
         self._T = fg.typestore.types
         self._template: bytes | None = None
         self._names: list[str] | None = None
@@ -103,7 +103,7 @@ class SceneBuilder:
                          color=self._color(rgb), colors=[], indices=np.zeros(0, dtype=np.uint32))
 
     def _update(self, entities) -> bytes:
-        return self.encode.encode(self._msg("SceneUpdate", deletions=[], entities=entities), fg.SCENE_UPDATE)
+        return self.codec.encode(self._msg("SceneUpdate", deletions=[], entities=entities), fg.SCENE_UPDATE)
 
     # --- the field -----------------------------------------------------------------------------------------
     def field_update(self) -> bytes:
