@@ -25,7 +25,9 @@ def test_msl_5v5_is_refereed_and_lasts_a_full_match():
 
 
 def test_run_json_carries_score_fouls_and_every_event():
-    args = ["run", "msl_5v5", "--json", "--seed", "3"] + [f"--set={k}={v}" for k, v in SHORT.items()]
+    # robots that stay at the original start poses (the default teams would take legal positions)
+    still = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"}
+    args = ["run", "msl_5v5", "--json", "--seed", "3"] + [f"--set={k}={v}" for k, v in {**SHORT, **still}.items()]
     proc = subprocess.run([sys.executable, "-m", "simatch", *args], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)

@@ -9,6 +9,7 @@ from __future__ import annotations
 #: name -> "module:function", in the order they run
 BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
+    "match": "simatch.bench.match:run",
     "record": "simatch.bench.record:run",
     "referee": "simatch.bench.referee:run",
     "web": "simatch.bench.web:run",

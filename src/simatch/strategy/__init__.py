@@ -16,6 +16,8 @@ from .worldmodel import WorldModel
 SHIPPED = {
     "constant": "simatch.strategy.scripted:ConstantVelocity",
     "startpose": "simatch.strategy.scripted:StartPose",
+    "nubot": "simatch.strategy.nubot:NubotTeam",
+    "simple": "simatch.strategy.simple:SimpleRobot",
     "encircle": "simatch.strategy.encirclement:Chaser",
     "flee": "simatch.strategy.encirclement:Target",
 }

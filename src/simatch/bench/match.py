@@ -1,0 +1,66 @@
+"""Full-match speed (``match_rtf``): the shipped ``msl_5v5`` scene as a user runs it — physics at 200 Hz,
+both teams' default strategies, the scene's judge (the automatic referee), no recording — from the
+kick-off on, in this process.
+
+It is measured in the same ``simatch bench`` run as the physics-only figure (``physics_rtf``), so the two
+can be compared: the difference is what the strategies, perception, bus and referee cost. Besides the
+real-time factor it reports where the time goes per control tick (the robots' decisions, in microseconds
+per robot and tick), so that a slow-down can be traced to a part.
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..scene.loader import load_scene
+from ..simulation import Simulation
+from ..strategy.node import RobotNode
+
+WARM_UP = 5.0          # simulated seconds run first, untimed (compiled kernels load, caches fill)
+
+
+def _timed_decisions(sim: Simulation) -> list[float]:
+    """Wrap every robot's decide to add up its wall time in the returned one-element list."""
+    total = [0.0]
+    clock = time.perf_counter
+    for node in sim.robot_nodes.values():
+        if not isinstance(node, RobotNode):
+            continue
+        decide = node.strategy.decide
+
+        def timed(world, decide=decide):
+            t0 = clock()
+            try:
+                return decide(world)
+            finally:
+                total[0] += clock() - t0
+
+        node.strategy.decide = timed
+    return total
+
+
+def run(seconds: float | None = None) -> dict:
+    seconds = seconds or 120.0
+    scene = load_scene("msl_5v5")
+    with Simulation(scene, seed=1) as sim:
+        sim.run(seconds=WARM_UP)
+        decisions = _timed_decisions(sim)
+        robots = len(sim.robot_nodes)
+        ticks0 = sim.clock.step_index
+        t0 = time.perf_counter()
+        sim.run(seconds=seconds, until_done=False)
+        wall = time.perf_counter() - t0
+        simulated = (sim.clock.step_index - ticks0) * sim.dt
+        control_ticks = simulated / scene.spec.control.period
+        result = sim.result()["result"]
+    out = {
+        "match_rtf": round(simulated / wall, 1),
+        "match_sim_seconds": round(simulated, 3),
+        "match_wall_seconds": round(wall, 3),
+        "match_ms_per_sim_second": round(wall / simulated * 1e3, 2),
+        "match_decide_us_per_robot_tick": round(decisions[0] / max(1.0, control_ticks * robots) * 1e6, 1),
+        "match_decide_share": round(decisions[0] / wall, 3),
+    }
+    if isinstance(result, dict) and "score" in result:
+        out["match_score"] = result["score"]
+    return out

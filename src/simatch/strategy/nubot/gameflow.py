@@ -1,0 +1,121 @@
+"""The robot's reading of the game flow from the game commands and what it sees.
+
+The scene interface says only the current command (MatchMode) and the last set piece (MatchType). The
+rules a team must respect after a restart depend on more: whether the ball is in play yet (it moved
+0.5 m), who took the restart (the taker may not touch the ball again before another robot did), whether
+a goal would count (no direct goal from a set piece: a team-mate must take the ball first). Every robot
+keeps this reading from its own observations, so that the team agrees without talking.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+
+from ...scene.commands import MatchMode, is_ours
+from .observation import Observation
+
+IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
+TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
+OUR_RESTART_LIMIT = 10.0      # a restart of ours not taken by then is given up [s]
+TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
+
+
+class Phase(enum.IntEnum):
+    STOP = 0
+    SETUP = 1          # positioning for a set piece (the command is a set piece)
+    OUR_RESTART = 2    # START given, our set piece not taken yet
+    OPP_RESTART = 3    # START given, the opponents' set piece not taken yet
+    PLAY = 4
+    PARK = 5
+    TEST = 6
+
+
+class GameFlow:
+    def __init__(self, restart_wait: float):
+        self.restart_wait = restart_wait
+        self.phase = Phase.STOP
+        self.kind = 0                  # the set piece being set up or taken (MatchMode value)
+        self.t0 = 0.0                  # when START came for the restart
+        self.ball0 = (0.0, 0.0)        # where the ball was then
+        self.taker = 0                 # our robot that took the last restart (blocked), 0 if none
+        self.taker_since = 0.0
+        self.pass_pending = False      # a goal would not count yet: a second team-mate must take the ball
+        self.first_holder = 0
+        self._last_mode = -1
+
+    def key(self) -> tuple:
+        return (int(self.phase), self.kind, self.ball0, self.taker)
+
+    def update(self, obs: Observation) -> None:
+        mode = obs.mode
+        last = self._last_mode
+        self._last_mode = mode
+        if mode == MatchMode.STOPROBOT:
+            self.phase = Phase.STOP
+            return
+        if mode == MatchMode.PARKINGROBOT:
+            self.phase = Phase.PARK
+            return
+        if mode == MatchMode.TEST:
+            self.phase = Phase.TEST
+            return
+        if 1 <= mode <= 13:
+            self.phase = Phase.SETUP
+            self.kind = mode
+            self.taker = 0
+            return
+        # START (or anything else that means play)
+        if mode != last:
+            if 1 <= last <= 13:
+                self._restart(obs, obs.mtype if 1 <= obs.mtype <= 13 else last)
+            else:
+                self.phase = Phase.PLAY
+        self._follow(obs)
+
+    def _restart(self, obs: Observation, kind: int) -> None:
+        self.kind = kind
+        self.t0 = obs.t
+        self.ball0 = (obs.bx, obs.by)
+        self.taker = 0
+        self.first_holder = 0
+        if kind == MatchMode.DROPBALL:
+            self.phase = Phase.PLAY
+            self.pass_pending = True
+        elif is_ours(kind):
+            self.phase = Phase.OUR_RESTART
+            self.pass_pending = kind != MatchMode.OUR_PENALTY
+        else:
+            self.phase = Phase.OPP_RESTART
+            self.pass_pending = False
+
+    def _follow(self, obs: Observation) -> None:
+        moved = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1]) >= IN_PLAY_DISTANCE
+        if self.phase == Phase.OUR_RESTART:
+            if moved:
+                self.phase = Phase.PLAY
+                bx, by = self.ball0
+                taker = min(obs.field_mates() or obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by))
+                self.taker, self.taker_since = taker.id, obs.t
+                self.first_holder = taker.id
+            elif obs.t - self.t0 > OUR_RESTART_LIMIT:
+                self.phase = Phase.PLAY
+        elif self.phase == Phase.OPP_RESTART:
+            if moved or obs.t - self.t0 > self.restart_wait:
+                self.phase = Phase.PLAY
+        if self.phase != Phase.PLAY or not (self.taker or self.pass_pending):
+            return
+        holder = next((m for m in obs.mates if m.holding), None)
+        touched = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
+        if self.taker:
+            if (touched or (holder is not None and holder.id != self.taker)
+                    or obs.t - self.taker_since > TAKER_BLOCK_LIMIT):
+                self.taker = 0
+        if self.pass_pending:
+            # no direct goal: a second robot of ours must have had the ball (at a dropped ball, any
+            # second robot, an opponent too)
+            if holder is not None and self.first_holder == 0:
+                self.first_holder = holder.id
+            elif (holder is not None and holder.id != self.first_holder) or (
+                    touched and self.kind == MatchMode.DROPBALL):
+                self.pass_pending = False

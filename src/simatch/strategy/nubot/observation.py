@@ -1,0 +1,155 @@
+"""What one robot knows at one control tick, distilled from its WorldModel into plain floats.
+
+Everything comes from the robot's own topics: its perception (ball, obstacles, its team), its team's
+fused StrategyInfo (teammates' roles and passes) and the game command. Opponents are the obstacles that
+are not one of the team's robots.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..worldmodel import WorldModel
+
+#: an obstacle this close to a teammate is that teammate [m]
+_SAME_ROBOT = 0.1
+
+
+class Mate:
+    """One robot of my team (me included), team frame."""
+
+    __slots__ = ("id", "x", "y", "yaw", "vx", "vy", "w", "holding", "valid", "stuck", "role", "action",
+                 "pass_info", "is_goalie", "attacking", "role_time")
+
+    def __init__(self, info, is_goalie: bool):
+        self.id = info.id
+        self.x, self.y, self.yaw = info.x, info.y, info.yaw
+        self.vx, self.vy, self.w = info.vx, info.vy, info.w
+        self.holding = info.holding_ball
+        self.valid = info.valid
+        self.stuck = info.stuck
+        self.role = -1           # as the robot announced it last (StrategyInfo), -1 if unknown
+        self.action = -1
+        self.pass_info = None
+        self.is_goalie = is_goalie
+        self.attacking = -1      # whether its team picture said "we attack" last tick (1/0), -1 if unknown
+        self.role_time = 1e9     # how long it has had its announced role [s]
+
+    def key(self) -> tuple:
+        return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
+
+
+class TeamView:
+    """The part of an observation that every robot of the team shares (its team's RobotInfo list and
+    StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
+    the others when they hold the very same messages."""
+
+    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array", "spots")
+
+    def __init__(self):
+        self.tick = -1
+        self.robots = None
+        self.infos: tuple = ()
+        self.mates: list[Mate] = []
+        self.by_id: dict[int, Mate] = {}
+        self.array = np.zeros((0, 5))         # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        self.spots: set = set()               # where the team-mates are, to tell them among obstacles
+
+    def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
+        robots = world.vision.robots
+        strategies = world.strategies
+        infos = self.infos
+        if (self.tick == world.tick and self.robots is robots and len(infos) == len(strategies)
+                and all(a is b for a, b in zip(infos, strategies.values()))):
+            return self.mates, self.by_id, self.array
+        gk = world.goalkeeper
+        mates = []
+        for r in robots:
+            m = Mate(r, r.id == gk)
+            s = strategies.get(r.id)
+            if s is not None:
+                m.role, m.action = s.role, s.action
+                if s.pass_cmd.is_valid:
+                    m.pass_info = s.pass_cmd
+                if len(s.user) >= 2:
+                    m.attacking, m.role_time = int(s.user[0]), float(s.user[1])
+            mates.append(m)
+        self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
+        self.mates, self.by_id = mates, {m.id: m for m in mates}
+        self.array = np.array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], dtype=float).reshape(-1, 5)
+        self.spots = {(m.x, m.y) for m in mates}
+        return self.mates, self.by_id, self.array
+
+
+class Observation:
+    __slots__ = ("t", "tick", "me", "mates", "by_id", "mate_array", "bx", "by", "bz", "bvx", "bvy", "bvz",
+                 "ball_seen", "ball_age", "opps", "_opp_array", "mode", "mtype", "coach", "goalie_id")
+
+    def __init__(self, world: WorldModel, view: TeamView | None = None):
+        v = world.vision
+        self.t = world.time
+        self.tick = world.tick
+        self.goalie_id = world.goalkeeper
+        view = view or TeamView()
+        mates, by_id, self.mate_array = view.get(world)
+        me = by_id.get(world.id)
+        if me is None:
+            raise LookupError(f"robot {world.id} is missing from its own perception")
+        self.me = me
+        self.mates = mates
+        self.by_id = by_id
+        b = v.ball if v.ball.pos_known else world.ball
+        if b is None:
+            self.bx = self.by = self.bvx = self.bvy = self.bvz = 0.0
+            self.bz = 0.11
+            self.ball_seen = False
+            self.ball_age = math.inf
+        else:
+            self.bx, self.by, self.bz = b.x, b.y, b.z
+            self.bvx, self.bvy, self.bvz = b.vx, b.vy, b.vz
+            self.ball_seen = b is v.ball
+            self.ball_age = 0.0 if self.ball_seen else b.age
+        self.opps = opponents(v.obstacles, mates, view.spots)
+        self._opp_array = None
+        c = world.coach
+        self.coach = c
+        self.mode = c.match_mode if c is not None else 0
+        self.mtype = c.match_type if c is not None else 0
+
+    @property
+    def opp_array(self) -> np.ndarray:
+        """(M, 4): the opponents as an array (x, y, vx, vy), for kernels."""
+        if self._opp_array is None:
+            self._opp_array = np.array(self.opps, dtype=float).reshape(-1, 4)
+        return self._opp_array
+
+    @property
+    def ball_speed(self) -> float:
+        return math.hypot(self.bvx, self.bvy)
+
+    def field_mates(self) -> list[Mate]:
+        """Valid team-mates that are not the goalkeeper, me included."""
+        return [m for m in self.mates if m.valid and not m.is_goalie]
+
+
+def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, float, float]]:
+    """(x, y, vx, vy) of the obstacles that are not team-mates. With exact perception a team-mate's
+    obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of one."""
+    n = len(o.x)
+    if n == 0:
+        return []
+    xs, ys, vxs, vys = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
+    found = 0
+    rest = []
+    for k in range(n):
+        if (xs[k], ys[k]) in spots:
+            found += 1
+        else:
+            rest.append(k)
+    if found < len(mates) - 1:
+        # some team-mates are not where the team list says (noisy perception): match by distance
+        rest = [k for k in rest
+                if all(abs(m.x - xs[k]) >= _SAME_ROBOT or abs(m.y - ys[k]) >= _SAME_ROBOT for m in mates)]
+    return [(xs[k], ys[k], vxs[k], vys[k]) for k in rest]

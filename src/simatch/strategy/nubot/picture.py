@@ -1,0 +1,345 @@
+"""The team picture: what every robot of the team concludes from the same facts at one control tick.
+
+Who has the ball or will get it first (interception times of every robot, ours and theirs, on the ball's
+predicted path), whether we attack or defend, and the roles: the active robot is the one that reaches the
+ball first (the one holding it, or the receiver of a pass under way), the others take the remaining roles
+(passive, assistant, midfield, or a set-piece slot) by the assignment that minimises the total distance to
+the roles' points. Both choices have hysteresis against the roles the robots announced last tick, so roles
+do not flicker when two robots are nearly equal.
+
+Each robot computes the picture from its own WorldModel; the result depends only on its inputs, so robots
+that see the same facts agree, and a team whose robots run in one process may share one computation per
+tick (see `TeamMemo`) without any robot deciding on anything but its own observations.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ..roles import Role
+from .ballpath import BallPath, intercepts
+from .gameflow import GameFlow, Phase
+from .geometry import wrap
+from .observation import Observation
+from .params import NubotParams
+from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
+from .setpieces import formation, spread
+
+BALL_RADIUS = 0.11
+#: an opponent whose centre is this close to the ball controls it [m]
+OPP_CONTROL = 0.45
+#: a robot that has just become the active one stays so at least this long (unless another holds the ball) [s]
+MIN_ACTIVE_TIME = 0.6
+#: a robot that took its role less than MIN_ROLE_TIME ago keeps it unless another way saves NEW_ROLE_HOLD more
+MIN_ROLE_TIME = 0.6
+NEW_ROLE_HOLD = 3.0
+#: the points of positional roles stay this far inside the lines [m]
+SLOT_INSIDE = 0.5
+#: we keep attacking (defending) until the opponents (we) reach the ball this much sooner [s]
+ATTACK_HYSTERESIS = 0.4
+#: set-piece slots change hands easily while robots run to them, and never once START is given [m]
+SETUP_HYSTERESIS = 0.5
+RESTART_HYSTERESIS = 50.0
+
+
+class Picture:
+    __slots__ = ("path", "phase", "holder", "goalie_plays", "opp_holds", "attacking", "catch", "their_t",
+                 "their_xy", "roles", "slots", "receiver", "pass_info", "active")
+
+    def __init__(self):
+        self.holder = 0               # our robot holding the ball (0: none)
+        self.goalie_plays = False     # the ball is our goalkeeper's to play
+        self.opp_holds = False
+        self.attacking = False
+        self.catch: dict[int, tuple[float, float, float]] = {}   # id -> (time, x, y) interception
+        self.their_t = math.inf
+        self.their_xy = (0.0, 0.0)
+        self.roles: dict[int, int] = {}
+        self.slots: dict[int, tuple[float, float, float, float]] = {}   # id -> (x, y, face x, face y)
+        self.receiver = 0             # robot a pass is (to be) played to
+        self.pass_info = None
+        self.active = 0
+
+
+class TeamMemo:
+    """The last picture computed in this process for a team, with every input it depends on: robots of
+    the team that see exactly the same facts at the same tick reuse it instead of recomputing it. (The
+    team-mates' part of an observation is the very same object then, see observation.TeamView.)"""
+
+    def __init__(self):
+        self.tick = -1
+        self.mates = None
+        self.rest: tuple = ()
+        self.picture = None
+
+    def get(self, obs: Observation, flow: GameFlow) -> Picture | None:
+        if self.tick == obs.tick and self.mates is obs.mates and self.rest == _rest_key(obs, flow):
+            return self.picture
+        return None
+
+    def put(self, obs: Observation, flow: GameFlow, picture: Picture) -> None:
+        self.tick, self.mates, self.rest, self.picture = obs.tick, obs.mates, _rest_key(obs, flow), picture
+
+
+def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
+    return (obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype, obs.opps, flow.key())
+
+
+def assign(robots: list, slots: list[tuple], hysteresis: float,
+           around: tuple[float, float, float] | None = None) -> dict[int, int]:
+    """Robot id -> slot index, minimising the total distance, each robot's announced role earning
+    ``hysteresis`` metres when it keeps it. Slots beyond the number of robots stay empty (they are listed
+    by priority). ``around`` = (x, y, r): a circle robots must go round (a set piece's ball), whose detour
+    counts too."""
+    n = len(robots)
+    if n == 0:
+        return {}
+    slots = slots[:n] if len(slots) >= n else slots
+    if not slots:
+        return {}
+    # a robot that took its role only a moment ago holds on to it harder (roles last a while)
+    r = np.array([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+                  for m in robots], dtype=float)
+    q = np.array([(sl[1], sl[2], sl[0]) for sl in slots], dtype=float)
+    cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
+    best = _assign(r, q, cx, cy, cr)
+    return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
+
+
+@numba.njit(cache=True, nogil=True)
+def _assign(robots, slots, cx, cy, cr):
+    """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
+    slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""
+    n, m = robots.shape[0], slots.shape[0]
+    k = min(n, m)
+    cost = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            dx, dy = slots[j, 0] - robots[i, 0], slots[j, 1] - robots[i, 1]
+            d = math.sqrt(dx * dx + dy * dy)
+            if cr > 0.0:
+                ll = dx * dx + dy * dy
+                t = 0.0
+                if ll > 1e-12:
+                    t = min(max(((cx - robots[i, 0]) * dx + (cy - robots[i, 1]) * dy) / ll, 0.0), 1.0)
+                gap = math.sqrt((robots[i, 0] + t * dx - cx) ** 2 + (robots[i, 1] + t * dy - cy) ** 2)
+                d += 2.0 * max(0.0, cr - gap)
+            if robots[i, 2] == slots[j, 2]:
+                d -= robots[i, 3]               # the robot's hysteresis for keeping its role
+            cost[i, j] = d
+    best = np.zeros(k, dtype=np.int64)
+    perm = np.zeros(k, dtype=np.int64)
+    used = np.zeros(m, dtype=np.bool_)
+    best_c = 1e18
+    # depth-first over the slots in increasing order: permutations come in lexicographic order
+    depth = 0
+    perm[0] = -1
+    acc = np.zeros(k + 1)
+    while depth >= 0:
+        j = perm[depth] + 1
+        if perm[depth] >= 0:
+            used[perm[depth]] = False
+        while j < m and used[j]:
+            j += 1
+        if j >= m:
+            perm[depth] = -1
+            depth -= 1
+            continue
+        perm[depth] = j
+        used[j] = True
+        acc[depth + 1] = acc[depth] + cost[depth, j]
+        if depth == k - 1:
+            if acc[k] < best_c - 1e-9:
+                best_c = acc[k]
+                best[:] = perm
+        else:
+            depth += 1
+            perm[depth] = -1
+    return best
+
+
+class Analyst:
+    """Computes team pictures for one team (field, parameters and the receiving-spot grid are fixed)."""
+
+    def __init__(self, params: NubotParams, areas: Areas, spots: tuple[np.ndarray, np.ndarray]):
+        self.p = params
+        self.areas = areas
+        self.spots = spots
+        self.xlim = areas.L2 + 1.3
+        self.ylim = areas.W2 + 1.3
+
+    def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
+        p = self.p
+        pic = Picture()
+        pic.phase = flow.phase
+        pic.path = path = BallPath(obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, p.ball_deceleration,
+                                   BALL_RADIUS, self.xlim, self.ylim)
+        # a robot off the field beyond the margin (it followed the ball) still plays; one not valid within
+        # the margin has been taken off (sent off: parked and disabled beside the field)
+        xl, yl = self.areas.L2 + 1.0, self.areas.W2 + 1.0
+        mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
+        for m in mates:
+            if m.holding:
+                pic.holder = m.id
+        opps = obs.opps
+        if pic.holder == 0:
+            pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
+        self._passes(obs, pic)
+        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
+            self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
+            return pic
+        # interception of every robot, ours (with the time to face the ball) and theirs, in one go
+        n_us = len(mates)
+        turn = 0.7 / p.max_turn
+        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)))
+                for m in mates] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
+        if rows:
+            a = np.array(rows).T.copy()
+            res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
+            for k, m in enumerate(mates):
+                pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
+            if opps:
+                t, x, y = min(res[n_us:])
+                pic.their_t, pic.their_xy = (0.0 if pic.opp_holds else t), (x, y)
+        self._play(obs, flow, pic, mates)
+        return pic
+
+    # --- passes announced by team-mates ---------------------------------------------------------------
+    def _passes(self, obs: Observation, pic: Picture) -> None:
+        for m in obs.mates:
+            info = m.pass_info
+            if info is None or info.catch_id == m.id or info.catch_id not in obs.by_id:
+                continue
+            if info.is_passout:
+                # under way while the ball is loose and still moving towards the catch point
+                if pic.holder or obs.ball_speed < 0.25:
+                    continue
+                dx, dy = info.catch_x - obs.bx, info.catch_y - obs.by
+                d = math.hypot(dx, dy)
+                if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < 0.6 * d * obs.ball_speed:
+                    continue
+            elif pic.holder != m.id and not info.is_static_pass:
+                continue                   # announced by a robot that does not have the ball (any more)
+            pic.receiver, pic.pass_info = info.catch_id, info
+            return
+
+    # --- open play --------------------------------------------------------------------------------------
+    def _play(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
+        p, areas = self.p, self.areas
+        field = [m for m in mates if not m.is_goalie]
+        goalie = next((m for m in mates if m.is_goalie), None)
+        holder = obs.by_id.get(pic.holder) if pic.holder else None
+        if goalie is not None:
+            pic.roles[goalie.id] = Role.GOALIE
+            if holder is goalie:
+                pic.goalie_plays = True
+            elif holder is None:
+                gt, gx, gy = pic.catch[goalie.id]
+                pic.goalie_plays = (areas.near_own_penalty_area(gx, gy, -0.1)
+                                    and areas.near_own_penalty_area(obs.bx, obs.by, 0.6))
+        active = None
+        if holder is not None and not holder.is_goalie:
+            active = holder
+        elif pic.receiver and pic.pass_info.is_passout and pic.receiver in obs.by_id \
+                and not obs.by_id[pic.receiver].is_goalie and obs.by_id[pic.receiver].valid:
+            active = obs.by_id[pic.receiver]
+        elif holder is None:
+            best = math.inf
+            fresh = next((m for m in field if m.role == Role.ACTIVE and m.role_time < MIN_ACTIVE_TIME
+                          and m.id != flow.taker), None)
+            if fresh is not None:
+                best, active = -math.inf, fresh      # a robot that just took the ball on keeps it a moment
+            for m in field:
+                if m.id == flow.taker:
+                    continue
+                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == Role.ACTIVE else 0.0)
+                if score < best:
+                    best, active = score, m
+        if active is not None:
+            pic.active = active.id
+            pic.roles[active.id] = Role.ACTIVE if pic.receiver != active.id else Role.CATCHOFPASS
+        our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
+        # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
+        said = [m.attacking for m in mates if m.attacking >= 0]
+        before = 2 * sum(said) > len(said) if said else False
+        margin = -ATTACK_HYSTERESIS if before else ATTACK_HYSTERESIS
+        pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
+        rest = [m for m in field if m is not active]
+        if not rest:
+            return
+        bx, by = pic.path.at(0.4)
+        receiver = None
+        if pic.receiver and pic.receiver != pic.active and pic.pass_info is not None:
+            receiver = next((m for m in rest if m.id == pic.receiver), None)
+        n_assist = 2 if len(rest) >= 4 else 1
+        assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
+        order = ([Role.ASSISTANT, Role.PASSIVE, Role.MIDFIELD] if pic.attacking
+                 else [Role.PASSIVE, Role.MIDFIELD, Role.ASSISTANT])
+        if n_assist == 2:
+            order = [Role.ASSISTANT, Role.ASSISTANT] + [r for r in order if r != Role.ASSISTANT]
+        slots: list[tuple] = []
+        used = 0
+        for role in order[:len(rest)]:
+            if role == Role.ASSISTANT:
+                x, y = assist[min(used, len(assist) - 1)]
+                used += 1
+            elif role == Role.PASSIVE:
+                x, y = passive_point(areas, bx, by, pic.attacking)
+            else:
+                x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
+            x, y = areas.inside_field(x, y, SLOT_INSIDE)
+            slots.append((role, x, y, bx, by))
+        slots = spread(slots, bx, by)
+        for rid, i in assign(rest, slots, p.role_hysteresis).items():
+            role, x, y, fx, fy = slots[i]
+            pic.roles[rid] = role
+            pic.slots[rid] = (x, y, fx, fy)
+        if receiver is not None and receiver.id in pic.slots:
+            # the announced receiver keeps its role and waits at the catch point, facing the passer
+            info = pic.pass_info
+            pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
+
+    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
+        cx, cy = self.spots
+        bx, by = obs.bx, obs.by
+        ox = np.array([o[0] for o in obs.opps])
+        oy = np.array([o[1] for o in obs.opps])
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+        score = score_spots(cx, cy, bx, by, ox, oy, self.areas.L2, 3.0, 8.5, prev)
+        out = []
+        for k in np.argsort(-score)[:12].tolist():
+            x, y = float(cx[k]), float(cy[k])
+            if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
+                out.append((x, y))
+                if len(out) == n:
+                    break
+        return out
+
+    # --- set pieces ---------------------------------------------------------------------------------------
+    def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
+        field = [m for m in mates if not m.is_goalie]
+        for m in mates:
+            if m.is_goalie:
+                pic.roles[m.id] = Role.GOALIE
+        bx, by = (obs.bx, obs.by) if flow.phase == Phase.SETUP else flow.ball0
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+        slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
+        hyst = SETUP_HYSTERESIS if flow.phase == Phase.SETUP else RESTART_HYSTERESIS
+        keep = self.p.dropball_distance if flow.kind == 13 else (
+            self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
+        chosen = assign(field, slots, hyst, around=(bx, by, keep))
+        for rid, i in chosen.items():
+            role, x, y, fx, fy = slots[i]
+            pic.roles[rid] = role
+            pic.slots[rid] = (x, y, fx, fy)
+            if role == Role.ACTIVE:
+                pic.active = rid
+        if flow.phase == Phase.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
+                and flow.kind != 1:
+            # the taker aims at the receiver: it waits for the ball where it is announced, facing it
+            info = pic.pass_info
+            pic.slots[pic.receiver] = (info.catch_x, info.catch_y, bx, by)
+        pic.attacking = flow.kind % 2 == 1 and flow.kind != 13

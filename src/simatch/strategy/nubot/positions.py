@@ -1,0 +1,194 @@
+"""Where the robots without the ball stand: the areas they must respect and the points of each role.
+
+All in the team frame (own goal at -x). Areas: a field robot's centre stays out of its own penalty area
+(only the goalkeeper lives there) and out of the opponents' goal area; only the robot playing the ball
+enters the opponents' penalty area.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .geometry import box_exit, clamp, push_out_of_box, segment_hits_box
+
+
+class Areas:
+    """The penalty and goal areas, widened by a margin so that a robot's centre stays clearly out."""
+
+    def __init__(self, field, margin: float):
+        L2 = field.half_length
+        self.L2, self.W2 = L2, field.half_width
+        self.margin = margin
+        self.pa_depth = field.penalty_area_depth
+        self.pa_half = 0.5 * field.penalty_area_width
+        self.ga_depth = field.goal_area_depth
+        self.ga_half = 0.5 * field.goal_area_width
+        self.goal_half = 0.5 * field.goal_width
+        self.own_pa = (-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
+        self.opp_pa = (L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
+        self.opp_ga = (L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
+
+    # exact lines (robot centre over the line counts as inside)
+    def in_own_penalty_area(self, x: float, y: float) -> bool:
+        return x <= -self.L2 + self.pa_depth and abs(y) <= self.pa_half
+
+    def in_opp_penalty_area(self, x: float, y: float) -> bool:
+        return x >= self.L2 - self.pa_depth and abs(y) <= self.pa_half
+
+    def in_own_goal_area(self, x: float, y: float) -> bool:
+        return x <= -self.L2 + self.ga_depth and abs(y) <= self.ga_half
+
+    def near_own_penalty_area(self, x: float, y: float, extra: float = 0.0) -> bool:
+        return x <= -self.L2 + self.pa_depth + extra and abs(y) <= self.pa_half + extra
+
+    def keep_out(self, x: float, y: float, own_pa: bool = True, opp_pa: bool = True) -> tuple[float, float]:
+        """The point moved out of the areas a field robot may not stand in."""
+        if own_pa:
+            x, y = push_out_of_box(x, y, *self.own_pa)
+        if opp_pa:
+            x, y = push_out_of_box(x, y, *self.opp_pa)
+        else:
+            x, y = push_out_of_box(x, y, *self.opp_ga)
+        return x, y
+
+    def forbidden(self, opp_area: bool) -> list[tuple[float, float, float]]:
+        """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
+        goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
+        return [self.own_pa, self.opp_pa if not opp_area else self.opp_ga]
+
+    def route(self, px: float, py: float, tx: float, ty: float,
+              boxes: list[tuple[float, float, float]]) -> tuple[float, float]:
+        """The next point on the way from P to T that keeps out of ``boxes``: the way out of a box the robot
+        is in, or the nearer field-side corner of a box the straight way would cross."""
+        for x0, x1, hw in boxes:
+            if x0 < px < x1 and -hw < py < hw:
+                ex, ey = push_out_of_box(px, py, x0, x1, hw)
+                return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
+        for x0, x1, hw in boxes:
+            if segment_hits_box(px, py, tx, ty, x0, x1, hw):
+                cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15        # the corners on the field side
+                best = min(((cx, hw + 0.15), (cx, -hw - 0.15)),
+                           key=lambda c: math.hypot(c[0] - px, c[1] - py) + math.hypot(tx - c[0], ty - c[1]))
+                return best
+        return tx, ty
+
+    def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
+        return clamp(x, -self.L2 + margin, self.L2 - margin), clamp(y, -self.W2 + margin, self.W2 - margin)
+
+
+def guard_point(areas: Areas, bx: float, by: float, fraction: float, min_s: float, gap: float) -> tuple[float, float]:
+    """A point on the way from the middle of our goal to the ball: ``fraction`` of the way, at least
+    ``min_s`` from the goal, at least ``gap`` short of the ball, and outside our penalty area."""
+    gx = -areas.L2
+    dx, dy = bx - gx, by
+    D = math.hypot(dx, dy)
+    if D < 1e-6:
+        return gx + min_s, 0.0
+    ux, uy = dx / D, dy / D
+    s = max(min_s, fraction * D)
+    s_out = box_exit(0.0, 0.0, ux, uy, -5.0, areas.own_pa[1] - gx, areas.own_pa[2])
+    s = max(s, s_out)
+    s = min(s, max(s_out, D - gap))
+    return gx + ux * s, uy * s
+
+
+def passive_point(areas: Areas, bx: float, by: float, attacking: bool) -> tuple[float, float]:
+    """The passive defender: between the ball and our goal; a last line further up when we attack."""
+    if attacking and bx > -3.0:
+        return clamp(bx - 6.5, -areas.L2 + 4.0, -0.5), 0.35 * by
+    return guard_point(areas, bx, by, 0.45, 3.2, 1.8)
+
+
+def midfield_point(areas: Areas, bx: float, by: float, attacking: bool,
+                   opps: list[tuple[float, float, float, float]]) -> tuple[float, float]:
+    """The midfielder: marks the most dangerous opponent away from the ball (between it and the ball)
+    when we defend; supports the attack from behind the ball, on the inner side, when we attack."""
+    L2, W2 = areas.L2, areas.W2
+    if attacking:
+        x = clamp(bx - 3.5, -L2 + 4.0, L2 - 4.5)
+        y = by - 3.0 if by > 0.0 else by + 3.0
+        return areas.keep_out(x, clamp(y, -W2 + 1.0, W2 - 1.0))
+    best, best_d = None, math.inf
+    for ox, oy, _, _ in opps:
+        if math.hypot(ox - bx, oy - by) < 2.0 or ox > 3.0:
+            continue
+        d = math.hypot(ox + L2, oy)
+        if d < best_d:
+            best, best_d = (ox, oy), d
+    if best is None:
+        x, y = clamp(bx - 4.0, -L2 + 4.0, 1.0), -0.4 * by
+        return areas.keep_out(x, y)
+    ox, oy = best
+    # stand on the line from the opponent towards our goal, a little towards the ball: cuts the pass
+    gx = -L2
+    ux, uy = gx - ox, -oy
+    n = math.hypot(ux, uy) or 1.0
+    vx, vy = bx - ox, by - oy
+    m = math.hypot(vx, vy) or 1.0
+    wx, wy = 0.6 * ux / n + 0.4 * vx / m, 0.6 * uy / n + 0.4 * vy / m
+    k = math.hypot(wx, wy) or 1.0
+    return areas.keep_out(ox + 1.0 * wx / k, oy + 1.0 * wy / k)
+
+
+def outlet_point(areas: Areas, bx: float, by: float) -> tuple[float, float]:
+    """The assistant when we defend: a free point up the field, away from the ball's side, ready to break."""
+    x = clamp(bx + 5.0, -2.0, 3.0)
+    y = -3.5 if by > 0.5 else 3.5
+    return x, y
+
+
+# --- receiving spots, scored for all candidates at once -----------------------------------------------
+
+def spot_grid(areas: Areas) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate points a receiver may offer itself at (the whole field, outside the areas)."""
+    xs = np.linspace(-areas.L2 + 3.0, areas.L2 - 1.5, 13)
+    ys = np.linspace(-areas.W2 + 1.2, areas.W2 - 1.2, 9)
+    gx, gy = np.meshgrid(xs, ys)
+    gx, gy = gx.ravel(), gy.ravel()
+    keep = np.ones(gx.shape, dtype=bool)
+    for x0, x1, hw in (areas.own_pa, areas.opp_pa):
+        keep &= ~((gx > x0) & (gx < x1) & (np.abs(gy) < hw))
+    return gx[keep].copy(), gy[keep].copy()
+
+
+def score_spots(cx: np.ndarray, cy: np.ndarray, bx: float, by: float, ox: np.ndarray, oy: np.ndarray, L2: float,
+                dmin: float, dmax: float, near: tuple[float, float] | None) -> np.ndarray:
+    """Value of each candidate receiving spot: close to the opponents' goal, far from opponents, a pass
+    lane from the ball that no opponent covers, within passing range, and (for stability) near where the
+    receiver already is."""
+    out = np.empty(len(cx))
+    nx, ny = near if near is not None else (math.nan, math.nan)
+    _score_spots(cx, cy, bx, by, np.ascontiguousarray(ox, dtype=float), np.ascontiguousarray(oy, dtype=float),
+                 L2, dmin, dmax, nx, ny, out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
+    """score_spots, compiled: a hundred candidates times five opponents are tiny loops, costly as NumPy
+    calls (about a microsecond each) and cheap as machine code."""
+    for i in range(cx.shape[0]):
+        x, y = cx[i], cy[i]
+        score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)
+        if abs(y) < 3.0:
+            score += 0.4 * min(x, 2.0)
+        dball = math.sqrt((x - bx) ** 2 + (y - by) ** 2)
+        score -= 3.0 * max(0.0, dmin - dball) + 1.0 * max(0.0, dball - dmax)
+        sx, sy = x - bx, y - by
+        ll = sx * sx + sy * sy + 1e-9
+        lane = 1e9
+        for k in range(ox.shape[0]):
+            dopp = math.sqrt((x - ox[k]) ** 2 + (y - oy[k]) ** 2)
+            score -= 2.0 * max(0.0, 2.5 - dopp)
+            t = min(max(((ox[k] - bx) * sx + (oy[k] - by) * sy) / ll, 0.0), 1.0)
+            lane = min(lane, math.sqrt((bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2))
+        if ox.shape[0] > 0:
+            if lane < 0.85:
+                score -= 4.0
+            score -= 1.5 * max(0.0, 1.4 - lane)
+        if nx == nx:                   # not NaN: a place to stay near
+            score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
+        out[i] = score

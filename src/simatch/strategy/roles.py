@@ -1,0 +1,60 @@
+"""Roles and actions a robot announces in its StrategyInfo (``role``, ``action``), with the original
+NuBot numbering, so that coaches, viewers and recordings can name what a robot is doing whatever
+strategy it runs. A strategy may use its own numbers above the ones listed here."""
+
+from __future__ import annotations
+
+import enum
+
+
+class Role(enum.IntEnum):
+    GOALIE = 0
+    ACTIVE = 1         # has the ball or goes for it
+    PASSIVE = 2        # defends between the ball and its own goal
+    MIDFIELD = 3       # marks an opponent, or supports behind the attack
+    ASSISTANT = 4      # offers itself for a pass
+    ACIDPASSIVE = 5
+    GAZER = 6
+    BLOCK = 7
+    NOROLE = 8
+    CATCHOFPASS = 9    # receives a pass under way
+    PASSOFPASS = 10    # has just passed
+
+
+class Action(enum.IntEnum):
+    STUCKED = 0
+    PENALTY = 1
+    CAN_NOT_SEE_BALL = 2
+    SEE_NOT_DRIBBLE_BALL = 3
+    TURN_FOR_SHOOT = 4
+    TURN_FOR_SHOOT_ROBOT = 5
+    AT_SHOOT_SITUATION = 6
+    TURN_TO_PASS = 7
+    TURN_TO_PASS_ROBOT = 8
+    STATIC_PASS = 9
+    AVOID_OBS = 10
+    CATCH_POSITIONED = 11
+    POSITIONED = 12
+    POSITIONED_STATIC = 13
+    KICK_COOP = 14
+    KICK_COOP_TURN = 15
+    CATCH_BALL = 16
+    CATCH_BALL_SLOW = 17
+    CIRCLE_TEST = 18
+    MOVE_WITH_BALL = 19
+    TELEOP_JOY = 20
+    NO_ACTION = 21
+
+
+def role_name(value: int) -> str:
+    try:
+        return Role(value).name
+    except ValueError:
+        return f"ROLE_{value}"
+
+
+def action_name(value: int) -> str:
+    try:
+        return Action(value).name
+    except ValueError:
+        return f"ACTION_{value}"
