@@ -16,24 +16,13 @@ import math
 
 from .. import frames
 from ..scene.commands import name as command_name
+from ..strategy.roles import action_name, role_name
 from .observer import RunObserver
-
-#: role and action names of StrategyInfo (the original's numbering)
-ROLE_NAMES = ["GOALIE", "ACTIVE", "PASSIVE", "MIDFIELD", "ASSISTANT", "ACIDPASSIVE", "GAZER", "BLOCK", "NOROLE",
-              "CATCHOFPASS", "PASSOFPASS"]
-ACTION_NAMES = ["Stucked", "Penalty", "CanNotSeeBall", "SeeNotDribbleBall", "TurnForShoot", "TurnForShoot_Robot",
-                "AtShootSituation", "TurnToPass", "TurnToPass_Robot", "StaticPass", "AvoidObs", "Catch_Positioned",
-                "Positioned", "Positioned_Static", "KickCoop", "KickCoop_turn", "CatchBall", "CatchBall_slow",
-                "CircleTest", "MoveWithBall", "TeleopJoy", "No_Action"]
 
 
 def _r(v: float, digits: int = 3) -> float | None:
     v = float(v)
     return round(v, digits) if math.isfinite(v) else None
-
-
-def _name(table: list[str], k: int) -> str:
-    return table[k] if 0 <= k < len(table) else str(k)
 
 
 class Picture:
@@ -120,7 +109,7 @@ class Picture:
                     best_ball = {"x": _r(bx), "y": _r(by), "z": _r(b.z), "vx": _r(bvx, 2), "vy": _r(bvy, 2),
                                  "seen_by": rid}
             if intent is not None:
-                entry.update(role=_name(ROLE_NAMES, intent.role), action=_name(ACTION_NAMES, intent.action),
+                entry.update(role=role_name(intent.role), action=action_name(intent.action),
                              dribble=bool(intent.is_dribble))
                 tx, ty = float(intent.target_x), float(intent.target_y)
                 if math.isfinite(tx) and math.isfinite(ty):
