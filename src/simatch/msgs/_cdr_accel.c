@@ -19,6 +19,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <string.h>
+#include <structmember.h>
 
 enum {
     K_BOOL = 1, K_I8, K_U8, K_I16, K_U16, K_I32, K_U32, K_I64, K_U64, K_F32, K_F64,
@@ -30,7 +31,9 @@ typedef struct {
     Py_ssize_t n, cap;
 } Buf;
 
-static Buf buf = {NULL, 0, 0};     /* reused between calls: the GIL is held throughout */
+static Buf scratch = {NULL, 0, 0}; /* `encode`'s output, reused between calls: the GIL is held throughout */
+static Buf *out = &scratch;         /* where the encoder writes now: `scratch` or a message log's buffer */
+static Py_ssize_t body = 4;         /* offset in `out` of the CDR body being written (alignment counts from it) */
 
 /* numpy arrays without numpy's headers: the leading fields of numpy's array object, whose layout is part of
  * numpy's ABI (extensions built against old headers run with new numpy). `setup` hands over the ndarray
@@ -55,29 +58,29 @@ static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous ar
 #define FAILED -1                  /* a Python exception is set (memory) */
 
 static int reserve(Py_ssize_t need) {
-    if (buf.n + need <= buf.cap)
+    if (out->n + need <= out->cap)
         return 0;
-    Py_ssize_t cap = buf.cap ? buf.cap : 4096;
-    while (cap < buf.n + need)
+    Py_ssize_t cap = out->cap ? out->cap : 4096;
+    while (cap < out->n + need)
         cap *= 2;
-    char *p = PyMem_Realloc(buf.p, cap);
+    char *p = PyMem_Realloc(out->p, cap);
     if (p == NULL) {
         PyErr_NoMemory();
         return FAILED;
     }
-    buf.p = p;
-    buf.cap = cap;
+    out->p = p;
+    out->cap = cap;
     return 0;
 }
 
 /* pad with zeros to a multiple of `a`, counted from the start of the body (after the 4-byte header) */
 static int align(int a) {
-    Py_ssize_t pad = (a - ((buf.n - 4) % a)) % a;
+    Py_ssize_t pad = (a - ((out->n - body) % a)) % a;
     if (pad) {
         if (reserve(pad) < 0)
             return FAILED;
-        memset(buf.p + buf.n, 0, pad);
-        buf.n += pad;
+        memset(out->p + out->n, 0, pad);
+        out->n += pad;
     }
     return 0;
 }
@@ -85,8 +88,8 @@ static int align(int a) {
 static int put(const void *src, Py_ssize_t size) {
     if (reserve(size) < 0)
         return FAILED;
-    memcpy(buf.p + buf.n, src, size);
-    buf.n += size;
+    memcpy(out->p + out->n, src, size);
+    out->n += size;
     return 0;
 }
 
@@ -179,9 +182,9 @@ static int put_string(PyObject *v) {
         return r;
     if (reserve(len + 1) < 0)
         return FAILED;
-    memcpy(buf.p + buf.n, s, len);
-    buf.p[buf.n + len] = 0;
-    buf.n += len + 1;
+    memcpy(out->p + out->n, s, len);
+    out->p[out->n + len] = 0;
+    out->n += len + 1;
     return 0;
 }
 
@@ -276,7 +279,7 @@ static PyObject *memo_find(PyObject *obj, long phase) {
 
 static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
     PyObject *key = PyLong_FromVoidPtr(obj);
-    PyObject *data = PyBytes_FromStringAndSize(buf.p + start, buf.n - start);
+    PyObject *data = PyBytes_FromStringAndSize(out->p + start, out->n - start);
     PyObject *entry = (key && data) ? Py_BuildValue("(OlO)", obj, phase, data) : NULL;
     int r = entry ? PyDict_SetItem(memo_now, key, entry) : -1;
     Py_XDECREF(key);
@@ -286,7 +289,7 @@ static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
 }
 
 static long phase_now(void) {
-    return (long)((buf.n - 4) & 7);
+    return (long)((out->n - body) & 7);
 }
 
 static int put_bytes_object(PyObject *data) {
@@ -296,7 +299,7 @@ static int put_bytes_object(PyObject *data) {
 /* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
 static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first) {
     long phase = phase_now();
-    Py_ssize_t start = buf.n;
+    Py_ssize_t start = out->n;
     if (memo_now != NULL) {
         PyObject *hit = memo_find(v, phase);
         if (hit != NULL)
@@ -322,8 +325,8 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align
             continue;
         }
         if (memo_now != NULL && align_first > 0) {     /* this message encoded on its own before? */
-            Py_ssize_t pad = (align_first - ((buf.n - 4) % align_first)) % align_first;
-            if (((buf.n - 4 + pad) & 7) == 0) {
+            Py_ssize_t pad = (align_first - ((out->n - body) % align_first)) % align_first;
+            if (((out->n - body + pad) & 7) == 0) {
                 PyObject *hit = memo_find(items[i], 0);
                 if (hit != NULL) {
                     if ((r = align(align_first)) == 0)
@@ -376,49 +379,384 @@ static int encode_program(PyObject *program, PyObject *msg) {
     return 0;
 }
 
+/* The encoder's globals while one call runs (saved and restored: a field's __float__ may run Python code that
+ * encodes too). */
+typedef struct {
+    Buf *out;
+    Py_ssize_t body;
+    PyObject *memo_now, *memo_old;
+} State;
+
+static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old) {
+    State saved = {out, body, memo_now, memo_old};
+    out = to;
+    body = at;
+    memo_now = now;
+    memo_old = old;
+    return saved;
+}
+
+static void leave(State saved) {
+    out = saved.out;
+    body = saved.body;
+    memo_now = saved.memo_now;
+    memo_old = saved.memo_old;
+}
+
 /* encode(program, msg[, memo, keep, out]): memo = (this period's dict, the last one's dict) or None; keep:
  * remember this message's body (it may be met again inside a sequence); out: a bytearray to append the
  * bytes to (then the number of bytes is returned) instead of returning them as bytes */
 static PyObject *encode(PyObject *self, PyObject *args) {
-    PyObject *program, *msg, *memo = Py_None, *out = Py_None;
+    PyObject *program, *msg, *memo = Py_None, *target = Py_None;
     int keep = 0;
-    if (!PyArg_ParseTuple(args, "O!O|OpO", &PyTuple_Type, &program, &msg, &memo, &keep, &out))
+    if (!PyArg_ParseTuple(args, "O!O|OpO", &PyTuple_Type, &program, &msg, &memo, &keep, &target))
         return NULL;
-    if (out != Py_None && !PyByteArray_Check(out)) {
+    if (target != Py_None && !PyByteArray_Check(target)) {
         PyErr_SetString(PyExc_TypeError, "out: a bytearray or None");
         return NULL;
     }
-    memo_now = memo_old = NULL;
+    PyObject *now = NULL, *old = NULL;
     if (memo != Py_None) {
         if (!PyTuple_Check(memo) || PyTuple_GET_SIZE(memo) != 2 || !PyDict_Check(PyTuple_GET_ITEM(memo, 0))
             || !PyDict_Check(PyTuple_GET_ITEM(memo, 1))) {
             PyErr_SetString(PyExc_TypeError, "memo: (dict, dict) or None");
             return NULL;
         }
-        memo_now = PyTuple_GET_ITEM(memo, 0);
-        memo_old = PyTuple_GET_ITEM(memo, 1);
+        now = PyTuple_GET_ITEM(memo, 0);
+        old = PyTuple_GET_ITEM(memo, 1);
     }
-    buf.n = 0;
-    if (reserve(4) < 0)
-        return NULL;
-    memcpy(buf.p, "\x00\x01\x00\x00", 4);
-    buf.n = 4;
-    int r = encode_program(program, msg);
+    if (scratch.p == NULL && (scratch.p = PyMem_Malloc(4096)) != NULL)
+        scratch.cap = 4096;
+    if (scratch.p == NULL)
+        return PyErr_NoMemory();
+    Py_ssize_t mark = scratch.n;           /* not 0 if this call runs inside another one's field conversion */
+    State saved = enter(&scratch, mark + 4, now, old);
+    int r = put("\x00\x01\x00\x00", 4);
+    if (r == 0)
+        r = encode_program(program, msg);
     if (r == 0 && keep && memo_now != NULL)
-        r = memo_keep(msg, 0, 4);
-    memo_now = memo_old = NULL;
-    if (r == FAILED)
-        return NULL;
+        r = memo_keep(msg, 0, mark + 4);
+    leave(saved);
+    PyObject *result = NULL;
     if (r == FALLBACK)
-        Py_RETURN_NONE;
-    if (out == Py_None)
-        return PyBytes_FromStringAndSize(buf.p, buf.n);
-    Py_ssize_t at = PyByteArray_GET_SIZE(out);
-    if (PyByteArray_Resize(out, at + buf.n) < 0)
-        return NULL;
-    memcpy(PyByteArray_AS_STRING(out) + at, buf.p, buf.n);
-    return PyLong_FromSsize_t(buf.n);
+        result = Py_NewRef(Py_None);
+    else if (r == 0 && target == Py_None)
+        result = PyBytes_FromStringAndSize(scratch.p + mark, scratch.n - mark);
+    else if (r == 0) {
+        Py_ssize_t at = PyByteArray_GET_SIZE(target), size = scratch.n - mark;
+        if (PyByteArray_Resize(target, at + size) == 0) {
+            memcpy(PyByteArray_AS_STRING(target) + at, scratch.p + mark, size);
+            result = PyLong_FromSsize_t(size);
+        }
+    }
+    scratch.n = mark;
+    return result;
 }
+
+/* --- The recorder's message log -----------------------------------------------------------------------------
+ *
+ * `Log(programs, fallback)` is a bus callback, ``log(topic, msg)``, that appends each message to one buffer as
+ * an MCAP Message record: opcode 0x05, record length, channel id, sequence 0, log time and publish time =
+ * `log.now` (u64 nanoseconds), then the message's CDR bytes, encoded in place by the programs above. A
+ * recording spends most of its time here, some two thousand times per simulated second, so the whole path
+ * (topic look-up, record header, encoding, count) is one C call with no Python frame and no object per
+ * message. `simatch.record.messagelog.MessageLog` is the same thing in Python, byte for byte.
+ *
+ * log.add(topic, channel id, typename): record `topic` on that channel; `programs(typename)` gives the
+ *     encoder's program and whether to remember each message's body (the memo's "keep").
+ * log(topic, msg): a topic not added, or a message the C encoder does not take as it is, goes to
+ *     `fallback(topic, msg)` instead (nothing of it is left in the buffer).
+ * log.record(channel id, data): a message already encoded; log.append(data): raw records (schemas, channels).
+ * log.take() -> (bytes, {channel id: messages}): everything since the last take; the buffer is kept.
+ * log.forget(): a new memo period (see simatch.msgs.cdr). log.now: the log time; log.size: bytes held. */
+
+#define RECORD_HEAD 31             /* opcode u8, length u64, channel u16, sequence u32, log time u64, publish u64 */
+
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    Buf buf;
+    PyObject *channels;            /* topic -> (channel id, program, keep) */
+    PyObject *programs, *fallback;
+    PyObject *memo_now, *memo_old;
+    long long now;
+    Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
+} Log;
+
+static void put_le(char *p, unsigned long long v, int size) {
+    for (int i = 0; i < size; i++, v >>= 8)
+        p[i] = (char)(v & 0xff);
+}
+
+static int count_message(Log *log, long cid) {
+    if (cid >= log->ncounts) {
+        Py_ssize_t n = cid + 64;
+        Py_ssize_t *c = PyMem_Realloc(log->counts, n * sizeof(Py_ssize_t));
+        if (c == NULL) {
+            PyErr_NoMemory();
+            return FAILED;
+        }
+        memset(c + log->ncounts, 0, (n - log->ncounts) * sizeof(Py_ssize_t));
+        log->counts = c;
+        log->ncounts = n;
+    }
+    log->counts[cid]++;
+    return 0;
+}
+
+static void put_head(Log *log, Py_ssize_t start, long cid) {
+    char *p = log->buf.p + start;
+    p[0] = 0x05;
+    put_le(p + 1, (unsigned long long)(log->buf.n - start - 9), 8);
+    put_le(p + 9, (unsigned long long)cid, 2);
+    put_le(p + 11, 0, 4);
+    put_le(p + 15, (unsigned long long)log->now, 8);
+    put_le(p + 23, (unsigned long long)log->now, 8);
+}
+
+static int check_channel(long cid) {
+    if (cid < 0 || cid > 65535) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "channel id: 0 to 65535");
+        return FAILED;
+    }
+    return 0;
+}
+
+/* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
+static int log_message(Log *log, long cid, PyObject *program, int keep, PyObject *msg) {
+    Py_ssize_t start = log->buf.n;
+    State saved = enter(&log->buf, start + RECORD_HEAD + 4, log->memo_now, log->memo_old);
+    int r = reserve(RECORD_HEAD + 4);
+    if (r == 0) {
+        memcpy(out->p + start + RECORD_HEAD, "\x00\x01\x00\x00", 4);
+        out->n = start + RECORD_HEAD + 4;
+        r = encode_program(program, msg);
+    }
+    if (r == 0 && keep)
+        r = memo_keep(msg, 0, start + RECORD_HEAD + 4);
+    leave(saved);
+    if (r == 0)
+        r = count_message(log, cid);
+    if (r != 0) {
+        log->buf.n = start;
+        return r;
+    }
+    put_head(log, start, cid);
+    return 0;
+}
+
+static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
+    Log *log = (Log *)self;
+    if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
+        PyErr_SetString(PyExc_TypeError, "log(topic, msg)");
+        return NULL;
+    }
+    PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
+    if (entry != NULL) {
+        long cid = PyLong_AsLong(PyTuple_GET_ITEM(entry, 0));
+        int r = log_message(log, cid, PyTuple_GET_ITEM(entry, 1), PyTuple_GET_ITEM(entry, 2) == Py_True, args[1]);
+        if (r == 0)
+            Py_RETURN_NONE;
+        if (r == FAILED)
+            return NULL;
+    } else if (PyErr_Occurred()) {
+        return NULL;
+    }
+    return PyObject_Vectorcall(log->fallback, args, 2, NULL);
+}
+
+static PyObject *log_add(Log *log, PyObject *args) {
+    PyObject *topic, *typename;
+    long cid;
+    if (!PyArg_ParseTuple(args, "UlO", &topic, &cid, &typename) || check_channel(cid) < 0)
+        return NULL;
+    PyObject *found = PyObject_CallOneArg(log->programs, typename);
+    if (found == NULL)
+        return NULL;
+    if (!PyTuple_Check(found) || PyTuple_GET_SIZE(found) != 2 || !PyTuple_Check(PyTuple_GET_ITEM(found, 0))) {
+        Py_DECREF(found);
+        PyErr_SetString(PyExc_TypeError, "programs(typename) must return (program tuple, keep)");
+        return NULL;
+    }
+    int keep = PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
+    PyObject *entry = keep < 0 ? NULL : Py_BuildValue("(lOO)", cid, PyTuple_GET_ITEM(found, 0), keep ? Py_True : Py_False);
+    Py_DECREF(found);
+    if (entry == NULL)
+        return NULL;
+    int r = PyDict_SetItem(log->channels, topic, entry);
+    Py_DECREF(entry);
+    if (r < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_record(Log *log, PyObject *args) {
+    long cid;
+    Py_buffer data;
+    if (!PyArg_ParseTuple(args, "ly*", &cid, &data))
+        return NULL;
+    Py_ssize_t start = log->buf.n;
+    State saved = enter(&log->buf, 0, NULL, NULL);
+    int r = check_channel(cid);
+    if (r == 0 && (r = reserve(RECORD_HEAD)) == 0) {
+        out->n += RECORD_HEAD;
+        r = put(data.buf, data.len);
+    }
+    leave(saved);
+    PyBuffer_Release(&data);
+    if (r == 0)
+        r = count_message(log, cid);
+    if (r != 0) {
+        log->buf.n = start;
+        return NULL;
+    }
+    put_head(log, start, cid);
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_append(Log *log, PyObject *args) {
+    Py_buffer data;
+    if (!PyArg_ParseTuple(args, "y*", &data))
+        return NULL;
+    State saved = enter(&log->buf, 0, NULL, NULL);
+    int r = put(data.buf, data.len);
+    leave(saved);
+    PyBuffer_Release(&data);
+    if (r != 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_take(Log *log, PyObject *unused) {
+    PyObject *counts = PyDict_New();
+    if (counts == NULL)
+        return NULL;
+    for (Py_ssize_t cid = 0; cid < log->ncounts; cid++) {
+        if (!log->counts[cid])
+            continue;
+        PyObject *k = PyLong_FromSsize_t(cid), *v = PyLong_FromSsize_t(log->counts[cid]);
+        int r = (k && v) ? PyDict_SetItem(counts, k, v) : -1;
+        Py_XDECREF(k);
+        Py_XDECREF(v);
+        if (r < 0) {
+            Py_DECREF(counts);
+            return NULL;
+        }
+    }
+    PyObject *data = PyBytes_FromStringAndSize(log->buf.p, log->buf.n);
+    if (data == NULL) {
+        Py_DECREF(counts);
+        return NULL;
+    }
+    log->buf.n = 0;
+    if (log->ncounts)
+        memset(log->counts, 0, log->ncounts * sizeof(Py_ssize_t));
+    PyObject *result = PyTuple_Pack(2, data, counts);
+    Py_DECREF(data);
+    Py_DECREF(counts);
+    return result;
+}
+
+static PyObject *log_forget(Log *log, PyObject *unused) {
+    PyObject *fresh = PyDict_New();
+    if (fresh == NULL)
+        return NULL;
+    Py_SETREF(log->memo_old, log->memo_now);
+    log->memo_now = fresh;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_size(Log *log, void *closure) {
+    return PyLong_FromSsize_t(log->buf.n);
+}
+
+static int log_traverse(Log *log, visitproc visit, void *arg) {
+    Py_VISIT(log->channels);
+    Py_VISIT(log->programs);
+    Py_VISIT(log->fallback);
+    Py_VISIT(log->memo_now);
+    Py_VISIT(log->memo_old);
+    return 0;
+}
+
+static int log_clear(Log *log) {
+    Py_CLEAR(log->channels);
+    Py_CLEAR(log->programs);
+    Py_CLEAR(log->fallback);
+    Py_CLEAR(log->memo_now);
+    Py_CLEAR(log->memo_old);
+    return 0;
+}
+
+static void log_dealloc(Log *log) {
+    PyObject_GC_UnTrack(log);
+    log_clear(log);
+    PyMem_Free(log->buf.p);
+    PyMem_Free(log->counts);
+    Py_TYPE(log)->tp_free((PyObject *)log);
+}
+
+static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    PyObject *programs, *fallback;
+    static char *kwlist[] = {"programs", "fallback", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OO", kwlist, &programs, &fallback))
+        return NULL;
+    if (!PyCallable_Check(programs) || !PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_TypeError, "Log(programs, fallback): two callables");
+        return NULL;
+    }
+    Log *log = (Log *)type->tp_alloc(type, 0);
+    if (log == NULL)
+        return NULL;
+    log->vectorcall = log_vectorcall;
+    log->channels = PyDict_New();
+    log->memo_now = PyDict_New();
+    log->memo_old = PyDict_New();
+    log->programs = Py_NewRef(programs);
+    log->fallback = Py_NewRef(fallback);
+    if (log->channels == NULL || log->memo_now == NULL || log->memo_old == NULL) {
+        Py_DECREF(log);
+        return NULL;
+    }
+    return (PyObject *)log;
+}
+
+static PyMethodDef log_methods[] = {
+    {"add", (PyCFunction)log_add, METH_VARARGS, "add(topic, channel_id, typename): record topic on that channel"},
+    {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
+    {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
+    {"take", (PyCFunction)log_take, METH_NOARGS, "take() -> (bytes, {channel_id: messages}) since the last take"},
+    {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyMemberDef log_members[] = {
+    {"now", T_LONGLONG, offsetof(Log, now), 0, "log time of the next messages [ns]"},
+    {NULL, 0, 0, 0, NULL},
+};
+
+static PyGetSetDef log_getset[] = {
+    {"size", (getter)log_size, NULL, "bytes held since the last take", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject LogType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.Log",
+    .tp_basicsize = sizeof(Log),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_doc = "Log(programs, fallback): MCAP message records of bus messages, encoded to CDR in C",
+    .tp_new = log_new,
+    .tp_dealloc = (destructor)log_dealloc,
+    .tp_traverse = (traverseproc)log_traverse,
+    .tp_clear = (inquiry)log_clear,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(Log, vectorcall),
+    .tp_methods = log_methods,
+    .tp_members = log_members,
+    .tp_getset = log_getset,
+};
 
 /* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
 static PyObject *setup(PyObject *self, PyObject *args) {
@@ -458,5 +796,14 @@ static PyMethodDef methods[] = {
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    return PyModule_Create(&module);
+    if (PyType_Ready(&LogType) < 0)
+        return NULL;
+    PyObject *m = PyModule_Create(&module);
+    if (m == NULL)
+        return NULL;
+    if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
 }

@@ -30,6 +30,7 @@ big-endian payload is handed to rosbags to read.
 
 from __future__ import annotations
 
+import os
 import struct
 import sys
 from typing import Any, Callable
@@ -40,11 +41,18 @@ from rosbags.typesys.base import normalize_fieldname
 
 from . import MessageError
 
+#: set (to anything but "" or "0") to use the pure-Python encoders even where the C encoder is built: what a
+#: machine without a C compiler runs (tests compare both)
+PURE_PYTHON_ENV = "SIMATCH_CDR_PURE_PYTHON"
+
 try:                                # the C encoder (setup.py builds it where a compiler is at hand)
+    if os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0"):
+        raise ImportError(f"{PURE_PYTHON_ENV} is set")
+    from ._cdr_accel import Log
     from ._cdr_accel import encode as _accel_encode
     from ._cdr_accel import setup as _accel_setup
-except ImportError:                 # pragma: no cover - a machine without a C compiler
-    _accel_encode = _accel_setup = None
+except ImportError:                 # a machine without a C compiler
+    _accel_encode = _accel_setup = Log = None
 
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
@@ -174,6 +182,14 @@ class Codec:
                          "    return len(d)"]
             found = self._appenders[typename] = self._compile(lines, typename, f"into_{ident}")
         return found
+
+    def program(self, typename: str) -> tuple[tuple, bool]:
+        """What the C message log (``Log``, see _cdr_accel.c) needs to encode ``typename``: the C encoder's
+        program, and whether a memo should remember each message's body (the type is an element of some
+        sequence, so a message published alone may be met again inside another one)."""
+        if typename not in self.typestore.fielddefs:
+            raise MessageError(f"unknown message type {typename!r}")
+        return self._program(typename), typename in self._elements
 
     def decode(self, typename: str, data: bytes | bytearray | memoryview):
         """The ``typename`` message held in ``data``; primitive sequences are read-only numpy views of it.
