@@ -8,7 +8,11 @@
  *
  * kinds (K_* below): a primitive (argument unused), a string, a nested message (argument: its program),
  * a sequence or fixed array of primitives (argument: (element kind, length or -1)), of strings (argument:
- * length or -1) or of messages (argument: (program, length or -1)).
+ * length or -1) or of messages (argument: (program, length or -1, alignment of its first field)).
+ * `compile` turns such a tuple into C structures once (no tuple unpacking or int conversion per field).
+ *
+ * The module also holds the recorder's message log (`Log`, below), which frames and encodes each message
+ * it is given straight into the recording's chunk buffer.
  *
  * Output: XCDR1 little endian with the 4-byte encapsulation header, byte for byte what rosbags writes
  * (checked type by type by tests/msgs/test_cdr.py). Anything this fast path does not take as it is (a
@@ -50,6 +54,14 @@ typedef struct {
     int flags;
 } ArrayHead;
 
+/* ... and the leading fields of a dtype, the same in numpy 1 and 2: an array made elsewhere (numba, a view of
+ * a structured array) may have a dtype object of its own that equals the shared one */
+typedef struct {
+    PyObject_HEAD
+    PyTypeObject *typeobj;         /* the scalar type: numpy.float64, ... */
+    char kind, type, byteorder;
+} DescrHead;
+
 #define C_CONTIGUOUS 0x0001
 static PyTypeObject *ndarray = NULL;
 static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous arrays taken as they are */
@@ -75,7 +87,7 @@ static int reserve(Py_ssize_t need) {
 
 /* pad with zeros to a multiple of `a`, counted from the start of the body (after the 4-byte header) */
 static int align(int a) {
-    Py_ssize_t pad = (a - ((out->n - body) % a)) % a;
+    Py_ssize_t pad = (body - out->n) & (a - 1);       /* a is 1, 2, 4 or 8 */
     if (pad) {
         if (reserve(pad) < 0)
             return FAILED;
@@ -211,15 +223,38 @@ static int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
     }
 }
 
-static int encode_program(PyObject *program, PyObject *msg);
-static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first);
+/* A program compiled once (`compile`): the same steps as its tuple, as C values. */
+typedef struct Program Program;
+typedef struct {
+    int kind;
+    int elem;                      /* K_PSEQ: the element kind; K_MSEQ: the alignment of the first field */
+    Py_ssize_t fixed;              /* sequences: the fixed length of an array, or -1 */
+    PyObject *name;                /* the attribute (interned) */
+    Program *sub;                  /* K_MSG, K_MSEQ: the nested message's program */
+} Op;
+struct Program {
+    Py_ssize_t count;
+    Op ops[];
+};
 
-static int put_primitives(PyObject *v, PyObject *arg) {
-    long kind = PyLong_AsLong(PyTuple_GET_ITEM(arg, 0));
-    Py_ssize_t fixed = PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1));
+static int encode_program(const Program *program, PyObject *msg);
+static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first);
+
+/* the dtype of the wire's element type (`ref`, from `setup`): that very object, or one of the same class with
+ * the same scalar type and byte order (a machine-native one: this module only runs on little-endian ones) */
+static int same_dtype(PyObject *descr, PyObject *ref) {
+    if (descr == ref)
+        return 1;
+    if (ref == NULL || Py_TYPE(descr) != Py_TYPE(ref))
+        return 0;
+    const DescrHead *d = (const DescrHead *)descr, *r = (const DescrHead *)ref;
+    return d->typeobj == r->typeobj && d->byteorder == r->byteorder && d->kind == r->kind && d->type == r->type;
+}
+
+static int put_primitives(PyObject *v, long kind, Py_ssize_t fixed) {
     if (Py_TYPE(v) == ndarray && kind < 16) {
         ArrayHead *a = (ArrayHead *)v;
-        if (a->nd == 1 && a->descr == dtypes[kind] && (a->flags & C_CONTIGUOUS)) {
+        if (a->nd == 1 && (a->flags & C_CONTIGUOUS) && same_dtype(a->descr, dtypes[kind])) {
             Py_ssize_t n = a->dimensions[0];
             int r;
             if (fixed >= 0) {
@@ -280,7 +315,9 @@ static PyObject *memo_find(PyObject *obj, long phase) {
 static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
     PyObject *key = PyLong_FromVoidPtr(obj);
     PyObject *data = PyBytes_FromStringAndSize(out->p + start, out->n - start);
-    PyObject *entry = (key && data) ? Py_BuildValue("(OlO)", obj, phase, data) : NULL;
+    PyObject *at = PyLong_FromLong(phase);                 /* a small int: cached, no allocation */
+    PyObject *entry = (key && data && at) ? PyTuple_Pack(3, obj, at, data) : NULL;
+    Py_XDECREF(at);
     int r = entry ? PyDict_SetItem(memo_now, key, entry) : -1;
     Py_XDECREF(key);
     Py_XDECREF(data);
@@ -297,7 +334,7 @@ static int put_bytes_object(PyObject *data) {
 }
 
 /* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
-static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first) {
+static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first) {
     long phase = phase_now();
     Py_ssize_t start = out->n;
     if (memo_now != NULL) {
@@ -325,7 +362,7 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align
             continue;
         }
         if (memo_now != NULL && align_first > 0) {     /* this message encoded on its own before? */
-            Py_ssize_t pad = (align_first - ((out->n - body) % align_first)) % align_first;
+            Py_ssize_t pad = (body - out->n) & (align_first - 1);
             if (((out->n - body + pad) & 7) == 0) {
                 PyObject *hit = memo_find(items[i], 0);
                 if (hit != NULL) {
@@ -347,36 +384,124 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align
     return r;
 }
 
-static int encode_program(PyObject *program, PyObject *msg) {
-    Py_ssize_t count = PyTuple_GET_SIZE(program);
-    for (Py_ssize_t i = 0; i < count; i++) {
-        PyObject *op = PyTuple_GET_ITEM(program, i);
-        long kind = PyLong_AsLong(PyTuple_GET_ITEM(op, 0));
-        PyObject *v = PyObject_GetAttr(msg, PyTuple_GET_ITEM(op, 1));
+static int encode_program(const Program *program, PyObject *msg) {
+    for (Py_ssize_t i = 0; i < program->count; i++) {
+        const Op *op = &program->ops[i];
+        PyObject *v = PyObject_GetAttr(msg, op->name);
         if (v == NULL) {
             PyErr_Clear();
             return FALLBACK;
         }
-        PyObject *arg = PyTuple_GET_ITEM(op, 2);
         int r;
-        if (kind < K_STR)
-            r = put_primitive(kind, v);
-        else if (kind == K_STR)
+        if (op->kind < K_STR)
+            r = put_primitive(op->kind, v);
+        else if (op->kind == K_STR)
             r = put_string(v);
-        else if (kind == K_MSG)
-            r = encode_program(arg, v);
-        else if (kind == K_PSEQ)
-            r = put_primitives(v, arg);
-        else if (kind == K_SSEQ)
-            r = put_items(v, PyLong_AsSsize_t(arg), NULL, 0);
+        else if (op->kind == K_MSG)
+            r = encode_program(op->sub, v);
+        else if (op->kind == K_PSEQ)
+            r = put_primitives(v, op->elem, op->fixed);
+        else if (op->kind == K_SSEQ)
+            r = put_items(v, op->fixed, NULL, 0);
         else
-            r = put_items(v, PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1)), PyTuple_GET_ITEM(arg, 0),
-                          (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 2)));
+            r = put_items(v, op->fixed, op->sub, op->elem);
         Py_DECREF(v);
         if (r)
             return r;
     }
     return 0;
+}
+
+static void free_program(Program *program) {
+    if (program == NULL)
+        return;
+    for (Py_ssize_t i = 0; i < program->count; i++) {
+        Py_XDECREF(program->ops[i].name);
+        free_program(program->ops[i].sub);
+    }
+    PyMem_Free(program);
+}
+
+static int bad_program(void) {
+    PyErr_SetString(PyExc_ValueError, "malformed encoder program");
+    return -1;
+}
+
+/* one op of a program tuple: (kind, attribute, argument), see the top of this file */
+static int compile_op(PyObject *item, Op *op, Program *(*compile)(PyObject *)) {
+    if (!PyTuple_Check(item) || PyTuple_GET_SIZE(item) != 3 || !PyUnicode_Check(PyTuple_GET_ITEM(item, 1)))
+        return bad_program();
+    op->kind = (int)PyLong_AsLong(PyTuple_GET_ITEM(item, 0));
+    op->name = Py_NewRef(PyTuple_GET_ITEM(item, 1));
+    PyUnicode_InternInPlace(&op->name);
+    PyObject *arg = PyTuple_GET_ITEM(item, 2);
+    if (op->kind == -1 && PyErr_Occurred())
+        return -1;
+    if ((op->kind >= K_BOOL && op->kind <= K_F64) || op->kind == K_STR)
+        return 0;
+    if (op->kind == K_MSG)
+        return (op->sub = compile(arg)) == NULL ? -1 : 0;
+    if (op->kind == K_SSEQ) {
+        op->fixed = PyLong_AsSsize_t(arg);
+        return (op->fixed == -1 && PyErr_Occurred()) ? -1 : 0;
+    }
+    if ((op->kind != K_PSEQ && op->kind != K_MSEQ) || !PyTuple_Check(arg) || PyTuple_GET_SIZE(arg) < 2)
+        return bad_program();
+    op->fixed = PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1));
+    if (op->fixed == -1 && PyErr_Occurred())
+        return -1;
+    if (op->kind == K_PSEQ) {
+        op->elem = (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 0));
+        return (op->elem >= K_BOOL && op->elem <= K_F64) ? 0 : bad_program();
+    }
+    if (PyTuple_GET_SIZE(arg) != 3)
+        return bad_program();
+    op->elem = (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 2));
+    if (op->elem != 1 && op->elem != 2 && op->elem != 4 && op->elem != 8)
+        return bad_program();
+    return (op->sub = compile(PyTuple_GET_ITEM(arg, 0))) == NULL ? -1 : 0;
+}
+
+static Program *compile_tuple(PyObject *program) {
+    if (!PyTuple_Check(program)) {
+        bad_program();
+        return NULL;
+    }
+    Py_ssize_t count = PyTuple_GET_SIZE(program);
+    Program *p = PyMem_Calloc(1, sizeof(Program) + count * sizeof(Op));
+    if (p == NULL) {
+        PyErr_NoMemory();
+        return NULL;
+    }
+    p->count = count;
+    for (Py_ssize_t i = 0; i < count; i++) {
+        if (compile_op(PyTuple_GET_ITEM(program, i), &p->ops[i], compile_tuple) < 0) {
+            free_program(p);
+            return NULL;
+        }
+    }
+    return p;
+}
+
+#define PROGRAM_CAPSULE "simatch.msgs._cdr_accel.program"
+
+static void program_capsule_free(PyObject *capsule) {
+    free_program(PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE));
+}
+
+/* compile(program tuple) -> the compiled program (a capsule) that `encode` and `Log` take */
+static PyObject *compile(PyObject *self, PyObject *program) {
+    Program *p = compile_tuple(program);
+    if (p == NULL)
+        return NULL;
+    PyObject *capsule = PyCapsule_New(p, PROGRAM_CAPSULE, program_capsule_free);
+    if (capsule == NULL)
+        free_program(p);
+    return capsule;
+}
+
+static const Program *program_of(PyObject *capsule) {
+    return PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE);    /* NULL, with an exception, if it is not one */
 }
 
 /* The encoder's globals while one call runs (saved and restored: a field's __float__ may run Python code that
@@ -409,7 +534,10 @@ static void leave(State saved) {
 static PyObject *encode(PyObject *self, PyObject *args) {
     PyObject *program, *msg, *memo = Py_None, *target = Py_None;
     int keep = 0;
-    if (!PyArg_ParseTuple(args, "O!O|OpO", &PyTuple_Type, &program, &msg, &memo, &keep, &target))
+    if (!PyArg_ParseTuple(args, "OO|OpO", &program, &msg, &memo, &keep, &target))
+        return NULL;
+    const Program *compiled = program_of(program);
+    if (compiled == NULL)
         return NULL;
     if (target != Py_None && !PyByteArray_Check(target)) {
         PyErr_SetString(PyExc_TypeError, "out: a bytearray or None");
@@ -433,7 +561,7 @@ static PyObject *encode(PyObject *self, PyObject *args) {
     State saved = enter(&scratch, mark + 4, now, old);
     int r = put("\x00\x01\x00\x00", 4);
     if (r == 0)
-        r = encode_program(program, msg);
+        r = encode_program(compiled, msg);
     if (r == 0 && keep && memo_now != NULL)
         r = memo_keep(msg, 0, mark + 4);
     leave(saved);
@@ -459,29 +587,43 @@ static PyObject *encode(PyObject *self, PyObject *args) {
  * an MCAP Message record: opcode 0x05, record length, channel id, sequence 0, log time and publish time =
  * `log.now` (u64 nanoseconds), then the message's CDR bytes, encoded in place by the programs above. A
  * recording spends most of its time here, some two thousand times per simulated second, so the whole path
- * (topic look-up, record header, encoding, count) is one C call with no Python frame and no object per
- * message. `simatch.record.messagelog.MessageLog` is the same thing in Python, byte for byte.
- *
- * log.add(topic, channel id, typename): record `topic` on that channel; `programs(typename)` gives the
- *     encoder's program and whether to remember each message's body (the memo's "keep").
- * log(topic, msg): a topic not added, or a message the C encoder does not take as it is, goes to
- *     `fallback(topic, msg)` instead (nothing of it is left in the buffer).
- * log.record(channel id, data): a message already encoded; log.append(data): raw records (schemas, channels).
- * log.take() -> (bytes, {channel id: messages}): everything since the last take; the buffer is kept.
- * log.forget(): a new memo period (see simatch.msgs.cdr). log.now: the log time; log.size: bytes held. */
+ * (topic look-up, clock, record header, encoding, count) is one C call with no Python frame and no object per
+ * message. `simatch.record.messagelog.MessageLog` is the same thing in Python, byte for byte; its docstring
+ * describes the interface. */
 
 #define RECORD_HEAD 31             /* opcode u8, length u64, channel u16, sequence u32, log time u64, publish u64 */
+#define CLOCK_STEP 1               /* add(..., clock=): the message's `step` sets the log time */
+#define CLOCK_TICK 2               /* ... and opens a new memo period */
 
 typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
     Buf buf;
-    PyObject *channels;            /* topic -> (channel id, program, keep) */
-    PyObject *programs, *fallback;
+    PyObject *channels;            /* topic -> Channel (in a capsule) */
+    PyObject *programs, *fallback, *on_chunk;
     PyObject *memo_now, *memo_old;
-    long long now;
+    long long now, first, last;    /* log time; of the first and last message since the last take (-1: none) */
+    long long step_ns, chunk_ns, next_chunk;
     Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
 } Log;
+
+typedef struct {
+    long id;
+    int keep;                      /* remember each message's body in the memo */
+    int clock;                     /* CLOCK_* flags */
+    const Program *program;
+    PyObject *owner;               /* the program's capsule */
+} Channel;
+
+static PyObject *step_name = NULL; /* "step" */
+
+static void channel_free(PyObject *capsule) {
+    Channel *ch = PyCapsule_GetPointer(capsule, NULL);
+    if (ch != NULL) {
+        Py_XDECREF(ch->owner);
+        PyMem_Free(ch);
+    }
+}
 
 static void put_le(char *p, unsigned long long v, int size) {
     for (int i = 0; i < size; i++, v >>= 8)
@@ -501,6 +643,9 @@ static int count_message(Log *log, long cid) {
         log->ncounts = n;
     }
     log->counts[cid]++;
+    if (log->first < 0)
+        log->first = log->now;
+    log->last = log->now;
     return 0;
 }
 
@@ -524,26 +669,68 @@ static int check_channel(long cid) {
 }
 
 /* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
-static int log_message(Log *log, long cid, PyObject *program, int keep, PyObject *msg) {
+static int log_message(Log *log, const Channel *ch, PyObject *msg) {
     Py_ssize_t start = log->buf.n;
     State saved = enter(&log->buf, start + RECORD_HEAD + 4, log->memo_now, log->memo_old);
     int r = reserve(RECORD_HEAD + 4);
     if (r == 0) {
         memcpy(out->p + start + RECORD_HEAD, "\x00\x01\x00\x00", 4);
         out->n = start + RECORD_HEAD + 4;
-        r = encode_program(program, msg);
+        r = encode_program(ch->program, msg);
     }
-    if (r == 0 && keep)
+    if (r == 0 && ch->keep)
         r = memo_keep(msg, 0, start + RECORD_HEAD + 4);
     leave(saved);
     if (r == 0)
-        r = count_message(log, cid);
+        r = count_message(log, ch->id);
     if (r != 0) {
         log->buf.n = start;
         return r;
     }
-    put_head(log, start, cid);
+    put_head(log, start, ch->id);
     return 0;
+}
+
+static int forget(Log *log) {
+    PyObject *fresh = PyDict_New();
+    if (fresh == NULL)
+        return FAILED;
+    Py_SETREF(log->memo_old, log->memo_now);
+    log->memo_now = fresh;
+    return 0;
+}
+
+/* the run is at physics step `step`: messages from now on carry its time; a chunk may end first */
+static int advance(Log *log, long long step) {
+    long long now = step * log->step_ns;
+    if (now == log->now || log->step_ns <= 0)
+        return 0;
+    log->now = now;
+    if (log->on_chunk == NULL || log->chunk_ns <= 0 || now < log->next_chunk)
+        return 0;
+    log->next_chunk = (now / log->chunk_ns + 1) * log->chunk_ns;
+    PyObject *r = PyObject_CallNoArgs(log->on_chunk);
+    Py_XDECREF(r);
+    return r == NULL ? FAILED : 0;
+}
+
+/* a clock message: its step (if it has a usable one) sets the time */
+static int clock_message(Log *log, const Channel *ch, PyObject *msg) {
+    PyObject *v = PyObject_GetAttr(msg, step_name);
+    long long step = -1;
+    if (v != NULL) {
+        PyObject *i = PyNumber_Index(v);      /* an int, or a numpy integer */
+        Py_DECREF(v);
+        if (i != NULL) {
+            step = PyLong_AsLongLong(i);
+            Py_DECREF(i);
+        }
+    }
+    if (step < 0)
+        PyErr_Clear();
+    else if (advance(log, step) < 0)
+        return FAILED;
+    return (ch->clock & CLOCK_TICK) ? forget(log) : 0;
 }
 
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
@@ -554,8 +741,17 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
     }
     PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
     if (entry != NULL) {
-        long cid = PyLong_AsLong(PyTuple_GET_ITEM(entry, 0));
-        int r = log_message(log, cid, PyTuple_GET_ITEM(entry, 1), PyTuple_GET_ITEM(entry, 2) == Py_True, args[1]);
+        const Channel *ch = PyCapsule_GetPointer(entry, NULL);
+        int r = 0;
+        if (ch->clock) {                   /* may call on_chunk (Python): keep the entry alive meanwhile */
+            Py_INCREF(entry);
+            r = clock_message(log, ch, args[1]);
+            if (r == 0)
+                r = log_message(log, ch, args[1]);
+            Py_DECREF(entry);
+        } else {
+            r = log_message(log, ch, args[1]);
+        }
         if (r == 0)
             Py_RETURN_NONE;
         if (r == FAILED)
@@ -566,28 +762,58 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
     return PyObject_Vectorcall(log->fallback, args, 2, NULL);
 }
 
-static PyObject *log_add(Log *log, PyObject *args) {
+static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
     PyObject *topic, *typename;
     long cid;
-    if (!PyArg_ParseTuple(args, "UlO", &topic, &cid, &typename) || check_channel(cid) < 0)
+    int clock = 0;
+    static char *kwlist[] = {"topic", "channel_id", "typename", "clock", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "UlO|i", kwlist, &topic, &cid, &typename, &clock)
+        || check_channel(cid) < 0)
         return NULL;
     PyObject *found = PyObject_CallOneArg(log->programs, typename);
     if (found == NULL)
         return NULL;
-    if (!PyTuple_Check(found) || PyTuple_GET_SIZE(found) != 2 || !PyTuple_Check(PyTuple_GET_ITEM(found, 0))) {
+    if (!PyTuple_Check(found) || PyTuple_GET_SIZE(found) != 2) {
         Py_DECREF(found);
-        PyErr_SetString(PyExc_TypeError, "programs(typename) must return (program tuple, keep)");
+        PyErr_SetString(PyExc_TypeError, "programs(typename) must return (compiled program, keep)");
         return NULL;
     }
-    int keep = PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
-    PyObject *entry = keep < 0 ? NULL : Py_BuildValue("(lOO)", cid, PyTuple_GET_ITEM(found, 0), keep ? Py_True : Py_False);
+    const Program *program = program_of(PyTuple_GET_ITEM(found, 0));
+    int keep = program == NULL ? -1 : PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
+    Channel *ch = keep < 0 ? NULL : PyMem_Malloc(sizeof(Channel));
+    if (ch == NULL) {
+        Py_DECREF(found);
+        return keep < 0 ? NULL : PyErr_NoMemory();
+    }
+    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), program, Py_NewRef(PyTuple_GET_ITEM(found, 0))};
     Py_DECREF(found);
-    if (entry == NULL)
+    PyObject *entry = PyCapsule_New(ch, NULL, channel_free);
+    if (entry == NULL) {
+        Py_DECREF(ch->owner);
+        PyMem_Free(ch);
         return NULL;
+    }
     int r = PyDict_SetItem(log->channels, topic, entry);
     Py_DECREF(entry);
     if (r < 0)
         return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
+    long long step_ns, chunk_ns;
+    PyObject *on_chunk;
+    static char *kwlist[] = {"step_ns", "chunk_ns", "on_chunk", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "LLO", kwlist, &step_ns, &chunk_ns, &on_chunk))
+        return NULL;
+    if (step_ns <= 0 || chunk_ns <= 0 || !PyCallable_Check(on_chunk)) {
+        PyErr_SetString(PyExc_ValueError, "timing(step_ns > 0, chunk_ns > 0, on_chunk callable)");
+        return NULL;
+    }
+    log->step_ns = step_ns;
+    log->chunk_ns = chunk_ns;
+    log->next_chunk = (log->now / chunk_ns + 1) * chunk_ns;
+    Py_XSETREF(log->on_chunk, Py_NewRef(on_chunk));
     Py_RETURN_NONE;
 }
 
@@ -645,25 +871,22 @@ static PyObject *log_take(Log *log, PyObject *unused) {
         }
     }
     PyObject *data = PyBytes_FromStringAndSize(log->buf.p, log->buf.n);
-    if (data == NULL) {
+    PyObject *result = data ? Py_BuildValue("(NNLL)", data, counts, log->first, log->last) : NULL;
+    if (result == NULL) {
+        Py_XDECREF(data);
         Py_DECREF(counts);
         return NULL;
     }
     log->buf.n = 0;
+    log->first = log->last = -1;
     if (log->ncounts)
         memset(log->counts, 0, log->ncounts * sizeof(Py_ssize_t));
-    PyObject *result = PyTuple_Pack(2, data, counts);
-    Py_DECREF(data);
-    Py_DECREF(counts);
     return result;
 }
 
 static PyObject *log_forget(Log *log, PyObject *unused) {
-    PyObject *fresh = PyDict_New();
-    if (fresh == NULL)
+    if (forget(log) < 0)
         return NULL;
-    Py_SETREF(log->memo_old, log->memo_now);
-    log->memo_now = fresh;
     Py_RETURN_NONE;
 }
 
@@ -675,6 +898,7 @@ static int log_traverse(Log *log, visitproc visit, void *arg) {
     Py_VISIT(log->channels);
     Py_VISIT(log->programs);
     Py_VISIT(log->fallback);
+    Py_VISIT(log->on_chunk);
     Py_VISIT(log->memo_now);
     Py_VISIT(log->memo_old);
     return 0;
@@ -684,6 +908,7 @@ static int log_clear(Log *log) {
     Py_CLEAR(log->channels);
     Py_CLEAR(log->programs);
     Py_CLEAR(log->fallback);
+    Py_CLEAR(log->on_chunk);
     Py_CLEAR(log->memo_now);
     Py_CLEAR(log->memo_old);
     return 0;
@@ -710,6 +935,7 @@ static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     if (log == NULL)
         return NULL;
     log->vectorcall = log_vectorcall;
+    log->first = log->last = -1;
     log->channels = PyDict_New();
     log->memo_now = PyDict_New();
     log->memo_old = PyDict_New();
@@ -723,10 +949,14 @@ static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
 }
 
 static PyMethodDef log_methods[] = {
-    {"add", (PyCFunction)log_add, METH_VARARGS, "add(topic, channel_id, typename): record topic on that channel"},
+    {"add", (PyCFunction)(void (*)(void))log_add, METH_VARARGS | METH_KEYWORDS,
+     "add(topic, channel_id, typename, clock=0): record topic on that channel"},
+    {"timing", (PyCFunction)(void (*)(void))log_timing, METH_VARARGS | METH_KEYWORDS,
+     "timing(step_ns, chunk_ns, on_chunk): how clock messages set the time and end chunks"},
     {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
     {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
-    {"take", (PyCFunction)log_take, METH_NOARGS, "take() -> (bytes, {channel_id: messages}) since the last take"},
+    {"take", (PyCFunction)log_take, METH_NOARGS,
+     "take() -> (bytes, {channel_id: messages}, first time, last time) since the last take"},
     {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
     {NULL, NULL, 0, NULL},
 };
@@ -780,7 +1010,8 @@ static PyObject *setup(PyObject *self, PyObject *args) {
         Py_INCREF(value);
         Py_XSETREF(dtypes[k], value);
     }
-    if (dtypes[K_F64] != a->descr)
+    const DescrHead *d = (const DescrHead *)a->descr;
+    if (dtypes[K_F64] != a->descr || d->kind != 'f' || d->type != 'd')
         Py_RETURN_FALSE;
     Py_INCREF(type);
     Py_XSETREF(ndarray, (PyTypeObject *)type);
@@ -788,15 +1019,16 @@ static PyObject *setup(PyObject *self, PyObject *args) {
 }
 
 static PyMethodDef methods[] = {
-    {"encode", encode, METH_VARARGS, "encode(program, msg) -> CDR bytes with the header, or None: use Python"},
+    {"encode", encode, METH_VARARGS, "encode(compiled program, msg) -> CDR bytes with the header, or None: use Python"},
     {"setup", setup, METH_VARARGS, "setup(ndarray, {kind: dtype}, np.arange(3.0)) -> arrays read directly"},
+    {"compile", compile, METH_O, "compile(program tuple) -> the compiled program that encode and Log take"},
     {NULL, NULL, 0, NULL},
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    if (PyType_Ready(&LogType) < 0)
+    if (PyType_Ready(&LogType) < 0 || (step_name = PyUnicode_InternFromString("step")) == NULL)
         return NULL;
     PyObject *m = PyModule_Create(&module);
     if (m == NULL)

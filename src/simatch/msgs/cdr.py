@@ -49,10 +49,11 @@ try:                                # the C encoder (setup.py builds it where a 
     if os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0"):
         raise ImportError(f"{PURE_PYTHON_ENV} is set")
     from ._cdr_accel import Log
+    from ._cdr_accel import compile as _accel_compile
     from ._cdr_accel import encode as _accel_encode
     from ._cdr_accel import setup as _accel_setup
 except ImportError:                 # a machine without a C compiler
-    _accel_encode = _accel_setup = Log = None
+    _accel_encode = _accel_setup = _accel_compile = Log = None
 
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
@@ -123,6 +124,7 @@ class Codec:
         self.memo = memo
         self.accelerate = accelerate and ACCELERATED
         self._programs: dict[str, tuple] = {}
+        self._compiled_programs: dict[str, Any] = {}
         self._appenders: dict[str, Callable] = {}
         self._memo = ({}, {})                           # the C encoder's: this period's, the last one's
         self._whole: dict[str, Callable] = {}           # type -> encode(msg) -> bytes
@@ -189,7 +191,7 @@ class Codec:
         sequence, so a message published alone may be met again inside another one)."""
         if typename not in self.typestore.fielddefs:
             raise MessageError(f"unknown message type {typename!r}")
-        return self._program(typename), typename in self._elements
+        return self._compiled(typename), typename in self._elements
 
     def decode(self, typename: str, data: bytes | bytearray | memoryview):
         """The ``typename`` message held in ``data``; primitive sequences are read-only numpy views of it.
@@ -293,7 +295,7 @@ class Codec:
 
     def _accelerated(self, typename: str, python: Callable) -> Callable:
         """The C encoder with its program for ``typename``; what it does not take goes to ``python``."""
-        self._ns[f"_PROG_{_ident(typename)}"] = self._program(typename)
+        self._ns[f"_PROG_{_ident(typename)}"] = self._compiled(typename)
         self._ns[f"_PY_{_ident(typename)}"] = python
         self._ns["_accel"] = _accel_encode
         ident = _ident(typename)
@@ -307,6 +309,13 @@ class Codec:
                  f"    data = {call}",
                  f"    return _PY_{ident}(m) if data is None else data"]
         return self._compile(lines, typename, f"fast_{ident}")
+
+    def _compiled(self, typename: str):
+        """The C encoder's program of a type, compiled (see _cdr_accel.c)."""
+        found = self._compiled_programs.get(typename)
+        if found is None:
+            found = self._compiled_programs[typename] = _accel_compile(self._program(typename))
+        return found
 
     def _program(self, typename: str) -> tuple:
         """The C encoder's program of a type: ((kind, attribute, argument), ...), see _cdr_accel.c."""

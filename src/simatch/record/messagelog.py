@@ -9,19 +9,26 @@ C compiler (and for the tests that compare the two).
 
 Interface of both:
 
-* ``log.add(topic, channel_id, typename)``: record ``topic`` on that channel.
+* ``log.add(topic, channel_id, typename, clock=0)``: record ``topic`` on that channel. ``clock``:
+  `CLOCK_STEP`, the message's ``step`` (a physics step) sets the log time first; `CLOCK_STEP | CLOCK_TICK`,
+  it also opens a new memo period (see `simatch.msgs.cdr.Codec`): model states and the clock.
+* ``log.timing(step_ns, chunk_ns, on_chunk)``: the physics step and the chunk length [ns]; when a clock
+  message moves the time into a new chunk, ``on_chunk()`` is called (the recorder takes the chunk then)
+  before that message is logged.
 * ``log(topic, msg)``: a topic not added, or a message the encoder does not take as it is, goes to
   ``fallback(topic, msg)`` instead, with nothing of it left in the buffer (the recorder then opens the
   channel, or encodes the message with the pure-Python encoder, or counts it as malformed).
 * ``log.record(channel_id, data)``: a message already encoded (the 3D scene); ``log.append(data)``: raw
   records (schemas and channels, which must precede their first message in the chunk).
-* ``log.take() -> (bytes, {channel_id: messages})``: everything since the last take (one chunk).
-* ``log.forget()``: a new memo period (see `simatch.msgs.cdr.Codec`); ``log.now``: the log time [ns];
-  ``log.size``: bytes held since the last take.
+* ``log.take() -> (bytes, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
+  and the log times of its first and last message (-1 if it holds none).
+* ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
+  last take.
 """
 
 from __future__ import annotations
 
+import operator
 import struct
 from typing import Any, Callable
 
@@ -36,6 +43,8 @@ _GAP = bytes(MESSAGE_HEADER.size)
 _pack_header = MESSAGE_HEADER.pack_into
 
 Fallback = Callable[[str, Any], None]
+CLOCK_STEP = 1              # the message's step sets the log time
+CLOCK_TICK = 2              # ... and opens a new memo period
 
 
 def new_log(fallback: Fallback, *, accelerate: bool = True):
@@ -52,22 +61,34 @@ class MessageLog:
         self.now = 0
         self._codec = codec
         self._fallback = fallback
-        self._channels: dict[str, tuple[int, Callable]] = {}
+        self._channels: dict[str, tuple[int, Callable, int]] = {}
         self._buf = bytearray()
         self._counts: dict[int, int] = {}
+        self._first = self._last = -1
+        self._step_ns = self._chunk_ns = self._next_chunk = 0
+        self._on_chunk: Callable[[], None] | None = None
 
     @property
     def size(self) -> int:
         return len(self._buf)
 
-    def add(self, topic: str, channel_id: int, typename: str) -> None:
-        self._channels[topic] = (_channel(channel_id), self._codec.appender(typename))
+    def add(self, topic: str, channel_id: int, typename: str, clock: int = 0) -> None:
+        self._channels[topic] = (_channel(channel_id), self._codec.appender(typename),
+                                 clock & (CLOCK_STEP | CLOCK_TICK))
+
+    def timing(self, step_ns: int, chunk_ns: int, on_chunk: Callable[[], None]) -> None:
+        if step_ns <= 0 or chunk_ns <= 0 or not callable(on_chunk):
+            raise ValueError("timing(step_ns > 0, chunk_ns > 0, on_chunk callable)")
+        self._step_ns, self._chunk_ns, self._on_chunk = step_ns, chunk_ns, on_chunk
+        self._next_chunk = (self.now // chunk_ns + 1) * chunk_ns
 
     def __call__(self, topic: str, msg) -> None:
         entry = self._channels.get(topic)
         if entry is None:
             return self._fallback(topic, msg)
-        cid, append = entry
+        cid, append, clock = entry
+        if clock:
+            self._clock(msg, clock)
         buf = self._buf
         start = len(buf)
         buf += _GAP                 # the record header, written once the message's size is known
@@ -78,23 +99,45 @@ class MessageLog:
             return self._fallback(topic, msg)
         now = self.now
         _pack_header(buf, start, OPCODE_MESSAGE, MESSAGE_FIXED + n, cid, 0, now, now)
+        self._counted(cid)
+
+    def _clock(self, msg, clock: int) -> None:
+        try:
+            step = operator.index(msg.step)
+        except (AttributeError, TypeError, ValueError):
+            step = -1
+        if step >= 0 and self._step_ns > 0:
+            now = step * self._step_ns
+            if now != self.now:
+                self.now = now
+                if self._on_chunk is not None and now >= self._next_chunk:
+                    self._next_chunk = (now // self._chunk_ns + 1) * self._chunk_ns
+                    self._on_chunk()
+        if clock & CLOCK_TICK:
+            self.forget()
+
+    def _counted(self, cid: int) -> None:
         self._counts[cid] = self._counts.get(cid, 0) + 1
+        if self._first < 0:
+            self._first = self.now
+        self._last = self.now
 
     def record(self, channel_id: int, data) -> None:
         cid = _channel(channel_id)
         now = self.now
         self._buf += MESSAGE_HEADER.pack(OPCODE_MESSAGE, MESSAGE_FIXED + len(data), cid, 0, now, now)
         self._buf += data
-        self._counts[cid] = self._counts.get(cid, 0) + 1
+        self._counted(cid)
 
     def append(self, data) -> None:
         self._buf += data
 
-    def take(self) -> tuple[bytes, dict[int, int]]:
-        data, counts = bytes(self._buf), self._counts
+    def take(self) -> tuple[bytes, dict[int, int], int, int]:
+        out = (bytes(self._buf), self._counts, self._first, self._last)
         self._buf = bytearray()
         self._counts = {}
-        return data, counts
+        self._first = self._last = -1
+        return out
 
     def forget(self) -> None:
         self._codec.forget()

@@ -39,7 +39,7 @@ from ..msgs.cdr import Codec
 from ..scene.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
-from .messagelog import new_log
+from .messagelog import CLOCK_STEP, CLOCK_TICK, new_log
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
 from .writer import McapWriter, WriterError
 
@@ -49,6 +49,8 @@ log = logging.getLogger(__name__)
 WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.EVENTS, topics.GAME_STATE,
                 topics.OPERATOR)
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
+#: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
+CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
 #: zstd level of the chunks: the data is mostly float64 noise, higher levels gain 1-4 % for 2-6 times the time
 COMPRESSION_LEVEL = 1
 
@@ -99,12 +101,9 @@ class Recorder:
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
         self._totals: dict[int, int] = defaultdict(int)   # messages per channel id in chunks handed over
-        self._now = first_step * self.dt_ns
-        self._log.now = self._now
-        self._chunk_start: int | None = None          # log time of the current chunk's first message
-        self._chunk_end = self._now
-        self._next_chunk = (self._now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
-        self._mark = 0                                # log size when the run reached the current step
+        self._log.now = first_step * self.dt_ns
+        self._log.timing(self.dt_ns, layout.CHUNK_NS, self._end_chunk)
+        self._chunk_end = self._log.now                # log time of the last message handed over
         self.first_step = first_step
         self._writer.metadata(layout.META_START, {
             "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": simatch_version(),
@@ -119,11 +118,10 @@ class Recorder:
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
         self._log.record(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
-        self._subs = [bus.subscribe_all(topics.MODEL_STATES, self._on_model_states),
-                      bus.subscribe_all(topics.CLOCK, self._on_clock)]
-        wanted = [t for t in WORLD_TOPICS if t not in (topics.MODEL_STATES, topics.CLOCK)]
-        wanted += [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
-        self._subs += [bus.subscribe_all(pattern, self._log) for pattern in wanted]
+        wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
+        self._subs = [bus.subscribe_all(pattern, self._log) for pattern in wanted]
+        # after the log's: the log time is that of the model states' step
+        self._subs.append(bus.subscribe_all(topics.MODEL_STATES, self._on_model_states))
 
     # --- channels --------------------------------------------------------------------------------------------
     def _raw_channel(self, channel_topic: str, typestore, typename: str) -> int:
@@ -145,7 +143,7 @@ class Recorder:
             return None
         ch = self._channels[topic] = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore,
                                                                 typename), typename)
-        self._log.add(topic, ch.id, typename)
+        self._log.add(topic, ch.id, typename, CLOCKS.get(topic, 0))
         return ch
 
     def _skip(self, topic: str, why: str) -> None:
@@ -174,47 +172,22 @@ class Recorder:
             return
         self._log.record(ch.id, data)
 
-    # --- time and chunks -------------------------------------------------------------------------------------
-    def _advance(self, step: int) -> None:
-        """The run is at physics step ``step``: messages from now on carry its time."""
-        now = step * self.dt_ns
-        if now == self._now:
-            return
-        if self._log.size > self._mark:                 # messages at the step that ends
-            if self._chunk_start is None:
-                self._chunk_start = self._now
-            self._chunk_end = self._now
-        self._now = self._log.now = now
-        if now >= self._next_chunk:
-            self._end_chunk()
-            self._next_chunk = (now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
-        self._mark = self._log.size
-
+    # --- chunks and the 3D scene ----------------------------------------------------------------------------
     def _end_chunk(self) -> None:
-        """What was recorded since the last chunk goes to the writer thread as one chunk."""
-        data, counts = self._log.take()
+        """What was recorded since the last chunk goes to the writer thread as one chunk (the message log calls
+        this when the time moves into a new chunk)."""
+        data, counts, first, last = self._log.take()
         if data:
             for cid, n in counts.items():
                 self._totals[cid] += n
-            start = self._chunk_start if self._chunk_start is not None else self._chunk_end
-            self._writer.end_chunk(data, start, self._chunk_end, counts)
-        self._chunk_start = None
-        self._mark = 0
+            if first < 0:                             # only schema and channel records
+                first = last = self._chunk_end
+            self._writer.end_chunk(data, first, last, counts)
+            self._chunk_end = last
         self._log.forget()
-
-    # --- bus callbacks (besides the log's) -----------------------------------------------------------------
-    def _on_clock(self, topic: str, msg) -> None:
-        step = _step_of(msg)
-        if step is not None:
-            self._advance(step)
-        self._log.forget()            # a control tick: see the memo periods of `Codec`
-        self._log(topic, msg)
 
     def _on_model_states(self, topic: str, msg) -> None:
         step = _step_of(msg)
-        if step is not None:
-            self._advance(step)
-        self._log(topic, msg)
         if step is not None and step % self._game_every == 0:
             try:
                 pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
@@ -225,7 +198,7 @@ class Recorder:
     # --- end ---------------------------------------------------------------------------------------------------
     @property
     def sim_seconds(self) -> float:
-        return self._now / layout.NS
+        return self._log.now / layout.NS
 
     def counts(self) -> dict[str, int]:
         """Messages recorded per bus topic, in the chunks handed to the writer (all of them once closed)."""
@@ -239,10 +212,6 @@ class Recorder:
         for sub in self._subs:
             sub.close()
         self._subs.clear()
-        if self._log.size > self._mark:                     # messages at the current step
-            if self._chunk_start is None:
-                self._chunk_start = self._now
-            self._chunk_end = self._now
         try:
             self._end_chunk()
             errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
