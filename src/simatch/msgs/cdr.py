@@ -20,6 +20,13 @@ strings that is the same object (the team list that perception gives every teamm
 a message already encoded on its own and met again inside a sequence (the StrategyInfo a robot published
 at one control tick is in its team's TeamStrategy at the next). Lists of strings are also kept by value.
 
+Where setup.py could build the C extension (``_cdr_accel.c``), messages with sequences are encoded by it:
+`Codec` compiles each type's encoder program once (`program`), and the C encoder walks a message with it
+(what it does not take as it is, e.g. a list where an array is expected, goes to the Python encoder). The
+extension also holds ``Log``, the recorder's message log (`simatch.record.messagelog`). Setting the
+environment variable ``SIMATCH_CDR_PURE_PYTHON=1`` uses the pure-Python encoders everywhere, as on a
+machine without a C compiler; both write the same bytes.
+
 Output: XCDR1 little endian with the 4-byte encapsulation header, as ROS 2 and rosbag2 write it; a
 big-endian payload is handed to rosbags to read.
 
