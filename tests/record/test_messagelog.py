@@ -182,3 +182,17 @@ def test_a_machine_without_the_c_extension_records_the_same_run(tmp_path):
         assert proc.stdout.strip() == sim.state_digest()
     assert list(Recording(path).raw()) == list(Recording(tmp_path / "c.mcap").raw())
     assert verify(path).identical
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_clock_message_with_an_absurd_step_does_not_move_the_time(kind):
+    """A remote process may publish anything on a clock topic: a step that is no step, or whose time does not
+    fit the log's 64 bits, leaves the time where it is; the message is still recorded."""
+    log = _log(kind, lambda topic, msg: None)
+    log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
+    log.timing(5_000_000, 500_000_000, lambda: None)
+    log("clock", msgs.new(msgs.Clock, step=40))
+    log("clock", msgs.new(msgs.Clock, step=2**63 + 5))
+    log("clock", msgs.new(msgs.Clock, step=2**62))
+    assert log.now == 200_000_000
+    assert [t for _, t, _ in _records(log.take()[0])] == [200_000_000] * 3

@@ -22,6 +22,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <limits.h>
 #include <string.h>
 #include <structmember.h>
 
@@ -702,8 +703,10 @@ static int forget(Log *log) {
 
 /* the run is at physics step `step`: messages from now on carry its time; a chunk may end first */
 static int advance(Log *log, long long step) {
+    if (log->step_ns <= 0 || step > LLONG_MAX / log->step_ns)      /* no timing, or an absurd step: ignored */
+        return 0;
     long long now = step * log->step_ns;
-    if (now == log->now || log->step_ns <= 0)
+    if (now == log->now)
         return 0;
     log->now = now;
     if (log->on_chunk == NULL || log->chunk_ns <= 0 || now < log->next_chunk)

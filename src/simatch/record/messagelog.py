@@ -41,6 +41,7 @@ MESSAGE_FIXED = 22                     # bytes of a Message record's content bef
 OPCODE_MESSAGE = 0x05
 _GAP = bytes(MESSAGE_HEADER.size)
 _pack_header = MESSAGE_HEADER.pack_into
+_MAX_NS = 2**63 - 1          # log times are signed 64-bit in the C log
 
 Fallback = Callable[[str, Any], None]
 CLOCK_STEP = 1              # the message's step sets the log time
@@ -106,7 +107,7 @@ class MessageLog:
             step = operator.index(msg.step)
         except (AttributeError, TypeError, ValueError):
             step = -1
-        if step >= 0 and self._step_ns > 0:
+        if self._step_ns > 0 and 0 <= step <= _MAX_NS // self._step_ns:     # else ignored, as by the C log
             now = step * self._step_ns
             if now != self.now:
                 self.now = now
