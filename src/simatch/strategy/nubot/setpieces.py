@@ -16,6 +16,7 @@ A slot is (role, x, y, face_x, face_y): where to stand and the point to face.
 from __future__ import annotations
 
 import math
+from operator import itemgetter
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from .positions import Areas, guard_point, outlet_point, passive_point, score_sp
 SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
 KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to the receiver's side) [m]
+#: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
+_ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
+_first = itemgetter(0)
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
@@ -217,14 +221,20 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
             x = min(x, -0.35)
         if legal(x, y):
             return x, y
-    best, best_d = (x, y), math.inf
-    for k in range(48):
-        a = k * math.pi / 24
-        for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0):
-            px, py = bx + rr * math.cos(a), by + rr * math.sin(a)
-            if abs(px) > areas.L2 + 0.5 or abs(py) > areas.W2 - 0.3 or not legal(px, py):
+    # the points round the ball, nearest to (x, y) first (ties in the order of the scan), the first legal one
+    xlim, ylim = areas.L2 + 0.5, areas.W2 - 0.3
+    rings = (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0)
+    around = []
+    for c, s in _ROUND:
+        for rr in rings:
+            px, py = bx + rr * c, by + rr * s
+            if abs(px) > xlim or abs(py) > ylim:
                 continue
             d = math.hypot(px - x, py - y)
-            if d < best_d:
-                best, best_d = (px, py), d
-    return best
+            if d < math.inf:
+                around.append((d, px, py))
+    around.sort(key=_first)
+    for _, px, py in around:
+        if legal(px, py):
+            return px, py
+    return x, y
