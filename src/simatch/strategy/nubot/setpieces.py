@@ -16,6 +16,7 @@ A slot is (role, x, y, face_x, face_y): where to stand and the point to face.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from operator import itemgetter
 
 import numpy as np
@@ -32,6 +33,13 @@ KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to 
 #: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
 _ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
 _first = itemgetter(0)
+
+
+@lru_cache(maxsize=16)
+def _round(r: float) -> tuple[tuple[float, float], ...]:
+    """The offsets from the ball of the points `_settle` tries for distance ``r``: rings at r + 0.05 ... r + 3
+    on each heading of _ROUND, in the order it scans them."""
+    return tuple((rr * c, rr * s) for c, s in _ROUND for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0))
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
@@ -223,16 +231,9 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
             return x, y
     # the points round the ball, nearest to (x, y) first (ties in the order of the scan), the first legal one
     xlim, ylim = areas.L2 + 0.5, areas.W2 - 0.3
-    rings = (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0)
-    around = []
-    for c, s in _ROUND:
-        for rr in rings:
-            px, py = bx + rr * c, by + rr * s
-            if abs(px) > xlim or abs(py) > ylim:
-                continue
-            d = math.hypot(px - x, py - y)
-            if d < math.inf:
-                around.append((d, px, py))
+    hypot, inf = math.hypot, math.inf
+    around = [(d, px, py) for px, py in ((bx + ox, by + oy) for ox, oy in _round(r))
+              if abs(px) <= xlim and abs(py) <= ylim and (d := hypot(px - x, py - y)) < inf]
     around.sort(key=_first)
     for _, px, py in around:
         if legal(px, py):
