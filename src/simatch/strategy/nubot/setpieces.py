@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
-from operator import itemgetter
 
 import numpy as np
 
@@ -32,14 +31,16 @@ TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting
 KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to the receiver's side) [m]
 #: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
 _ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
-_first = itemgetter(0)
 
 
 @lru_cache(maxsize=16)
-def _round(r: float) -> tuple[tuple[float, float], ...]:
-    """The offsets from the ball of the points `_settle` tries for distance ``r``: rings at r + 0.05 ... r + 3
-    on each heading of _ROUND, in the order it scans them."""
-    return tuple((rr * c, rr * s) for c, s in _ROUND for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0))
+def _round(r: float) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets (x, y) from the ball of the points `_settle` tries for distance ``r``: rings at r + 0.05
+    ... r + 3 on each heading of _ROUND, in the order it scans them."""
+    offsets = [(rr * c, rr * s) for c, s in _ROUND for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0)]
+    ox, oy = np.array(offsets).T.copy()
+    ox.flags.writeable = oy.flags.writeable = False
+    return ox, oy
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
@@ -230,12 +231,14 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
         if legal(x, y):
             return x, y
     # the points round the ball, nearest to (x, y) first (ties in the order of the scan), the first legal one
-    xlim, ylim = areas.L2 + 0.5, areas.W2 - 0.3
-    hypot, inf = math.hypot, math.inf
-    around = [(d, px, py) for px, py in ((bx + ox, by + oy) for ox, oy in _round(r))
-              if abs(px) <= xlim and abs(py) <= ylim and (d := hypot(px - x, py - y)) < inf]
-    around.sort(key=_first)
-    for _, px, py in around:
-        if legal(px, py):
-            return px, py
+    # (the same float operations as a scan in Python, done for all candidates at once)
+    ox, oy = _round(r)
+    px, py = bx + ox, by + oy
+    on = (np.abs(px) <= areas.L2 + 0.5) & (np.abs(py) <= areas.W2 - 0.3)
+    px, py = px[on], py[on]
+    d = list(map(math.hypot, (px - x).tolist(), (py - y).tolist()))
+    pxs, pys = px.tolist(), py.tolist()
+    for k in sorted(range(len(d)), key=d.__getitem__):
+        if d[k] < math.inf and legal(pxs[k], pys[k]):
+            return pxs[k], pys[k]
     return x, y
