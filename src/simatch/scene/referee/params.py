@@ -124,7 +124,7 @@ class RefereeParams(BaseModel):
                                                             "[m/s] (null: never)")
     penalty_for_fouls_in_area: bool = Field(True, description="a charge or push by a defender in its own penalty "
                                                               "area gives a penalty kick")
-    pushing_speed: float = Field(0.2, gt=0.0, le=20.0,
+    pushing_speed: float = Field(0.1, gt=0.0, le=20.0,
                                  description="a robot in contact with an opponent drives into it while it moves "
                                              "towards it at least this fast, and the opponent is moved away at least "
                                              "this fast [m/s]")

@@ -5,7 +5,8 @@ Charging (`charging.py`) judges the impact; this rule judges what comes after it
 In every control period of a contact (`contacts.py`) robot i *drives into* robot j when i moves towards j
 at least ``pushing_speed`` and j is moved away from i at least as fast (it gives way: i is displacing it).
 The displacement of j and the time are added up while this goes on without a break; the pusher has
-pushed once j was moved ``pushing_distance`` (1 m) or for ``pushing_time`` (3 s). The count ends when the
+pushed once j was moved ``pushing_distance`` (1 m) or for ``pushing_time`` (3 s) (the event's value and
+limit are the distance, or the time when the time was the limit reached). The count ends when the
 contact does or i stops driving into j. Two robots pressing against each other for the ball move neither,
 so the ordinary duel is not pushing; a robot held still against a wall is not judged (the referee sees
 motion, not forces).
@@ -57,7 +58,8 @@ class PushingRule(Rule):
         obs = self.m.obs
         restart, then = self.foul_restart(a)
         card = p.pushing_card
-        return self.call("pushing", a, distance, p.pushing_distance,
+        far = distance >= p.pushing_distance
+        return self.call("pushing", a, distance if far else seconds, p.pushing_distance if far else p.pushing_time,
                          f"{obs.names[a]} kept driving into {obs.names[b]} and pushed it {distance:.2f} m in "
                          f"{seconds:.2f} s (limits {p.pushing_distance:.2f} m, {p.pushing_time:.1f} s): {then}"
                          + (f", {card} card" if card else ""), restart=restart, card=card)
