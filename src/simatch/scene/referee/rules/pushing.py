@@ -12,7 +12,13 @@ so the ordinary duel is not pushing; a robot held still against a wall is not ju
 motion, not forces).
 
 A push gives the opponents a free kick where the ball is (a penalty kick when the pusher was a defender in
-its own penalty area and ``penalty_for_fouls_in_area``), and ``pushing_card``. During a stoppage the foul
+its own penalty area and ``penalty_for_fouls_in_area``), and ``pushing_card``.
+
+A contact in which either robot is on the ball (the ball's centre within ``dribble_release_distance`` of
+its centre, as for possession) is a duel for the ball, not judged here: in the matches of the default
+team, a robot that presses a dribbler keeps in contact with it while the dribbler turns and drives away
+with the ball (1 m in 1.5-2.5 s), and whether the dribbler gives way or drives away cannot be told from
+motion. Charging is judged in duels as everywhere. During a stoppage the foul
 stands, the restart does not change.
 """
 
@@ -35,9 +41,13 @@ class PushingRule(Rule):
     def check(self) -> Optional[list[Call]]:
         m, p = self.m, self.p
         contacts = m.contacts
+        obs = m.obs
+        on_ball = p.dribble_release_distance
         going: dict[tuple[int, int], list[float]] = {}
         calls = None
         for c in contacts.now:
+            if obs.ball_distance(c.i) <= on_ball or obs.ball_distance(c.j) <= on_ball:
+                continue                                   # a duel for the ball
             for a, b, ux, uy in ((c.i, c.j, c.ux, c.uy), (c.j, c.i, -c.ux, -c.uy)):
                 drive = contacts.speed_along(a, ux, uy)
                 moved = contacts.speed_along(b, ux, uy)
