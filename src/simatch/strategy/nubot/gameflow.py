@@ -21,7 +21,7 @@ OUR_RESTART_LIMIT = 10.0      # a restart of ours not taken by then is given up 
 TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
 ON_BALL = 0.42                # a team-mate's centre this close to the ball's is on it [m]
 REGAIN_ROLL = 1.3             # a pass into the opponents' half rolls at least 1 m (MSL RC-10.1.2; margin) [m]
-HALF_MARGIN = 0.3             # the half-way line, with a margin for the referee's reading [m]
+HALF_MARGIN = 0.3             # a pass is received past the half-way line by this much, to be sure [m]
 
 
 class Phase(enum.IntEnum):
@@ -143,7 +143,7 @@ class GameFlow:
                 self._ours = 0
             return
         if not self._ours:
-            self.need_pass = bx < HALF_MARGIN          # won in our half (or near the line)
+            self.need_pass = bx < 0.0                  # won in our half (the line itself is not)
         elif (on.id != self._ours and self.need_pass and bx > HALF_MARGIN
               and math.hypot(bx - self._left_at[0], by - self._left_at[1]) >= REGAIN_ROLL):
             self.need_pass = False                     # a team-mate received a pass in their half
