@@ -24,6 +24,7 @@ from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_ses
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
+from .warmup import preload_compiled_kernels
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +117,13 @@ class TeamProcess:
         self.scene = scene
         self.seed = int(offer["seed"])
         self.mode = offer.get("mode", protocol.LOCKSTEP)
+        #: one sample per tick each way (the server's feed in, this process's bundle out): see `protocol`
+        self.bundles = bool(offer.get("bundles"))
+        if self.bundles:
+            bus.take_feed(protocol.feed_topic(self.team), protocol.feed_covers(self.team))
         nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
+        strategy = str(spec.teams[self.team].strategy)
+        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))   # not at the kick-off
         self.clock = LockstepClock(bus, spec.physics.timestep, self.seed)
         for node in nodes:
             self.clock.add(node)
@@ -124,6 +131,8 @@ class TeamProcess:
         bus.subscribe_raw(protocol.END, self._on_end, verify=False)
         bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
         bus.declare_token(protocol.alive_topic(self.team, self.proc))
+        if self.bundles:     # declared before the join, so that it knows the server listens when ticks come
+            bus.raw_publisher(protocol.bundle_topic(self.team))
         self._join()
 
     def _ask_scene(self) -> dict:
@@ -173,11 +182,17 @@ class TeamProcess:
         except (protocol.ProtocolError, TypeError, ValueError) as exc:
             log.warning("ignored a bad tick message: %s", exc)
             return
-        clock = self.clock
+        clock, bus = self.clock, self.bus
         clock.step_index = step
-        clock.step()
-        self.bus.put_raw(protocol.ack_topic(self.team),
-                         protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+        if self.bundles:
+            bus.begin_batch()
+        try:
+            clock.step()
+            bus.put_raw(protocol.ack_topic(self.team),
+                        protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+        finally:
+            if self.bundles:
+                bus.send_batch(protocol.bundle_topic(self.team))
         self.ticks += 1
 
     def _on_end(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
