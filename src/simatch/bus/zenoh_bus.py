@@ -7,10 +7,11 @@ run, over one Zenoh session. Topics become key expressions ``simatch/<run>/<topi
 
 * Local delivery is exactly the in-process bus: synchronous, in subscription order, no serialisation. A
   message is encoded only when a subscriber in another process matches it.
-* Remote samples never run a node's callback in a Zenoh thread. They are queued, in the order they arrived
-  (callbacks run directly in the network thread, so one link keeps its order), and the owner of the bus
-  delivers them from its own thread with `pump` (or `take` and `deliver`, to look at them first, as the
-  lockstep server does). Node code therefore needs no locks, and a run stays deterministic.
+* Remote samples are queued, in the order they arrived (callbacks run directly in the network thread, so
+  one link keeps its order), and the owner of the bus delivers them with `pump` (or `take` and `deliver`,
+  to look at them first, as the lockstep server does). Node code therefore runs one delivery at a time,
+  needs no locks, and a run stays deterministic. (An owner may ask Zenoh's thread to deliver a feed
+  itself, under the owner's lock: see `take_feed`.)
 * A payload that does not decode, or that makes the receiving callback fail, is dropped and counted
   (`BusStats.malformed`); a sample the `verifier` refuses (fair play) is dropped and counted (`refused`).
   Neither ever stops the process.
@@ -477,14 +478,19 @@ class ZenohBus:
         ``entry_verifier``; a broken bundle is dropped whole and counted as malformed."""
         self._declare_bundles(pattern, fed=False, verify=verify)
 
-    def take_feed(self, topic: str, covers: Sequence[str]) -> None:
+    def take_feed(self, topic: str, covers: Sequence[str], handle: Callable[[], None] | None = None) -> None:
         """Receive the topics ``covers`` matches only from the feed on ``topic`` (see `declare_feed`); call it
         before subscribing. Subscriptions to those exact topics (no wildcard) then declare nothing in Zenoh,
-        so nothing arrives twice; the feed's sender is not checked (like every sample from the server)."""
-        self._fed_covers = (*self._fed_covers, *covers)
-        self._declare_bundles(topic, fed=True, verify=False)
+        so nothing arrives twice; the feed's sender is not checked (like every sample from the server).
 
-    def _declare_bundles(self, pattern: str, fed: bool, verify: bool) -> None:
+        ``handle``: called in Zenoh's receiving thread once a feed sample is queued, instead of waking the
+        owner: an owner whose only work is to answer its feed (a lockstep client) saves a thread hand-off
+        per sample. It must deliver under the same lock as the owner's own deliveries."""
+        self._fed_covers = (*self._fed_covers, *covers)
+        self._declare_bundles(topic, fed=True, verify=False, handle=handle)
+
+    def _declare_bundles(self, pattern: str, fed: bool, verify: bool,
+                         handle: Callable[[], None] | None = None) -> None:
         n = len(self.prefix)
         clock = time.monotonic
         notices = self._notices
@@ -498,7 +504,16 @@ class ZenohBus:
                 items = self._open_bundle(topic, payload, attachment, arrival, fed, verify)
             except Exception as exc:      # never fail in Zenoh's thread: the owner reports it
                 items = [(notices, topic, payload, None, "", arrival, (None, None, exc))]
-            self._queue_all(items)
+            if handle is None:
+                self._queue_all(items)
+                return
+            with self._queue_lock:
+                self._inbox.extend(items)
+            try:
+                handle()
+            except Exception:       # never fail in Zenoh's thread: wake the owner to deal with it
+                log.exception("handling a feed sample failed")
+                self._wake.set()
 
         zsub = self.session.declare_subscriber(self.key(pattern), _ZCallback(on_sample, indirect=False),
                                                allowed_origin=zenoh.Locality.REMOTE)

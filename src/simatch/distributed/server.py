@@ -304,6 +304,16 @@ class Server:
             out.update({f"realtime_{k}": v for k, v in self.pacer.stats().items()})
         return out
 
+    def reset_stats(self) -> None:
+        """Start `stats` afresh (e.g. after a warm-up: loading, the first kick-off)."""
+        gate = self.gate
+        gate.latencies.clear()
+        gate.transits.clear()
+        gate.missed = 0
+        gate.ticks = 0
+        if self.pacer is not None:
+            self.pacer.reset_stats()
+
     def close(self) -> None:
         self.sim.close()
         self.bus.close()
