@@ -206,13 +206,14 @@ class RawPublisher(_Matching):
         self.always = always
         self._watch(zpub)
 
-    def put(self, payload: bytes) -> None:
+    def put(self, payload: bytes, count: bool = True) -> None:
+        """``count``: counts as a published sample (not a bundle, whose entries were counted)."""
         bus = self._bus
         if bus._gather(self.topic, payload):
             return
         if not self.matching:
             if self.always:
-                bus._put_signed(self.topic, payload)
+                bus._put_signed(self.topic, payload, count)
             return
         signer = bus.signer
         try:
@@ -220,7 +221,8 @@ class RawPublisher(_Matching):
         except zenoh.ZError as exc:
             log.debug("put on %s failed: %s", self.topic, exc)
             return
-        bus.stats.published += 1
+        if count:
+            bus.stats.published += 1
 
 
 class _Publisher(_Matching):
@@ -439,7 +441,7 @@ class ZenohBus:
         its receivers subscribe to ``topic`` exactly); returns how many entries it carried."""
         entries, self._batch = self._batch, None
         if entries:
-            self.raw_publisher(topic).put(_bundle.pack(entries))
+            self.raw_publisher(topic).put(_bundle.pack(entries), count=False)
         return len(entries or ())
 
     def declare_feed(self, topic: str, covers: Sequence[str]) -> Feed:
@@ -465,11 +467,12 @@ class ZenohBus:
                     continue
                 self.stats.published += 1
 
-    def _put_signed(self, topic: str, payload: bytes) -> None:
+    def _put_signed(self, topic: str, payload: bytes, count: bool = True) -> None:
         attachment = self.signer(topic, payload) if self.signer is not None else None
         self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
                          allowed_destination=zenoh.Locality.REMOTE)
-        self.stats.published += 1
+        if count:
+            self.stats.published += 1
 
     def accept_bundles(self, pattern: str, verify: bool = True) -> None:
         """Open the bundles that arrive on ``pattern``: each entry goes to this process's subscriptions as if
