@@ -58,10 +58,7 @@ class FairPlay:
         who = self.verifier.signer_of(topic, payload, attachment)
         if who is None:
             return Refusal.of("", f"unsigned or forged sample on {topic} (no valid credential)")
-        if who == ADMIN:
-            return None
-        why = self.may_send(who, topic, payload)
-        return None if why is None else Refusal.of(who, why)
+        return self._judge(who, topic, payload)
 
     def check_entry(self, attachment: Optional[bytes], topic: str, payload: bytes) -> Optional[Refusal]:
         """None if an entry of a bundle may be used, else why not (for `ZenohBus(entry_verifier=...)`):
@@ -70,6 +67,9 @@ class FairPlay:
         who = claimed_name(attachment)
         if who is None:
             return Refusal.of("", f"entry on {topic} of an unsigned bundle")
+        return self._judge(who, topic, payload)
+
+    def _judge(self, who: str, topic: str, payload: bytes) -> Optional[Refusal]:
         if who == ADMIN:
             return None
         why = self.may_send(who, topic, payload)
