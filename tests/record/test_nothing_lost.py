@@ -128,3 +128,22 @@ def test_not_a_recording_is_refused_clearly(tmp_path):
     assert proc.returncode == 2 and "is not an MCAP recording" in proc.stderr and "Traceback" not in proc.stderr
     proc = _replay(tmp_path / "missing.mcap")
     assert proc.returncode == 2 and "no such recording" in proc.stderr
+
+
+def test_any_damaged_byte_of_a_chunk_is_caught(recording, tmp_path):
+    """Chunks carry zstd's content checksum (their CRC32 field is 0): one changed byte anywhere in a chunk's
+    compressed records is a damaged chunk, never wrong messages."""
+    path, _ = recording
+    data = path.read_bytes()
+    chunk = Recording(path).chunks[1]
+    end = chunk.offset + 9 + int.from_bytes(data[chunk.offset + 1:chunk.offset + 9], "little")
+    body = chunk.offset + 9 + 8 * 3 + 4 + 4 + 4 + 8          # after times, sizes, CRC, compression, length
+    bad = tmp_path / "flipped.mcap"
+    for at in range(body, end, (end - body) // 7):
+        damaged = bytearray(data)
+        damaged[at] ^= 0x20
+        bad.write_bytes(damaged)
+        rec = Recording(bad)
+        kept = [t for _, t, _ in rec.raw()]
+        assert any(f"the chunk at byte {chunk.offset}" in p for p in rec.problems), at
+        assert not [t for t in kept if chunk.start <= t <= chunk.end], at

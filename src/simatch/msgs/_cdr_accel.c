@@ -8,7 +8,11 @@
  *
  * kinds (K_* below): a primitive (argument unused), a string, a nested message (argument: its program),
  * a sequence or fixed array of primitives (argument: (element kind, length or -1)), of strings (argument:
- * length or -1) or of messages (argument: (program, length or -1)).
+ * length or -1) or of messages (argument: (program, length or -1, alignment of its first field)).
+ * `compile` turns such a tuple into C structures once (no tuple unpacking or int conversion per field).
+ *
+ * The module also holds the recorder's message log (`Log`, below), which frames and encodes each message
+ * it is given straight into the recording's chunk buffer.
  *
  * Output: XCDR1 little endian with the 4-byte encapsulation header, byte for byte what rosbags writes
  * (checked type by type by tests/msgs/test_cdr.py). Anything this fast path does not take as it is (a
@@ -18,7 +22,9 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <limits.h>
 #include <string.h>
+#include <structmember.h>
 
 enum {
     K_BOOL = 1, K_I8, K_U8, K_I16, K_U16, K_I32, K_U32, K_I64, K_U64, K_F32, K_F64,
@@ -30,7 +36,9 @@ typedef struct {
     Py_ssize_t n, cap;
 } Buf;
 
-static Buf buf = {NULL, 0, 0};     /* reused between calls: the GIL is held throughout */
+static Buf scratch = {NULL, 0, 0}; /* `encode`'s output, reused between calls: the GIL is held throughout */
+static Buf *out = &scratch;         /* where the encoder writes now: `scratch` or a message log's buffer */
+static Py_ssize_t body = 4;         /* offset in `out` of the CDR body being written (alignment counts from it) */
 
 /* numpy arrays without numpy's headers: the leading fields of numpy's array object, whose layout is part of
  * numpy's ABI (extensions built against old headers run with new numpy). `setup` hands over the ndarray
@@ -47,6 +55,14 @@ typedef struct {
     int flags;
 } ArrayHead;
 
+/* ... and the leading fields of a dtype, the same in numpy 1 and 2: an array made elsewhere (numba, a view of
+ * a structured array) may have a dtype object of its own that equals the shared one */
+typedef struct {
+    PyObject_HEAD
+    PyTypeObject *typeobj;         /* the scalar type: numpy.float64, ... */
+    char kind, type, byteorder;
+} DescrHead;
+
 #define C_CONTIGUOUS 0x0001
 static PyTypeObject *ndarray = NULL;
 static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous arrays taken as they are */
@@ -55,29 +71,29 @@ static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous ar
 #define FAILED -1                  /* a Python exception is set (memory) */
 
 static int reserve(Py_ssize_t need) {
-    if (buf.n + need <= buf.cap)
+    if (out->n + need <= out->cap)
         return 0;
-    Py_ssize_t cap = buf.cap ? buf.cap : 4096;
-    while (cap < buf.n + need)
+    Py_ssize_t cap = out->cap ? out->cap : 4096;
+    while (cap < out->n + need)
         cap *= 2;
-    char *p = PyMem_Realloc(buf.p, cap);
+    char *p = PyMem_Realloc(out->p, cap);
     if (p == NULL) {
         PyErr_NoMemory();
         return FAILED;
     }
-    buf.p = p;
-    buf.cap = cap;
+    out->p = p;
+    out->cap = cap;
     return 0;
 }
 
 /* pad with zeros to a multiple of `a`, counted from the start of the body (after the 4-byte header) */
 static int align(int a) {
-    Py_ssize_t pad = (a - ((buf.n - 4) % a)) % a;
+    Py_ssize_t pad = (body - out->n) & (a - 1);       /* a is 1, 2, 4 or 8 */
     if (pad) {
         if (reserve(pad) < 0)
             return FAILED;
-        memset(buf.p + buf.n, 0, pad);
-        buf.n += pad;
+        memset(out->p + out->n, 0, pad);
+        out->n += pad;
     }
     return 0;
 }
@@ -85,8 +101,8 @@ static int align(int a) {
 static int put(const void *src, Py_ssize_t size) {
     if (reserve(size) < 0)
         return FAILED;
-    memcpy(buf.p + buf.n, src, size);
-    buf.n += size;
+    memcpy(out->p + out->n, src, size);
+    out->n += size;
     return 0;
 }
 
@@ -179,9 +195,9 @@ static int put_string(PyObject *v) {
         return r;
     if (reserve(len + 1) < 0)
         return FAILED;
-    memcpy(buf.p + buf.n, s, len);
-    buf.p[buf.n + len] = 0;
-    buf.n += len + 1;
+    memcpy(out->p + out->n, s, len);
+    out->p[out->n + len] = 0;
+    out->n += len + 1;
     return 0;
 }
 
@@ -208,15 +224,38 @@ static int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
     }
 }
 
-static int encode_program(PyObject *program, PyObject *msg);
-static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first);
+/* A program compiled once (`compile`): the same steps as its tuple, as C values. */
+typedef struct Program Program;
+typedef struct {
+    int kind;
+    int elem;                      /* K_PSEQ: the element kind; K_MSEQ: the alignment of the first field */
+    Py_ssize_t fixed;              /* sequences: the fixed length of an array, or -1 */
+    PyObject *name;                /* the attribute (interned) */
+    Program *sub;                  /* K_MSG, K_MSEQ: the nested message's program */
+} Op;
+struct Program {
+    Py_ssize_t count;
+    Op ops[];
+};
 
-static int put_primitives(PyObject *v, PyObject *arg) {
-    long kind = PyLong_AsLong(PyTuple_GET_ITEM(arg, 0));
-    Py_ssize_t fixed = PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1));
+static int encode_program(const Program *program, PyObject *msg);
+static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first);
+
+/* the dtype of the wire's element type (`ref`, from `setup`): that very object, or one of the same class with
+ * the same scalar type and byte order (a machine-native one: this module only runs on little-endian ones) */
+static int same_dtype(PyObject *descr, PyObject *ref) {
+    if (descr == ref)
+        return 1;
+    if (ref == NULL || Py_TYPE(descr) != Py_TYPE(ref))
+        return 0;
+    const DescrHead *d = (const DescrHead *)descr, *r = (const DescrHead *)ref;
+    return d->typeobj == r->typeobj && d->byteorder == r->byteorder && d->kind == r->kind && d->type == r->type;
+}
+
+static int put_primitives(PyObject *v, long kind, Py_ssize_t fixed) {
     if (Py_TYPE(v) == ndarray && kind < 16) {
         ArrayHead *a = (ArrayHead *)v;
-        if (a->nd == 1 && a->descr == dtypes[kind] && (a->flags & C_CONTIGUOUS)) {
+        if (a->nd == 1 && (a->flags & C_CONTIGUOUS) && same_dtype(a->descr, dtypes[kind])) {
             Py_ssize_t n = a->dimensions[0];
             int r;
             if (fixed >= 0) {
@@ -276,8 +315,10 @@ static PyObject *memo_find(PyObject *obj, long phase) {
 
 static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
     PyObject *key = PyLong_FromVoidPtr(obj);
-    PyObject *data = PyBytes_FromStringAndSize(buf.p + start, buf.n - start);
-    PyObject *entry = (key && data) ? Py_BuildValue("(OlO)", obj, phase, data) : NULL;
+    PyObject *data = PyBytes_FromStringAndSize(out->p + start, out->n - start);
+    PyObject *at = PyLong_FromLong(phase);                 /* a small int: cached, no allocation */
+    PyObject *entry = (key && data && at) ? PyTuple_Pack(3, obj, at, data) : NULL;
+    Py_XDECREF(at);
     int r = entry ? PyDict_SetItem(memo_now, key, entry) : -1;
     Py_XDECREF(key);
     Py_XDECREF(data);
@@ -286,7 +327,7 @@ static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
 }
 
 static long phase_now(void) {
-    return (long)((buf.n - 4) & 7);
+    return (long)((out->n - body) & 7);
 }
 
 static int put_bytes_object(PyObject *data) {
@@ -294,9 +335,9 @@ static int put_bytes_object(PyObject *data) {
 }
 
 /* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
-static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align_first) {
+static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first) {
     long phase = phase_now();
-    Py_ssize_t start = buf.n;
+    Py_ssize_t start = out->n;
     if (memo_now != NULL) {
         PyObject *hit = memo_find(v, phase);
         if (hit != NULL)
@@ -322,8 +363,8 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align
             continue;
         }
         if (memo_now != NULL && align_first > 0) {     /* this message encoded on its own before? */
-            Py_ssize_t pad = (align_first - ((buf.n - 4) % align_first)) % align_first;
-            if (((buf.n - 4 + pad) & 7) == 0) {
+            Py_ssize_t pad = (body - out->n) & (align_first - 1);
+            if (((out->n - body + pad) & 7) == 0) {
                 PyObject *hit = memo_find(items[i], 0);
                 if (hit != NULL) {
                     if ((r = align(align_first)) == 0)
@@ -344,31 +385,27 @@ static int put_items(PyObject *v, Py_ssize_t fixed, PyObject *program, int align
     return r;
 }
 
-static int encode_program(PyObject *program, PyObject *msg) {
-    Py_ssize_t count = PyTuple_GET_SIZE(program);
-    for (Py_ssize_t i = 0; i < count; i++) {
-        PyObject *op = PyTuple_GET_ITEM(program, i);
-        long kind = PyLong_AsLong(PyTuple_GET_ITEM(op, 0));
-        PyObject *v = PyObject_GetAttr(msg, PyTuple_GET_ITEM(op, 1));
+static int encode_program(const Program *program, PyObject *msg) {
+    for (Py_ssize_t i = 0; i < program->count; i++) {
+        const Op *op = &program->ops[i];
+        PyObject *v = PyObject_GetAttr(msg, op->name);
         if (v == NULL) {
             PyErr_Clear();
             return FALLBACK;
         }
-        PyObject *arg = PyTuple_GET_ITEM(op, 2);
         int r;
-        if (kind < K_STR)
-            r = put_primitive(kind, v);
-        else if (kind == K_STR)
+        if (op->kind < K_STR)
+            r = put_primitive(op->kind, v);
+        else if (op->kind == K_STR)
             r = put_string(v);
-        else if (kind == K_MSG)
-            r = encode_program(arg, v);
-        else if (kind == K_PSEQ)
-            r = put_primitives(v, arg);
-        else if (kind == K_SSEQ)
-            r = put_items(v, PyLong_AsSsize_t(arg), NULL, 0);
+        else if (op->kind == K_MSG)
+            r = encode_program(op->sub, v);
+        else if (op->kind == K_PSEQ)
+            r = put_primitives(v, op->elem, op->fixed);
+        else if (op->kind == K_SSEQ)
+            r = put_items(v, op->fixed, NULL, 0);
         else
-            r = put_items(v, PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1)), PyTuple_GET_ITEM(arg, 0),
-                          (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 2)));
+            r = put_items(v, op->fixed, op->sub, op->elem);
         Py_DECREF(v);
         if (r)
             return r;
@@ -376,49 +413,583 @@ static int encode_program(PyObject *program, PyObject *msg) {
     return 0;
 }
 
+static void free_program(Program *program) {
+    if (program == NULL)
+        return;
+    for (Py_ssize_t i = 0; i < program->count; i++) {
+        Py_XDECREF(program->ops[i].name);
+        free_program(program->ops[i].sub);
+    }
+    PyMem_Free(program);
+}
+
+static int bad_program(void) {
+    PyErr_SetString(PyExc_ValueError, "malformed encoder program");
+    return -1;
+}
+
+/* one op of a program tuple: (kind, attribute, argument), see the top of this file */
+static int compile_op(PyObject *item, Op *op, Program *(*compile)(PyObject *)) {
+    if (!PyTuple_Check(item) || PyTuple_GET_SIZE(item) != 3 || !PyUnicode_Check(PyTuple_GET_ITEM(item, 1)))
+        return bad_program();
+    op->kind = (int)PyLong_AsLong(PyTuple_GET_ITEM(item, 0));
+    op->name = Py_NewRef(PyTuple_GET_ITEM(item, 1));
+    PyUnicode_InternInPlace(&op->name);
+    PyObject *arg = PyTuple_GET_ITEM(item, 2);
+    if (op->kind == -1 && PyErr_Occurred())
+        return -1;
+    if ((op->kind >= K_BOOL && op->kind <= K_F64) || op->kind == K_STR)
+        return 0;
+    if (op->kind == K_MSG)
+        return (op->sub = compile(arg)) == NULL ? -1 : 0;
+    if (op->kind == K_SSEQ) {
+        op->fixed = PyLong_AsSsize_t(arg);
+        return (op->fixed == -1 && PyErr_Occurred()) ? -1 : 0;
+    }
+    if ((op->kind != K_PSEQ && op->kind != K_MSEQ) || !PyTuple_Check(arg) || PyTuple_GET_SIZE(arg) < 2)
+        return bad_program();
+    op->fixed = PyLong_AsSsize_t(PyTuple_GET_ITEM(arg, 1));
+    if (op->fixed == -1 && PyErr_Occurred())
+        return -1;
+    if (op->kind == K_PSEQ) {
+        op->elem = (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 0));
+        return (op->elem >= K_BOOL && op->elem <= K_F64) ? 0 : bad_program();
+    }
+    if (PyTuple_GET_SIZE(arg) != 3)
+        return bad_program();
+    op->elem = (int)PyLong_AsLong(PyTuple_GET_ITEM(arg, 2));
+    if (op->elem != 1 && op->elem != 2 && op->elem != 4 && op->elem != 8)
+        return bad_program();
+    return (op->sub = compile(PyTuple_GET_ITEM(arg, 0))) == NULL ? -1 : 0;
+}
+
+static Program *compile_tuple(PyObject *program) {
+    if (!PyTuple_Check(program)) {
+        bad_program();
+        return NULL;
+    }
+    Py_ssize_t count = PyTuple_GET_SIZE(program);
+    Program *p = PyMem_Calloc(1, sizeof(Program) + count * sizeof(Op));
+    if (p == NULL) {
+        PyErr_NoMemory();
+        return NULL;
+    }
+    p->count = count;
+    for (Py_ssize_t i = 0; i < count; i++) {
+        if (compile_op(PyTuple_GET_ITEM(program, i), &p->ops[i], compile_tuple) < 0) {
+            free_program(p);
+            return NULL;
+        }
+    }
+    return p;
+}
+
+#define PROGRAM_CAPSULE "simatch.msgs._cdr_accel.program"
+
+static void program_capsule_free(PyObject *capsule) {
+    free_program(PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE));
+}
+
+/* compile(program tuple) -> the compiled program (a capsule) that `encode` and `Log` take */
+static PyObject *compile(PyObject *self, PyObject *program) {
+    Program *p = compile_tuple(program);
+    if (p == NULL)
+        return NULL;
+    PyObject *capsule = PyCapsule_New(p, PROGRAM_CAPSULE, program_capsule_free);
+    if (capsule == NULL)
+        free_program(p);
+    return capsule;
+}
+
+static const Program *program_of(PyObject *capsule) {
+    return PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE);    /* NULL, with an exception, if it is not one */
+}
+
+/* The encoder's globals while one call runs (saved and restored: a field's __float__ may run Python code that
+ * encodes too). */
+typedef struct {
+    Buf *out;
+    Py_ssize_t body;
+    PyObject *memo_now, *memo_old;
+} State;
+
+static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old) {
+    State saved = {out, body, memo_now, memo_old};
+    out = to;
+    body = at;
+    memo_now = now;
+    memo_old = old;
+    return saved;
+}
+
+static void leave(State saved) {
+    out = saved.out;
+    body = saved.body;
+    memo_now = saved.memo_now;
+    memo_old = saved.memo_old;
+}
+
 /* encode(program, msg[, memo, keep, out]): memo = (this period's dict, the last one's dict) or None; keep:
  * remember this message's body (it may be met again inside a sequence); out: a bytearray to append the
  * bytes to (then the number of bytes is returned) instead of returning them as bytes */
 static PyObject *encode(PyObject *self, PyObject *args) {
-    PyObject *program, *msg, *memo = Py_None, *out = Py_None;
+    PyObject *program, *msg, *memo = Py_None, *target = Py_None;
     int keep = 0;
-    if (!PyArg_ParseTuple(args, "O!O|OpO", &PyTuple_Type, &program, &msg, &memo, &keep, &out))
+    if (!PyArg_ParseTuple(args, "OO|OpO", &program, &msg, &memo, &keep, &target))
         return NULL;
-    if (out != Py_None && !PyByteArray_Check(out)) {
+    const Program *compiled = program_of(program);
+    if (compiled == NULL)
+        return NULL;
+    if (target != Py_None && !PyByteArray_Check(target)) {
         PyErr_SetString(PyExc_TypeError, "out: a bytearray or None");
         return NULL;
     }
-    memo_now = memo_old = NULL;
+    PyObject *now = NULL, *old = NULL;
     if (memo != Py_None) {
         if (!PyTuple_Check(memo) || PyTuple_GET_SIZE(memo) != 2 || !PyDict_Check(PyTuple_GET_ITEM(memo, 0))
             || !PyDict_Check(PyTuple_GET_ITEM(memo, 1))) {
             PyErr_SetString(PyExc_TypeError, "memo: (dict, dict) or None");
             return NULL;
         }
-        memo_now = PyTuple_GET_ITEM(memo, 0);
-        memo_old = PyTuple_GET_ITEM(memo, 1);
+        now = PyTuple_GET_ITEM(memo, 0);
+        old = PyTuple_GET_ITEM(memo, 1);
     }
-    buf.n = 0;
-    if (reserve(4) < 0)
-        return NULL;
-    memcpy(buf.p, "\x00\x01\x00\x00", 4);
-    buf.n = 4;
-    int r = encode_program(program, msg);
+    if (scratch.p == NULL && (scratch.p = PyMem_Malloc(4096)) != NULL)
+        scratch.cap = 4096;
+    if (scratch.p == NULL)
+        return PyErr_NoMemory();
+    Py_ssize_t mark = scratch.n;           /* not 0 if this call runs inside another one's field conversion */
+    State saved = enter(&scratch, mark + 4, now, old);
+    int r = put("\x00\x01\x00\x00", 4);
+    if (r == 0)
+        r = encode_program(compiled, msg);
     if (r == 0 && keep && memo_now != NULL)
-        r = memo_keep(msg, 0, 4);
-    memo_now = memo_old = NULL;
-    if (r == FAILED)
-        return NULL;
+        r = memo_keep(msg, 0, mark + 4);
+    leave(saved);
+    PyObject *result = NULL;
     if (r == FALLBACK)
-        Py_RETURN_NONE;
-    if (out == Py_None)
-        return PyBytes_FromStringAndSize(buf.p, buf.n);
-    Py_ssize_t at = PyByteArray_GET_SIZE(out);
-    if (PyByteArray_Resize(out, at + buf.n) < 0)
-        return NULL;
-    memcpy(PyByteArray_AS_STRING(out) + at, buf.p, buf.n);
-    return PyLong_FromSsize_t(buf.n);
+        result = Py_NewRef(Py_None);
+    else if (r == 0 && target == Py_None)
+        result = PyBytes_FromStringAndSize(scratch.p + mark, scratch.n - mark);
+    else if (r == 0) {
+        Py_ssize_t at = PyByteArray_GET_SIZE(target), size = scratch.n - mark;
+        if (PyByteArray_Resize(target, at + size) == 0) {
+            memcpy(PyByteArray_AS_STRING(target) + at, scratch.p + mark, size);
+            result = PyLong_FromSsize_t(size);
+        }
+    }
+    scratch.n = mark;
+    return result;
 }
+
+/* --- The recorder's message log -----------------------------------------------------------------------------
+ *
+ * `Log(programs, fallback)` is a bus callback, ``log(topic, msg)``, that appends each message to one buffer as
+ * an MCAP Message record: opcode 0x05, record length, channel id, sequence 0, log time and publish time =
+ * `log.now` (u64 nanoseconds), then the message's CDR bytes, encoded in place by the programs above. A
+ * recording spends most of its time here, some two thousand times per simulated second, so the whole path
+ * (topic look-up, clock, record header, encoding, count) is one C call with no Python frame and no object per
+ * message. `simatch.record.messagelog.MessageLog` is the same thing in Python, byte for byte; its docstring
+ * describes the interface. */
+
+#define RECORD_HEAD 31             /* opcode u8, length u64, channel u16, sequence u32, log time u64, publish u64 */
+#define CLOCK_STEP 1               /* add(..., clock=): the message's `step` sets the log time */
+#define CLOCK_TICK 2               /* ... and opens a new memo period */
+
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    Buf buf;
+    PyObject *channels;            /* topic -> Channel (in a capsule) */
+    PyObject *programs, *fallback, *on_chunk;
+    PyObject *memo_now, *memo_old;
+    long long now, first, last;    /* log time; of the first and last message since the last take (-1: none) */
+    long long step_ns, chunk_ns, next_chunk;
+    Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
+} Log;
+
+typedef struct {
+    long id;
+    int keep;                      /* remember each message's body in the memo */
+    int clock;                     /* CLOCK_* flags */
+    const Program *program;
+    PyObject *owner;               /* the program's capsule */
+} Channel;
+
+static PyObject *step_name = NULL; /* "step" */
+
+static void channel_free(PyObject *capsule) {
+    Channel *ch = PyCapsule_GetPointer(capsule, NULL);
+    if (ch != NULL) {
+        Py_XDECREF(ch->owner);
+        PyMem_Free(ch);
+    }
+}
+
+static void put_le(char *p, unsigned long long v, int size) {
+    for (int i = 0; i < size; i++, v >>= 8)
+        p[i] = (char)(v & 0xff);
+}
+
+static int count_message(Log *log, long cid) {
+    if (cid >= log->ncounts) {
+        Py_ssize_t n = cid + 64;
+        Py_ssize_t *c = PyMem_Realloc(log->counts, n * sizeof(Py_ssize_t));
+        if (c == NULL) {
+            PyErr_NoMemory();
+            return FAILED;
+        }
+        memset(c + log->ncounts, 0, (n - log->ncounts) * sizeof(Py_ssize_t));
+        log->counts = c;
+        log->ncounts = n;
+    }
+    log->counts[cid]++;
+    if (log->first < 0)
+        log->first = log->now;
+    log->last = log->now;
+    return 0;
+}
+
+static void put_head(Log *log, Py_ssize_t start, long cid) {
+    char *p = log->buf.p + start;
+    p[0] = 0x05;
+    put_le(p + 1, (unsigned long long)(log->buf.n - start - 9), 8);
+    put_le(p + 9, (unsigned long long)cid, 2);
+    put_le(p + 11, 0, 4);
+    put_le(p + 15, (unsigned long long)log->now, 8);
+    put_le(p + 23, (unsigned long long)log->now, 8);
+}
+
+static int check_channel(long cid) {
+    if (cid < 0 || cid > 65535) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "channel id: 0 to 65535");
+        return FAILED;
+    }
+    return 0;
+}
+
+/* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
+static int log_message(Log *log, const Channel *ch, PyObject *msg) {
+    Py_ssize_t start = log->buf.n;
+    State saved = enter(&log->buf, start + RECORD_HEAD + 4, log->memo_now, log->memo_old);
+    int r = reserve(RECORD_HEAD + 4);
+    if (r == 0) {
+        memcpy(out->p + start + RECORD_HEAD, "\x00\x01\x00\x00", 4);
+        out->n = start + RECORD_HEAD + 4;
+        r = encode_program(ch->program, msg);
+    }
+    if (r == 0 && ch->keep)
+        r = memo_keep(msg, 0, start + RECORD_HEAD + 4);
+    leave(saved);
+    if (r == 0)
+        r = count_message(log, ch->id);
+    if (r != 0) {
+        log->buf.n = start;
+        return r;
+    }
+    put_head(log, start, ch->id);
+    return 0;
+}
+
+static int forget(Log *log) {
+    PyObject *fresh = PyDict_New();
+    if (fresh == NULL)
+        return FAILED;
+    Py_SETREF(log->memo_old, log->memo_now);
+    log->memo_now = fresh;
+    return 0;
+}
+
+/* the run is at physics step `step`: messages from now on carry its time; a chunk may end first */
+static int advance(Log *log, long long step) {
+    if (log->step_ns <= 0 || step > LLONG_MAX / log->step_ns)      /* no timing, or an absurd step: ignored */
+        return 0;
+    long long now = step * log->step_ns;
+    if (now == log->now)
+        return 0;
+    log->now = now;
+    if (log->on_chunk == NULL || log->chunk_ns <= 0 || now < log->next_chunk)
+        return 0;
+    log->next_chunk = (now / log->chunk_ns + 1) * log->chunk_ns;
+    PyObject *r = PyObject_CallNoArgs(log->on_chunk);
+    Py_XDECREF(r);
+    return r == NULL ? FAILED : 0;
+}
+
+/* a clock message: its step (if it has a usable one) sets the time */
+static int clock_message(Log *log, const Channel *ch, PyObject *msg) {
+    PyObject *v = PyObject_GetAttr(msg, step_name);
+    long long step = -1;
+    if (v != NULL) {
+        PyObject *i = PyNumber_Index(v);      /* an int, or a numpy integer */
+        Py_DECREF(v);
+        if (i != NULL) {
+            step = PyLong_AsLongLong(i);
+            Py_DECREF(i);
+        }
+    }
+    if (step < 0)
+        PyErr_Clear();
+    else if (advance(log, step) < 0)
+        return FAILED;
+    return (ch->clock & CLOCK_TICK) ? forget(log) : 0;
+}
+
+static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
+    Log *log = (Log *)self;
+    if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
+        PyErr_SetString(PyExc_TypeError, "log(topic, msg)");
+        return NULL;
+    }
+    PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
+    if (entry != NULL) {
+        const Channel *ch = PyCapsule_GetPointer(entry, NULL);
+        int r = 0;
+        if (ch->clock) {                   /* may call on_chunk (Python): keep the entry alive meanwhile */
+            Py_INCREF(entry);
+            r = clock_message(log, ch, args[1]);
+            if (r == 0)
+                r = log_message(log, ch, args[1]);
+            Py_DECREF(entry);
+        } else {
+            r = log_message(log, ch, args[1]);
+        }
+        if (r == 0)
+            Py_RETURN_NONE;
+        if (r == FAILED)
+            return NULL;
+    } else if (PyErr_Occurred()) {
+        return NULL;
+    }
+    return PyObject_Vectorcall(log->fallback, args, 2, NULL);
+}
+
+static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
+    PyObject *topic, *typename;
+    long cid;
+    int clock = 0;
+    static char *kwlist[] = {"topic", "channel_id", "typename", "clock", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "UlO|i", kwlist, &topic, &cid, &typename, &clock)
+        || check_channel(cid) < 0)
+        return NULL;
+    PyObject *found = PyObject_CallOneArg(log->programs, typename);
+    if (found == NULL)
+        return NULL;
+    if (!PyTuple_Check(found) || PyTuple_GET_SIZE(found) != 2) {
+        Py_DECREF(found);
+        PyErr_SetString(PyExc_TypeError, "programs(typename) must return (compiled program, keep)");
+        return NULL;
+    }
+    const Program *program = program_of(PyTuple_GET_ITEM(found, 0));
+    int keep = program == NULL ? -1 : PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
+    Channel *ch = keep < 0 ? NULL : PyMem_Malloc(sizeof(Channel));
+    if (ch == NULL) {
+        Py_DECREF(found);
+        return keep < 0 ? NULL : PyErr_NoMemory();
+    }
+    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), program, Py_NewRef(PyTuple_GET_ITEM(found, 0))};
+    Py_DECREF(found);
+    PyObject *entry = PyCapsule_New(ch, NULL, channel_free);
+    if (entry == NULL) {
+        Py_DECREF(ch->owner);
+        PyMem_Free(ch);
+        return NULL;
+    }
+    int r = PyDict_SetItem(log->channels, topic, entry);
+    Py_DECREF(entry);
+    if (r < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
+    long long step_ns, chunk_ns;
+    PyObject *on_chunk;
+    static char *kwlist[] = {"step_ns", "chunk_ns", "on_chunk", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "LLO", kwlist, &step_ns, &chunk_ns, &on_chunk))
+        return NULL;
+    if (step_ns <= 0 || chunk_ns <= 0 || !PyCallable_Check(on_chunk)) {
+        PyErr_SetString(PyExc_ValueError, "timing(step_ns > 0, chunk_ns > 0, on_chunk callable)");
+        return NULL;
+    }
+    log->step_ns = step_ns;
+    log->chunk_ns = chunk_ns;
+    log->next_chunk = (log->now / chunk_ns + 1) * chunk_ns;
+    Py_XSETREF(log->on_chunk, Py_NewRef(on_chunk));
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_record(Log *log, PyObject *args) {
+    long cid;
+    Py_buffer data;
+    if (!PyArg_ParseTuple(args, "ly*", &cid, &data))
+        return NULL;
+    Py_ssize_t start = log->buf.n;
+    State saved = enter(&log->buf, 0, NULL, NULL);
+    int r = check_channel(cid);
+    if (r == 0 && (r = reserve(RECORD_HEAD)) == 0) {
+        out->n += RECORD_HEAD;
+        r = put(data.buf, data.len);
+    }
+    leave(saved);
+    PyBuffer_Release(&data);
+    if (r == 0)
+        r = count_message(log, cid);
+    if (r != 0) {
+        log->buf.n = start;
+        return NULL;
+    }
+    put_head(log, start, cid);
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_append(Log *log, PyObject *args) {
+    Py_buffer data;
+    if (!PyArg_ParseTuple(args, "y*", &data))
+        return NULL;
+    State saved = enter(&log->buf, 0, NULL, NULL);
+    int r = put(data.buf, data.len);
+    leave(saved);
+    PyBuffer_Release(&data);
+    if (r != 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_take(Log *log, PyObject *unused) {
+    PyObject *counts = PyDict_New();
+    if (counts == NULL)
+        return NULL;
+    for (Py_ssize_t cid = 0; cid < log->ncounts; cid++) {
+        if (!log->counts[cid])
+            continue;
+        PyObject *k = PyLong_FromSsize_t(cid), *v = PyLong_FromSsize_t(log->counts[cid]);
+        int r = (k && v) ? PyDict_SetItem(counts, k, v) : -1;
+        Py_XDECREF(k);
+        Py_XDECREF(v);
+        if (r < 0) {
+            Py_DECREF(counts);
+            return NULL;
+        }
+    }
+    PyObject *data = PyBytes_FromStringAndSize(log->buf.p, log->buf.n);
+    PyObject *result = data ? Py_BuildValue("(NNLL)", data, counts, log->first, log->last) : NULL;
+    if (result == NULL) {
+        Py_XDECREF(data);
+        Py_DECREF(counts);
+        return NULL;
+    }
+    log->buf.n = 0;
+    log->first = log->last = -1;
+    if (log->ncounts)
+        memset(log->counts, 0, log->ncounts * sizeof(Py_ssize_t));
+    return result;
+}
+
+static PyObject *log_forget(Log *log, PyObject *unused) {
+    if (forget(log) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_size(Log *log, void *closure) {
+    return PyLong_FromSsize_t(log->buf.n);
+}
+
+static int log_traverse(Log *log, visitproc visit, void *arg) {
+    Py_VISIT(log->channels);
+    Py_VISIT(log->programs);
+    Py_VISIT(log->fallback);
+    Py_VISIT(log->on_chunk);
+    Py_VISIT(log->memo_now);
+    Py_VISIT(log->memo_old);
+    return 0;
+}
+
+static int log_clear(Log *log) {
+    Py_CLEAR(log->channels);
+    Py_CLEAR(log->programs);
+    Py_CLEAR(log->fallback);
+    Py_CLEAR(log->on_chunk);
+    Py_CLEAR(log->memo_now);
+    Py_CLEAR(log->memo_old);
+    return 0;
+}
+
+static void log_dealloc(Log *log) {
+    PyObject_GC_UnTrack(log);
+    log_clear(log);
+    PyMem_Free(log->buf.p);
+    PyMem_Free(log->counts);
+    Py_TYPE(log)->tp_free((PyObject *)log);
+}
+
+static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    PyObject *programs, *fallback;
+    static char *kwlist[] = {"programs", "fallback", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OO", kwlist, &programs, &fallback))
+        return NULL;
+    if (!PyCallable_Check(programs) || !PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_TypeError, "Log(programs, fallback): two callables");
+        return NULL;
+    }
+    Log *log = (Log *)type->tp_alloc(type, 0);
+    if (log == NULL)
+        return NULL;
+    log->vectorcall = log_vectorcall;
+    log->first = log->last = -1;
+    log->channels = PyDict_New();
+    log->memo_now = PyDict_New();
+    log->memo_old = PyDict_New();
+    log->programs = Py_NewRef(programs);
+    log->fallback = Py_NewRef(fallback);
+    if (log->channels == NULL || log->memo_now == NULL || log->memo_old == NULL) {
+        Py_DECREF(log);
+        return NULL;
+    }
+    return (PyObject *)log;
+}
+
+static PyMethodDef log_methods[] = {
+    {"add", (PyCFunction)(void (*)(void))log_add, METH_VARARGS | METH_KEYWORDS,
+     "add(topic, channel_id, typename, clock=0): record topic on that channel"},
+    {"timing", (PyCFunction)(void (*)(void))log_timing, METH_VARARGS | METH_KEYWORDS,
+     "timing(step_ns, chunk_ns, on_chunk): how clock messages set the time and end chunks"},
+    {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
+    {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
+    {"take", (PyCFunction)log_take, METH_NOARGS,
+     "take() -> (bytes, {channel_id: messages}, first time, last time) since the last take"},
+    {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyMemberDef log_members[] = {
+    {"now", T_LONGLONG, offsetof(Log, now), 0, "log time of the next messages [ns]"},
+    {NULL, 0, 0, 0, NULL},
+};
+
+static PyGetSetDef log_getset[] = {
+    {"size", (getter)log_size, NULL, "bytes held since the last take", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject LogType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.Log",
+    .tp_basicsize = sizeof(Log),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_doc = "Log(programs, fallback): MCAP message records of bus messages, encoded to CDR in C",
+    .tp_new = log_new,
+    .tp_dealloc = (destructor)log_dealloc,
+    .tp_traverse = (traverseproc)log_traverse,
+    .tp_clear = (inquiry)log_clear,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(Log, vectorcall),
+    .tp_methods = log_methods,
+    .tp_members = log_members,
+    .tp_getset = log_getset,
+};
 
 /* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
 static PyObject *setup(PyObject *self, PyObject *args) {
@@ -442,7 +1013,8 @@ static PyObject *setup(PyObject *self, PyObject *args) {
         Py_INCREF(value);
         Py_XSETREF(dtypes[k], value);
     }
-    if (dtypes[K_F64] != a->descr)
+    const DescrHead *d = (const DescrHead *)a->descr;
+    if (dtypes[K_F64] != a->descr || d->kind != 'f' || d->type != 'd')
         Py_RETURN_FALSE;
     Py_INCREF(type);
     Py_XSETREF(ndarray, (PyTypeObject *)type);
@@ -450,13 +1022,23 @@ static PyObject *setup(PyObject *self, PyObject *args) {
 }
 
 static PyMethodDef methods[] = {
-    {"encode", encode, METH_VARARGS, "encode(program, msg) -> CDR bytes with the header, or None: use Python"},
+    {"encode", encode, METH_VARARGS, "encode(compiled program, msg) -> CDR bytes with the header, or None: use Python"},
     {"setup", setup, METH_VARARGS, "setup(ndarray, {kind: dtype}, np.arange(3.0)) -> arrays read directly"},
+    {"compile", compile, METH_O, "compile(program tuple) -> the compiled program that encode and Log take"},
     {NULL, NULL, 0, NULL},
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    return PyModule_Create(&module);
+    if (PyType_Ready(&LogType) < 0 || (step_name = PyUnicode_InternFromString("step")) == NULL)
+        return NULL;
+    PyObject *m = PyModule_Create(&module);
+    if (m == NULL)
+        return NULL;
+    if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
 }

@@ -20,6 +20,13 @@ strings that is the same object (the team list that perception gives every teamm
 a message already encoded on its own and met again inside a sequence (the StrategyInfo a robot published
 at one control tick is in its team's TeamStrategy at the next). Lists of strings are also kept by value.
 
+Where setup.py could build the C extension (``_cdr_accel.c``), messages with sequences are encoded by it:
+`Codec` compiles each type's encoder program once (`program`), and the C encoder walks a message with it
+(what it does not take as it is, e.g. a list where an array is expected, goes to the Python encoder). The
+extension also holds ``Log``, the recorder's message log (`simatch.record.messagelog`). Setting the
+environment variable ``SIMATCH_CDR_PURE_PYTHON=1`` uses the pure-Python encoders everywhere, as on a
+machine without a C compiler; both write the same bytes.
+
 Output: XCDR1 little endian with the 4-byte encapsulation header, as ROS 2 and rosbag2 write it; a
 big-endian payload is handed to rosbags to read.
 
@@ -30,6 +37,7 @@ big-endian payload is handed to rosbags to read.
 
 from __future__ import annotations
 
+import os
 import struct
 import sys
 from typing import Any, Callable
@@ -40,11 +48,19 @@ from rosbags.typesys.base import normalize_fieldname
 
 from . import MessageError
 
+#: set (to anything but "" or "0") to use the pure-Python encoders even where the C encoder is built: what a
+#: machine without a C compiler runs (tests compare both)
+PURE_PYTHON_ENV = "SIMATCH_CDR_PURE_PYTHON"
+
 try:                                # the C encoder (setup.py builds it where a compiler is at hand)
+    if os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0"):
+        raise ImportError(f"{PURE_PYTHON_ENV} is set")
+    from ._cdr_accel import Log
+    from ._cdr_accel import compile as _accel_compile
     from ._cdr_accel import encode as _accel_encode
     from ._cdr_accel import setup as _accel_setup
-except ImportError:                 # pragma: no cover - a machine without a C compiler
-    _accel_encode = _accel_setup = None
+except ImportError:                 # a machine without a C compiler
+    _accel_encode = _accel_setup = _accel_compile = Log = None
 
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
@@ -115,6 +131,7 @@ class Codec:
         self.memo = memo
         self.accelerate = accelerate and ACCELERATED
         self._programs: dict[str, tuple] = {}
+        self._compiled_programs: dict[str, Any] = {}
         self._appenders: dict[str, Callable] = {}
         self._memo = ({}, {})                           # the C encoder's: this period's, the last one's
         self._whole: dict[str, Callable] = {}           # type -> encode(msg) -> bytes
@@ -174,6 +191,14 @@ class Codec:
                          "    return len(d)"]
             found = self._appenders[typename] = self._compile(lines, typename, f"into_{ident}")
         return found
+
+    def program(self, typename: str) -> tuple[tuple, bool]:
+        """What the C message log (``Log``, see _cdr_accel.c) needs to encode ``typename``: the C encoder's
+        program, and whether a memo should remember each message's body (the type is an element of some
+        sequence, so a message published alone may be met again inside another one)."""
+        if typename not in self.typestore.fielddefs:
+            raise MessageError(f"unknown message type {typename!r}")
+        return self._compiled(typename), typename in self._elements
 
     def decode(self, typename: str, data: bytes | bytearray | memoryview):
         """The ``typename`` message held in ``data``; primitive sequences are read-only numpy views of it.
@@ -277,7 +302,7 @@ class Codec:
 
     def _accelerated(self, typename: str, python: Callable) -> Callable:
         """The C encoder with its program for ``typename``; what it does not take goes to ``python``."""
-        self._ns[f"_PROG_{_ident(typename)}"] = self._program(typename)
+        self._ns[f"_PROG_{_ident(typename)}"] = self._compiled(typename)
         self._ns[f"_PY_{_ident(typename)}"] = python
         self._ns["_accel"] = _accel_encode
         ident = _ident(typename)
@@ -291,6 +316,13 @@ class Codec:
                  f"    data = {call}",
                  f"    return _PY_{ident}(m) if data is None else data"]
         return self._compile(lines, typename, f"fast_{ident}")
+
+    def _compiled(self, typename: str):
+        """The C encoder's program of a type, compiled (see _cdr_accel.c)."""
+        found = self._compiled_programs.get(typename)
+        if found is None:
+            found = self._compiled_programs[typename] = _accel_compile(self._program(typename))
+        return found
 
     def _program(self, typename: str) -> tuple:
         """The C encoder's program of a type: ((kind, attribute, argument), ...), see _cdr_accel.c."""

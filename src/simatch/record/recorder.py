@@ -1,21 +1,21 @@
 """The recorder: every message of a run's bus into one MCAP file (layout in `simatch.record.layout`).
 
 It listens on the bus, not inside the simulator, so it records an embedded run today and a distributed
-run (a server's bus) the same way. Each message is encoded to CDR on arrival (`simatch.msgs.cdr.Codec`, with
-its memo: what teammates share and what a team's TeamStrategy repeats is encoded once) and its record is
-appended to the current chunk (`simatch.record.writer`); every half simulated second the chunk goes to the
-writer thread, which compresses and writes it while the simulation goes on.
+run (a server's bus) the same way. Its message log (`simatch.record.messagelog`: in C where the extension is
+built) is the bus callback of every recorded topic: it encodes each message to CDR on arrival (with the memo
+of `simatch.msgs.cdr.Codec`: what teammates share and what a team's TeamStrategy repeats is encoded once) and
+appends its record to the current chunk; every half simulated second the chunk goes to the writer thread
+(`simatch.record.writer`), which compresses and writes it while the simulation goes on.
 
-The hot path is one dictionary look-up, the encoding, one ``struct`` call and two list appends per message:
-measured, everything else (a lock, a call into a writer per message) cost as much as the encoding.
-Bus deliveries come from the thread that runs the bus (the in-process bus calls synchronously; the Zenoh bus
-delivers from its owner's thread), so the hot path takes no lock.
+The hot path is one Python-to-C call per message: measured, every Python frame and attribute access on it
+cost a visible share of a match's time. Bus deliveries come from the thread that runs the bus (the in-process
+bus calls synchronously; the Zenoh bus delivers from its owner's thread), so the hot path takes no lock.
 
 What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics
 step), ball contacts, events, game state and operator commands, plus the two 3D-scene channels. Link
-states are recorded only on request (``links=True``): a listener makes the simulator compute every wheel's
-pose each physics step, which costs several times a whole physics step, and base and ball links are the
-model states anyway.
+states are recorded only on request (``links=True``): a listener makes the simulator compute every
+wheel's pose each physics step, which costs several times a whole physics step, and base and ball links are
+the model states anyway.
 
 Nothing a producer sends can stop the run: a message whose type is unknown or that does not encode is
 counted (and its topic named in the ``simatch_end`` metadata), never raised into the bus.
@@ -27,8 +27,9 @@ import datetime as _dt
 import json
 import logging
 import sys
+from collections import defaultdict
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Iterable
 
 import numpy as np
 
@@ -38,8 +39,9 @@ from ..msgs.cdr import Codec
 from ..scene.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
+from .messagelog import CLOCK_STEP, CLOCK_TICK, new_log
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
-from .writer import MESSAGE_FIXED, MESSAGE_HEADER, McapWriter, WriterError
+from .writer import McapWriter, WriterError
 
 log = logging.getLogger(__name__)
 
@@ -47,11 +49,10 @@ log = logging.getLogger(__name__)
 WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.EVENTS, topics.GAME_STATE,
                 topics.OPERATOR)
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
+#: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
+CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
 #: zstd level of the chunks: the data is mostly float64 noise, higher levels gain 1-4 % for 2-6 times the time
 COMPRESSION_LEVEL = 1
-_OPCODE_MESSAGE = 0x05
-_GAP = bytes(MESSAGE_HEADER.size)
-_pack_header = MESSAGE_HEADER.pack_into
 
 
 class RecordError(Exception):
@@ -65,10 +66,10 @@ def simatch_version() -> str:
 
 
 class _Channel:
-    __slots__ = ("id", "encode", "count", "errors")
+    __slots__ = ("id", "typename", "errors")
 
-    def __init__(self, cid: int, encode: Callable):
-        self.id, self.encode, self.count, self.errors = cid, encode, 0, 0
+    def __init__(self, cid: int, typename: str):
+        self.id, self.typename, self.errors = cid, typename, 0
 
 
 class Recorder:
@@ -76,11 +77,13 @@ class Recorder:
 
     ``scene``, ``seed`` and ``dt`` describe the run (they go into the metadata, so that the run can be
     reproduced, and draw the 3D scene); ``first_step`` is the physics step the run is at when recording
-    starts (0: from the beginning, which `simatch replay --verify` needs)."""
+    starts (0: from the beginning, which `simatch replay --verify` needs). ``accelerate=False`` uses the
+    pure-Python message log and encoders even where the C extension is built (the same bytes)."""
 
     def __init__(self, bus, path: str | Path, *, scene: LoadedScene, seed: int, dt: float, first_step: int = 0,
                  command_line: Iterable[str] | None = None, links: bool = False,
-                 extra_topics: Iterable[str] = (), compression_level: int = COMPRESSION_LEVEL):
+                 extra_topics: Iterable[str] = (), compression_level: int = COMPRESSION_LEVEL,
+                 accelerate: bool = True):
         self.path = Path(path)
         _check_path(self.path)
         self.bus = bus
@@ -92,17 +95,15 @@ class Recorder:
                                       compression_level=compression_level)
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
-        self._codec = Codec(msgs.typestore, memo=True)
+        self._log = new_log(self._fallback, accelerate=accelerate)
+        self._codec = Codec(msgs.typestore, accelerate=accelerate)     # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
-        self._now = first_step * self.dt_ns
-        self._chunk_start: int | None = None          # log time of the current chunk's first message
-        self._chunk_end = self._now
-        self._next_chunk = (self._now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
-        self._chunk_counts: dict[int, int] = {}
-        self._every: list[_Channel] = []              # every channel, the 3D scene's too
-        self._mark = 0                                # len(chunk) when the run reached the current step
+        self._totals: dict[int, int] = defaultdict(int)   # messages per channel id in chunks handed over
+        self._log.now = first_step * self.dt_ns
+        self._log.timing(self.dt_ns, layout.CHUNK_NS, self._end_chunk)
+        self._chunk_end = self._log.now                # log time of the last message handed over
         self.first_step = first_step
         self._writer.metadata(layout.META_START, {
             "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": simatch_version(),
@@ -116,31 +117,33 @@ class Recorder:
         self._scene3d = SceneBuilder(scene.spec)
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
-        self._log(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
-        self._subs = [bus.subscribe_all(topics.MODEL_STATES, self._on_model_states),
-                      bus.subscribe_all(topics.CLOCK, self._on_clock)]
-        wanted = [t for t in WORLD_TOPICS if t not in (topics.MODEL_STATES, topics.CLOCK)]
-        wanted += [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
-        self._subs += [bus.subscribe_all(pattern, self._on_message) for pattern in wanted]
+        self._log.record(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
+        wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
+        self._subs = [bus.subscribe_all(pattern, self._log) for pattern in wanted]
+        # after the log's: the log time is that of the model states' step
+        self._subs.append(bus.subscribe_all(topics.MODEL_STATES, self._on_model_states))
 
     # --- channels --------------------------------------------------------------------------------------------
-    def _raw_channel(self, channel_topic: str, typestore, typename: str) -> _Channel:
+    def _raw_channel(self, channel_topic: str, typestore, typename: str) -> int:
+        """A new channel (and its schema if new); their records go into the current chunk."""
         sid = self._schemas.get(typename)
         if sid is None:
-            sid = self._schemas[typename] = self._writer.schema(
-                typename, layout.SCHEMA_ENCODING, layout.schema_text(typestore, typename).encode())
-        ch = _Channel(self._writer.channel(channel_topic, sid, layout.MESSAGE_ENCODING), bytes)
-        self._every.append(ch)
-        return ch
+            sid, record = self._writer.schema(typename, layout.SCHEMA_ENCODING,
+                                              layout.schema_text(typestore, typename).encode())
+            self._schemas[typename] = sid
+            self._log.append(record)
+        cid, record = self._writer.channel(channel_topic, sid, layout.MESSAGE_ENCODING)
+        self._log.append(record)
+        return cid
 
     def _open(self, topic: str, msg) -> _Channel | None:
         typename = getattr(msg, "__msgtype__", None)
         if typename is None or typename not in msgs.typestore.fielddefs:
             self._skip(topic, f"type {typename or type(msg).__name__} is not a simatch message type")
             return None
-        ch = self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename)
-        ch.encode = self._codec.appender(typename)
-        self._channels[topic] = ch
+        ch = self._channels[topic] = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore,
+                                                                typename), typename)
+        self._log.add(topic, ch.id, typename, CLOCKS.get(topic, 0))
         return ch
 
     def _skip(self, topic: str, why: str) -> None:
@@ -148,92 +151,58 @@ class Recorder:
         self._skipped[topic] = why
         log.warning("recording: not recording topic %s: %s", topic, why)
 
-    def _log(self, ch: _Channel, data: bytes) -> None:
-        """Append a message record of the current time to the current chunk."""
-        now = self._now
-        if self._chunk_start is None:
-            self._chunk_start = now
-        chunk = self._writer.chunk
-        chunk += MESSAGE_HEADER.pack(_OPCODE_MESSAGE, MESSAGE_FIXED + len(data), ch.id, 0, now, now)
-        chunk += data
-        ch.count += 1
-
-    # --- bus callbacks (hot path) --------------------------------------------------------------------------
-    def _on_message(self, topic: str, msg) -> None:
+    def _fallback(self, topic: str, msg) -> None:
+        """What the message log does not take: the first message of a topic (the channel is opened and the
+        message given to the log again), or a message its encoder does not take as it is (a list where an array
+        is expected, a malformed message: the pure-Python encoder converts it or says what is wrong)."""
         ch = self._channels.get(topic, False)
         if ch is False:
-            ch = self._open(topic, msg)
+            if self._open(topic, msg) is not None:
+                self._log(topic, msg)
+            return
         if ch is None:
             return
-        chunk = self._writer.chunk
-        start = len(chunk)
-        chunk += _GAP                 # the record header, written once the message's size is known
         try:
-            n = ch.encode(msg, chunk)
+            data = self._codec.encode(msg, ch.typename)
         except Exception as exc:      # a malformed message from a producer: counted, never raised
-            del chunk[start:]
             ch.errors += 1
             if ch.errors == 1:
                 log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
                             topic, exc)
             return
-        now = self._now
-        _pack_header(chunk, start, _OPCODE_MESSAGE, MESSAGE_FIXED + n, ch.id, 0, now, now)
-        ch.count += 1
+        self._log.record(ch.id, data)
 
-    def _advance(self, step: int) -> None:
-        """The run is at physics step ``step``: messages from now on carry its time."""
-        now = step * self.dt_ns
-        if now == self._now:
-            return
-        if len(self._writer.chunk) > self._mark:        # messages at the step that ends
-            if self._chunk_start is None:
-                self._chunk_start = self._now
-            self._chunk_end = self._now
-        self._now = now
-        if now >= self._next_chunk:
-            self._end_chunk()
-            self._next_chunk = (now // layout.CHUNK_NS + 1) * layout.CHUNK_NS
-        self._mark = len(self._writer.chunk)
-
+    # --- chunks and the 3D scene ----------------------------------------------------------------------------
     def _end_chunk(self) -> None:
-        """What was recorded since the last chunk goes to the writer thread as one chunk."""
-        if self._writer.chunk:
-            counts = {ch.id: ch.count for ch in self._every}
-            delta = {cid: n - self._chunk_counts.get(cid, 0) for cid, n in counts.items()}
-            self._chunk_counts = counts
-            start = self._chunk_start if self._chunk_start is not None else self._chunk_end
-            self._writer.end_chunk(start, self._chunk_end, {c: n for c, n in delta.items() if n})
-        self._chunk_start = None
-        self._mark = 0
-        self._codec.forget()
-
-    def _on_clock(self, topic: str, msg) -> None:
-        step = _step_of(msg)
-        if step is not None:
-            self._advance(step)
-        self._codec.forget()          # a control tick: see the memo periods of `Codec`
-        self._on_message(topic, msg)
+        """What was recorded since the last chunk goes to the writer thread as one chunk (the message log calls
+        this when the time moves into a new chunk)."""
+        data, counts, first, last = self._log.take()
+        if data:
+            for cid, n in counts.items():
+                self._totals[cid] += n
+            if first < 0:                             # only schema and channel records
+                first = last = self._chunk_end
+            self._writer.end_chunk(data, first, last, counts)
+            self._chunk_end = last
+        self._log.forget()
 
     def _on_model_states(self, topic: str, msg) -> None:
         step = _step_of(msg)
-        if step is not None:
-            self._advance(step)
-        self._on_message(topic, msg)
         if step is not None and step % self._game_every == 0:
             try:
                 pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
-                self._log(self._game, self._scene3d.game_update(msg.name, pose))
+                self._log.record(self._game, self._scene3d.game_update(msg.name, pose))
             except Exception as exc:
                 log.warning("recording: no 3D scene update at step %d: %s", step, exc)
 
     # --- end ---------------------------------------------------------------------------------------------------
     @property
     def sim_seconds(self) -> float:
-        return self._now / layout.NS
+        return self._log.now / layout.NS
 
     def counts(self) -> dict[str, int]:
-        return {t: ch.count for t, ch in self._channels.items() if ch is not None}
+        """Messages recorded per bus topic, in the chunks handed to the writer (all of them once closed)."""
+        return {t: self._totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
 
     def close(self, status: str = "complete", summary: dict | None = None) -> None:
         """Stop listening and finalise the file (summary, indexes, ``simatch_end`` metadata)."""
@@ -243,19 +212,15 @@ class Recorder:
         for sub in self._subs:
             sub.close()
         self._subs.clear()
-        errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
-        end = {"status": status, "sim_seconds": repr(self.sim_seconds),
-               "messages": json.dumps(self.counts(), sort_keys=True),
-               "skipped_topics": json.dumps(self._skipped, sort_keys=True),
-               "encode_errors": json.dumps(errors, sort_keys=True)}
-        for key, value in (summary or {}).items():
-            end[key] = value if isinstance(value, str) else json.dumps(value)
-        if len(self._writer.chunk) > self._mark:            # messages at the current step
-            if self._chunk_start is None:
-                self._chunk_start = self._now
-            self._chunk_end = self._now
         try:
             self._end_chunk()
+            errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
+            end = {"status": status, "sim_seconds": repr(self.sim_seconds),
+                   "messages": json.dumps(self.counts(), sort_keys=True),
+                   "skipped_topics": json.dumps(self._skipped, sort_keys=True),
+                   "encode_errors": json.dumps(errors, sort_keys=True)}
+            for key, value in (summary or {}).items():
+                end[key] = value if isinstance(value, str) else json.dumps(value)
             self._writer.metadata(layout.META_END, end)
         finally:
             try:

@@ -1,0 +1,150 @@
+"""The recorder's message log: every bus message it records, as MCAP Message records in one buffer.
+
+A recording encodes some two thousand messages per simulated second on the thread that runs the simulation,
+so the log is the bus callback itself (``log(topic, msg)``): it looks the topic up, appends the record header
+(opcode, length, channel id, sequence 0, log time and publish time = ``log.now``) and the message's CDR bytes,
+and counts the message. Where the C extension is built, `new_log` returns its ``Log`` (`simatch.msgs.cdr`),
+which does all of that in one C call; `MessageLog` is the same in Python, byte for byte, for machines without a
+C compiler (and for the tests that compare the two).
+
+Interface of both:
+
+* ``log.add(topic, channel_id, typename, clock=0)``: record ``topic`` on that channel. ``clock``:
+  `CLOCK_STEP`, the message's ``step`` (a physics step) sets the log time first; `CLOCK_STEP | CLOCK_TICK`,
+  it also opens a new memo period (see `simatch.msgs.cdr.Codec`): model states and the clock.
+* ``log.timing(step_ns, chunk_ns, on_chunk)``: the physics step and the chunk length [ns]; when a clock
+  message moves the time into a new chunk, ``on_chunk()`` is called (the recorder takes the chunk then)
+  before that message is logged.
+* ``log(topic, msg)``: a topic not added, or a message the encoder does not take as it is, goes to
+  ``fallback(topic, msg)`` instead, with nothing of it left in the buffer (the recorder then opens the
+  channel, or encodes the message with the pure-Python encoder, or counts it as malformed).
+* ``log.record(channel_id, data)``: a message already encoded (the 3D scene); ``log.append(data)``: raw
+  records (schemas and channels, which must precede their first message in the chunk).
+* ``log.take() -> (bytes, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
+  and the log times of its first and last message (-1 if it holds none).
+* ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
+  last take.
+"""
+
+from __future__ import annotations
+
+import operator
+import struct
+from typing import Any, Callable
+
+from .. import msgs
+from ..msgs import cdr
+
+#: a Message record up to its data: opcode, record length, channel id, sequence, log time, publish time
+MESSAGE_HEADER = struct.Struct("<BQHIQQ")
+MESSAGE_FIXED = 22                     # bytes of a Message record's content before its data
+OPCODE_MESSAGE = 0x05
+_GAP = bytes(MESSAGE_HEADER.size)
+_pack_header = MESSAGE_HEADER.pack_into
+_MAX_NS = 2**63 - 1          # log times are signed 64-bit in the C log
+
+Fallback = Callable[[str, Any], None]
+CLOCK_STEP = 1              # the message's step sets the log time
+CLOCK_TICK = 2              # ... and opens a new memo period
+
+
+def new_log(fallback: Fallback, *, accelerate: bool = True):
+    """The C ``Log`` where it is built (and ``accelerate``), else a `MessageLog`."""
+    if accelerate and cdr.Log is not None:
+        return cdr.Log(cdr.Codec(msgs.typestore, memo=True).program, fallback)
+    return MessageLog(cdr.Codec(msgs.typestore, memo=True, accelerate=False), fallback)
+
+
+class MessageLog:
+    """The message log in Python (see the module docstring)."""
+
+    def __init__(self, codec: cdr.Codec, fallback: Fallback):
+        self.now = 0
+        self._codec = codec
+        self._fallback = fallback
+        self._channels: dict[str, tuple[int, Callable, int]] = {}
+        self._buf = bytearray()
+        self._counts: dict[int, int] = {}
+        self._first = self._last = -1
+        self._step_ns = self._chunk_ns = self._next_chunk = 0
+        self._on_chunk: Callable[[], None] | None = None
+
+    @property
+    def size(self) -> int:
+        return len(self._buf)
+
+    def add(self, topic: str, channel_id: int, typename: str, clock: int = 0) -> None:
+        self._channels[topic] = (_channel(channel_id), self._codec.appender(typename),
+                                 clock & (CLOCK_STEP | CLOCK_TICK))
+
+    def timing(self, step_ns: int, chunk_ns: int, on_chunk: Callable[[], None]) -> None:
+        if step_ns <= 0 or chunk_ns <= 0 or not callable(on_chunk):
+            raise ValueError("timing(step_ns > 0, chunk_ns > 0, on_chunk callable)")
+        self._step_ns, self._chunk_ns, self._on_chunk = step_ns, chunk_ns, on_chunk
+        self._next_chunk = (self.now // chunk_ns + 1) * chunk_ns
+
+    def __call__(self, topic: str, msg) -> None:
+        entry = self._channels.get(topic)
+        if entry is None:
+            return self._fallback(topic, msg)
+        cid, append, clock = entry
+        if clock:
+            self._clock(msg, clock)
+        buf = self._buf
+        start = len(buf)
+        buf += _GAP                 # the record header, written once the message's size is known
+        try:
+            n = append(msg, buf)
+        except Exception:           # the fallback encodes it again and reports what is wrong
+            del buf[start:]
+            return self._fallback(topic, msg)
+        now = self.now
+        _pack_header(buf, start, OPCODE_MESSAGE, MESSAGE_FIXED + n, cid, 0, now, now)
+        self._counted(cid)
+
+    def _clock(self, msg, clock: int) -> None:
+        try:
+            step = operator.index(msg.step)
+        except (AttributeError, TypeError, ValueError):
+            step = -1
+        if self._step_ns > 0 and 0 <= step <= _MAX_NS // self._step_ns:     # else ignored, as by the C log
+            now = step * self._step_ns
+            if now != self.now:
+                self.now = now
+                if self._on_chunk is not None and now >= self._next_chunk:
+                    self._next_chunk = (now // self._chunk_ns + 1) * self._chunk_ns
+                    self._on_chunk()
+        if clock & CLOCK_TICK:
+            self.forget()
+
+    def _counted(self, cid: int) -> None:
+        self._counts[cid] = self._counts.get(cid, 0) + 1
+        if self._first < 0:
+            self._first = self.now
+        self._last = self.now
+
+    def record(self, channel_id: int, data) -> None:
+        cid = _channel(channel_id)
+        now = self.now
+        self._buf += MESSAGE_HEADER.pack(OPCODE_MESSAGE, MESSAGE_FIXED + len(data), cid, 0, now, now)
+        self._buf += data
+        self._counted(cid)
+
+    def append(self, data) -> None:
+        self._buf += data
+
+    def take(self) -> tuple[bytes, dict[int, int], int, int]:
+        out = (bytes(self._buf), self._counts, self._first, self._last)
+        self._buf = bytearray()
+        self._counts = {}
+        self._first = self._last = -1
+        return out
+
+    def forget(self) -> None:
+        self._codec.forget()
+
+
+def _channel(channel_id: int) -> int:
+    if not 0 <= channel_id <= 0xFFFF:
+        raise ValueError("channel id: 0 to 65535")
+    return channel_id

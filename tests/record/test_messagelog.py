@@ -1,0 +1,198 @@
+"""The recorder's message log: the C one (built by setup.py) and the pure-Python one of machines without a C
+compiler write the same records, byte for byte, and a machine without the C extension records and
+re-simulates a run."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import simatch
+from simatch import msgs
+from simatch.bus.inproc import InProcessBus
+from simatch.msgs import cdr
+from simatch.record import Recorder, Recording, verify
+from simatch.record.messagelog import CLOCK_STEP, CLOCK_TICK, MESSAGE_HEADER, MessageLog, new_log
+
+from .conftest import NOISY, play_a_little
+
+KINDS = ["c", "python"]
+
+
+def _log(kind: str, fallback):
+    return new_log(fallback, accelerate=(kind == "c"))
+
+
+def _records(data: bytes) -> list[tuple[int, int, bytes]]:
+    """(channel id, log time, CDR bytes) of the Message records in ``data`` (and nothing else)."""
+    out, pos = [], 0
+    while pos < len(data):
+        opcode, length, cid, seq, t, pub = MESSAGE_HEADER.unpack_from(data, pos)
+        assert opcode == 0x05 and seq == 0 and pub == t
+        out.append((cid, t, bytes(data[pos + MESSAGE_HEADER.size:pos + 9 + length])))
+        pos += 9 + length
+    return out
+
+
+def test_the_c_log_is_built():
+    assert cdr.Log is not None and not isinstance(new_log(print), MessageLog)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback(kind):
+    refused = []
+    log = _log(kind, lambda topic, msg: refused.append((topic, msg)))
+    log.add("cyan/1/VelCmd", 3, "simatch_msgs/msg/VelCmd")
+    log.add("model_states", 4, "simatch_msgs/msg/ModelStates")
+    log.now = 7_000_000
+    vel = msgs.new(msgs.VelCmd, stamp=0.007, tick=1, vx=1.5, w=-0.25)
+    states = msgs.new(msgs.ModelStates, stamp=0.007, step=1, name=["ball"], pose=np.arange(7.0), twist=np.ones(6))
+    log("cyan/1/VelCmd", vel)
+    log("model_states", states)
+    log("cyan/1/Unknown", vel)                                     # not added: the fallback's
+    listed = msgs.new(msgs.ModelStates, name=["ball"], pose=[1.0, 2.0], twist=np.zeros(0))
+    log("model_states", listed)                                    # a list: converted or left to the fallback
+    bad = msgs.new(msgs.VelCmd, vx="fast")
+    log("cyan/1/VelCmd", bad)                                      # does not encode: the fallback's
+    data, counts, first, last = log.take()
+    records = _records(data)
+    assert records[:2] == [(3, 7_000_000, msgs.encode(vel)), (4, 7_000_000, msgs.encode(states))]
+    assert ("cyan/1/Unknown", vel) in refused and ("cyan/1/VelCmd", bad) in refused
+    if ("model_states", listed) not in refused:                   # the Python log converts lists itself
+        assert records[2] == (4, 7_000_000, msgs.encode(listed))
+    assert counts == {3: 1, 4: len(records) - 1} and first == last == 7_000_000
+    assert log.size == 0 and log.take() == (b"", {}, -1, -1)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_clock_messages_set_the_time_and_end_chunks(kind):
+    log = _log(kind, lambda topic, msg: None)
+    chunks = []
+    log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
+    log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
+    log.add("cyan/1/VelCmd", 3, "simatch_msgs/msg/VelCmd")
+    log.timing(5_000_000, 500_000_000, lambda: chunks.append(log.take()))
+    for step in range(0, 230):
+        if step % 5 == 0:
+            log("clock", msgs.new(msgs.Clock, stamp=step * 0.005, step=step, tick=step // 5))
+        log("model_states", msgs.new(msgs.ModelStates, step=np.uint64(step), name=[], pose=np.zeros(0),
+                                      twist=np.zeros(0)))
+        log("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=step))
+    assert log.now == 229 * 5_000_000
+    assert [(first, last) for _, _, first, last in chunks] == [(0, 495_000_000), (500_000_000, 995_000_000)]
+    assert chunks[0][1] == {1: 20, 2: 100, 3: 100}
+    times = [t for _, t, _ in _records(chunks[1][0])]
+    assert times == sorted(times) and times[0] == 500_000_000            # the step's clock opens the chunk
+    data, counts, first, last = log.take()
+    assert (first, last) == (1_000_000_000, 1_145_000_000) and counts == {1: 6, 2: 30, 3: 30}
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_encoded_messages_and_raw_records(kind):
+    log = _log(kind, lambda topic, msg: None)
+    log.now = 42
+    log.append(b"raw")
+    log.record(9, b"\x00\x01\x00\x00abc")
+    with pytest.raises(ValueError):
+        log.record(70000, b"x")
+    data, counts, first, last = log.take()
+    assert data[:3] == b"raw" and _records(data[3:]) == [(9, 42, b"\x00\x01\x00\x00abc")]
+    assert counts == {9: 1} and first == last == 42
+
+
+def test_c_and_python_recordings_hold_the_same_bytes(tmp_path):
+    """A whole run with operator commands, noisy perception, coaches and the 3D scene, recorded twice."""
+    def record(path, accelerate):
+        with simatch.Simulation("msl_5v5", seed=4, overrides=NOISY) as sim:
+            with Recorder.for_run(sim, path, command_line=["pytest"], accelerate=accelerate):
+                play_a_little(sim)
+            return sim.state_digest()
+
+    assert record(tmp_path / "c.mcap", True) == record(tmp_path / "py.mcap", False)
+    c, py = Recording(tmp_path / "c.mcap"), Recording(tmp_path / "py.mcap")
+    assert list(c.raw()) == list(py.raw())
+    assert c.end["messages"] == py.end["messages"] and json.loads(c.end["encode_errors"]) == {}
+    assert [(x.start, x.end) for x in c.chunks] == [(x.start, x.end) for x in py.chunks]
+
+
+@pytest.mark.parametrize("accelerate", [True, False])
+def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, accelerate):
+    """Lists for arrays, numpy scalars, an equal dtype object of its own: what the C encoder does not take as
+    it is goes through the Python encoder, and every record holds rosbags' bytes."""
+    import copy
+
+    bus = InProcessBus()
+    with simatch.Simulation("omni_circle") as sim:
+        scene = sim.scene
+    path = tmp_path / "odd.mcap"
+    own = copy.deepcopy(np.dtype("<f8"))
+    pose = np.arange(14.0)
+    pairs = [(msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=("a", "b"), pose=pose.tolist(), twist=np.arange(24.0)[::2]),
+              msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=["a", "b"], pose=pose, twist=np.arange(0.0, 24.0, 2.0))),
+             (msgs.new(msgs.ModelStates, stamp=np.float32(0.5), step=np.uint64(1), name=["a"],
+                       pose=np.arange(7.0).astype(own), twist=np.ones(6, dtype=">f8")),
+              msgs.new(msgs.ModelStates, stamp=0.5, step=1, name=["a"], pose=np.arange(7.0), twist=np.ones(6))),
+             (msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
+              msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0)))]
+    assert pairs[1][0].pose.dtype is own
+    with Recorder(bus, path, scene=scene, seed=0, dt=0.005, accelerate=accelerate):
+        states, info = bus.publisher("model_states", msgs.ModelStates), bus.publisher("cyan/1/StrategyInfo",
+                                                                                     msgs.StrategyInfo)
+        for m, _ in pairs:
+            (info if m.__msgtype__.endswith("StrategyInfo") else states).put(m)
+    got = [bytes(d) for topic, _, d in Recording(path).raw() if not topic.startswith("scene/")]
+    assert got == [bytes(msgs.typestore.serialize_cdr(m, m.__msgtype__)) for _, m in pairs]
+
+
+PURE_PYTHON = textwrap.dedent('''
+    import sys
+    from simatch.msgs import cdr
+    assert not cdr.ACCELERATED and cdr.Log is None          # as on a machine without a C compiler
+    from simatch.record import Recorder, verify
+    from simatch.record.messagelog import MessageLog
+    import simatch
+    with simatch.Simulation("msl_5v5", seed=5, overrides={"judge.kind": "none"}) as sim:
+        with Recorder.for_run(sim, sys.argv[1]) as rec:
+            assert isinstance(rec._log, MessageLog)
+            for coach in sim.coaches.values():
+                coach.start_play()
+            sim.run(seconds=1.2)
+    assert verify(sys.argv[1]).identical
+    print(sim.state_digest())
+''')
+
+
+def test_a_machine_without_the_c_extension_records_the_same_run(tmp_path):
+    path = tmp_path / "pure.mcap"
+    env = dict(os.environ, **{cdr.PURE_PYTHON_ENV: "1"})
+    proc = subprocess.run([sys.executable, "-c", PURE_PYTHON, str(path)], capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr
+    with simatch.Simulation("msl_5v5", seed=5, overrides={"judge.kind": "none"}) as sim:
+        with Recorder.for_run(sim, tmp_path / "c.mcap"):
+            for coach in sim.coaches.values():
+                coach.start_play()
+            sim.run(seconds=1.2)
+        assert proc.stdout.strip() == sim.state_digest()
+    assert list(Recording(path).raw()) == list(Recording(tmp_path / "c.mcap").raw())
+    assert verify(path).identical
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_clock_message_with_an_absurd_step_does_not_move_the_time(kind):
+    """A remote process may publish anything on a clock topic: a step that is no step, or whose time does not
+    fit the log's 64 bits, leaves the time where it is; the message is still recorded."""
+    log = _log(kind, lambda topic, msg: None)
+    log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
+    log.timing(5_000_000, 500_000_000, lambda: None)
+    log("clock", msgs.new(msgs.Clock, step=40))
+    log("clock", msgs.new(msgs.Clock, step=2**63 + 5))
+    log("clock", msgs.new(msgs.Clock, step=2**62))
+    assert log.now == 200_000_000
+    assert [t for _, t, _ in _records(log.take()[0])] == [200_000_000] * 3
