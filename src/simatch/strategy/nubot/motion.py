@@ -135,7 +135,9 @@ class Motion:
             return vx, vy
         nx, ny = dx / d, dy / d
         inward = vx * nx + vy * ny
-        allowed = 2.0 * (d - r - 0.1)             # negative inside: move out
+        # negative inside: move out, at 1 m/s at least, along the way out the target chose (straight away
+        # from a ball near a line would drive into the boards)
+        allowed = max(2.0 * (d - r - 0.1), -1.0)
         if inward > allowed:
             vx -= (inward - allowed) * nx
             vy -= (inward - allowed) * ny
