@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 
+from simatch import msgs
+from simatch.bus import topics
 from simatch.scene.commands import MatchMode as M
-from tests.strategy.helpers import command, scenario
+from tests.strategy.helpers import command, scenario, start
 
 PREPARE = 5.0           # the referee's preparation time before START
 
@@ -38,4 +40,58 @@ def test_a_robot_beyond_the_side_line_leaves_the_throw_in_circle_along_the_field
     near = {n: round(math.hypot(ms[n].x - bx, ms[n].y - by), 2) for n in sim.simulator.robot_names
             if n.startswith("cyan")}
     assert min(near.values()) >= 3.0, near
+    sim.close()
+
+
+#: seed 4 (halves of 150 s), t = 176.85 s: the ball is placed for cyan's throw-in at (-3.11, -6.70)
+LATE_TAKER = {"cyan/2": (3.78, 1.50, 2.97), "cyan/3": (-2.11, -4.99, -2.05), "cyan/4": (-7.48, -3.41, -0.96),
+              "cyan/5": (-6.97, -2.37, -1.55), "magenta/2": (4.60, -3.44, -2.60), "magenta/3": (-1.03, -5.55, -2.27),
+              "magenta/4": (-7.28, -1.08, -1.01), "magenta/5": (2.64, 0.87, -2.57)}
+
+
+class Contacts:
+    """Every physics step in which a robot touches, holds or kicks the ball: (time, robot names)."""
+
+    def __init__(self, sim):
+        self.steps: list[tuple[float, set]] = []
+        sim.bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on)
+
+    def _on(self, m) -> None:
+        names = set(m.touching) | {n for n in (m.holder, m.kicker) if n}
+        if names:
+            self.steps.append((m.stamp, names))
+
+    def double_touch(self, gap: float = 0.1) -> tuple | None:
+        """(robot, time) if the first robot to touch the ball let go of it for ``gap`` s and touched it again
+        before any other robot did (the referee's double touch), else None."""
+        if not self.steps:
+            return None
+        first = sorted(self.steps[0][1])[0]
+        last = self.steps[0][0]
+        for t, names in self.steps:
+            if names - {first}:
+                return None
+            if t - last > gap:
+                return first, t
+            last = t
+        return None
+
+
+def test_a_taker_that_bumped_the_ball_leaves_it_to_a_team_mate():
+    """START comes one second after the ball is placed, the taker still coming from the field side. Going
+    round the ball to its line-up point it brushed the ball (0.4 m: not yet in play), then lined up and
+    played it again: the referee's double touch. The taker must go round clear of the ball and, if it
+    did move the ball, leave it to a team-mate."""
+    sim = scenario(cyan="nubot", magenta="nubot")
+    bx, by = -3.11, -6.70
+    place(sim, LATE_TAKER)
+    sim.set_model_state("ball", x=bx, y=by, z=0.11)
+    contacts = Contacts(sim)
+    sim.step()
+    command(sim, "cyan", M.OUR_THROWIN)
+    sim.run(seconds=1.0)
+    start(sim)
+    sim.run(seconds=7.0)
+    assert contacts.steps and sorted(contacts.steps[0][1])[0].startswith("cyan"), "the throw-in was not taken"
+    assert contacts.double_touch() is None, contacts.double_touch()
     sim.close()

@@ -16,6 +16,9 @@ from ...scene.commands import MatchMode, is_ours
 from .observation import Observation
 
 IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
+#: our restart's ball moved this far (beyond perception noise; opponents keep 3 m away): our taker touched
+#: it, so the restart counts as taken by it even if it is not in play yet (a bump, a kick that fizzled) [m]
+TAKEN_DISTANCE = 0.2
 TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
 OUR_RESTART_LIMIT = 10.0      # a restart of ours not taken by then is given up [s]
 TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
@@ -90,9 +93,12 @@ class GameFlow:
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
-        moved = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1]) >= IN_PLAY_DISTANCE
+        shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
+        moved = shift >= IN_PLAY_DISTANCE
         if self.phase == Phase.OUR_RESTART:
-            if moved:
+            # from the taker's first touch on, it may not touch the ball again before another robot did:
+            # play goes on, and a team-mate plays a ball that did not go far
+            if shift >= TAKEN_DISTANCE:
                 self.phase = Phase.PLAY
                 bx, by = self.ball0
                 taker = min(obs.field_mates() or obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by))

@@ -25,6 +25,9 @@ from .picture import Picture
 KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
 LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
 ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
+#: going round the ball to the line-up point, the taker's centre stays this far (+ 0.1 m) from the ball's
+#: (touching: 0.36 m): brushing it would be the taker's touch, and its kick a second one [m]
+ROUND_CLEARANCE = 0.42
 ON_LINE = 0.045         # distance off the kick line allowed (the ball must enter the mouth) [m]
 
 
@@ -93,7 +96,7 @@ class RestartTaker:
             # beside or in front of the ball: go round it to the line-up point
             tx, ty = bx - LINE_UP * ux, by - LINE_UP * uy
             vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=True,
-                                       ball_obstacle=0.45)
+                                       ball_obstacle=0.45, fence=(bx, by, ROUND_CLEARANCE))
             action = Action.POSITIONED_STATIC
         else:
             # behind it: close in along the line, converging onto it; drive through the ball only when lined
