@@ -8,7 +8,7 @@ import math
 from simatch import msgs
 from simatch.bus import topics
 from simatch.scene.commands import MatchMode as M
-from tests.strategy.helpers import command, scenario, start
+from tests.strategy.helpers import command, run_until, scenario, start
 
 PREPARE = 5.0           # the referee's preparation time before START
 
@@ -94,4 +94,30 @@ def test_a_taker_that_bumped_the_ball_leaves_it_to_a_team_mate():
     sim.run(seconds=7.0)
     assert contacts.steps and sorted(contacts.steps[0][1])[0].startswith("cyan"), "the throw-in was not taken"
     assert contacts.double_touch() is None, contacts.double_touch()
+    sim.close()
+
+
+def test_a_late_kick_off_taker_stays_in_its_half():
+    """START comes while the taker still runs in from its own half (seed 5: after a goal, the taker came from
+    its goal area). Arriving fast beside the ball it overran the half-way line before the ball was in play
+    (the referee's kickoff_half foul). Every robot of the kicking team stays in its half until the ball
+    moved 0.5 m."""
+    sim = scenario(cyan="nubot", magenta="nubot")
+    place(sim, {"cyan/2": (-6.0, 3.0, 0.0), "cyan/3": (-8.0, 5.0, 0.0), "cyan/4": (-8.0, -5.0, 0.0),
+                "cyan/5": (-9.0, 0.0, 0.0)})
+    sim.set_model_state("ball", x=0.0, y=0.0, z=0.11)
+    sim.step()
+    command(sim, "cyan", M.OUR_KICKOFF)
+    run_until(sim, lambda: min(math.hypot(p.x, p.y) for n, p in sim.model_states().items()
+                               if n.startswith("cyan")) < 1.0, 10.0, step=0.025)
+    start(sim)
+    worst = (-1.0, "")
+    end = sim.time + 7.0
+    while sim.time < end:
+        sim.run(seconds=0.025)
+        ms = sim.model_states()
+        if math.hypot(ms["ball"].x, ms["ball"].y) >= 0.5:
+            break
+        worst = max([worst] + [(ms[n].x, n) for n in sim.simulator.robot_names if n.startswith("cyan")])
+    assert worst[0] <= 0.0, f"{worst[1]} at x = {worst[0]:.3f} m before the ball was in play"
     sim.close()

@@ -27,7 +27,8 @@ from .positions import Areas, guard_point, outlet_point, passive_point, score_sp
 
 SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
-KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to the receiver's side) [m]
+KICKOFF_LEAD = (0.3, 1.95)    # where the kick-off pass stops (team frame, y to the receiver's side; x > 0
+#                               keeps the taker, behind the ball on the kick line, clear of the half-way line) [m]
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
