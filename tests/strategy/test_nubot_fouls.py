@@ -81,7 +81,8 @@ def test_a_taker_that_bumped_the_ball_leaves_it_to_a_team_mate():
     """START comes one second after the ball is placed, the taker still coming from the field side. Going
     round the ball to its line-up point it brushed the ball (0.4 m: not yet in play), then lined up and
     played it again: the referee's double touch. The taker must go round clear of the ball and, if it
-    did move the ball, leave it to a team-mate."""
+    did move the ball, leave it (its team-mates keep 2 m until the ball is in play or the restart times
+    out)."""
     sim = scenario(cyan="nubot", magenta="nubot")
     bx, by = -3.11, -6.70
     place(sim, LATE_TAKER)
@@ -91,9 +92,23 @@ def test_a_taker_that_bumped_the_ball_leaves_it_to_a_team_mate():
     command(sim, "cyan", M.OUR_THROWIN)
     sim.run(seconds=1.0)
     start(sim)
-    sim.run(seconds=7.0)
+    t0, closest = sim.time, {}
+    while sim.time < t0 + 7.0:
+        sim.run(seconds=0.05)
+        ms = sim.model_states()
+        if math.hypot(ms["ball"].x - bx, ms["ball"].y - by) >= 0.5:
+            break                                  # in play
+        if contacts.steps:
+            first = sorted(contacts.steps[0][1])[0]
+            for n in sim.simulator.robot_names:
+                if n.startswith("cyan") and n != first:
+                    d = math.hypot(ms[n].x - ms["ball"].x, ms[n].y - ms["ball"].y)
+                    closest[n] = min(closest.get(n, 9.0), round(d, 2))
+    sim.run(seconds=max(0.0, t0 + 7.0 - sim.time))
     assert contacts.steps and sorted(contacts.steps[0][1])[0].startswith("cyan"), "the throw-in was not taken"
     assert contacts.double_touch() is None, contacts.double_touch()
+    # until the ball is in play the taker's team-mates keep 2 m from it
+    assert min(closest.values(), default=9.0) >= 2.0, closest
     sim.close()
 
 

@@ -140,7 +140,7 @@ class NubotRobot(RobotStrategy):
             role = pic.roles.get(me.id, Role.NOROLE)
             if me.is_goalie:
                 cmd = self.keeper.decide(obs, pic, flow)
-            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE:
+            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE and flow.taker != me.id:
                 cmd = self.taker.take(obs, pic, flow)
             elif phase != Phase.PLAY:
                 cmd = self.hold_slot(obs, pic, role)
