@@ -39,6 +39,10 @@ MOUTH = 0.29            # robot centre to a held ball's centre [m]
 PASS_KEEP = 1.5         # a pass being lined up keeps its receiver unless another is this much better
 TASTE = 0.3             # spread of a possession's taste for each receiver (position value units)
 LEAN = 0.15             # weight of a possession's preferred dribbling side
+#: the open part of the goal (as the shooter sees it, opponents' reach included) that makes a shot worth it,
+#: and that keeps a shot being lined up [rad]
+SHOT_WIDTH = 0.045
+SHOT_KEEP_WIDTH = 0.03
 AIM_SPREAD = 0.25       # a shot aims this fraction of the open width either side of its middle
 OPEN_GOAL_VALUE = 15.0  # value of a place with an open shot, per radian of open goal (capped at 0.15 rad)
 CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
@@ -186,7 +190,7 @@ class BallPlayer:
         # 1. shoot, when part of the goal stays open and there is time to turn to it
         if can_score and math.hypot(L2 - bx, by) < p.shoot_range:
             aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed)
-            need = 0.045 if (prev and prev[0] == "shoot") else 0.07
+            need = SHOT_KEEP_WIDTH if (prev and prev[0] == "shoot") else SHOT_WIDTH
             if left < 0.4 or threat < 0.8:
                 need = 0.025
             if width > need and self.turn_time(obs, L2, aim_y) < threat + 0.3:
