@@ -377,18 +377,17 @@ class BallPlayer:
 
     def kick_heading(self, obs: Observation, tx: float, ty: float, speed: float) -> float:
         """The heading to kick at ``speed`` so that the ball heads for (tx, ty): the kicker adds its speed to
-        the mouth's own velocity (the robot's drift and its turning), so the heading leans against the
-        part of that velocity across the line to the target (a robot drifting 1 m/s sideways would put a
-        10 m/s shot 0.6 m wide at 6 m)."""
+        the mouth's own velocity, so the heading leans against the robot's drift across the line to the
+        target (drifting 1 m/s sideways put a 10 m/s shot 0.6 m wide at 6 m). The turning part of the
+        mouth's velocity is left out: it changes with the heading error it would correct (the robot
+        would chase its own turn), and the kick waits for the turn to settle."""
         me = obs.me
         ux, uy = tx - obs.bx, ty - obs.by
         d = math.hypot(ux, uy)
         if d < 1e-6 or speed <= 0.0:
             return math.atan2(ty - me.y, tx - me.x)
         ux, uy = ux / d, uy / d
-        c, s = math.cos(me.yaw), math.sin(me.yaw)
-        mvx, mvy = me.vx - me.w * MOUTH * s, me.vy + me.w * MOUTH * c
-        across = clamp((mvx * -uy + mvy * ux) / speed, -0.5, 0.5)
+        across = clamp((me.vx * -uy + me.vy * ux) / speed, -0.5, 0.5)
         along = math.sqrt(1.0 - across * across)
         return math.atan2(along * uy - across * ux, along * ux + across * uy)
 
