@@ -10,7 +10,7 @@ BIN    := $(VENV)/bin
 .PHONY: run test setup system-deps bench clean
 
 run: setup
-	$(BIN)/simatch run omni_circle
+	$(BIN)/simatch run msl_5v5 --events all
 
 test: setup system-deps
 	$(BIN)/python -m pytest

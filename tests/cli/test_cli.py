@@ -63,3 +63,18 @@ def test_scenes_lists_the_shipped_scenes():
     assert "omni_circle" in out and "msl_5v5" in out
     detail = json.loads(run("scenes", "omni_circle").stdout)
     assert detail["judge"]["kind"] == "locomotion_test"
+
+
+def test_a_match_summary_prints_the_event_log_it_is_asked_for():
+    """The main job (`make run`) prints the whole event log; by default the summary keeps the last 30."""
+    short = ["run", "msl_5v5", "--quiet", "--set", "match.half_duration=4", "--set", "match.half_time=2"]
+    every = json.loads(run(*short, "--json").stdout)["events"]
+    full = run(*short, "--events", "all").stdout
+    listed = [line for line in full.splitlines() if line.startswith("  ") and line.strip()[:1].isdigit()]
+    assert len(listed) == len(every) > 10 and "earlier events" not in full
+    assert listed[-1].split()[1] == "match_end" and "final score" in listed[-1]
+    two = run(*short, "--events", "2").stdout
+    assert f"({len(every) - 2} earlier events" in two
+    assert len([line for line in two.splitlines() if line.strip()[:1].isdigit() and "  " in line[:4]]) == 2
+    bad = run(*short, "--events", "some", check=False)
+    assert bad.returncode == 2 and "expected a number of events or 'all'" in bad.stderr

@@ -11,6 +11,7 @@ import time
 import pytest
 
 from simatch import msgs
+from simatch.bus import bundle
 from simatch.bus.zenoh_bus import TransportError, ZenohBus, open_session, zenoh_config
 from simatch.distributed import credentials
 
@@ -58,7 +59,13 @@ def test_teams_are_confined_to_their_own_robots(procs):
         organise = admin.publisher("set_model_state", msgs.ModelState)
         relink = admin.publisher("set_link_state", msgs.LinkState)
         shove = admin.publisher("apply_wrench", msgs.ApplyWrench)
-        poison = admin.key("cyan/2/OmniVisionInfo")
+        poison = admin.key("lockstep/feed/cyan")      # the team hears its perception only from its feed
+        ovi = msgs.msgtype_name(msgs.OmniVisionInfo)
+        poisoned = bundle.pack([("cyan/2/OmniVisionInfo", ovi, b"junk")])
+        mine_bundle = rogue.key("cyan/lockstep/bundle")
+        vel = msgs.msgtype_name(msgs.VelCmd)
+        smuggled = bundle.pack([("cyan/2/VelCmd", vel, msgs.encode(msgs.new(msgs.VelCmd))),
+                                ("magenta/3/VelCmd", vel, msgs.encode(msgs.new(msgs.VelCmd, vx=2.0)))])
         for k in range(20):
             steal.put(msgs.new(msgs.VelCmd, vx=2.0))
             cheat.put(msgs.new(msgs.ModelState, name="ball", x=10.0, y=0.0, z=0.11))
@@ -66,7 +73,12 @@ def test_teams_are_confined_to_their_own_robots(procs):
             rogue.session.put(rogue.key("magenta/4/VelCmd"), msgs.encode(msgs.new(msgs.VelCmd, vx=2.0)))  # unsigned
             data = b"\x00\x01\x00\x00not a VelCmd"
             rogue.session.put(own, data, attachment=rogue.signer("cyan/2/VelCmd", data))   # signed, malformed
-            admin.session.put(poison, b"junk", attachment=admin.signer("cyan/2/OmniVisionInfo", b"junk"))
+            admin.session.put(poison, poisoned, attachment=admin.signer("lockstep/feed/cyan", poisoned))
+            admin.session.put(poison, b"junk", attachment=admin.signer("lockstep/feed/cyan", b"junk"))
+            # a bundle may carry only what its sender may send alone; its signature covers every entry
+            rogue.session.put(mine_bundle, smuggled, attachment=rogue.signer("cyan/lockstep/bundle", smuggled))
+            rogue.session.put(mine_bundle, smuggled, attachment=rogue.signer("cyan/lockstep/bundle", b"other"))
+            rogue.session.put(mine_bundle, b"SMB1\xff", attachment=rogue.signer("cyan/lockstep/bundle", b"SMB1\xff"))
             if k == 5:
                 organise.put(msgs.new(msgs.ModelState, name="magenta/5", x=6.0, y=-4.0))
                 relink.put(msgs.new(msgs.LinkState, name="magenta/1/base", x=9.0, y=1.0))
@@ -83,11 +95,15 @@ def test_teams_are_confined_to_their_own_robots(procs):
     refused = [e for e in out["events"] if e["type"] == "refused"]
     details = " | ".join(e["detail"] for e in refused)
     assert "cyan may not command magenta/2 (VelCmd)" in details
+    assert "cyan may not command magenta/3 (VelCmd)" in details                  # smuggled in a bundle
+    assert "unsigned or forged sample on cyan/lockstep/bundle" in details
+    assert any(e["type"] == "malformed_message" and "cyan/lockstep/bundle" in e["detail"] for e in out["events"])
     assert "cyan may not call set_model_state" in details and "cyan may not call apply_wrench" in details
     assert "unsigned or forged sample on magenta/4/VelCmd" in details
     assert all(e["team"] == "cyan" for e in refused if "unsigned" not in e["detail"])
     assert any(e["type"] == "malformed_message" and "cyan/2/VelCmd" in e["detail"] for e in out["events"])
-    assert "malformed sample" in procs.stderr(team)          # the team process dropped the junk, and lived
+    stderr = procs.stderr(team)                              # the team process dropped the junk, and lived
+    assert "malformed sample on cyan/2/OmniVisionInfo" in stderr and "malformed sample on lockstep/feed/cyan" in stderr
 
     names = list(states[-1].name)
     pose = states[-1].pose.reshape(len(names), -1)

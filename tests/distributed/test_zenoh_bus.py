@@ -158,3 +158,48 @@ def test_the_interpreter_exits_even_if_nobody_closes_the_bus():
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30, cwd=ROOT)
     assert out.returncode == 0 and "open" in out.stdout, out.stderr
     assert time.monotonic() - t0 < 20
+
+
+def test_a_batch_leaves_as_one_bundle_and_its_entries_arrive_as_if_alone(pair):
+    server, client = pair
+    got = []
+    server.subscribe("cyan/*/VelCmd", msgs.VelCmd, lambda m: got.append(("vel", m.tick)))
+    server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: got.append(("ack", payload)))
+    server.accept_bundles("cyan/lockstep/bundle", verify=False)
+    vel = client.publisher("cyan/2/VelCmd", msgs.VelCmd)
+    pump_until(client, lambda: vel.matching)
+    client.begin_batch()
+    for k in range(3):
+        vel.put(msgs.new(msgs.VelCmd, tick=k))
+    client.put_raw("cyan/lockstep/ack", b"done")
+    before = client.stats.published
+    assert client.send_batch("cyan/lockstep/bundle") == 4
+    assert client.stats.published == before        # counted when gathered, sent as one sample
+    pump_until(server, lambda: len(got) == 4)
+    assert got == [("vel", 0), ("vel", 1), ("vel", 2), ("ack", b"done")]
+    assert server.stats.delivered == 3 and server.stats.malformed == 0
+
+
+def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives_twice(pair):
+    server, client = pair
+    feed = server.declare_feed("lockstep/feed/cyan", ["cyan/*/OmniVisionInfo", "lockstep/tick"])
+    vision = server.publisher("cyan/1/OmniVisionInfo", msgs.OmniVisionInfo)
+    other = server.publisher("magenta/1/OmniVisionInfo", msgs.OmniVisionInfo)
+    got = []
+    client.take_feed("lockstep/feed/cyan", ["cyan/*/OmniVisionInfo", "lockstep/tick"])
+    client.subscribe("cyan/1/OmniVisionInfo", msgs.OmniVisionInfo, lambda m: got.append(("vision", m.tick)))
+    client.subscribe_raw("lockstep/tick", lambda topic, payload, att, t: got.append(("tick", payload)))
+    pump_until(server, lambda: feed.matching)
+    assert not vision.matching and vision.active     # nobody subscribes alone: the feed carries it
+    assert not other.active
+    for k in range(2):
+        vision.put(msgs.new(msgs.OmniVisionInfo, tick=k))
+    server.put_raw("lockstep/tick", b"t1")
+    time.sleep(0.2)
+    assert client.pump(0.0) == 0                     # nothing left before the flush
+    server.flush_feeds()
+    pump_until(client, lambda: len(got) == 3)
+    time.sleep(0.2)
+    client.pump(0.0)
+    assert got == [("vision", 0), ("vision", 1), ("tick", b"t1")]
+    assert feed.entries == []

@@ -3,16 +3,18 @@ processes, over Zenoh on loopback.
 
 * ``distributed_rtt``: the command round trip between the server and one robot process (lockstep): from
   the server opening a tick (perception and game command sent) to the robot's commands and answer being
-  back, p50/p99; and the transit of the commands alone (answer sent -> received).
-* ``distributed_lockstep``: the real-time factor of a 5v5 lockstep run with two team processes, against the
-  same run embedded (same scene, seed and interventions: the digests must be equal).
-* ``distributed_realtime``: a 5v5 ``--realtime`` run with one process per robot (11 processes): the
+  back, p50/p99; and the transit of the commands alone (answer sent -> received). The load is the plumbing
+  strategy (``startpose``) on one robot thrown across the field every 4 s: the figure is the bus's, not a
+  strategy's.
+* ``distributed_lockstep``: the real-time factor of ``msl_5v5`` as shipped (both teams' default strategy,
+  the automatic referee) in lockstep with two team processes, against the same run embedded (same scene
+  and seed: the digests must be equal).
+* ``distributed_realtime``: the same match ``--realtime`` with one process per robot (11 processes): the
   real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and the
   commands' transit alone.
 
-The load: msl_5v5 with the plumbing strategy (``startpose``) in play, every robot thrown across the field every
-4 s so that all ten keep driving back to their start poses. (A team strategy that plays the ball will be a
-heavier load for the strategies, not for the bus.)
+Both match figures start after a warm-up of a few simulated seconds, past the kick-off (processes start,
+the default team's compiled kernels load), as ``match_rtf`` does.
 """
 
 from __future__ import annotations
@@ -31,9 +33,11 @@ import numpy as np
 from ..scene.loader import load_scene
 
 SCENE = "msl_5v5"
-OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose",
-             "perception.position_noise": 0.02}
+#: the round trip's load: one robot driving back to its start pose (the bus's figure, not a strategy's)
+RTT_OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "none",
+                 "teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]], "perception.position_noise": 0.02}
 SCATTER_EVERY = 4.0
+WARM_UP = 3.0          # simulated seconds before the figures start: past the kick-off at 2 s
 
 
 def _port() -> int:
@@ -72,7 +76,7 @@ def _server(realtime: bool = False, overrides: dict | None = None):
     folder = tempfile.TemporaryDirectory(prefix="simatch-bench-")
     endpoint = f"tcp/127.0.0.1:{_port()}"
     run = f"bench{os.getpid()}"
-    server = Server(load_scene(SCENE, {**OVERRIDES, **(overrides or {})}), seed=0, listen=[endpoint], run=run,
+    server = Server(load_scene(SCENE, overrides or {}), seed=0, listen=[endpoint], run=run,
                     realtime=realtime, team_timeout=120, credentials_dir=folder.name, say=lambda text: None)
     procs: list[subprocess.Popen] = []
 
@@ -98,8 +102,7 @@ def _server(realtime: bool = False, overrides: dict | None = None):
 
 def rtt(seconds: float | None = None) -> dict:
     seconds = seconds or 20.0
-    only_one = {"teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]], "teams.magenta.strategy": "none"}
-    with _server(overrides=only_one) as (server, launch):
+    with _server(overrides=RTT_OVERRIDES) as (server, launch):
         launch("robot", "cyan/2")
         server.wait_for_teams()
         _play(server.sim, seconds)
@@ -109,25 +112,36 @@ def rtt(seconds: float | None = None) -> dict:
             "distributed_rtt_transit_p99_ms": st["transit_p99_ms"], "distributed_rtt_samples": st["answers"]}
 
 
+def _match(sim, seconds: float, server=None) -> float:
+    """Run the warm-up, then ``seconds`` more of the match; returns the wall seconds of the latter."""
+    sim.run(seconds=WARM_UP, until_done=False)
+    if server is not None:
+        server.reset_stats()
+    t0 = time.perf_counter()
+    sim.run(seconds=seconds, until_done=False)
+    return time.perf_counter() - t0
+
+
 def lockstep(seconds: float | None = None) -> dict:
     from ..simulation import Simulation
 
     seconds = seconds or 20.0
-    with Simulation(load_scene(SCENE, OVERRIDES), seed=0) as sim:
-        embedded_wall = _play(sim, seconds)
+    with Simulation(load_scene(SCENE), seed=0) as sim:
+        embedded_wall = _match(sim, seconds)
         embedded_digest = sim.state_digest()
     with _server() as (server, launch):
         launch("team", "cyan")
         launch("team", "magenta")
         server.wait_for_teams()
-        wall = _play(server.sim, seconds)
+        wall = _match(server.sim, seconds, server)
         digest = server.sim.state_digest()
         st = server.stats()
     rtf, emb = seconds / wall, seconds / embedded_wall
     return {"distributed_lockstep_rtf": round(rtf, 2), "distributed_lockstep_embedded_rtf": round(emb, 2),
             "distributed_lockstep_ratio": round(rtf / emb, 3), "distributed_lockstep_digest_equal": digest == embedded_digest,
             "distributed_lockstep_latency_p50_ms": st["latency_p50_ms"],
-            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"], "distributed_lockstep_missed": st["missed"]}
+            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"], "distributed_lockstep_missed": st["missed"],
+            "distributed_lockstep_load": round(os.getloadavg()[0], 2)}
 
 
 def realtime(seconds: float | None = None) -> dict:
@@ -137,7 +151,7 @@ def realtime(seconds: float | None = None) -> dict:
             for rid in range(1, 6):
                 launch("robot", f"{team}/{rid}")
         server.wait_for_teams()
-        wall = _play(server.sim, seconds)
+        wall = _match(server.sim, seconds, server)
         st = server.stats()
     return {"distributed_realtime_processes": 1 + st["processes"], "distributed_realtime_rtf": round(seconds / wall, 4),
             "distributed_realtime_latency_p50_ms": st["latency_p50_ms"],
@@ -146,4 +160,5 @@ def realtime(seconds: float | None = None) -> dict:
             "distributed_realtime_transit_p50_ms": st["transit_p50_ms"],
             "distributed_realtime_transit_p99_ms": st["transit_p99_ms"], "distributed_realtime_missed": st["missed"],
             "distributed_realtime_late_steps": st["realtime_late_steps"],
-            "distributed_realtime_max_lag_ms": st["realtime_max_lag_ms"]}
+            "distributed_realtime_max_lag_ms": st["realtime_max_lag_ms"],
+            "distributed_realtime_load": round(os.getloadavg()[0], 2)}

@@ -7,10 +7,11 @@ run, over one Zenoh session. Topics become key expressions ``simatch/<run>/<topi
 
 * Local delivery is exactly the in-process bus: synchronous, in subscription order, no serialisation. A
   message is encoded only when a subscriber in another process matches it.
-* Remote samples never run a node's callback in a Zenoh thread. They are queued, in the order they arrived
-  (callbacks run directly in the network thread, so one link keeps its order), and the owner of the bus
-  delivers them from its own thread with `pump` (or `take` and `deliver`, to look at them first, as the
-  lockstep server does). Node code therefore needs no locks, and a run stays deterministic.
+* Remote samples are queued, in the order they arrived (callbacks run directly in the network thread, so
+  one link keeps its order), and the owner of the bus delivers them with `pump` (or `take` and `deliver`,
+  to look at them first, as the lockstep server does). Node code therefore runs one delivery at a time,
+  needs no locks, and a run stays deterministic. (An owner may ask Zenoh's thread to deliver a feed
+  itself, under the owner's lock: see `take_feed`.)
 * A payload that does not decode, or that makes the receiving callback fail, is dropped and counted
   (`BusStats.malformed`); a sample the `verifier` refuses (fair play) is dropped and counted (`refused`).
   Neither ever stops the process.
@@ -36,6 +37,7 @@ import zenoh
 from zenoh.handlers import Callback as _ZCallback
 
 from .. import msgs
+from . import bundle as _bundle
 from . import topics as _topics
 from .base import AnyCallback, BusStats, Callback
 from .inproc import InProcessBus
@@ -52,6 +54,8 @@ _ENCODING_PREFIX = "application/cdr;"
 Verifier = Callable[[str, bytes, Optional[bytes]], Optional[str]]
 #: (topic, payload) -> attachment that proves who sent it
 Signer = Callable[[str, bytes], bytes]
+#: (attachment of the bundle, entry topic, entry payload) -> None if the entry may be used, else why not
+EntryVerifier = Callable[[Optional[bytes], str, bytes], Optional[str]]
 
 
 class TransportError(RuntimeError):
@@ -115,8 +119,8 @@ def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh
 class _RemoteSub:
     """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
 
-    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes",
-                 "__weakref__")
+    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes", "fed",
+                 "bundled", "__weakref__")
 
     def __init__(self, topic: str, msgtype: Any, callback, any_type: bool = False, raw: bool = False,
                  verify: bool = True, wakes: bool = True):
@@ -129,6 +133,8 @@ class _RemoteSub:
         self.wakes = wakes
         self.closed = False
         self.zsub = None
+        self.fed = False           # served by a feed (`ZenohBus.take_feed`), not by a Zenoh subscriber of its own
+        self.bundled = True        # bundle entries may reach it (not liveliness: only Zenoh tells who is alive)
 
 
 class _Subscription:
@@ -146,16 +152,13 @@ class _Subscription:
         self._bus._drop_remote(self._remote)
 
 
-class _Publisher:
-    __slots__ = ("topic", "msgtype", "_local", "_z", "_bus", "matching", "_listener")
+class _Matching:
+    __slots__ = ()
+    """Whether a subscriber in another process matches a Zenoh publisher (kept up to date by Zenoh's
+    matching listener)."""
 
-    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub):
-        self.topic = topic
-        self.msgtype = msgtype
-        self._bus = bus
-        self._local = local
+    def _watch(self, zpub) -> None:
         self._z = zpub
-        #: whether a subscriber in another process matches (kept up to date by Zenoh's matching listener)
         self.matching = False
 
         def on_status(status) -> None:
@@ -171,17 +174,93 @@ class _Publisher:
         except zenoh.ZError:           # the session is closing
             self.matching = False
 
+    def close(self) -> None:
+        for thing in (self._listener, self._z):
+            try:
+                thing.undeclare()
+            except zenoh.ZError:
+                pass
+
+
+class Feed(_Matching):
+    """What this process sends to one kind of receiver, gathered and sent as one bundle when the owner
+    flushes it (`ZenohBus.flush_feeds`): a copy of every message published on a topic ``covers`` matches,
+    and of every protocol sample (`ZenohBus.put_raw`) on such a topic; kept only while somebody listens."""
+
+    def __init__(self, topic: str, covers: Sequence[str], zpub):
+        self.topic = topic
+        self.covers = tuple(covers)
+        self.entries: list[tuple[str, str, bytes]] = []
+        self._watch(zpub)
+
+    def covering(self, topic: str) -> bool:
+        return any(_topics.matches(c, topic) for c in self.covers)
+
+
+class RawPublisher(_Matching):
+    """Bytes sent often on one topic (`ZenohBus.raw_publisher`), signed like every sample of the process."""
+
+    def __init__(self, bus: "ZenohBus", topic: str, zpub, always: bool):
+        self.topic = topic
+        self._bus = bus
+        self.always = always
+        self._watch(zpub)
+
+    def put(self, payload: bytes, count: bool = True) -> None:
+        """``count``: counts as a published sample (not a bundle, whose entries were counted)."""
+        bus = self._bus
+        if bus._gather(self.topic, payload):
+            return
+        if not self.matching:
+            if self.always:
+                bus._put_signed(self.topic, payload, count)
+            return
+        signer = bus.signer
+        try:
+            self._z.put(payload, attachment=signer(self.topic, payload) if signer is not None else None)
+        except zenoh.ZError as exc:
+            log.debug("put on %s failed: %s", self.topic, exc)
+            return
+        if count:
+            bus.stats.published += 1
+
+
+class _Publisher(_Matching):
+    __slots__ = ("topic", "msgtype", "typename", "feeds", "_local", "_z", "_bus", "matching", "_listener")
+
+    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub):
+        self.topic = topic
+        self.msgtype = msgtype
+        self.typename = msgs.msgtype_name(msgtype)
+        self._bus = bus
+        self._local = local
+        #: the feeds that carry this topic too
+        self.feeds: list[Feed] = [f for f in bus._feeds if f.covering(topic)]
+        self._watch(zpub)
+
     @property
     def active(self) -> bool:
-        return self.matching or self._bus.eager or self._local.active
+        return (self.matching or self._bus.eager or self._local.active
+                or any(f.matching for f in self.feeds))
 
     def put(self, msg: Any) -> None:
         local = self._local
         if local._callbacks:
             local.put(msg)
         bus = self._bus
-        if self.matching or bus.eager:
+        remote = self.matching or bus.eager
+        fed = [f for f in self.feeds if f.matching] if self.feeds else ()
+        if remote or fed:
             data = msgs.encode(msg)
+            for feed in fed:
+                feed.entries.append((self.topic, self.typename, data))
+            if not remote:
+                return
+            batch = bus._batch
+            if batch is not None:
+                batch.append((self.topic, self.typename, data))
+                bus.stats.published += 1
+                return
             signer = bus.signer
             try:
                 if signer is None:
@@ -192,13 +271,6 @@ class _Publisher:
                 log.debug("put on %s failed: %s", self.topic, exc)
                 return
             bus.stats.published += 1
-
-    def close(self) -> None:
-        for thing in (self._listener, self._z):
-            try:
-                thing.undeclare()
-            except zenoh.ZError:
-                pass
 
 
 class ZenohBus:
@@ -224,20 +296,34 @@ class ZenohBus:
 
     ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
     a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
-    switch on a machine where cores are scarce."""
+    switch on a machine where cores are scarce.
+
+    **Bundles** (`bundle`): a process that sends many small samples at once can carry them in one Zenoh
+    sample, which costs one put, one callback and one signature instead of one each:
+
+    * ``begin_batch()`` ... ``send_batch(topic)``: what this process sends to others in between (messages
+      and protocol samples) leaves as one bundle on ``topic`` (a lockstep process's answer to a tick);
+    * ``declare_feed(topic, covers)`` ... ``flush_feeds()``: a copy of what is published on the topics
+      ``covers`` matches is gathered and sent as one bundle on ``topic`` (what a lockstep server sends to
+      one team at a tick), while the topics are still sent one by one to whoever subscribes to them;
+    * ``accept_bundles(pattern)``: bundles received on ``pattern`` are opened and each entry is handled as
+      if it had arrived alone (checked by ``entry_verifier``: the bundle's own signature covers every entry);
+    * ``take_feed(topic, covers)``: this process receives the topics ``covers`` matches from the feed on
+      ``topic`` only (it declares no Zenoh subscriber of its own for them)."""
 
     def __init__(self, session: zenoh.Session, run: str = "default", *, signer: Signer | None = None,
                  verifier: Verifier | None = None,
                  on_refused: Callable[[str, str], None] | None = None,
                  on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
                  wake_on_data: bool = True, drop_when_congested: bool = False, prepare_on_arrival: bool = True,
-                 owns_session: bool = True):
+                 owns_session: bool = True, entry_verifier: EntryVerifier | None = None):
         self.run = check_run_name(run)
         self.session = session
         self.stats = BusStats()
         self.local = InProcessBus(run)
         self.signer = signer
         self.verifier = verifier
+        self.entry_verifier = entry_verifier
         self.on_refused = on_refused
         self.on_malformed = on_malformed
         self.eager = eager
@@ -248,9 +334,18 @@ class ZenohBus:
         self._owns = owns_session
         self._inbox: deque = deque()
         self._wake = threading.Event()
+        self._queue_lock = threading.Lock()   # the inbox and its count of waking samples change together
+        self._waking = 0                      # waking samples in the inbox
         self._remote: list[_RemoteSub] = []
         self._pubs: dict[str, _Publisher] = {}
         self._declared: list[Any] = []        # tokens, queryables, liveliness subscribers
+        self._batch: list[tuple[str, str, bytes]] | None = None     # between begin_batch and send_batch
+        self._feeds: list[Feed] = []
+        self._raw_pubs: dict[str, RawPublisher] = {}
+        self._fed_covers: tuple[str, ...] = ()                      # topics this process takes from a feed
+        self._routes: dict[tuple[str, bool, bool], tuple[_RemoteSub, ...]] = {}   # bundle entry -> subscriptions
+        self._routes_lock = threading.Lock()     # Zenoh's threads fill the routes; the owner changes subscriptions
+        self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)   # refusals inside bundles
         self._closed = False
         _SESSIONS.add(self)
 
@@ -263,11 +358,7 @@ class ZenohBus:
         local = self.local.publisher(topic, msgtype)     # raises TypeError on a type clash
         if pub is not None:
             return pub
-        name = msgs.msgtype_name(msgtype)
-        zpub = self.session.declare_publisher(
-            self.key(topic), encoding=zenoh.Encoding(_ENCODING_PREFIX + name),
-            congestion_control=self.congestion, reliability=zenoh.Reliability.RELIABLE,
-            allowed_destination=zenoh.Locality.REMOTE)
+        zpub = self._declare_zpub(topic, _ENCODING_PREFIX + msgs.msgtype_name(msgtype))
         pub = _Publisher(self, topic, msgtype, local, zpub)
         self._pubs[topic] = pub
         return pub
@@ -289,7 +380,7 @@ class ZenohBus:
     def refresh_matching(self) -> None:
         """Bring every publisher's knowledge of remote subscribers up to date now (e.g. when a process
         joins: its subscriptions arrived before its join)."""
-        for pub in self._pubs.values():
+        for pub in (*self._pubs.values(), *self._feeds, *self._raw_pubs.values()):
             pub.refresh()
 
     # --- raw samples (protocols built on the bus, e.g. lockstep) -------------------------------------------
@@ -302,11 +393,188 @@ class ZenohBus:
                                                                                  verify=verify)))
 
     def put_raw(self, topic: str, payload: bytes) -> None:
-        """Send bytes to the other processes (signed like every sample of this process)."""
+        """Send bytes to the other processes (signed like every sample of this process), for occasional
+        samples (see `raw_publisher` for frequent ones); between `begin_batch` and `send_batch` they join
+        the batch; feeds covering ``topic`` keep a copy."""
+        if self._gather(topic, payload):
+            return
+        self._put_signed(topic, payload)
+
+    def raw_publisher(self, topic: str, always: bool = True) -> "RawPublisher":
+        """A declared publisher of bytes on ``topic``, for samples sent often: a put on a declared Zenoh
+        publisher costs a few microseconds, a `put_raw` (the session's put) up to hundreds. Receivers must
+        subscribe to the exact key (not a pattern), or the server's access control may hide them; until a
+        receiver is known, a put goes out as a `put_raw` (``always``) or not at all."""
+        pub = self._raw_pubs.get(topic)
+        if pub is None:
+            pub = self._raw_pubs[topic] = RawPublisher(self, topic, self._declare_zpub(topic, express=True), always)
+        return pub
+
+    def _gather(self, topic: str, payload: bytes) -> bool:
+        """Copy a protocol sample into the feeds that cover it; True if it joined the batch instead of
+        leaving now."""
+        for feed in self._feeds:
+            if feed.matching and feed.covering(topic):
+                feed.entries.append((topic, "", payload))
+        if self._batch is not None:
+            self._batch.append((topic, "", payload))
+            self.stats.published += 1
+            return True
+        return False
+
+    def _declare_zpub(self, topic: str, encoding: str | None = None, express: bool = False):
+        """``express``: sent at once by the calling thread, not batched by Zenoh's sending task: for a sample
+        that is all of what the process sends now (a bundle, a tick), it saves a thread wake-up, which on a
+        busy machine is what makes the milliseconds of the latency's tail."""
+        return self.session.declare_publisher(
+            self.key(topic), encoding=zenoh.Encoding(encoding) if encoding else None,
+            congestion_control=self.congestion, reliability=zenoh.Reliability.RELIABLE,
+            allowed_destination=zenoh.Locality.REMOTE, express=express)
+
+    # --- bundles ----------------------------------------------------------------------------------------------
+    def begin_batch(self) -> None:
+        """From now until `send_batch`, what this process sends to others is gathered, not sent."""
+        self._batch = []
+
+    def send_batch(self, topic: str) -> int:
+        """Send what was gathered since `begin_batch` as one bundle on ``topic`` (through `raw_publisher`:
+        its receivers subscribe to ``topic`` exactly); returns how many entries it carried."""
+        entries, self._batch = self._batch, None
+        if entries:
+            self.raw_publisher(topic).put(_bundle.pack(entries), count=False)
+        return len(entries or ())
+
+    def declare_feed(self, topic: str, covers: Sequence[str]) -> Feed:
+        """A feed on ``topic`` of what is published on the topics ``covers`` matches (see the class)."""
+        feed = Feed(topic, covers, self._declare_zpub(topic, express=True))
+        self._feeds.append(feed)
+        for pub in self._pubs.values():
+            if feed.covering(pub.topic):
+                pub.feeds.append(feed)
+        return feed
+
+    def flush_feeds(self) -> None:
+        """Send each feed's gathered entries as one bundle (feeds nobody listens to gather nothing)."""
+        signer = self.signer
+        for feed in self._feeds:
+            entries, feed.entries = feed.entries, []
+            if entries and feed.matching:
+                data = _bundle.pack(entries)
+                try:
+                    feed._z.put(data, attachment=signer(feed.topic, data) if signer is not None else None)
+                except zenoh.ZError as exc:
+                    log.debug("put on %s failed: %s", feed.topic, exc)
+                    continue
+                self.stats.published += 1
+
+    def _put_signed(self, topic: str, payload: bytes, count: bool = True) -> None:
         attachment = self.signer(topic, payload) if self.signer is not None else None
         self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
                          allowed_destination=zenoh.Locality.REMOTE)
-        self.stats.published += 1
+        if count:
+            self.stats.published += 1
+
+    def accept_bundles(self, pattern: str, verify: bool = True) -> None:
+        """Open the bundles that arrive on ``pattern``: each entry goes to this process's subscriptions as if
+        it had arrived alone (to those a feed serves if ``pattern`` is the feed taken by `take_feed`, else
+        to the others). With ``verify``, the bundle is checked by ``verifier`` and each entry by
+        ``entry_verifier``; a broken bundle is dropped whole and counted as malformed."""
+        self._declare_bundles(pattern, fed=False, verify=verify)
+
+    def take_feed(self, topic: str, covers: Sequence[str], handle: Callable[[], None] | None = None) -> None:
+        """Receive the topics ``covers`` matches only from the feed on ``topic`` (see `declare_feed`); call it
+        before subscribing. Subscriptions to those exact topics (no wildcard) then declare nothing in Zenoh,
+        so nothing arrives twice; the feed's sender is not checked (like every sample from the server).
+
+        ``handle``: called in Zenoh's receiving thread once a feed sample is queued, instead of waking the
+        owner: an owner whose only work is to answer its feed (a lockstep client) saves a thread hand-off
+        per sample. It must deliver under the same lock as the owner's own deliveries."""
+        self._fed_covers = (*self._fed_covers, *covers)
+        self._declare_bundles(topic, fed=True, verify=False, handle=handle)
+
+    def _declare_bundles(self, pattern: str, fed: bool, verify: bool,
+                         handle: Callable[[], None] | None = None) -> None:
+        n = len(self.prefix)
+        clock = time.monotonic
+        notices = self._notices
+
+        def on_sample(sample) -> None:
+            att = sample.attachment
+            topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
+            attachment = att.to_bytes() if att is not None else None
+            arrival = clock()
+            try:
+                items = self._open_bundle(topic, payload, attachment, arrival, fed, verify)
+            except Exception as exc:      # never fail in Zenoh's thread: the owner reports it
+                items = [(notices, topic, payload, None, "", arrival, (None, None, exc))]
+            if handle is None:
+                self._queue_all(items)
+                return
+            with self._queue_lock:
+                self._inbox.extend(items)
+            try:
+                handle()
+            except Exception:       # never fail in Zenoh's thread: wake the owner to deal with it
+                log.exception("handling a feed sample failed")
+                self._wake.set()
+
+        zsub = self.session.declare_subscriber(self.key(pattern), _ZCallback(on_sample, indirect=False),
+                                               allowed_origin=zenoh.Locality.REMOTE)
+        self._declared.append(zsub)
+
+    def _open_bundle(self, topic: str, payload: bytes, attachment, arrival: float, fed: bool,
+                     verify: bool) -> list:
+        """The inbox items of one bundle: its entries, each with what `deliver` needs to know
+        (``pre``: why refused / decoded message / error), or one notice if the bundle is refused or broken."""
+        notices = self._notices
+        if verify and self.verifier is not None:
+            why = self.verifier(topic, payload, attachment)
+            if why is not None:
+                return [(notices, topic, payload, None, "", arrival, (why, None, None))]
+        try:
+            entries = _bundle.unpack(payload)
+        except _bundle.BundleError as exc:
+            return [(notices, topic, payload, None, "", arrival, (None, None, msgs.MessageError(str(exc))))]
+        check = self.entry_verifier if verify else None
+        decode = self.prepare_on_arrival
+        routes = self._routes
+        out = []
+        for entry_topic, msgtype, data in entries:
+            raw = not msgtype
+            subs = routes.get((entry_topic, raw, fed))
+            if subs is None:
+                subs = self._route(entry_topic, raw, fed)
+            if not subs:
+                continue
+            if check is not None:
+                why = check(attachment, entry_topic, data)
+                if why is not None:
+                    out.append((notices, entry_topic, data, None, "", arrival, (why, None, None)))
+                    continue
+            encoding = "" if raw else _ENCODING_PREFIX + msgtype
+            for rsub in subs:
+                pre = (None, None, None)
+                if decode and not raw:
+                    try:
+                        pre = (None, msgs.decode(rsub.msgtype or _type_of(encoding), data), None)
+                    except msgs.MessageError as exc:
+                        pre = (None, None, exc)
+                out.append((rsub, entry_topic, data, None, encoding, arrival, pre))
+        return out
+
+    def _route(self, topic: str, raw: bool, fed: bool) -> tuple:
+        """The subscriptions an entry on ``topic`` goes to (remembered until subscriptions change)."""
+        with self._routes_lock:
+            subs = tuple(r for r in self._remote
+                         if r.raw == raw and r.fed == fed and r.bundled and not r.closed
+                         and _topics.matches(r.topic, topic))
+            self._routes[(topic, raw, fed)] = subs
+        return subs
+
+    def _add_remote(self, rsub: _RemoteSub) -> None:
+        with self._routes_lock:
+            self._remote.append(rsub)
+            self._routes = {}
 
     def declare_token(self, topic: str) -> Any:
         """A liveliness token: the others see it vanish when this process ends, however it ends."""
@@ -319,17 +587,17 @@ class ZenohBus:
         tokens present now are reported too."""
         rsub = _RemoteSub(pattern, None, lambda topic, payload, att, t: callback(topic, payload == b"+"),
                           raw=True, verify=False)
-        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+        rsub.bundled = False
+        n = len(self.prefix)
 
         def on_sample(sample) -> None:
             alive = b"+" if sample.kind == zenoh.SampleKind.PUT else b"-"
-            inbox.append((rsub, str(sample.key_expr)[n:], alive, None, "", time.monotonic(), None))
-            wake.set()
+            self._queue((rsub, str(sample.key_expr)[n:], alive, None, "", time.monotonic(), None), True)
 
         rsub.zsub = self.session.liveliness().declare_subscriber(self.key(pattern), _ZCallback(on_sample,
                                                                                                 indirect=False),
                                                                  history=True)
-        self._remote.append(rsub)
+        self._add_remote(rsub)
 
     def serve(self, topic: str, callback: Callable[[Any], None]) -> None:
         """A queryable on ``topic``: each query is queued and ``callback(query)`` runs in `deliver`, which
@@ -341,11 +609,10 @@ class ZenohBus:
                 query.drop()           # the query ends once answered
 
         rsub = _RemoteSub(topic, None, answer, raw=True, verify=False)
-        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+        n = len(self.prefix)
 
         def on_query(query) -> None:
-            inbox.append((rsub, str(query.key_expr)[n:], query, None, "", time.monotonic(), None))
-            wake.set()
+            self._queue((rsub, str(query.key_expr)[n:], query, None, "", time.monotonic(), None), True)
 
         self._declared.append(self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False),
                                                              complete=True))
@@ -363,12 +630,16 @@ class ZenohBus:
 
     # --- receiving ------------------------------------------------------------------------------------------
     def _declare_remote(self, rsub: _RemoteSub) -> _RemoteSub:
-        inbox, wake, n = self._inbox, self._wake, len(self.prefix)
+        if not rsub.raw:
+            rsub.wakes = self.wake_on_data
+        if "*" not in rsub.topic and any(_topics.matches(c, rsub.topic) for c in self._fed_covers):
+            rsub.fed = True                          # served by the feed taken with take_feed
+            self._add_remote(rsub)
+            return rsub
+        n = len(self.prefix)
         clock = time.monotonic
         with_encoding = rsub.any_type
         prepare = None if rsub.raw or not self.prepare_on_arrival else self._prepare
-        if not rsub.raw:
-            rsub.wakes = self.wake_on_data
 
         def on_sample(sample) -> None:
             att = sample.attachment
@@ -379,13 +650,11 @@ class ZenohBus:
                 return                                   # not a message (e.g. a lockstep protocol sample)
             # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
             pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
-            inbox.append((rsub, topic, payload, attachment, encoding, clock(), pre))
-            if rsub.wakes:
-                wake.set()
+            self._queue((rsub, topic, payload, attachment, encoding, clock(), pre), rsub.wakes)
 
         rsub.zsub = self.session.declare_subscriber(self.key(rsub.topic), _ZCallback(on_sample, indirect=False),
                                                     allowed_origin=zenoh.Locality.REMOTE)
-        self._remote.append(rsub)
+        self._add_remote(rsub)
         return rsub
 
     def _prepare(self, rsub: _RemoteSub, topic: str, payload: bytes, attachment, encoding: str):
@@ -404,31 +673,49 @@ class ZenohBus:
     def _drop_remote(self, rsub: _RemoteSub) -> None:
         rsub.closed = True
         if rsub in self._remote:
-            self._remote.remove(rsub)
+            with self._routes_lock:
+                self._remote.remove(rsub)
+                self._routes = {}
             if rsub.zsub is not None and not self._closed:
                 try:
                     rsub.zsub.undeclare()
                 except zenoh.ZError:
                     pass
 
+    # --- the owner's side of the inbox ---------------------------------------------------------------------------
+    def _queue(self, item: tuple, wakes: bool) -> None:
+        with self._queue_lock:
+            self._inbox.append(item)
+            if wakes:
+                self._waking += 1
+                self._wake.set()
+
+    def _queue_all(self, items: list) -> None:
+        with self._queue_lock:
+            self._inbox.extend(items)
+            waking = sum(1 for item in items if item[0].wakes)
+            if waking:
+                self._waking += waking
+                self._wake.set()
+
     def wait(self, timeout: float | None) -> bool:
-        """Block until a remote sample that wakes is queued (True; see ``wake_on_data``) or ``timeout``
-        seconds pass (False)."""
-        if self._inbox:
-            return True
-        self._wake.clear()
-        if self._inbox:
-            return True
+        """Block until a waking remote sample is queued (True; see ``wake_on_data``) or ``timeout`` seconds
+        pass (False)."""
+        with self._queue_lock:
+            if self._waking:
+                return True
+            self._wake.clear()
         return self._wake.wait(timeout)
 
     def take(self, timeout: float | None = 0.0) -> list:
-        """Every queued remote sample, oldest first, waiting up to ``timeout`` seconds for one if none is."""
-        if not self._inbox and timeout != 0.0:
+        """Every queued remote sample, oldest first, waiting up to ``timeout`` seconds for a waking one (see
+        `wait`) if none is queued."""
+        if timeout != 0.0:
             self.wait(timeout)
-        inbox = self._inbox
-        out = []
-        while inbox:
-            out.append(inbox.popleft())
+        with self._queue_lock:
+            out = list(self._inbox)
+            self._inbox.clear()
+            self._waking = 0
         return out
 
     def deliver(self, items: Iterable) -> int:
@@ -439,11 +726,18 @@ class ZenohBus:
             if rsub.closed:
                 continue
             if rsub.raw:
-                if rsub.verify and self.verifier is not None:
-                    why = self.verifier(topic, payload, attachment)
-                    if why is not None:
-                        self._refused(topic, why)
+                if pre is not None:                  # from a bundle: checked when it was opened
+                    why, _, error = pre
+                    if error is not None:
+                        self._malformed(topic, error)
                         continue
+                elif rsub.verify and self.verifier is not None:
+                    why = self.verifier(topic, payload, attachment)
+                else:
+                    why = None
+                if why is not None:
+                    self._refused(topic, why)
+                    continue
                 rsub.callback(topic, payload, attachment, arrival)
                 n += 1
                 continue
@@ -511,9 +805,11 @@ class ZenohBus:
                         rsub.zsub.undeclare()
                     except zenoh.ZError:
                         pass
-            for pub in self._pubs.values():
+            for pub in (*self._pubs.values(), *self._feeds, *self._raw_pubs.values()):
                 pub.close()
         finally:
+            self._feeds.clear()
+            self._raw_pubs.clear()
             self._remote.clear()
             self._declared.clear()
             self._pubs.clear()

@@ -6,11 +6,12 @@ Options shared with ``simatch server`` are added by `add_run_options`. Features 
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import importlib
 import json
 import sys
-from typing import Any
+from typing import Any, Callable
 
 from ..scene.loader import load_scene, parse_override
 from . import UsageError
@@ -32,8 +33,23 @@ def add_run_options(p, with_extensions: bool = True) -> None:
     p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--events", type=_event_count, default=30, metavar="N|all",
+                   help="how many of the run's last events the summary prints (default 30; `all`: the whole "
+                        "event log; --json always carries every event)")
     for ext in (extensions() if with_extensions else ()):
         ext.add_arguments(p)
+
+
+def _event_count(text: str) -> int | None:
+    if text == "all":
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of events or 'all', got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"expected a number of events >= 0 or 'all', got {n}")
+    return n
 
 
 def extensions() -> list[Any]:
@@ -70,25 +86,46 @@ def run_duration(sim, args) -> float:
 
 
 class Progress:
-    """A progress bar on a terminal (stderr), nothing otherwise."""
+    """A progress bar on a terminal (stderr), nothing otherwise. ``status()``, if given, is a short text
+    shown beside the bar (a match's score and stage)."""
 
-    def __init__(self, total: float, enabled: bool):
+    def __init__(self, total: float, enabled: bool, status: Callable[[], str] | None = None):
         self.bar = None
+        self.status = status
         if enabled and sys.stderr.isatty():
             from tqdm import tqdm
 
             self.bar = tqdm(total=round(total, 3), unit="sim s", file=sys.stderr, dynamic_ncols=True,
-                            bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+                            bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]{postfix}")
         self.last = 0.0
+        self._shown = ""
 
     def __call__(self, t: float) -> None:
         if self.bar is not None:
+            if self.status is not None:
+                text = self.status()
+                if text != self._shown:
+                    self._shown = text
+                    self.bar.set_postfix_str(text, refresh=False)
             self.bar.update(t - self.last)
             self.last = t
 
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
+
+
+def match_status(sim) -> Callable[[], str] | None:
+    """The score and stage of a run whose judge keeps a game (the referee), for the progress bar."""
+    if sim.game is None:
+        return None
+
+    def status() -> str:
+        game = sim.game
+        score = " ".join(f"{team} {goals}" for team, goals in game["score"].items())
+        return f"{score}, {game['stage'].replace('_', ' ')}"
+
+    return status
 
 
 def _readable(value: Any) -> Any:
@@ -102,7 +139,8 @@ def _readable(value: Any) -> Any:
     return value
 
 
-def print_summary(out: dict, file=sys.stdout) -> None:
+def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
+    """The run for people: what ran, how fast, the result, and the last ``limit`` events (None: all)."""
     print(f"scene {out['scene']}  seed {out['seed']}", file=file)
     rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
     print(f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})",
@@ -112,12 +150,14 @@ def print_summary(out: dict, file=sys.stdout) -> None:
     for key, value in out["result"].items():
         print(f"  {key}: {json.dumps(_readable(value))}", file=file)
     events = out["events"]
+    shown = events if limit is None else events[len(events) - limit:] if limit else []
     print(f"events: {len(events)}", file=file)
-    for ev in events[-30:]:
+    if len(shown) < len(events):
+        print(f"  ... ({len(events) - len(shown)} earlier events: --events all prints every one, "
+              f"--json gives them as data)", file=file)
+    for ev in shown:
         rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
         print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(_readable(rest)) if rest else ''}", file=file)
-    if len(events) > 30:
-        print(f"  ... ({len(events) - 30} earlier events: use --json for all)", file=file)
 
 
 def main(args) -> int:
@@ -128,7 +168,7 @@ def main(args) -> int:
         for ext in extensions():
             stack.enter_context(ext.attach(sim, args))
         duration = run_duration(sim, args)
-        progress = Progress(duration, not args.quiet)
+        progress = Progress(duration, not args.quiet, match_status(sim))
         try:
             sim.run(seconds=duration, progress=progress, realtime=args.realtime)
         finally:
@@ -137,5 +177,5 @@ def main(args) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print_summary(out)
+        print_summary(out, limit=args.events)
     return 0

@@ -98,7 +98,7 @@ def serve_scene(args) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print_summary(out)
+        print_summary(out, limit=args.events)
     return 0
 
 

@@ -14,7 +14,8 @@ import sys
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from ..scene.loader import load_scene
 from . import UsageError
-from .run import Progress, add_run_options, extensions, overrides_of, print_summary, run_duration
+from .run import (Progress, add_run_options, extensions, match_status, overrides_of, print_summary,
+                  run_duration)
 
 
 def add_network_options(p, run_help: str) -> None:
@@ -72,7 +73,7 @@ def main(args) -> int:
             duration = run_duration(server.sim, args)
             try:
                 server.wait_for_teams()
-                progress = Progress(duration, not args.quiet)
+                progress = Progress(duration, not args.quiet, match_status(server.sim))
                 try:
                     server.sim.run(seconds=duration, progress=progress)
                 finally:
@@ -86,6 +87,6 @@ def main(args) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print_summary(out)
+        print_summary(out, limit=args.events)
     print("simatch server: " + ", ".join(f"{k} {v}" for k, v in stats.items()), file=sys.stderr)
     return 130 if interrupted else 0

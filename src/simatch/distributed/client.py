@@ -15,6 +15,7 @@ import logging
 import os
 import socket
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -24,6 +25,7 @@ from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_ses
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
+from .warmup import preload_compiled_kernels
 
 log = logging.getLogger(__name__)
 
@@ -64,6 +66,8 @@ class TeamProcess:
         self.bus: ZenohBus | None = None
         self.stats = None             # the bus's counters (kept after it closes)
         self.clock: LockstepClock | None = None
+        #: ticks are answered by Zenoh's receiving thread, the rest by the main thread: one at a time
+        self._delivering = threading.Lock()
 
     @property
     def what(self) -> str:
@@ -116,7 +120,13 @@ class TeamProcess:
         self.scene = scene
         self.seed = int(offer["seed"])
         self.mode = offer.get("mode", protocol.LOCKSTEP)
+        #: one sample per tick each way (the server's feed in, this process's bundle out): see `protocol`
+        self.bundles = bool(offer.get("bundles"))
+        if self.bundles:         # the tick is answered in the thread that receives it: one hand-off less
+            bus.take_feed(protocol.feed_topic(self.team), protocol.feed_covers(self.team), self._answer)
         nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
+        strategy = str(spec.teams[self.team].strategy)
+        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))   # not at the kick-off
         self.clock = LockstepClock(bus, spec.physics.timestep, self.seed)
         for node in nodes:
             self.clock.add(node)
@@ -124,6 +134,8 @@ class TeamProcess:
         bus.subscribe_raw(protocol.END, self._on_end, verify=False)
         bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
         bus.declare_token(protocol.alive_topic(self.team, self.proc))
+        if self.bundles:     # declared before the join, so that it knows the server listens when ticks come
+            bus.raw_publisher(protocol.bundle_topic(self.team))
         self._join()
 
     def _ask_scene(self) -> dict:
@@ -173,11 +185,17 @@ class TeamProcess:
         except (protocol.ProtocolError, TypeError, ValueError) as exc:
             log.warning("ignored a bad tick message: %s", exc)
             return
-        clock = self.clock
+        clock, bus = self.clock, self.bus
         clock.step_index = step
-        clock.step()
-        self.bus.put_raw(protocol.ack_topic(self.team),
-                         protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+        if self.bundles:
+            bus.begin_batch()
+        try:
+            clock.step()
+            bus.put_raw(protocol.ack_topic(self.team),
+                        protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+        finally:
+            if self.bundles:
+                bus.send_batch(protocol.bundle_topic(self.team))
         self.ticks += 1
 
     def _on_end(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
@@ -191,11 +209,19 @@ class TeamProcess:
         self._server_lost_at = None if alive else time.monotonic()
 
     # --- running -------------------------------------------------------------------------------------------------
+    def _answer(self) -> None:
+        """Deliver what is queued (the nodes run here, one thread at a time)."""
+        with self._delivering:
+            bus = self.bus
+            if bus is not None:           # None once closing: nothing more is answered
+                bus.deliver(self._latest_tick_only(bus.take(0.0)))
+
     def serve(self) -> str:
         """Answer the server's ticks until it ends the run (returns its reason); ClientError if it vanishes."""
         bus = self.bus
         while not self.ended:
-            bus.deliver(self._latest_tick_only(bus.take(0.25)))
+            bus.wait(0.25)
+            self._answer()
             lost = self._server_lost_at
             if lost is not None and time.monotonic() - lost > self.server_timeout:
                 raise ClientError(f"lost the server at {self.connect} (gone for {self.server_timeout:g} s)")
@@ -213,18 +239,20 @@ class TeamProcess:
 
     def close(self) -> None:
         """Leave (saying so while the server is there to hear it) and close the session."""
-        bus = self.bus
-        if bus is None:
-            return
-        self.bus = None
+        with self._delivering:        # a tick being answered in Zenoh's thread ends first
+            bus = self.bus
+            if bus is None:
+                return
+            self.bus = None
         try:
             if self.joined and self._server_alive:
                 bus.put_raw(protocol.bye_topic(self.team), protocol.dumps({"proc": self.proc}))
                 time.sleep(0.05)      # let the goodbye leave before the session closes
             if self.clock is not None:
-                self.clock.close()
+                with self._delivering:
+                    self.clock.close()
         finally:
-            bus.close()
+            bus.close()               # not under the lock: closing waits for Zenoh's callbacks to return
 
     def run(self) -> str:
         self.open()

@@ -106,6 +106,13 @@ def users_file(folder: str | os.PathLike, creds: Iterable[Credential]) -> str:
     return str(path)
 
 
+def claimed_name(attachment: Optional[bytes]) -> Optional[str]:
+    """The name an attachment claims (trust it only once `Verifier.signer_of` accepted the sample)."""
+    if not attachment or len(attachment) < 6 or attachment[:4] != _MAGIC:
+        return None
+    return attachment[5:5 + attachment[4]].decode(errors="replace")
+
+
 class Verifier:
     """Tells, for a received sample, which credential signed it (None: unsigned or forged)."""
 

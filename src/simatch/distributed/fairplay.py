@@ -20,7 +20,7 @@ from typing import Iterable, Mapping, Optional
 from .. import msgs
 from ..bus import topics
 from . import protocol
-from .credentials import ADMIN, Credential, Verifier
+from .credentials import ADMIN, Credential, Verifier, claimed_name
 
 #: robot topics a team sends (server-side consumers only)
 ROBOT_OUTPUTS = (topics.VEL_CMD, topics.ACTION_CMD, topics.STRATEGY_INFO)
@@ -58,6 +58,18 @@ class FairPlay:
         who = self.verifier.signer_of(topic, payload, attachment)
         if who is None:
             return Refusal.of("", f"unsigned or forged sample on {topic} (no valid credential)")
+        return self._judge(who, topic, payload)
+
+    def check_entry(self, attachment: Optional[bytes], topic: str, payload: bytes) -> Optional[Refusal]:
+        """None if an entry of a bundle may be used, else why not (for `ZenohBus(entry_verifier=...)`):
+        the bundle's signature, already checked by `check`, names the sender; each entry must be one that
+        sender may send on its own."""
+        who = claimed_name(attachment)
+        if who is None:
+            return Refusal.of("", f"entry on {topic} of an unsigned bundle")
+        return self._judge(who, topic, payload)
+
+    def _judge(self, who: str, topic: str, payload: bytes) -> Optional[Refusal]:
         if who == ADMIN:
             return None
         why = self.may_send(who, topic, payload)
@@ -106,7 +118,7 @@ class FairPlay:
                          topics.EVENTS, f"{team}/lockstep/**", *PRIVILEGED)
             hears = keys(f"{team}/*/{topics.OMNI_VISION}", f"{team}/{topics.RECEIVE_FROM_COACH}",
                          f"{team}/{topics.TEAM_STRATEGY}", topics.CLOCK, topics.GAME_STATE, protocol.TICK,
-                         protocol.END)
+                         protocol.END, protocol.feed_topic(team))
             asks = keys(protocol.SCENE, protocol.JOIN)
             mine = [
                 (f"{team}-send", ["ingress"], ["put"], sends),

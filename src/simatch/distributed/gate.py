@@ -53,6 +53,8 @@ class LockstepGate(Node):
         self.control_steps = ctx.steps(self.period, "control period")
         self.bus = ctx.bus
         self._sub = self.bus.subscribe_raw(protocol.ACKS, self._ack)
+        #: the tick goes into each team's feed, and alone to processes that take no feed
+        self._tick_pub = self.bus.raw_publisher(protocol.TICK, always=False)
 
     def forget(self, proc_id: str) -> None:
         """Stop waiting for a process (it left or died)."""
@@ -88,7 +90,8 @@ class LockstepGate(Node):
         self._absorb(bus.take(0.0), pending)          # joins, late answers, requests since the last tick
         self._tick = step // self.control_steps
         self._waiting = {p.id for p in self._active()}
-        bus.put_raw(protocol.TICK, protocol.dumps({"step": step, "tick": self._tick}))
+        self._tick_pub.put(protocol.dumps({"step": step, "tick": self._tick}))
+        bus.flush_feeds()                              # each team's inputs of this tick, then the tick
         self._opened = opened = time.monotonic()
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
         while self._waiting:

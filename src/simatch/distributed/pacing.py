@@ -44,6 +44,10 @@ class Pacer(Node):
             self.anchor = (wall, nxt)
             self.reanchored += 1
 
+    def reset_stats(self) -> None:
+        self.steps = self.late_steps = self.reanchored = 0
+        self.max_lag = 0.0
+
     def stats(self) -> dict:
         return {"late_steps": self.late_steps, "steps": self.steps, "max_lag_ms": round(self.max_lag * 1e3, 3),
                 "reanchored": self.reanchored}

@@ -11,10 +11,19 @@ payloads are small JSON objects so that a client in any language can speak them:
                                      tick (``sent``, optional: its monotonic clock, to measure the transit)
     <team>/lockstep/bye    client  -> {"proc"}: this process leaves on purpose
     lockstep/end           server  -> {"reason"}: the run is over; every client exits
+    <team>/lockstep/bundle client  -> a bundle (`simatch.bus.bundle`) of what a process sends for one tick:
+                                     its commands, strategy infos and events, then its ack
+    lockstep/feed/<team>   server  -> a bundle of what the team's processes hear, sent when a tick opens:
+                                     what `feed_covers` names since the last tick, then the tick itself
     lockstep/alive/server, <team>/lockstep/alive/<proc>   liveliness tokens (vanish when a process dies)
 
 Zenoh keeps the order of the samples of one session on one link, so an ``ack`` arrives after the commands
 it closes, and ``tick`` after the perception and game command it opens.
+
+Bundles and feeds are how simatch's own processes talk (one sample per process and tick each way, instead
+of one per message: every sample costs a put, a wake-up and a GIL hand-off); the scene offer says the server
+speaks them (``"bundles": 1``). A client that does not use them sends and subscribes topic by topic, and the
+server serves it that way: both kinds may play in one run.
 """
 
 from __future__ import annotations
@@ -25,6 +34,7 @@ import socket
 import uuid
 from typing import Any, Mapping
 
+from ..bus import topics
 from ..scene.loader import LoadedScene, scene_from_text
 
 SCENE = "lockstep/scene"
@@ -54,6 +64,21 @@ def bye_topic(team: str) -> str:
 
 def alive_topic(team: str, proc: str) -> str:
     return f"{team}/lockstep/alive/{proc}"
+
+
+def bundle_topic(team: str) -> str:
+    return f"{team}/lockstep/bundle"
+
+
+def feed_topic(team: str) -> str:
+    return f"lockstep/feed/{team}"
+
+
+def feed_covers(team: str) -> list[str]:
+    """What the feed of ``team`` carries: what its robot nodes and StrategyPub hear from the server (the
+    same list on both sides: a client takes these topics from the feed only)."""
+    return [topics.robot_topic(team, "*", topics.OMNI_VISION), topics.team_topic(team, topics.RECEIVE_FROM_COACH),
+            topics.team_topic(team, topics.TEAM_STRATEGY), topics.GAME_STATE, TICK]
 
 
 def team_of(topic: str) -> str:
@@ -87,7 +112,7 @@ def loads(payload: bytes, *required: str) -> dict:
 # --- the scene offer: what a team process needs to build its nodes exactly as the embedded run does ----------
 def scene_offer(scene: LoadedScene, seed: int, run: str, mode: str) -> dict:
     return {"scene": {"text": scene.text, "source": scene.source, "overrides": scene.overrides},
-            "seed": int(seed), "run": run, "mode": mode}
+            "seed": int(seed), "run": run, "mode": mode, "bundles": 1}
 
 
 def scene_from_offer(offer: Mapping[str, Any], local: Mapping[str, Any] | None = None) -> LoadedScene:

@@ -67,8 +67,8 @@ class Server:
                             users_file=credentials.users_file(self.credentials_dir, self.creds.values()),
                             access_control=self.fair.access_control())
         session = open_session(conf, what=f"listening on {', '.join(listen)}")
-        self.bus = ZenohBus(session, run, verifier=self.fair.check, on_refused=self._refused,
-                            on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True,
+        self.bus = ZenohBus(session, run, verifier=self.fair.check, entry_verifier=self.fair.check_entry,
+                            on_refused=self._refused, on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True,
                             prepare_on_arrival=not realtime)
         self.registry = Registry(spec)
         self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}   # rate limit of refusal/malformed events
@@ -83,6 +83,9 @@ class Server:
             self.world_service = clock.add(WorldService(self.sim, self.emit))
             self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
             self.strategy_pubs: dict[str, StrategyPub] = {}
+            for team in teams:          # one sample per process and tick each way (see protocol)
+                self.bus.declare_feed(protocol.feed_topic(team), protocol.feed_covers(team))
+                self.bus.accept_bundles(protocol.bundle_topic(team))
             self.bus.serve(protocol.SCENE, self._on_scene)
             self.bus.serve(protocol.JOIN, self._on_join)
             self._byes = self.bus.subscribe_raw(protocol.BYES, self._on_bye)
@@ -300,6 +303,16 @@ class Server:
         if self.pacer is not None:
             out.update({f"realtime_{k}": v for k, v in self.pacer.stats().items()})
         return out
+
+    def reset_stats(self) -> None:
+        """Start `stats` afresh (e.g. after a warm-up: loading, the first kick-off)."""
+        gate = self.gate
+        gate.latencies.clear()
+        gate.transits.clear()
+        gate.missed = 0
+        gate.ticks = 0
+        if self.pacer is not None:
+            self.pacer.reset_stats()
 
     def close(self) -> None:
         self.sim.close()

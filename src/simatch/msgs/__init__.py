@@ -32,6 +32,8 @@ __all__ = [
     "typestore",
     "msgtype_name",
     "new",
+    "fields",
+    "positional",
     "encode",
     "decode",
     "definition",
@@ -137,6 +139,24 @@ def new(msgtype: Any, **fields: Any):
         if fname not in fields:
             fields[fname] = make()
     return typestore.types[name](**fields)
+
+
+def fields(msgtype: Any) -> tuple[str, ...]:
+    """The field names of a message type, in the order of its ``.msg`` file (its constructor's order)."""
+    return tuple(fname for fname, _ in typestore.fielddefs[msgtype_name(msgtype)][1])
+
+
+def positional(msgtype: Any, order: str):
+    """The class of ``msgtype`` for construction with positional arguments, after checking that its fields
+    are exactly ``order`` (space-separated names).
+
+    Hot paths (perception, commands: hundreds of messages per simulated second) build messages
+    positionally, about three times faster than by keyword. The check, at import, turns a later change of
+    a ``.msg`` file into a clear error instead of fields silently swapped."""
+    want, have = tuple(order.split()), fields(msgtype)
+    if want != have:
+        raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
+    return typestore.types[msgtype_name(msgtype)]
 
 
 # ---------------------------------------------------------------------------------------------------

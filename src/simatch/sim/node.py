@@ -12,6 +12,10 @@ from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from .simulator import Simulator
 
+# built positionally (every physics step; see msgs.positional)
+_ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
+_Clock = msgs.positional(msgs.Clock, "stamp step tick")
+
 
 class SimulatorNode(Node):
     phase = Phase.SENSE
@@ -64,7 +68,7 @@ class SimulatorNode(Node):
         if k % self.control_steps == 0:
             tick = k // self.control_steps
             if self.pub_clock.active:
-                self.pub_clock.put(msgs.Clock(stamp=now, step=k, tick=tick))
+                self.pub_clock.put(_Clock(now, k, tick))
             if any(p.active for p in self.pub_vision):
                 snap = sim.snapshot()
                 for pub, info in zip(self.pub_vision, perception.observe(perception.delayed(snap), now, tick)):
@@ -72,7 +76,7 @@ class SimulatorNode(Node):
                         pub.put(info)
         if self.pub_models.active:
             names, pose, twist = sim.model_state_arrays()
-            self.pub_models.put(msgs.ModelStates(stamp=now, step=k, name=names, pose=pose.ravel(), twist=twist.ravel()))
+            self.pub_models.put(_ModelStates(now, k, names, pose.ravel(), twist.ravel()))
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()
             self.pub_links.put(msgs.LinkStates(stamp=now, step=k, name=names, pose=pose.ravel(), twist=twist.ravel()))

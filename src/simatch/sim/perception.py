@@ -20,10 +20,11 @@ import numpy as np
 from .. import msgs
 from .kernels import perceive
 
-_BallInfo = msgs.BallInfo
-_ObstaclesInfo = msgs.ObstaclesInfo
-_RobotInfo = msgs.RobotInfo
-_OmniVisionInfo = msgs.OmniVisionInfo
+# built positionally (several hundred messages per simulated second; see msgs.positional)
+_BallInfo = msgs.positional(msgs.BallInfo, "state x y z vx vy vz angle distance pos_known velocity_known")
+_ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius")
+_RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds")
+_OmniVisionInfo = msgs.positional(msgs.OmniVisionInfo, "stamp tick robot_id ball obstacles robots")
 _EMPTY = np.zeros(0)
 
 
@@ -66,6 +67,7 @@ class Perception:
         m = max(n - 1, 0)
         self._no_own_noise, self._no_ball_noise, self._no_obs_noise = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4))
         self._orad = self.radii[self.others] if n > 1 else np.zeros((n, 0))
+        self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
         self._nw = [int(k) for k in n_wheels]
         self.exact = (spec.position_noise == 0 and spec.velocity_noise == 0 and spec.heading_noise == 0
@@ -114,39 +116,28 @@ class Perception:
         # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
         tx, ty, tyaw, tvx, tvy, tw = own.T.tolist()
         valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
-        wheels = snap.wheels
-        ids = self._ids
+        wheels = list(snap.wheels)
+        ids, nw, holder = self._ids, self._nw, snap.holder
         team_infos = {}
         for team, idx in self.members.items():
-            team_infos[team] = [_RobotInfo(
-                id=ids[i], x=tx[i], y=ty[i], yaw=tyaw[i], vx=tvx[i], vy=tvy[i], w=tw[i], valid=valid[i],
-                stuck=stuck[i], holding_ball=snap.holder == i, wheel_speeds=wheels[i, : self._nw[i]])
-                for i in idx]
-        tx_o, ty_o, tvx_o, tvy_o, o_ang, o_dist = obs
-        orad = self._orad
+            team_infos[team] = [_RobotInfo(ids[i], tx[i], ty[i], tyaw[i], tvx[i], tvy[i], tw[i], valid[i], stuck[i],
+                                           holder == i, wheels[i][: nw[i]]) for i in idx]
         sx, sy, svx, svy, bang, bdist = balls.T.tolist()
-        seen_l = seen
         bz, bvz = float(snap.ball[2]), float(snap.ball[5])
+        if n > 1:
+            if keep is None:
+                rows = zip(*(list(a) for a in obs), self._orad_rows)     # each robot's row of every array
+            else:
+                rows = ((*(a[i][keep[i]] for a in obs), self._orad[i][keep[i]]) for i in range(n))
+            obstacles = [_ObstaclesInfo(*row) for row in rows]
+        else:
+            obstacles = [_ObstaclesInfo(_EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY)] * n
+        unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
+        team_of = self.team_of
         out = []
         for i in range(n):
-            if seen_l[i]:
-                ball = _BallInfo(state=1, x=sx[i], y=sy[i], z=bz, vx=svx[i], vy=svy[i], vz=bvz, angle=bang[i],
-                                 distance=bdist[i], pos_known=True, velocity_known=True)
-            else:
-                ball = _BallInfo(state=0, x=0.0, y=0.0, z=0.0, vx=0.0, vy=0.0, vz=0.0, angle=0.0, distance=0.0,
-                                 pos_known=False, velocity_known=False)
-            if n > 1:
-                if keep is None:
-                    obstacles = _ObstaclesInfo(x=tx_o[i], y=ty_o[i], vx=tvx_o[i], vy=tvy_o[i], angle=o_ang[i],
-                                               distance=o_dist[i], radius=orad[i])
-                else:
-                    sel = keep[i]
-                    obstacles = _ObstaclesInfo(x=tx_o[i][sel], y=ty_o[i][sel], vx=tvx_o[i][sel], vy=tvy_o[i][sel],
-                                               angle=o_ang[i][sel], distance=o_dist[i][sel], radius=orad[i][sel])
-            else:
-                obstacles = _ObstaclesInfo(x=_EMPTY, y=_EMPTY, vx=_EMPTY, vy=_EMPTY, angle=_EMPTY,
-                                           distance=_EMPTY, radius=_EMPTY)
-            out.append(_OmniVisionInfo(stamp=stamp, tick=tick, robot_id=ids[i], ball=ball,
-                                       obstacles=obstacles, robots=team_infos[self.team_of[i]]))
+            ball = (_BallInfo(1, sx[i], sy[i], bz, svx[i], svy[i], bvz, bang[i], bdist[i], True, True) if seen[i]
+                    else unseen)
+            out.append(_OmniVisionInfo(stamp, tick, ids[i], ball, obstacles[i], team_infos[team_of[i]]))
         return out
 

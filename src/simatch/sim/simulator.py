@@ -283,6 +283,8 @@ class Simulator:
         """Stop every robot whose last command would be older than ``timeout`` before the next check,
         ``next_check`` steps from now (its node died or hangs): it is stopped within ``timeout``."""
         limit = round(timeout / self.dt)
+        if self.last_command_step.min() > self.step_index + next_check - limit:
+            return          # every robot commanded recently (the usual case): nothing to check one by one
         stale = (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
         for i in np.flatnonzero(stale):
             self.watchdog_tripped[i] = True

@@ -19,7 +19,13 @@ from .worldmodel import WorldModel
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
-_VelCmd, _ActionCmd, _StrategyInfo = msgs.VelCmd, msgs.ActionCmd, msgs.StrategyInfo
+# built positionally (three messages per robot and control tick; see msgs.positional)
+_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
+_ActionCmd = msgs.positional(msgs.ActionCmd, "stamp tick move_action rotate_action rotate_mode target_x target_y "
+                             "target_ori target_vx target_vy max_vel max_w dribble kick_speed kick_type")
+_StrategyInfo = msgs.positional(msgs.StrategyInfo, "stamp tick agent_id role action is_dribble is_kickoff role_time "
+                                "target_x target_y target_num static_pass_num static_catch_num pass_cmd user")
+_TeamStrategy = msgs.positional(msgs.TeamStrategy, "stamp tick strategies")
 _MOVE, _NO_ACTION = msgs.ActionCmd.MOVE, msgs.ActionCmd.NO_ACTION
 _LOB, _GROUND = msgs.ActionCmd.KICK_LOB, msgs.ActionCmd.KICK_GROUND
 #: the "no pass" entry shared by every StrategyInfo without a pass (messages are read-only)
@@ -86,15 +92,16 @@ class RobotNode(Node):
         return vx, vy, w
 
     def publish(self, now: float, tick: int, cmd: Command, vx: float, vy: float, w: float) -> None:
-        self.pub_vel.put(_VelCmd(stamp=now, tick=tick, vx=vx, vy=vy, w=w))
+        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
         target, ori = cmd.target, cmd.target_ori
-        tx, ty = target if target is not None else (0.0, 0.0)
-        self.pub_action.put(_ActionCmd(
-            stamp=now, tick=tick, move_action=_MOVE if target is not None else _NO_ACTION,
-            rotate_action=_MOVE if ori is not None else _NO_ACTION, rotate_mode=0, target_x=tx, target_y=ty,
-            target_ori=ori if ori is not None else 0.0, target_vx=cmd.target_vel[0], target_vy=cmd.target_vel[1],
-            max_vel=cmd.max_vel, max_w=cmd.max_w, dribble=cmd.dribble, kick_speed=cmd.kick_speed,
-            kick_type=_LOB if cmd.lob else _GROUND))
+        if target is None:
+            move, tx, ty = _NO_ACTION, 0.0, 0.0
+        else:
+            move, (tx, ty) = _MOVE, target
+        rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
+        tvx, tvy = cmd.target_vel
+        self.pub_action.put(_ActionCmd(now, tick, move, rotate, 0, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w,
+                                       cmd.dribble, cmd.kick_speed, _LOB if cmd.lob else _GROUND))
         if self.pub_info.active:
             self.pub_info.put(self.strategy_info(now, tick, cmd))
 
@@ -110,11 +117,9 @@ class RobotNode(Node):
         intent = cmd.intent if cmd.intent is not None else cmd.target
         ix, iy = intent if intent is not None else (math.nan, math.nan)
         return _StrategyInfo(
-            stamp=now, tick=tick, agent_id=self.rid, role=cmd.role, action=cmd.action, is_dribble=self._holding(),
-            is_kickoff=False, role_time=0.0, target_x=ix, target_y=iy,
-            target_num=np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32,
-            static_pass_num=0, static_catch_num=0, pass_cmd=pass_cmd,
-            user=np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64)
+            now, tick, self.rid, cmd.role, cmd.action, self._holding(), False, 0.0, ix, iy,
+            np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32, 0, 0, pass_cmd,
+            np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64)
 
     def _holding(self) -> bool:
         try:
@@ -160,7 +165,7 @@ class StrategyPub(Node):
 
     def tick(self, now: float) -> None:
         fresh = [m for _, m in sorted(self.latest.items()) if now - m.stamp <= self.stale_after + 1e-9]
-        self.pub.put(msgs.TeamStrategy(stamp=now, tick=0, strategies=fresh))
+        self.pub.put(_TeamStrategy(now, 0, fresh))
 
     def stop(self) -> None:
         self.sub.close()

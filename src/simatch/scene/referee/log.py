@@ -15,7 +15,7 @@ from ... import msgs
 #: event types that are fouls (counted per team in the result); the rules' own types
 FOUL_TYPES = frozenset({"dribble_too_far", "dribble_backward_too_far", "goal_area", "penalty_area_crowded",
                         "penalty_area_time", "set_piece_distance", "kickoff_half", "dropped_ball_distance",
-                        "double_touch", "charging"})
+                        "double_touch", "charging", "lob", "ball_holding", "pushing", "goalkeeper_contact"})
 
 
 class EventLog:

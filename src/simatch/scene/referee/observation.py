@@ -53,7 +53,7 @@ class Observation:
         self.VX = [0.0] * n
         self.VY = [0.0] * n
         self.bx = self.by = self.bz = 0.0
-        self.bvx = self.bvy = 0.0
+        self.bvx = self.bvy = self.bvz = 0.0
         self.penalty_area = [0] * n     # side of the penalty area the robot is in (-1, +1), 0 if none
         self.goal_area = [0] * n
 
@@ -88,7 +88,7 @@ class Observation:
             goal[i] = side if ax >= gx and ay <= gy else 0
         b = rows[n]
         self.bx, self.by, self.bz = P[7 * b], P[7 * b + 1], P[7 * b + 2]
-        self.bvx, self.bvy = T[6 * b], T[6 * b + 1]
+        self.bvx, self.bvy, self.bvz = T[6 * b], T[6 * b + 1], T[6 * b + 2]
         self.stamp = msg.stamp
         self.step = msg.step
 
@@ -109,6 +109,14 @@ class Observation:
         if self._rows is None:
             self._rows = self._find_rows(list(self.msg.name))
         r = 7 * self._rows[i]
+        pose = self.msg.pose
+        return (float(pose[r]), float(pose[r + 1]))
+
+    def ball_xy_now(self) -> tuple[float, float]:
+        """The ball's position in the latest message (physics rate, without a refresh)."""
+        if self._rows is None:
+            self._rows = self._find_rows(list(self.msg.name))
+        r = 7 * self._rows[self.n]
         pose = self.msg.pose
         return (float(pose[r]), float(pose[r + 1]))
 

@@ -14,7 +14,8 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 #: the rules a scene may switch off with ``judge.disabled_rules`` (names are the rule files and event types)
 RULE_NAMES = ("goal", "ball_out", "dribbling", "goal_area", "penalty_area", "set_piece_distance", "kickoff_half",
-              "dropped_ball_distance", "restart_timeout", "double_touch", "charging", "no_progress")
+              "dropped_ball_distance", "restart_timeout", "double_touch", "charging", "no_progress",
+              "own_half_regain", "lob", "ball_holding", "pushing", "goalkeeper_contact")
 
 Card = Optional[Literal["yellow", "red"]]
 
@@ -74,6 +75,29 @@ class RefereeParams(BaseModel):
     dribble_release_distance: float = Field(0.6, gt=0.0, le=5.0,
                                             description="a robot has released the ball once the ball's centre is "
                                                         "this far from the robot's centre [m]")
+    ball_holding_depth: float = Field(1 / 3, gt=0.0, le=1.0,
+                                      description="the ball may enter a robot's convex hull (its footprint) by at "
+                                                  "most this fraction of its diameter (MSL: 1/3)")
+    ball_holding_brief_depth: float = Field(0.5, gt=0.0, le=1.0,
+                                            description="... and by at most this fraction for less than "
+                                                        "ball_holding_brief_time (MSL: 1/2, when stopping the ball)")
+    ball_holding_brief_time: float = Field(1.0, gt=0.0, le=60.0,
+                                           description="longest time the ball may be deeper than ball_holding_depth "
+                                                       "[s] (MSL: less than 1 s)")
+
+    # --- scoring and lobs -----------------------------------------------------------------------------------
+    regain_pass_roll: float = Field(1.0, ge=0.0, le=20.0,
+                                    description="a team that won the ball in its own half scores only after a "
+                                                "team-mate received it in the opponent half after it rolled freely "
+                                                "this far [m] (MSL RC-10.1.2: 1 m)")
+    lob_height: float = Field(0.6, ge=0.0, le=20.0,
+                              description="a lob from the own half flying higher than this (the ball's underside at "
+                                          "the apex) needs a team-mate near where it lands [m] (MSL: 60 cm)")
+    lob_mate_distance: float = Field(3.0, ge=0.0, le=30.0,
+                                     description="... a team-mate within this of the landing point [m] (MSL: 3 m)")
+    lob_min_robots: int = Field(3, ge=0, le=20,
+                                description="the lob rule applies to a team with at least this many robots on the "
+                                            "field (MSL: 3)")
 
     # --- areas ----------------------------------------------------------------------------------------------
     penalty_area_robots: int = Field(1, ge=0, le=10,
@@ -98,8 +122,19 @@ class RefereeParams(BaseModel):
     charging_red_speed: Optional[float] = Field(3.0, gt=0.0, le=50.0,
                                                 description="charging faster than this is ramming: red card "
                                                             "[m/s] (null: never)")
-    penalty_for_fouls_in_area: bool = Field(True, description="a charge by a defender in its own penalty area "
-                                                              "gives a penalty kick")
+    penalty_for_fouls_in_area: bool = Field(True, description="a charge or push by a defender in its own penalty "
+                                                              "area gives a penalty kick")
+    pushing_speed: float = Field(0.1, gt=0.0, le=20.0,
+                                 description="a robot in contact with an opponent drives into it while it moves "
+                                             "towards it at least this fast, and the opponent is moved away at least "
+                                             "this fast [m/s]")
+    pushing_distance: float = Field(1.0, gt=0.0, le=20.0,
+                                    description="a robot that keeps driving into an opponent and moves it this far "
+                                                "in one contact pushes it [m] (MSL gives no number)")
+    pushing_time: float = Field(3.0, gt=0.0, le=120.0,
+                                description="... or keeps driving into it, moving it, this long [s]")
+    pushing_card: Card = Field(None, description="card for pushing (null: none, as in MSL; the 2020 Simatch rules "
+                                                 "gave a yellow card)")
 
     # --- no progress ------------------------------------------------------------------------------------------
     no_progress_time: float = Field(10.0, gt=0.0, le=600.0,
@@ -152,6 +187,8 @@ class RefereeParams(BaseModel):
                              f"{', '.join(RULE_NAMES)}")
         if self.prepare_min_time > min(self.prepare_time, self.kickoff_prepare_time):
             raise ValueError("prepare_min_time must not exceed prepare_time and kickoff_prepare_time")
+        if self.ball_holding_brief_depth < self.ball_holding_depth:
+            raise ValueError("ball_holding_brief_depth must not be below ball_holding_depth")
         if self.restart_spot[0] < 0 or self.restart_spot[1] < 0:
             raise ValueError("restart_spot: both numbers must be >= 0")
         return self

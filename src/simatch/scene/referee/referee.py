@@ -26,6 +26,7 @@ from ..commands import SET_PIECES, MatchMode, for_team, name as command_name
 from ..judges.base import Judge
 from ..loader import SceneError
 from . import report
+from .contacts import RobotContacts
 from .discipline import Discipline
 from .log import EventLog
 from .observation import Observation
@@ -49,7 +50,10 @@ class Match:
         self.control_dt = self.control_steps * self.dt
         self.obs = Observation(scene, params.robot_radius)
         self.game = Game(teams=list(spec.teams), stages=schedule(spec.match), dt=self.dt)
-        self.touches = Touches(self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt))
+        self.touches = Touches(self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt),
+                               params.regain_pass_roll)
+        self.contacts = RobotContacts(self.obs, params.contact_margin)
+        self.gravity = spec.physics.gravity
         self.spots = Spots(self.obs.field, params, spec.ball.radius)
 
     def restart_name(self) -> str:
@@ -190,6 +194,8 @@ class MslReferee(OperatorTakeover, Judge):
         g = m.game
         obs = m.obs
         obs.refresh()
+        if g.phase is not Phase.PAUSED:
+            m.contacts.update()
         if g.phase is Phase.STOPPED or g.phase is Phase.PREPARE:
             for i in self.discipline.due(now):
                 self.discipline.bring_back(i, "its time off is over and the ball is dead")

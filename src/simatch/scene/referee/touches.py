@@ -9,7 +9,14 @@ Kept at the physics rate, because a deflection lasts a step or two:
   robot did (double touch);
 * possession for the dribbling rule: the robot in sole contact with the ball and the point where it took
   the ball; another robot alone on the ball takes possession over, a duel of two keeps it with the robot
-  that had it, and the possession ends when the ball is ``dribble_release_distance`` away from the robot.
+  that had it, and the possession ends when the ball is ``dribble_release_distance`` away from the robot;
+* the team on the ball (RC-10.1.2): a team *wins* (regains) the ball when one of its robots touches it and
+  the previous touch since the restart was the other team's or nobody's; where the ball was then decides
+  whether it was won in the team's own half (the ball's centre behind the half-way line). From then on the
+  team has *passed* once a team-mate (another robot than the one that touched the ball before) touched it
+  with the ball's centre in the opponent half after it rolled freely — untouched — at least
+  ``regain_pass_roll``;
+* the last kick (robot, step, where the robot stood), for the lob rule.
 """
 
 from __future__ import annotations
@@ -20,10 +27,12 @@ from .observation import Observation
 
 
 class Touches:
-    def __init__(self, obs: Observation, release_distance: float, double_touch_gap_steps: int):
+    def __init__(self, obs: Observation, release_distance: float, double_touch_gap_steps: int,
+                 pass_roll: float = 1.0):
         self.obs = obs
         n = obs.n
         self.release = release_distance
+        self.pass_roll = pass_roll
         self.gap_steps = max(1, double_touch_gap_steps)
         self.last = -1                       # robot index of the last touch
         self.last_step = -1
@@ -46,6 +55,17 @@ class Touches:
         self.start_xy = (0.0, 0.0)
         self.prev_xy = (0.0, 0.0)
         self.backward = 0.0
+        # the team on the ball (RC-10.1.2), per team index
+        teams = len(obs.teams)
+        self.team_on_ball = -1                       # team of the last touch since the restart, -1: nobody's
+        self.won_by = [-1] * teams                   # the robot whose touch won the ball for the team
+        self.won_at = [(0.0, 0.0)] * teams           # where the ball was then
+        self.won_own_half = [False] * teams
+        self.passed = [False] * teams                # a team-mate received it in the opponent half since
+        self.longest_roll = [0.0] * teams            # the longest free roll before a team-mate's touch since
+        self.ball_at_contact = (0.0, 0.0)            # the ball's position at the last step anybody touched it
+        # the last kick: (robot, step, the robot's x, y), None before any
+        self.kick: tuple[int, int, float, float] | None = None
 
     # --- restarts ----------------------------------------------------------------------------------------
     def on_restart(self) -> None:
@@ -57,6 +77,7 @@ class Touches:
         self.retouch = None
         self.others_touched = False
         self.possessor = -1
+        self.team_on_ball = -1
 
     def arm_taker(self) -> None:
         """START of a set piece: the first robot to touch the ball now is its taker."""
@@ -76,6 +97,12 @@ class Touches:
         self.holder = index.get(msg.holder, -1) if msg.holder else -1
         if not robots:
             return
+        ball = self.obs.ball_xy_now()
+        if msg.kicker and msg.kicker in index:
+            k = index[msg.kicker]
+            self.kick = (k, step, *self.obs.xy_now(k))
+        self._team_touches(robots, step, ball)
+        self.ball_at_contact = ball
         self.contact = tuple(robots)
         self.contact_step = step
         xy_now = self.obs.xy_now
@@ -90,6 +117,36 @@ class Touches:
             if self.armed:
                 self._taker_touch(i, step)
         self._possession(robots)
+
+    def _team_touches(self, robots: list[int], step: int, ball: tuple[float, float]) -> None:
+        """Who is on the ball as a team, and whether a team-mate received it in the opponent half after a free
+        roll (before `last`, `touch_step` and `ball_at_contact` are updated for this step)."""
+        obs = self.obs
+        bx, by = ball
+        for i in robots:
+            k = obs.team_ix[i]
+            if k != self.team_on_ball:
+                self.team_on_ball = k
+                self.won_by[k] = i
+                self.won_at[k] = ball
+                self.won_own_half[k] = obs.attack_sign[i] * bx < 0.0
+                self.passed[k] = False
+                self.longest_roll[k] = 0.0
+                continue
+            if self.touch_step[i] >= step - 1 or self.last == i or self.last < 0 or obs.team_ix[self.last] != k:
+                continue                             # the same touch going on, or no pass from a team-mate
+            if obs.attack_sign[i] * bx <= 0.0:
+                continue                             # received in its own half (or on the line)
+            px, py = self.ball_at_contact
+            roll = math.hypot(bx - px, by - py)
+            self.longest_roll[k] = max(self.longest_roll[k], roll)
+            if roll >= self.pass_roll:
+                self.passed[k] = True
+
+    def needs_pass(self, team_ix: int) -> bool:
+        """RC-10.1.2: the team won the ball in its own half and no team-mate received it in the opponent half
+        after a free roll since."""
+        return self.team_on_ball == team_ix and self.won_own_half[team_ix] and not self.passed[team_ix]
 
     def _taker_touch(self, i: int, step: int) -> None:
         if self.taker < 0:

@@ -185,7 +185,7 @@ class BallPlayer:
         left = p.dribble_limit - used
         opps = obs.opps
         bx, by = obs.bx, obs.by
-        can_score = (not flow.pass_pending and me.x > 0.3 and flow.phase == Phase.PLAY)
+        can_score = (not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == Phase.PLAY)
         threat = self.threat_time(obs)
         prev = self.plan
         plan = None
@@ -212,7 +212,8 @@ class BallPlayer:
                 value, rid, cx, cy, v, keep = best
                 margin = 0.4 if keep else 1.0
                 urgent = left < 0.8 or threat < 1.2
-                if flow.pass_pending or value > mine + margin or (urgent and value > mine - 2.5):
+                forced = flow.pass_pending or (flow.need_pass and cx > 0.3)     # MSL RC-10.1.2
+                if forced or value > mine + margin or (urgent and value > mine - 2.5):
                     plan = ("pass", cx, cy, v, rid)
             if plan is None and threat < CONTACT_THREAT:
                 plan = self.first_time(obs, can_score)

@@ -21,6 +21,9 @@ IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its
 TAKEN_DISTANCE = 0.2
 TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
 TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
+ON_BALL = 0.42                # a team-mate's centre this close to the ball's is on it [m]
+REGAIN_ROLL = 1.3             # a pass into the opponents' half rolls at least 1 m (MSL RC-10.1.2; margin) [m]
+HALF_MARGIN = 0.3             # a pass is received past the half-way line by this much, to be sure [m]
 
 
 class Phase(enum.IntEnum):
@@ -44,6 +47,11 @@ class GameFlow:
         self.taker_since = 0.0
         self.pass_pending = False      # a goal would not count yet: a second team-mate must take the ball
         self.first_holder = 0
+        # MSL RC-10.1.2: a ball won in our own half counts for a goal only after a team-mate received it
+        # in the opponents' half after a free roll of 1 m
+        self.need_pass = False
+        self._ours = 0                 # our robot last on the ball, 0 if the opponents (or nobody) were
+        self._left_at = (0.0, 0.0)     # where the ball was when our robot last had it
         self._last_mode = -1
 
     def key(self) -> tuple:
@@ -81,6 +89,7 @@ class GameFlow:
         self.ball0 = (obs.bx, obs.by)
         self.taker = 0
         self.first_holder = 0
+        self._ours = 0
         if kind == MatchMode.DROPBALL:
             self.phase = Phase.PLAY
             self.pass_pending = True
@@ -92,6 +101,7 @@ class GameFlow:
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
+        self._regain(obs)
         shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
         moved = shift >= IN_PLAY_DISTANCE
         if self.phase == Phase.OUR_RESTART:
@@ -123,3 +133,23 @@ class GameFlow:
             elif (holder is not None and holder.id != self.first_holder) or (
                     touched and self.kind == MatchMode.DROPBALL):
                 self.pass_pending = False
+
+    def _regain(self, obs: Observation) -> None:
+        """Follow who is on the ball for RC-10.1.2 (as the referee reads it from the touches, with margins)."""
+        bx, by = obs.bx, obs.by
+        on = next((m for m in obs.mates if m.holding), None)
+        if on is None:
+            on = min(obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by), default=None)
+            if on is not None and math.hypot(on.x - bx, on.y - by) > ON_BALL:
+                on = None
+        if on is None:
+            if any(math.hypot(o[0] - bx, o[1] - by) < TOUCH_DISTANCE for o in obs.opps):
+                self._ours = 0
+            return
+        if not self._ours:
+            self.need_pass = bx < 0.0                  # won in our half (the line itself is not)
+        elif (on.id != self._ours and self.need_pass and bx > HALF_MARGIN
+              and math.hypot(bx - self._left_at[0], by - self._left_at[1]) >= REGAIN_ROLL):
+            self.need_pass = False                     # a team-mate received a pass in their half
+        self._ours = on.id
+        self._left_at = (bx, by)

@@ -28,6 +28,8 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
+LOB_MIN, LOB_MAX = 3.0, 9.0   # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
+
 LINE_DEPTH = 0.7          # the keeper's line, in front of the goal line [m]
 KEEPER_HEIGHT = 0.75       # a ball below this height hits the keeper [m]
 HISTORY = 6
@@ -154,8 +156,15 @@ class Goalkeeper:
         return self.player.execute(obs, plan, Role.GOALIE)
 
     def clearance(self, obs: Observation) -> tuple:
-        """A lob up the field, to the side with more room."""
+        """A lob up the field, to the side with more room, landing at the team-mate nearest to that point (MSL:
+        a lob from the own half must come down within 3 m of a team-mate); with no team-mate in a lob's reach, a
+        ground clearance to that point instead."""
         side = 1.0 if sum(o[1] for o in obs.opps if o[0] < 0.0) < 0.0 else -1.0
         tx, ty = -2.0, side * 4.0
-        d = math.hypot(tx - obs.bx, ty - obs.by)
-        return ("lob", tx, ty, min(10.0, math.sqrt(d * GRAVITY / 0.96)), 0)
+        reach = [m for m in obs.mates if m.valid and not m.is_goalie
+                 and LOB_MIN < math.hypot(m.x - obs.bx, m.y - obs.by) < LOB_MAX]
+        if not reach:
+            return ("clear", tx, ty, 6.0, 0)
+        mate = min(reach, key=lambda m: math.hypot(m.x - tx, m.y - ty))
+        d = math.hypot(mate.x - obs.bx, mate.y - obs.by)
+        return ("lob", mate.x, mate.y, min(10.0, math.sqrt(d * GRAVITY / 0.96)), 0)

@@ -8,6 +8,7 @@ are not one of the team's robots.
 from __future__ import annotations
 
 import math
+from operator import is_
 
 import numpy as np
 
@@ -62,7 +63,7 @@ class TeamView:
         strategies = world.strategies
         infos = self.infos
         if (self.tick == world.tick and self.robots is robots and len(infos) == len(strategies)
-                and all(a is b for a, b in zip(infos, strategies.values()))):
+                and all(map(is_, infos, strategies.values()))):
             return self.mates, self.by_id, self.array
         gk = world.goalkeeper
         mates = []
@@ -140,16 +141,9 @@ def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, floa
     n = len(o.x)
     if n == 0:
         return []
-    xs, ys, vxs, vys = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
-    found = 0
-    rest = []
-    for k in range(n):
-        if (xs[k], ys[k]) in spots:
-            found += 1
-        else:
-            rest.append(k)
-    if found < len(mates) - 1:
+    rest = [q for q in zip(o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()) if (q[0], q[1]) not in spots]
+    if n - len(rest) < len(mates) - 1:
         # some team-mates are not where the team list says (noisy perception): match by distance
-        rest = [k for k in rest
-                if all(abs(m.x - xs[k]) >= _SAME_ROBOT or abs(m.y - ys[k]) >= _SAME_ROBOT for m in mates)]
-    return [(xs[k], ys[k], vxs[k], vys[k]) for k in rest]
+        rest = [q for q in rest
+                if all(abs(m.x - q[0]) >= _SAME_ROBOT or abs(m.y - q[1]) >= _SAME_ROBOT for m in mates)]
+    return rest

@@ -16,6 +16,7 @@ A slot is (role, x, y, face_x, face_y): where to stand and the point to face.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -29,6 +30,18 @@ SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
 KICKOFF_LEAD = (0.3, 1.95)    # where the kick-off pass stops (team frame, y to the receiver's side; x > 0
 #                               keeps the taker, behind the ball on the kick line, clear of the half-way line) [m]
+#: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
+_ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
+
+
+@lru_cache(maxsize=16)
+def _round(r: float) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets (x, y) from the ball of the points `_settle` tries for distance ``r``: rings at r + 0.05
+    ... r + 3 on each heading of _ROUND, in the order it scans them."""
+    offsets = [(rr * c, rr * s) for c, s in _ROUND for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0)]
+    ox, oy = np.array(offsets).T.copy()
+    ox.flags.writeable = oy.flags.writeable = False
+    return ox, oy
 
 
 def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float, float]:
@@ -218,14 +231,15 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
             x = min(x, -0.35)
         if legal(x, y):
             return x, y
-    best, best_d = (x, y), math.inf
-    for k in range(48):
-        a = k * math.pi / 24
-        for rr in (r + 0.05, r + 0.6, r + 1.2, r + 2.0, r + 3.0):
-            px, py = bx + rr * math.cos(a), by + rr * math.sin(a)
-            if abs(px) > areas.L2 + 0.5 or abs(py) > areas.W2 - 0.3 or not legal(px, py):
-                continue
-            d = math.hypot(px - x, py - y)
-            if d < best_d:
-                best, best_d = (px, py), d
-    return best
+    # the points round the ball, nearest to (x, y) first (ties in the order of the scan), the first legal one
+    # (the same float operations as a scan in Python, done for all candidates at once)
+    ox, oy = _round(r)
+    px, py = bx + ox, by + oy
+    on = (np.abs(px) <= areas.L2 + 0.5) & (np.abs(py) <= areas.W2 - 0.3)
+    px, py = px[on], py[on]
+    d = list(map(math.hypot, (px - x).tolist(), (py - y).tolist()))
+    pxs, pys = px.tolist(), py.tolist()
+    for k in sorted(range(len(d)), key=d.__getitem__):
+        if d[k] < math.inf and legal(pxs[k], pys[k]):
+            return pxs[k], pys[k]
+    return x, y

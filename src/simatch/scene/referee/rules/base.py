@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Optional
 
-from ..state import Phase
+from ..state import LIVE, Phase
 
 if TYPE_CHECKING:
     from ..referee import Match
@@ -77,3 +77,16 @@ class Rule:
         """A free kick for the opponents of robot ``i``, where the ball is."""
         obs = self.m.obs
         return self.m.spots.at_ball("free_kick", obs.other(obs.team_of[i]), obs.bx, obs.by)
+
+    def foul_restart(self, i: int) -> tuple[Optional["Restart"], str]:
+        """(restart, what it is) after a foul by robot ``i`` against an opponent: a free kick for the opponents
+        where the ball is, or a penalty kick when ``i`` is a defender in its own penalty area (and
+        ``penalty_for_fouls_in_area``). While the ball is not in play the restart stands (None)."""
+        m, p = self.m, self.p
+        if m.game.phase not in LIVE:
+            return None, "the ball is not in play: the restart stands"
+        obs = m.obs
+        other = obs.other(obs.team_of[i])
+        if p.penalty_for_fouls_in_area and obs.penalty_area[i] == obs.own_side[i]:
+            return m.spots.penalty(other, obs.own_side[i]), f"penalty kick for {other}"
+        return self.free_kick_against(i), f"free kick for {other}"

@@ -9,7 +9,9 @@ crossbar (judged at the physics rate, the first step the ball is wholly over the
 * it came directly from a dropped ball: two robots (of any team) must have touched it;
 * the shooter — the last robot to touch the ball, when it belongs to the scoring team — stood in its own
   half when it touched the ball (an own goal, last touched by the defending team, counts);
-* no robot touched the ball since the restart.
+* no robot touched the ball since the restart;
+* the scoring team won the ball in its own half and no team-mate received it in the opponent half after a
+  free roll of 1 m (RC-10.1.2, `own_half_regain.py`).
 
 A goal that counts restarts with a kick-off for the team that conceded; one that does not restarts with a
 goal kick for the defending team.
@@ -22,6 +24,7 @@ from typing import Optional
 from ..restarts import NAMES
 from ..state import LIVE
 from .base import Call, Rule
+from .own_half_regain import OwnHalfRegainRule
 
 #: restarts from which no goal may be scored directly
 NO_DIRECT_GOAL = frozenset({"kickoff", "free_kick", "throw_in", "goal_kick", "corner_kick"})
@@ -30,6 +33,10 @@ NO_DIRECT_GOAL = frozenset({"kickoff", "free_kick", "throw_in", "goal_kick", "co
 class GoalRule(Rule):
     name = "goal"
     phases = LIVE
+
+    def __init__(self, match):
+        super().__init__(match)
+        self.regain = OwnHalfRegainRule(match) if "own_half_regain" not in self.p.disabled_rules else None
 
     def in_goal(self, y: float, z: float) -> bool:
         """A ball wholly over a goal line at lateral ``y`` and height ``z`` (centre) is in the goal."""
@@ -85,4 +92,6 @@ class GoalRule(Rule):
             if not obs.in_opponent_half(last, x):
                 return (obs.attack_sign[last] * x, 0.0, f"the shooter {obs.names[last]} kicked from its own half "
                                                         f"(x = {x:.2f} m)")
+        if self.regain is not None:
+            return self.regain.invalid(scoring)
         return None

@@ -1,0 +1,49 @@
+"""Touching the goalkeeper in its goal area (MSL RC-12.3.5, illegal attack): while the goalkeeper's centre
+is in its own goal area, an opponent may not come into contact with it.
+
+Contacts come from `contacts.py`. A contact is judged once, when it begins (or when the goalkeeper enters
+its goal area while the contact goes on): the attacker commits the foul unless the goalkeeper drove into
+it — the goalkeeper's speed towards the attacker greater than the attacker's towards the goalkeeper (a
+goalkeeper coming out to an attacker that stands its ground is no foul by the attacker). The defending
+team gets a free kick (placed at the restart spot of that half, as every free kick in a penalty area).
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+from ..state import LIVE
+from .base import Call, Rule
+
+
+class GoalkeeperContactRule(Rule):
+    name = "goalkeeper_contact"
+    phases = LIVE
+
+    def __init__(self, match):
+        super().__init__(match)
+        self.judged: set[int] = set()          # contact pairs judged while they go on
+
+    def check(self) -> Optional[Call]:
+        m = self.m
+        obs, contacts = m.obs, m.contacts
+        judged: set[int] = set()
+        call = None
+        for c in contacts.now:
+            if c.pair in self.judged:
+                judged.add(c.pair)
+                continue
+            for keeper, attacker, ux, uy in ((c.i, c.j, c.ux, c.uy), (c.j, c.i, -c.ux, -c.uy)):
+                if not obs.is_goalkeeper[keeper] or obs.goal_area[keeper] != obs.own_side[keeper]:
+                    continue
+                judged.add(c.pair)
+                v_att = contacts.approach(attacker, -ux, -uy)      # attacker towards the keeper
+                v_keep = contacts.approach(keeper, ux, uy)         # keeper towards the attacker
+                if v_keep > v_att or call is not None:
+                    continue
+                call = self.call("goalkeeper_contact", attacker, max(v_att, 0.0), max(v_keep, 0.0),
+                                 f"{obs.names[attacker]} touched {obs.names[keeper]}, the goalkeeper, in its goal area "
+                                 f"(driving in at {max(v_att, 0.0):.2f} m/s, the goalkeeper at {max(v_keep, 0.0):.2f} "
+                                 f"m/s): free kick for {obs.team_of[keeper]}", restart=self.free_kick_against(attacker))
+        self.judged = judged
+        return call
