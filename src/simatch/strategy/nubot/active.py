@@ -409,7 +409,9 @@ class BallPlayer:
             return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=Action.MOVE_WITH_BALL,
                            intent=(tx, ty))
         tx, ty, speed = plan[1], plan[2], plan[3]
-        face = self.kick_heading(obs, tx, ty, speed)
+        # a shot leans against the robot's drift; a pass does not need it (the receiver gives way along the
+        # ball's path), and a target that moves with the robot's own speed would delay the kick
+        face = self.kick_heading(obs, tx, ty, speed) if kind == "shoot" else math.atan2(ty - me.y, tx - me.x)
         err = wrap(face - me.yaw)
         d = math.hypot(tx - me.x, ty - me.y)
         if kind == "shoot":

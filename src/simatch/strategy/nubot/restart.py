@@ -23,7 +23,7 @@ from .params import NubotParams
 from .picture import Picture
 
 KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
-KICKOFF_MAX_X = -0.03   # the kick-off taker's centre stays behind this line (the referee: 0) [m]
+KICKOFF_MAX_X = -0.01   # the kick-off taker's centre stays behind this line (the referee: 0) [m]
 LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
 ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
 #: going round the ball to the line-up point, the taker's centre stays this far (+ 0.1 m) from the ball's
