@@ -296,6 +296,8 @@ class BallPlayer:
         tx, ty = me.x + 4.0 * c, me.y + 4.0 * s
         if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
             return None
+        if lane_clear(obs.bx, obs.by, tx, ty, obs.opps, CLEAR_SPEED) < 0.0:
+            return None              # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
         # opponents' throw-in (most of these kicks used to go out)
         room = self.room_ahead(obs.bx, obs.by, c, s)
