@@ -27,7 +27,11 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-RETAKES_FOR_A_LOOP = 3      # the same restart taken again this many times in a row is a stuck loop
+from simatch.scene.referee.log import FOUL_TYPES
+
+RETAKES_FOR_A_LOOP = 3
+#: event types left out of the --out file (the rest, every foul, goal, ball out and restart, is kept)
+QUIET = frozenset({"stage"})      # the same restart taken again this many times in a row is a stuck loop
 
 
 def match_command(simatch: list[str], cyan: str, magenta: str, seed: int, half: float) -> list[str]:
@@ -85,14 +89,23 @@ def summarise(out: dict, nubot_team: str, duration: float) -> dict:
 
 
 def _fouls_by_type(events: list[dict]) -> dict:
+    """Fouls per team and rule, counted as the referee counts them (its FOUL_TYPES: a restart not taken in
+    time, a card or a goal is an event, not a foul)."""
     counts: dict[str, int] = {}
     for e in events:
-        if e.get("team") and e["type"] not in ("goal", "ball_out", "ball_in_play", "ball_placed", "command", "stage",
-                                                "yellow_card", "red_card", "send_off", "robot_returned",
-                                                "ball_moved_out", "goal_disallowed", "match_end"):
+        if e.get("team") and e["type"] in FOUL_TYPES:
             key = f"{e['team']}:{e['type']}"
             counts[key] = counts.get(key, 0) + 1
     return counts
+
+
+def check_fouls(row: dict) -> None:
+    """The table's fouls per type must add up to the referee's own count per team."""
+    for colour, total in ((row["nubot_colour"], row["fouls_nubot"]),
+                          ("magenta" if row["nubot_colour"] == "cyan" else "cyan", row["fouls_other"])):
+        mine = sum(n for k, n in row["fouls_by_type"].items() if k.startswith(colour + ":"))
+        if mine != total:
+            raise RuntimeError(f"seed {row['seed']}: {mine} fouls of {colour} by type, the referee counted {total}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -126,12 +139,15 @@ def main(argv: list[str] | None = None) -> int:
         with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
             outs = list(pool.map(lambda j: play(simatch, j[2], j[3], j[0], args.half), jobs))
         rows = [summarise(out, j[1], 2 * args.half) for out, j in zip(outs, jobs)]
+        for row in rows:
+            check_fouls(row)
         print_table(rows)
         verdict = judge(pairing, rows)
         for line in verdict["lines"]:
             print(line)
         status |= 0 if verdict["ok"] else 1
-        report[pairing] = {"matches": rows, "verdict": verdict, "results": [o["result"] for o in outs]}
+        report[pairing] = {"matches": rows, "verdict": verdict, "results": [o["result"] for o in outs],
+                            "events": [[e for e in o["events"] if e["type"] not in QUIET] for o in outs]}
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
             json.dump(report, f, indent=1)

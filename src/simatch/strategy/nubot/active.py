@@ -39,12 +39,18 @@ MOUTH = 0.29            # robot centre to a held ball's centre [m]
 PASS_KEEP = 1.5         # a pass being lined up keeps its receiver unless another is this much better
 TASTE = 0.3             # spread of a possession's taste for each receiver (position value units)
 LEAN = 0.15             # weight of a possession's preferred dribbling side
+#: the open part of the goal (as the shooter sees it, opponents' reach included) that makes a shot worth it,
+#: and that keeps a shot being lined up [rad]
+SHOT_WIDTH = 0.045
+SHOT_KEEP_WIDTH = 0.03
 AIM_SPREAD = 0.25       # a shot aims this fraction of the open width either side of its middle
 OPEN_GOAL_VALUE = 15.0  # value of a place with an open shot, per radian of open goal (capped at 0.15 rad)
 CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
 ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
 CONTACT_DISTANCE = 0.42  # ball centre this close to the robot's centre: touching it [m]
 RELEASE_DISTANCE = 0.75  # a dribble ends once the ball centre is this far from the robot's (referee: 0.6) [m]
+CLEAR_SPEED = 4.0       # a first-time kick into space, at most [m/s] ...
+CLEAR_MIN_SPEED = 1.8   # ... and at least (slower is no clearance: dribble away instead) [m/s]
 PASS_ANNOUNCE = 1.0     # a kicked pass is announced this long beyond its expected travel time [s]
 DRIBBLE_DIRECTIONS = [(math.cos(k * math.pi / 8), math.sin(k * math.pi / 8)) for k in range(16)]
 
@@ -186,7 +192,7 @@ class BallPlayer:
         # 1. shoot, when part of the goal stays open and there is time to turn to it
         if can_score and math.hypot(L2 - bx, by) < p.shoot_range:
             aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed)
-            need = 0.045 if (prev and prev[0] == "shoot") else 0.07
+            need = SHOT_KEEP_WIDTH if (prev and prev[0] == "shoot") else SHOT_WIDTH
             if left < 0.4 or threat < 0.8:
                 need = 0.025
             if width > need and self.turn_time(obs, L2, aim_y) < threat + 0.3:
@@ -290,7 +296,25 @@ class BallPlayer:
         tx, ty = me.x + 4.0 * c, me.y + 4.0 * s
         if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
             return None
-        return ("clear", tx, ty, 4.0, 0)
+        if lane_clear(obs.bx, obs.by, tx, ty, obs.opps, CLEAR_SPEED) < 0.0:
+            return None              # straight into an opponent: the ball would only bounce back (dribble away)
+        # no harder than the ball can roll and stay on the field: a clearance over a line is the
+        # opponents' throw-in (most of these kicks used to go out)
+        room = self.room_ahead(obs.bx, obs.by, c, s)
+        speed = min(CLEAR_SPEED, math.sqrt(2.0 * max(p.ball_deceleration, 0.05) * room))
+        if speed < CLEAR_MIN_SPEED:
+            return None
+        return ("clear", tx, ty, speed, 0)
+
+    def room_ahead(self, x: float, y: float, c: float, s: float) -> float:
+        """How far a ball can roll from (x, y) along (c, s) before it leaves the field (with a margin) [m]."""
+        lx, ly = self.areas.L2 - 0.3, self.areas.W2 - 0.3
+        room = math.inf
+        if abs(c) > 1e-6:
+            room = min(room, ((lx if c > 0 else -lx) - x) / c)
+        if abs(s) > 1e-6:
+            room = min(room, ((ly if s > 0 else -ly) - y) / s)
+        return max(0.0, room)
 
     def release(self, obs: Observation, can_score: bool):
         """The dribble must end now and nothing better is on: shoot if the shot can count, else play the ball
@@ -354,6 +378,22 @@ class BallPlayer:
         self.dribble_dir = (best[2], best[3])
         return ("dribble", best[0], best[1])
 
+    def kick_heading(self, obs: Observation, tx: float, ty: float, speed: float) -> float:
+        """The heading to kick at ``speed`` so that the ball heads for (tx, ty): the kicker adds its speed to
+        the mouth's own velocity, so the heading leans against the robot's drift across the line to the
+        target (drifting 1 m/s sideways put a 10 m/s shot 0.6 m wide at 6 m). The turning part of the
+        mouth's velocity is left out: it changes with the heading error it would correct (the robot
+        would chase its own turn), and the kick waits for the turn to settle."""
+        me = obs.me
+        ux, uy = tx - obs.bx, ty - obs.by
+        d = math.hypot(ux, uy)
+        if d < 1e-6 or speed <= 0.0:
+            return math.atan2(ty - me.y, tx - me.x)
+        ux, uy = ux / d, uy / d
+        across = clamp((me.vx * -uy + me.vy * ux) / speed, -0.5, 0.5)
+        along = math.sqrt(1.0 - across * across)
+        return math.atan2(along * uy - across * ux, along * ux + across * uy)
+
     def execute(self, obs: Observation, plan: tuple, role: int) -> Command:
         """Carry out a plan: ("dribble", x, y) or (kind, x, y, kick speed, extra) for "shoot" (extra: the
         open width), "pass" (extra: the receiver), "clear" (a ground kick into space) and "lob"."""
@@ -371,7 +411,9 @@ class BallPlayer:
             return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=Action.MOVE_WITH_BALL,
                            intent=(tx, ty))
         tx, ty, speed = plan[1], plan[2], plan[3]
-        face = math.atan2(ty - me.y, tx - me.x)
+        # a shot leans against the robot's drift; a pass does not need it (the receiver gives way along the
+        # ball's path), and a target that moves with the robot's own speed would delay the kick
+        face = self.kick_heading(obs, tx, ty, speed) if kind == "shoot" else math.atan2(ty - me.y, tx - me.x)
         err = wrap(face - me.yaw)
         d = math.hypot(tx - me.x, ty - me.y)
         if kind == "shoot":

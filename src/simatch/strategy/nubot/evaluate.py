@@ -14,6 +14,9 @@ BALL_RADIUS = 0.11
 ROBOT_RADIUS = 0.25
 REACT_ACC = 3.0          # how fast an opponent starts moving to block [m/s^2]
 MAX_REACH = 0.9          # an opponent covers at most this much beyond its body during a shot [m]
+#: a shot is seen only once it is under way: a defender (a goalkeeper fitting the ball's path) starts to
+#: move this long after the kick [s]
+SHOT_REACTION = 0.15
 
 
 def reach(t: float) -> float:
@@ -39,7 +42,7 @@ def shot_window(bx: float, by: float, opps: list, goal_x: float, goal_half: floa
         d = math.hypot(rx, ry)
         if d < 1e-6:
             continue
-        r = ROBOT_RADIUS + BALL_RADIUS + reach(d / speed)
+        r = ROBOT_RADIUS + BALL_RADIUS + reach(max(0.0, d / speed - SHOT_REACTION))
         half = math.asin(min(1.0, r / d))
         c = math.atan2(ry, rx)
         a0, a1 = c - half, c + half

@@ -16,8 +16,10 @@ from ...scene.commands import MatchMode, is_ours
 from .observation import Observation
 
 IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
+#: our restart's ball moved this far (beyond perception noise; opponents keep 3 m away): our taker touched
+#: it, and may not touch it again, even if it is not in play yet (a bump, a kick that fizzled) [m]
+TAKEN_DISTANCE = 0.2
 TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
-OUR_RESTART_LIMIT = 10.0      # a restart of ours not taken by then is given up [s]
 TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
 ON_BALL = 0.42                # a team-mate's centre this close to the ball's is on it [m]
 REGAIN_ROLL = 1.3             # a pass into the opponents' half rolls at least 1 m (MSL RC-10.1.2; margin) [m]
@@ -100,15 +102,17 @@ class GameFlow:
 
     def _follow(self, obs: Observation) -> None:
         self._regain(obs)
-        moved = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1]) >= IN_PLAY_DISTANCE
+        shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
+        moved = shift >= IN_PLAY_DISTANCE
         if self.phase == Phase.OUR_RESTART:
-            if moved:
-                self.phase = Phase.PLAY
+            if shift >= TAKEN_DISTANCE and not self.taker:
+                # from its first touch on, the taker may not touch the ball again before another robot did;
+                # the others keep their distance until the ball is in play (or the restart times out)
                 bx, by = self.ball0
                 taker = min(obs.field_mates() or obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by))
                 self.taker, self.taker_since = taker.id, obs.t
                 self.first_holder = taker.id
-            elif obs.t - self.t0 > OUR_RESTART_LIMIT:
+            if moved or obs.t - self.t0 > self.restart_wait:
                 self.phase = Phase.PLAY
         elif self.phase == Phase.OPP_RESTART:
             if moved or obs.t - self.t0 > self.restart_wait:

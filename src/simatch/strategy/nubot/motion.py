@@ -32,6 +32,10 @@ LOOK_AHEAD = 0.3
 #: the braking assumed when closing in on an opponent (below the drive's, which also has to turn) [m/s^2]
 CHARGE_BRAKING = 2.0
 HEADING_GAIN = 5.0
+#: a fenced circle (a restart's ball) is approached at a speed from which the robot can stop at it, from
+#: this far out [m], braking at [m/s^2]
+FENCE_RANGE = 3.0
+FENCE_BRAKING = 2.0
 
 
 class Motion:
@@ -131,11 +135,19 @@ class Motion:
         circle (and leaves it at once if it is inside)."""
         dx, dy = cx - x, cy - y
         d = math.hypot(dx, dy)
-        if d > r + 1.0 or d < 1e-6:
+        if d > r + FENCE_RANGE or d < 1e-6:
             return vx, vy
         nx, ny = dx / d, dy / d
         inward = vx * nx + vy * ny
-        allowed = 2.0 * (d - r - 0.1)             # negative inside: move out
+        gap = d - r - 0.1
+        if gap > 0.0:
+            # slow down in time: the drive brakes at about FENCE_BRAKING, a robot running in fast would
+            # otherwise overrun the circle (a taker brushing the ball, a defender inside the 3 m)
+            allowed = min(math.sqrt(2.0 * FENCE_BRAKING * gap), POSITION_GAIN * gap)
+        else:
+            # inside: move out, at 1 m/s at least, along the way out the target chose (straight away from
+            # a ball near a line would drive into the boards)
+            allowed = max(2.0 * gap, -1.0)
         if inward > allowed:
             vx -= (inward - allowed) * nx
             vy -= (inward - allowed) * ny

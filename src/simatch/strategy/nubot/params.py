@@ -44,8 +44,9 @@ class NubotParams(BaseModel):
     area_time: float = Field(6.0, gt=0.0, le=60.0,
                              description="longest stay of a field robot in a penalty area (MSL: 10 s) [s]")
     restart_wait: float = Field(7.5, gt=0.0, le=60.0,
-                                description="after this long the defending team may play an opponents' "
-                                            "restart that was not taken (MSL: 7 s) [s]")
+                                description="after this long a restart that was not taken is in play for "
+                                            "everybody: the defending team may play it, the kicking team's "
+                                            "other robots may come closer (MSL: 7 s) [s]")
     contact_speed: float = Field(0.8, gt=0.0, le=10.0,
                                  description="closing speed allowed when touching an opponent [m/s]")
 

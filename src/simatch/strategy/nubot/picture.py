@@ -43,6 +43,10 @@ ATTACK_HYSTERESIS = 0.4
 #: set-piece slots change hands easily while robots run to them, and never once START is given [m]
 SETUP_HYSTERESIS = 0.5
 RESTART_HYSTERESIS = 50.0
+#: a pass under way counts while the ball heads for the catch point within acos(PASS_HEADING), or within
+#: acos(PASS_KEPT) once the receiver took the catching role
+PASS_HEADING = 0.6
+PASS_KEPT = 0.3
 
 
 class Picture:
@@ -214,12 +218,17 @@ class Analyst:
             if info is None or info.catch_id == m.id or info.catch_id not in obs.by_id:
                 continue
             if info.is_passout:
-                # under way while the ball is loose and still moving towards the catch point
-                if pic.holder or obs.ball_speed < 0.25:
+                # under way while the ball is loose (no opponent on it either: a kick into a duel is no
+                # pass) and still moving towards the catch point
+                if pic.holder or pic.opp_holds or obs.ball_speed < 0.25:
                     continue
                 dx, dy = info.catch_x - obs.bx, info.catch_y - obs.by
                 d = math.hypot(dx, dy)
-                if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < 0.6 * d * obs.ball_speed:
+                # hysteresis on what the receiver tells the team: a pass slightly off does not swap the
+                # roles back and forth
+                on_it = obs.by_id[info.catch_id].role == Role.CATCHOFPASS
+                heading = PASS_KEPT if on_it else PASS_HEADING
+                if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < heading * d * obs.ball_speed:
                     continue
             elif pic.holder != m.id and not info.is_static_pass:
                 continue                   # announced by a robot that does not have the ball (any more)

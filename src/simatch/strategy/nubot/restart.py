@@ -23,8 +23,12 @@ from .params import NubotParams
 from .picture import Picture
 
 KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
+KICKOFF_MAX_X = -0.01   # the kick-off taker's centre stays behind this line (the referee: 0) [m]
 LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
 ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
+#: going round the ball to the line-up point, the taker's centre stays this far (+ 0.1 m) from the ball's
+#: (touching: 0.36 m): brushing it would be the taker's touch, and its kick a second one [m]
+ROUND_CLEARANCE = 0.42
 ON_LINE = 0.045         # distance off the kick line allowed (the ball must enter the mouth) [m]
 
 
@@ -89,11 +93,13 @@ class RestartTaker:
         behind = -(rx * ux + ry * uy)               # distance behind the ball along the kick line
         off = abs(rx * uy - ry * ux)                # distance off the kick line
         kick = 0.0
+        # at a kick-off the taker stays in its half until the ball is in play, whatever its momentum
+        max_x = KICKOFF_MAX_X if flow.kind == MatchMode.OUR_KICKOFF else None
         if behind < 0.2 or off > 0.5:
             # beside or in front of the ball: go round it to the line-up point
             tx, ty = bx - LINE_UP * ux, by - LINE_UP * uy
             vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=True,
-                                       ball_obstacle=0.45)
+                                       ball_obstacle=0.45, fence=(bx, by, ROUND_CLEARANCE), max_x=max_x)
             action = Action.POSITIONED_STATIC
         else:
             # behind it: close in along the line, converging onto it; drive through the ball only when lined
@@ -104,7 +110,8 @@ class RestartTaker:
             vmax = 0.7 if behind < 1.2 else p.max_speed
             # brake early: touching the ball before the kick would be the taker's touch (then no second one)
             vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, avoid=False,
-                                       end_speed=0.4 if armed else 0.0, gentle=False, brake=1.5)
+                                       end_speed=0.4 if armed else 0.0, gentle=False, brake=1.5,
+                                       max_x=max_x)
             if armed:
                 kick = speed
                 action = Action.STATIC_PASS if receiver is not None else Action.AT_SHOOT_SITUATION

@@ -49,6 +49,8 @@ DODGE_WIDTH = 0.8
 TAKER_BALL_CLEARANCE = 0.9
 #: a robot going round the ball's circle at a restart heads this far (in angle) along it [rad]
 ORBIT_STEP = 0.6
+#: a robot leaving or going round a restart's ball stays within this far beyond the field lines [m]
+ON_FLOOR_MARGIN = 0.4
 
 
 class _Shared:
@@ -138,7 +140,7 @@ class NubotRobot(RobotStrategy):
             role = pic.roles.get(me.id, Role.NOROLE)
             if me.is_goalie:
                 cmd = self.keeper.decide(obs, pic, flow)
-            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE:
+            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE and flow.taker != me.id:
                 cmd = self.taker.take(obs, pic, flow)
             elif phase != Phase.PLAY:
                 cmd = self.hold_slot(obs, pic, role)
@@ -253,17 +255,32 @@ class NubotRobot(RobotStrategy):
             e = math.hypot(ex, ey)
             ux, uy = (ex / e, ey / e) if e > 1e-6 else (-1.0, 0.0)
             x, y = bx + ux * (keep + 0.3), by + uy * (keep + 0.3)
+        a_me = math.atan2(me.y - by, me.x - bx) if d > 1e-6 else math.pi
         if d < keep - 0.25:
-            ux, uy = ((me.x - bx) / d, (me.y - by) / d) if d > 1e-6 else (-1.0, 0.0)
-            return bx + ux * (keep + 0.4), by + uy * (keep + 0.4)
+            # out of the circle by the nearest way that stays on the floor: straight away from a ball near
+            # a line would run into the boards and stay inside the circle
+            r = keep + 0.4
+            for k in range(13):
+                for a in (a_me + k * math.pi / 12, a_me - k * math.pi / 12):
+                    px, py = bx + r * math.cos(a), by + r * math.sin(a)
+                    if self.on_floor(px, py):
+                        return px, py
+            return bx + r * math.cos(a_me), by + r * math.sin(a_me)
         gap, _ = segment_distance(bx, by, me.x, me.y, x, y)
         if gap >= keep:
             return x, y
-        a_me = math.atan2(me.y - by, me.x - bx)
         turn = wrap(math.atan2(y - by, x - bx) - a_me)
         step = max(-ORBIT_STEP, min(ORBIT_STEP, turn))
         r = max(d, keep + 0.3)
-        return bx + r * math.cos(a_me + step), by + r * math.sin(a_me + step)
+        px, py = bx + r * math.cos(a_me + step), by + r * math.sin(a_me + step)
+        if not self.on_floor(px, py):
+            # round the ball the other way: this way runs off the floor
+            px, py = bx + r * math.cos(a_me - step), by + r * math.sin(a_me - step)
+        return px, py
+
+    def on_floor(self, x: float, y: float) -> bool:
+        """Whether a robot can stand at (x, y): inside the lines or just beyond them, short of the boards."""
+        return abs(x) <= self.areas.L2 + ON_FLOOR_MARGIN and abs(y) <= self.areas.W2 + ON_FLOOR_MARGIN
 
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at

@@ -28,7 +28,8 @@ from .positions import Areas, guard_point, outlet_point, passive_point, score_sp
 
 SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
-KICKOFF_LEAD = (0.15, 1.95)   # where the kick-off pass stops (team frame, y to the receiver's side) [m]
+KICKOFF_LEAD = (0.3, 1.95)    # where the kick-off pass stops (team frame, y to the receiver's side; x > 0
+#                               keeps the taker, behind the ball on the kick line, clear of the half-way line) [m]
 #: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
 _ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
 
