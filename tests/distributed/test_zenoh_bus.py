@@ -51,7 +51,8 @@ def test_remote_delivery_is_in_order_in_the_owners_thread_and_local_delivery_is_
     server.subscribe("cyan/2/VelCmd", msgs.VelCmd, lambda m: local.append(m.tick))
     vel = server.publisher("cyan/2/VelCmd", msgs.VelCmd)
     coach = server.publisher("cyan/receive_from_coach", msgs.CoachInfo)
-    pump_until(server, lambda: vel.active and vel.matching)
+    # both routes must be up before the first put (pub/sub drops what nobody is matched to yet)
+    pump_until(server, lambda: vel.active and vel.matching and coach.active and coach.matching)
     for k in range(5):
         vel.put(msgs.new(msgs.VelCmd, tick=k, vx=0.5))
         coach.put(msgs.new(msgs.CoachInfo, match_mode=k))
