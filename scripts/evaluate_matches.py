@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import shlex
 import subprocess
@@ -30,6 +31,8 @@ from concurrent.futures import ThreadPoolExecutor
 from simatch.scene.referee.log import FOUL_TYPES
 
 RETAKES_FOR_A_LOOP = 3
+FOUL_LOOP = 5               # the same robot fouled for the same rule this many times in a row is stuck
+FOUL_LOOP_GAP = 15.0        # ... each within this many seconds of the one before
 #: event types left out of the --out file (the rest, every foul, goal, ball out and restart, is kept)
 QUIET = frozenset({"stage"})      # the same restart taken again this many times in a row is a stuck loop
 
@@ -50,6 +53,21 @@ def play(simatch: list[str], cyan: str, magenta: str, seed: int, half: float) ->
     out["_wall"] = time.monotonic() - t0
     out["_teams"] = {"cyan": cyan, "magenta": magenta}
     return out
+
+
+def longest_foul_repeat(events: list[dict], gap: float = FOUL_LOOP_GAP) -> int:
+    """The longest run of the same robot committing the same foul again and again, each within ``gap``
+    seconds of the one before (a robot stuck where it may not be, fouled at every restart)."""
+    best = run = 0
+    last, last_t = None, -math.inf
+    for ev in events:
+        if ev["type"] not in FOUL_TYPES:
+            continue
+        key = (ev["type"], ev.get("team"), ev.get("robot"))
+        run = run + 1 if key == last and ev["t"] - last_t <= gap else 1
+        last, last_t = key, ev["t"]
+        best = max(best, run)
+    return best
 
 
 def longest_retake_run(events: list[dict]) -> int:
@@ -82,6 +100,7 @@ def summarise(out: dict, nubot_team: str, duration: float) -> dict:
         "fouls_by_type": _fouls_by_type(events),
         "no_progress": sum(1 for e in events if e["type"] == "no_progress"),
         "retake_loop": longest_retake_run(events),
+        "foul_loop": longest_foul_repeat(events),
         "ended": bool(r.get("ended")) and out["sim_seconds"] >= duration - 1e-6,
         "rtf": out["rtf"],
         "wall_s": round(out["_wall"], 1),
@@ -156,11 +175,11 @@ def main(argv: list[str] | None = None) -> int:
 
 def print_table(rows: list[dict]) -> None:
     print("\n| seed | nubot plays | score (nubot-other) | fouls nubot | fouls other | no progress | retake loop "
-          "| ended | rtf |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| foul loop | ended | rtf |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['seed']} | {r['nubot_colour']} | {r['goals_for']}-{r['goals_against']} | {r['fouls_nubot']} | "
-              f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {'yes' if r['ended'] else 'NO'} | "
+              f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {r['foul_loop']} | {'yes' if r['ended'] else 'NO'} | "
               f"{r['rtf']} |")
 
 
@@ -179,7 +198,8 @@ def judge(pairing: str, rows: list[dict]) -> dict:
         scored = sum(r["goals_for"] + r["goals_against"] > 0 for r in rows)
         fouls_both = fouls + [r["fouls_other"] for r in rows]
         worst = max(fouls_both) if fouls_both else 0
-        frozen = [r["seed"] for r in rows if not r["ended"] or r["retake_loop"] >= RETAKES_FOR_A_LOOP]
+        frozen = [r["seed"] for r in rows if not r["ended"] or r["retake_loop"] >= RETAKES_FOR_A_LOOP
+                  or r["foul_loop"] >= FOUL_LOOP]
         ok = scored > n / 2 and worst <= 3 and not frozen
         lines.append(f"\nmatches with a goal {scored}/{n} (target: most), goals per match "
                      f"{sum(r['goals_for'] + r['goals_against'] for r in rows) / n:.2f}, fouls per team per match: "

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from simatch import msgs
 from simatch.bus import topics
 from simatch.scene.commands import MatchMode as M
-from tests.strategy.helpers import command, run_until, scenario, start
+from tests.strategy.helpers import bench_all_but, command, run_until, scenario, start
 
 PREPARE = 5.0           # the referee's preparation time before START
 
@@ -136,3 +138,20 @@ def test_a_late_kick_off_taker_stays_in_its_half():
         worst = max([worst] + [(ms[n].x, n) for n in sim.simulator.robot_names if n.startswith("cyan")])
     assert worst[0] <= 0.0, f"{worst[1]} at x = {worst[0]:.3f} m before the ball was in play"
     sim.close()
+
+
+@pytest.mark.parametrize("team, x, y", [("magenta", -11.35, 1.076), ("cyan", 11.35, -1.076), ("cyan", 11.3, 0.2)])
+def test_a_robot_caught_in_the_opponents_goal_gets_out(team, x, y):
+    """A robot pushed into the opponents' goal beside a post (seed 0's full match: magenta/3 stood there,
+    fouled for being in the goal area again and again) leaves it towards the field, not sideways into the
+    net."""
+
+    sim = scenario(cyan="nubot" if team == "cyan" else "none", magenta="nubot" if team == "magenta" else "none")
+    name = f"{team}/3"
+    bench_all_but(sim, [name, f"{team}/1", f"{team}/2"])
+    sim.set_model_state(name, x=x, y=y, yaw=0.0, vx=0.0, vy=0.0, wz=0.0)
+    sim.set_model_state("ball", x=0.0, y=3.0, z=0.11)
+    start(sim)
+    sim.run(seconds=4.0)
+    r = sim.model_states()[name]
+    assert abs(float(r.x)) < 11.0 - 0.75, f"{name} still in the goal area at ({float(r.x):.2f}, {float(r.y):.2f})"

@@ -65,6 +65,13 @@ class Areas:
         is in, or the nearer field-side corner of a box the straight way would cross."""
         for x0, x1, hw in boxes:
             if x0 < px < x1 and -hw < py < hw:
+                if abs(px) > self.L2 - 0.1 and abs(py) < self.goal_half + 0.3:
+                    # in a goal (behind its line): sideways it would meet the net and the posts, so first
+                    # clear of the posts towards the middle, then straight out into the field
+                    inner = self.goal_half - 0.45
+                    if abs(py) > inner:
+                        return px, clamp(py, -inner, inner)
+                    return (x0 - 0.3 if x1 > 0.0 else x1 + 0.3), py
                 ex, ey = push_out_of_box(px, py, x0, x1, hw)
                 return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
         for x0, x1, hw in boxes:
