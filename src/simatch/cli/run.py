@@ -150,7 +150,7 @@ def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
     for key, value in out["result"].items():
         print(f"  {key}: {json.dumps(_readable(value))}", file=file)
     events = out["events"]
-    shown = events if limit is None else events[len(events) - limit:] if limit else []
+    shown = events if limit is None else events[max(0, len(events) - limit):]
     print(f"events: {len(events)}", file=file)
     if len(shown) < len(events):
         print(f"  ... ({len(events) - len(shown)} earlier events: --events all prints every one, "

@@ -119,8 +119,8 @@ class GameFlow:
                 self.phase = Phase.PLAY
         if self.phase != Phase.PLAY or not (self.taker or self.pass_pending):
             return
-        holder = next((m for m in obs.mates if m.holding), None)
-        touched = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
+        holder = _holder(obs)
+        touched = _opponent_touching(obs)
         if self.taker:
             if (touched or (holder is not None and holder.id != self.taker)
                     or obs.t - self.taker_since > TAKER_BLOCK_LIMIT):
@@ -137,13 +137,13 @@ class GameFlow:
     def _regain(self, obs: Observation) -> None:
         """Follow who is on the ball for RC-10.1.2 (as the referee reads it from the touches, with margins)."""
         bx, by = obs.bx, obs.by
-        on = next((m for m in obs.mates if m.holding), None)
+        on = _holder(obs)
         if on is None:
             on = min(obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by), default=None)
             if on is not None and math.hypot(on.x - bx, on.y - by) > ON_BALL:
                 on = None
         if on is None:
-            if any(math.hypot(o[0] - bx, o[1] - by) < TOUCH_DISTANCE for o in obs.opps):
+            if _opponent_touching(obs):
                 self._ours = 0
             return
         if not self._ours:
@@ -153,3 +153,13 @@ class GameFlow:
             self.need_pass = False                     # a team-mate received a pass in their half
         self._ours = on.id
         self._left_at = (bx, by)
+
+
+def _holder(obs: Observation):
+    """The team-mate holding the ball, if any."""
+    return next((m for m in obs.mates if m.holding), None)
+
+
+def _opponent_touching(obs: Observation) -> bool:
+    """An opponent is close enough to the ball to be touching it."""
+    return any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
