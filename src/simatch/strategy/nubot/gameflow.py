@@ -139,8 +139,13 @@ class GameFlow:
         bx, by = obs.bx, obs.by
         on = _holder(obs)
         if on is None:
-            on = min(obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by), default=None)
-            if on is not None and math.hypot(on.x - bx, on.y - by) > ON_BALL:
+            # the team-mate nearest to the ball (the first of equals), if it is on it
+            near = math.inf
+            for m in obs.mates:
+                d = math.hypot(m.x - bx, m.y - by)
+                if on is None or d < near:
+                    on, near = m, d
+            if on is not None and near > ON_BALL:
                 on = None
         if on is None:
             if _opponent_touching(obs):
@@ -157,9 +162,16 @@ class GameFlow:
 
 def _holder(obs: Observation):
     """The team-mate holding the ball, if any."""
-    return next((m for m in obs.mates if m.holding), None)
+    for m in obs.mates:
+        if m.holding:
+            return m
+    return None
 
 
 def _opponent_touching(obs: Observation) -> bool:
     """An opponent is close enough to the ball to be touching it."""
-    return any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
+    bx, by = obs.bx, obs.by
+    for o in obs.opps:
+        if math.hypot(o[0] - bx, o[1] - by) < TOUCH_DISTANCE:
+            return True
+    return False

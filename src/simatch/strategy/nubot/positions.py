@@ -75,6 +75,9 @@ class Areas:
                 ex, ey = push_out_of_box(px, py, x0, x1, hw)
                 return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
         for x0, x1, hw in boxes:
+            if ((px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw)
+                    or (py >= hw and ty >= hw)):
+                continue            # both ends on the same side of the box: the way cannot cross it
             if segment_hits_box(px, py, tx, ty, x0, x1, hw):
                 cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15        # the corners on the field side
                 best = min(((cx, hw + 0.15), (cx, -hw - 0.15)),
