@@ -16,6 +16,7 @@ import time
 from ..scene.loader import load_scene
 from ..simulation import Simulation
 from ..strategy.node import RobotNode
+from ..strategy.nubot.warm import load_kernels as load_nubot_kernels
 
 WARM_UP = 5.0          # simulated seconds run first, untimed (compiled kernels load, caches fill)
 
@@ -44,7 +45,9 @@ def load_kernels(scene) -> None:
     """Load (or, on a fresh clone, compile and cache) the compiled kernels a match may first need late, so
     that no compilation falls into the timed part: a throwaway run of the scene in which a robot, driven
     by hand, catches the ball, holds it while turning, and kicks it (the ball mechanisms' kernels; the
-    strategies' and perception's run in the warm-up of the timed match itself)."""
+    strategies' and perception's run in the warm-up of the timed match itself), and the default team's
+    kernels that only open play needs (the warm-up may end before the kick-off is taken)."""
+    load_nubot_kernels()
     with Simulation(scene, seed=0) as sim:
         name = next(iter(sim.robot_nodes))
         me = sim.model_states()[name]
