@@ -22,8 +22,8 @@ import numpy as np
 from ..roles import Role
 from .ballpath import BallPath, intercepts
 from .gameflow import GameFlow, Phase
-from .geometry import wrap
-from .observation import Observation
+from .geometry import TWO_PI
+from .observation import Observation, _array as _rows
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
 from .setpieces import formation, spread
@@ -105,9 +105,9 @@ def assign(robots: list, slots: list[tuple], hysteresis: float,
     if not slots:
         return {}
     # a robot that took its role only a moment ago holds on to it harder (roles last a while)
-    r = np.array([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
-                  for m in robots], dtype=float)
-    q = np.array([(sl[1], sl[2], sl[0]) for sl in slots], dtype=float)
+    r = _rows([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+               for m in robots], 4)
+    q = _rows([(sl[1], sl[2], sl[0]) for sl in slots], 3)
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
     best = _assign(r, q, cx, cy, cr)
     return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
@@ -190,7 +190,11 @@ class Analyst:
                 pic.holder = m.id
         opps = obs.opps
         if pic.holder == 0:
-            pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
+            bx, by = obs.bx, obs.by
+            for o in opps:
+                if math.hypot(o[0] - bx, o[1] - by) < OPP_CONTROL:
+                    pic.opp_holds = True
+                    break
         self._passes(obs, pic)
         if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
             self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
@@ -198,10 +202,11 @@ class Analyst:
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         turn = 0.7 / p.max_turn
-        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)))
+        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(math.remainder(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw,
+                                                                     TWO_PI)))
                 for m in mates] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
         if rows:
-            a = np.array(rows).T.copy()
+            a = _rows(rows, 5).T.copy()
             res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
             for k, m in enumerate(mates):
                 pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])

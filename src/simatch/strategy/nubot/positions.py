@@ -46,12 +46,14 @@ class Areas:
 
     def keep_out(self, x: float, y: float, own_pa: bool = True, opp_pa: bool = True) -> tuple[float, float]:
         """The point moved out of the areas a field robot may not stand in."""
+        # (push_out_of_box returns a point outside the box unchanged: the test first, inline, saves the call)
         if own_pa:
-            x, y = push_out_of_box(x, y, *self.own_pa)
-        if opp_pa:
-            x, y = push_out_of_box(x, y, *self.opp_pa)
-        else:
-            x, y = push_out_of_box(x, y, *self.opp_ga)
+            x0, x1, hw = self.own_pa
+            if x0 < x < x1 and -hw < y < hw:
+                x, y = push_out_of_box(x, y, x0, x1, hw)
+        x0, x1, hw = self.opp_pa if opp_pa else self.opp_ga
+        if x0 < x < x1 and -hw < y < hw:
+            x, y = push_out_of_box(x, y, x0, x1, hw)
         return x, y
 
     def forbidden(self, opp_area: bool) -> list[tuple[float, float, float]]:
@@ -86,7 +88,11 @@ class Areas:
         return tx, ty
 
     def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
-        return clamp(x, -self.L2 + margin, self.L2 - margin), clamp(y, -self.W2 + margin, self.W2 - margin)
+        # (clamp, inline)
+        lo, hi = -self.L2 + margin, self.L2 - margin
+        x = lo if x < lo else hi if x > hi else x
+        lo, hi = -self.W2 + margin, self.W2 - margin
+        return x, (lo if y < lo else hi if y > hi else y)
 
 
 def guard_point(areas: Areas, bx: float, by: float, fraction: float, min_s: float, gap: float) -> tuple[float, float]:

@@ -169,7 +169,10 @@ def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> l
     out: list[tuple] = []
     for slot in slots:
         role, x, y, fx, fy = slot
-        if all(math.hypot(x - o[1], y - o[2]) >= gap for o in out):
+        for o in out:
+            if not math.hypot(x - o[1], y - o[2]) >= gap:
+                break
+        else:
             out.append(slot)                       # unchanged (the same object: callers can tell)
             continue
         for _ in range(3):
@@ -219,12 +222,13 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
             return False
         if r > 0.0 and math.hypot(px - bx, py - by) < r - 1e-6:
             return False
-        if any(math.hypot(px - tx, py - ty) < SLOT_GAP - 1e-6 for tx, ty in taken):
-            return False
-        return areas.keep_out(px, py, own_pa=True, opp_pa=not taker) == (px, py)
+        for tx, ty in taken:
+            if math.hypot(px - tx, py - ty) < SLOT_GAP - 1e-6:
+                return False
+        return areas.keep_out(px, py, True, not taker) == (px, py)
 
     for _ in range(3):
-        x, y = areas.keep_out(x, y, own_pa=True, opp_pa=not taker)
+        x, y = areas.keep_out(x, y, True, not taker)
         if r > 0.0:
             x, y = push_from(x, y, bx, by, r)
         if kickoff:
