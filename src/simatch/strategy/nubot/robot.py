@@ -27,7 +27,7 @@ from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
 from .observation import Observation, TeamView
-from .params import NubotParams
+from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
 from .restart import RestartTaker
@@ -64,6 +64,7 @@ class _Shared:
 
     def __init__(self, params: NubotParams, field):
         self.params = params
+        params = plain(params)
         self.areas = Areas(field, params.robot_radius + 0.15)
         self.spots = spot_grid(self.areas)
         self.analyst = Analyst(params, self.areas, self.spots)
@@ -82,8 +83,8 @@ class NubotRobot(RobotStrategy):
     def __init__(self, ctx: RobotContext, shared: _Shared | None = None):
         super().__init__(ctx)
         params = ctx.params if isinstance(ctx.params, NubotParams) else NubotParams.model_validate(ctx.params or {})
-        self.p = params
         self.shared = shared or _Shared(params, ctx.field)
+        self.p = params = plain(params)
         areas = self.shared.areas
         goal_half = 0.5 * ctx.field.goal_width
         self.areas = areas
