@@ -30,6 +30,8 @@ class Areas:
         self.own_pa = (-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
         self.opp_pa = (L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
         self.opp_ga = (L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
+        self._with_opp_area = (self.own_pa, self.opp_ga)
+        self._without_opp_area = (self.own_pa, self.opp_pa)
 
     # exact lines (robot centre over the line counts as inside)
     def in_own_penalty_area(self, x: float, y: float) -> bool:
@@ -56,10 +58,10 @@ class Areas:
             x, y = push_out_of_box(x, y, x0, x1, hw)
         return x, y
 
-    def forbidden(self, opp_area: bool) -> list[tuple[float, float, float]]:
+    def forbidden(self, opp_area: bool) -> tuple[tuple[float, float, float], ...]:
         """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
         goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
-        return [self.own_pa, self.opp_pa if not opp_area else self.opp_ga]
+        return self._with_opp_area if opp_area else self._without_opp_area     # (shared: read only)
 
     def route(self, px: float, py: float, tx: float, ty: float,
               boxes: list[tuple[float, float, float]]) -> tuple[float, float]:

@@ -185,7 +185,8 @@ class NubotRobot(RobotStrategy):
         near = STEADY_SET_PIECE_DISTANCE if 1 <= mode <= 13 else STEADY_BALL_DISTANCE
         if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < near * near:
             return None
-        if len(v.obstacles.distance) and v.obstacles.distance.min() < STEADY_ROBOT_DISTANCE:
+        dist = v.obstacles.distance
+        if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:     # (plain floats: a few, every tick)
             return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
