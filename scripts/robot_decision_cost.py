@@ -18,6 +18,7 @@ import json
 import time
 
 from simatch import Simulation
+from simatch.bench.match import timed_decisions
 from simatch.scene.loader import load_scene
 from simatch.strategy.node import RobotNode
 
@@ -31,19 +32,7 @@ def measure(lone: bool, seconds: float, seed: int) -> dict:
     with Simulation(scene, seed=seed) as sim:
         sim.run(seconds=WARM_UP, until_done=False)
         nodes = [n for n in sim.robot_nodes.values() if isinstance(n, RobotNode)]
-        spent = [0.0]
-        clock = time.process_time
-        for node in nodes:
-            decide = node.strategy.decide
-
-            def timed(world, decide=decide):
-                t0 = clock()
-                try:
-                    return decide(world)
-                finally:
-                    spent[0] += clock() - t0
-
-            node.strategy.decide = timed
+        spent = timed_decisions(sim, time.process_time)
         shared = {id(n.strategy.shared): n.strategy.shared for n in nodes}
         pictures0 = sum(s.evaluated for s in shared.values())
         sim.run(seconds=seconds, until_done=False)

@@ -63,3 +63,19 @@ def test_load_kernels_loads_what_open_play_calls():
     after = {k: set(map(str, f.signatures)) for k, f in _kernels().items()}
     assert evaluated > 0 and 4 in phases          # open play (gameflow.Phase.PLAY) was reached
     assert after == before
+
+
+def test_a_robot_alone_decides_as_in_its_team():
+    """Robots that each compute their own team picture (one robot per process in a distributed run) play
+    the very same match as a team sharing one picture per tick: the sharing is only a cache."""
+    from simatch.scene.loader import load_scene
+    lone = "simatch.strategy.nubot:NubotRobot"
+    digests = []
+    for overrides in ({}, {"teams.cyan.strategy": lone, "teams.magenta.strategy": lone}):
+        with simatch.Simulation(load_scene("msl_5v5", overrides), seed=3) as sim:
+            sim.run(seconds=12.0, until_done=False)
+            shared = {id(n.strategy.shared) for n in sim.robot_nodes.values()}
+            digests.append((len(shared), sim.state_digest()))
+    (team_pictures, team_digest), (lone_pictures, lone_digest) = digests
+    assert (team_pictures, lone_pictures) == (2, 10)
+    assert team_digest == lone_digest

@@ -21,10 +21,10 @@ from ..strategy.nubot.warm import load_kernels as load_nubot_kernels
 WARM_UP = 5.0          # simulated seconds run first, untimed (compiled kernels load, caches fill)
 
 
-def _timed_decisions(sim: Simulation) -> list[float]:
-    """Wrap every robot's decide to add up its wall time in the returned one-element list."""
+def timed_decisions(sim: Simulation, clock=time.perf_counter) -> list[float]:
+    """Wrap every robot's decide to add up its time (by ``clock``, wall time by default) in the returned
+    one-element list."""
     total = [0.0]
-    clock = time.perf_counter
     for node in sim.robot_nodes.values():
         if not isinstance(node, RobotNode):
             continue
@@ -69,7 +69,7 @@ def run(seconds: float | None = None) -> dict:
     load_kernels(scene)
     with Simulation(scene, seed=1) as sim:
         sim.run(seconds=WARM_UP)
-        decisions = _timed_decisions(sim)
+        decisions = timed_decisions(sim)
         robots = len(sim.robot_nodes)
         ticks0 = sim.clock.step_index
         t0, c0 = time.perf_counter(), time.process_time()
