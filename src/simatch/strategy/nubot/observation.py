@@ -25,19 +25,20 @@ class Mate:
     __slots__ = ("id", "x", "y", "yaw", "vx", "vy", "w", "holding", "valid", "stuck", "role", "action",
                  "pass_info", "is_goalie", "attacking", "role_time")
 
-    def __init__(self, info, is_goalie: bool):
+    def __init__(self, info, is_goalie: bool, role: int = -1, action: int = -1, pass_info=None,
+                 attacking: int = -1, role_time: float = 1e9):
         self.id = info.id
         self.x, self.y, self.yaw = info.x, info.y, info.yaw
         self.vx, self.vy, self.w = info.vx, info.vy, info.w
         self.holding = info.holding_ball
         self.valid = info.valid
         self.stuck = info.stuck
-        self.role = -1           # as the robot announced it last (StrategyInfo), -1 if unknown
-        self.action = -1
-        self.pass_info = None
+        self.role = role              # as the robot announced it last (StrategyInfo), -1 if unknown
+        self.action = action
+        self.pass_info = pass_info
         self.is_goalie = is_goalie
-        self.attacking = -1      # whether its team picture said "we attack" last tick (1/0), -1 if unknown
-        self.role_time = 1e9     # how long it has had its announced role [s]
+        self.attacking = attacking    # whether its team picture said "we attack" last tick (1/0), -1 if unknown
+        self.role_time = role_time    # how long it has had its announced role [s]
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
@@ -71,17 +72,17 @@ class TeamView:
             return self.mates, self.by_id, self.array
         gk = world.goalkeeper
         mates = []
+        told = strategies.get
         for r in robots:
-            m = Mate(r, r.id == gk)
-            s = strategies.get(r.id)
-            if s is not None:
-                m.role, m.action = s.role, s.action
-                if s.pass_cmd.is_valid:
-                    m.pass_info = s.pass_cmd
-                if len(s.user) >= 2:
-                    user = s.user.tolist()
-                    m.attacking, m.role_time = int(user[0]), user[1]
-            mates.append(m)
+            s = told(r.id)
+            if s is None:
+                mates.append(Mate(r, r.id == gk))
+                continue
+            user = s.user.tolist()
+            attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+            pass_cmd = s.pass_cmd
+            mates.append(Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None,
+                              attacking, role_time))
         self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
