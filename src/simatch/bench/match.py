@@ -16,14 +16,15 @@ import time
 from ..scene.loader import load_scene
 from ..simulation import Simulation
 from ..strategy.node import RobotNode
+from ..strategy.nubot.warm import load_kernels as load_nubot_kernels
 
 WARM_UP = 5.0          # simulated seconds run first, untimed (compiled kernels load, caches fill)
 
 
-def _timed_decisions(sim: Simulation) -> list[float]:
-    """Wrap every robot's decide to add up its wall time in the returned one-element list."""
+def timed_decisions(sim: Simulation, clock=time.perf_counter) -> list[float]:
+    """Wrap every robot's decide to add up its time (by ``clock``, wall time by default) in the returned
+    one-element list."""
     total = [0.0]
-    clock = time.perf_counter
     for node in sim.robot_nodes.values():
         if not isinstance(node, RobotNode):
             continue
@@ -44,7 +45,9 @@ def load_kernels(scene) -> None:
     """Load (or, on a fresh clone, compile and cache) the compiled kernels a match may first need late, so
     that no compilation falls into the timed part: a throwaway run of the scene in which a robot, driven
     by hand, catches the ball, holds it while turning, and kicks it (the ball mechanisms' kernels; the
-    strategies' and perception's run in the warm-up of the timed match itself)."""
+    strategies' and perception's run in the warm-up of the timed match itself), and the default team's
+    kernels that only open play needs (the warm-up may end before the kick-off is taken)."""
+    load_nubot_kernels()
     with Simulation(scene, seed=0) as sim:
         name = next(iter(sim.robot_nodes))
         me = sim.model_states()[name]
@@ -66,7 +69,7 @@ def run(seconds: float | None = None) -> dict:
     load_kernels(scene)
     with Simulation(scene, seed=1) as sim:
         sim.run(seconds=WARM_UP)
-        decisions = _timed_decisions(sim)
+        decisions = timed_decisions(sim)
         robots = len(sim.robot_nodes)
         ticks0 = sim.clock.step_index
         t0, c0 = time.perf_counter(), time.process_time()

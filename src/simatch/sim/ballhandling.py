@@ -53,6 +53,8 @@ class BallHandling:
         self.recharge_steps = round(kk.recharge / model.opt.timestep)
         self.mouth = np.array([[rm.mouth_x(self.ball_r), 0.0, 0.0] for rm in robot_models])
         self.dribble_on = np.zeros(self.n, dtype=bool)
+        self.dribbling = [False] * self.n       # the same as plain bools (read for every command and step)
+        self._dribblers = 0                     # how many are on
         self.holder = -1
         self.hold_since = 0
         self.kicks: dict[int, KickRequest] = {}
@@ -74,6 +76,9 @@ class BallHandling:
 
     # --- requests from commands -----------------------------------------------------------------------------
     def set_dribbler(self, i: int, on: bool) -> None:
+        on = bool(on)
+        self._dribblers += on - self.dribbling[i]
+        self.dribbling[i] = on
         self.dribble_on[i] = on
         self._catch_idle_until = 0
         if not on and self.holder == i:
@@ -116,7 +121,7 @@ class BallHandling:
             self._kicks(step, enabled)
         if self.holder >= 0:
             self._keep(step, enabled)
-        elif step >= self._catch_idle_until and self.dribble_on.any():
+        elif step >= self._catch_idle_until and self._dribblers:
             self._catch(step, enabled)
 
     def _kicks(self, step: int, enabled: np.ndarray) -> None:

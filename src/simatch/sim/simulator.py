@@ -108,6 +108,9 @@ class Simulator:
         self.last_command_step = np.zeros(self.n, dtype=np.int64)
         self.watchdog_tripped = np.zeros(self.n, dtype=bool)
         self.commanded = np.zeros(self.n, dtype=bool)      # has ever received a command
+        # per robot: commanded, not stopped by the watchdog, and usable (a command needs no other check then);
+        # plain bools, read for every command
+        self._live = [False] * self.n
         self.refused = np.zeros(self.n, dtype=np.int64)
         self._refused_reported_step = np.full(self.n, -10**9, dtype=np.int64)
         self._refused_since_report = np.zeros(self.n, dtype=np.int64)
@@ -210,10 +213,12 @@ class Simulator:
         if not ok:
             return self._refuse(i, _describe_bad_velocity(vx, vy, w))
         self.last_command_step[i] = self.step_index
-        if not self.commanded[i] or self.watchdog_tripped[i]:
-            self._fresh(i)
-        if self.usable[i]:
-            self.drive.command(i, float(vx), float(vy), float(w))
+        if not self._live[i]:
+            if not self.commanded[i] or self.watchdog_tripped[i]:
+                self._fresh(i)
+            if not self.usable[i]:
+                return True
+        self.drive.command(i, float(vx), float(vy), float(w))
         return True
 
     def command_all(self, V: np.ndarray, dribble: np.ndarray | None = None) -> None:
@@ -256,11 +261,14 @@ class Simulator:
         if not ok:
             return self._refuse(i, f"kick speed {kick_speed!r} is not a number in [0, {MAX_KICK_REQUEST:g}] m/s")
         self.last_command_step[i] = self.step_index
-        if not self.commanded[i] or self.watchdog_tripped[i]:
-            self._fresh(i)
-        usable = bool(self.usable[i])
+        if self._live[i]:
+            usable = True
+        else:
+            if not self.commanded[i] or self.watchdog_tripped[i]:
+                self._fresh(i)
+            usable = bool(self.usable[i])
         on = bool(dribble) and usable
-        if on != self.ball.dribble_on[i]:
+        if on is not self.ball.dribbling[i]:
             self.ball.set_dribbler(i, on)
         if kick_speed > 0.0 and usable:
             window = self.scene.control.period if window is None else window
@@ -273,6 +281,10 @@ class Simulator:
             self.event("watchdog_resume", i, detail="commands arrive again")
         self.last_command_step[i] = self.step_index
         self.commanded[i] = True
+        self._relive(i)
+
+    def _relive(self, i: int) -> None:
+        self._live[i] = bool(self.commanded[i] and not self.watchdog_tripped[i] and self.usable[i])
 
     def stop_robot(self, i: int) -> None:
         self.drive.stop(i)
@@ -288,6 +300,7 @@ class Simulator:
         stale = (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
         for i in np.flatnonzero(stale):
             self.watchdog_tripped[i] = True
+            self._live[i] = False
             self.stop_robot(int(i))
             self.event("watchdog_stop", int(i), value=(self.step_index - self.last_command_step[i]) * self.dt,
                        limit=timeout, detail="no fresh command: robot stopped, dribbler off")
@@ -648,6 +661,7 @@ class Simulator:
         i = self.index_of(name)
         self.enabled[i] = enabled
         self.usable[i] = self.enabled[i] and not self.frozen[i]
+        self._relive(i)
         if not enabled:
             self.stop_robot(i)
             if self.ball.holder == i:
@@ -658,6 +672,7 @@ class Simulator:
         i = self.index_of(name)
         self.frozen[i] = frozen
         self.usable[i] = self.enabled[i] and not self.frozen[i]
+        self._relive(i)
         self._freeze(i, frozen)
         if frozen:
             self.stop_robot(i)

@@ -5,6 +5,7 @@ strategy it runs. A strategy may use its own numbers above the ones listed here.
 from __future__ import annotations
 
 import enum
+import types
 
 
 class Role(enum.IntEnum):
@@ -58,3 +59,10 @@ def action_name(value: int) -> str:
         return Action(value).name
     except ValueError:
         return f"ACTION_{value}"
+
+
+def members(enum_cls: type[enum.Enum]) -> types.SimpleNamespace:
+    """The members of an Enum class as plain attributes (``members(Role).ACTIVE is Role.ACTIVE``), for code
+    that runs for every robot and tick: on Python 3.11 every attribute lookup on an Enum class takes the
+    metaclass's slow path (it defines ``__getattr__``) and costs about eight times a plain attribute."""
+    return types.SimpleNamespace(**enum_cls.__members__)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import replace
+from types import SimpleNamespace
 from typing import Optional
 
 from ... import msgs
@@ -37,6 +38,10 @@ from .shootout import ShootOut
 from .state import LIVE, Game, Phase, schedule
 from .takeover import OperatorTakeover
 from .touches import Touches
+
+# the phases as plain attributes: on Python 3.11 every attribute lookup on an Enum class takes the slow
+# path of its metaclass (which defines __getattr__), and the referee looks phases up at every step
+_Phase = SimpleNamespace(**Phase.__members__)
 
 
 class Match:
@@ -158,13 +163,13 @@ class MslReferee(OperatorTakeover, Judge):
             self._begin(now)
         if self._ops:
             self._operator_queue(now)
-        if g.phase is Phase.ENDED:
+        if g.phase is _Phase.ENDED:
             return
-        if g.phase is not Phase.PAUSED:
+        if g.phase is not _Phase.PAUSED:
             d = g.stage.duration
             if d is not None and g.stage_steps * self.dt >= d - 1e-9:
                 self._end_stage(now)
-                if g.phase is Phase.ENDED:
+                if g.phase is _Phase.ENDED:
                     return
             g.stage_steps += 1
             g.phase_steps += 1
@@ -194,26 +199,26 @@ class MslReferee(OperatorTakeover, Judge):
         g = m.game
         obs = m.obs
         obs.refresh()
-        if g.phase is not Phase.PAUSED:
+        if g.phase is not _Phase.PAUSED:
             m.contacts.update()
-        if g.phase is Phase.STOPPED or g.phase is Phase.PREPARE:
+        if g.phase is _Phase.STOPPED or g.phase is _Phase.PREPARE:
             for i in self.discipline.due(now):
                 self.discipline.bring_back(i, "its time off is over and the ball is dead")
-        if g.phase is Phase.STOPPED:
+        if g.phase is _Phase.STOPPED:
             self._stopped(now)
-        elif g.phase is Phase.PREPARE:
+        elif g.phase is _Phase.PREPARE:
             self._prepare(now)
-        elif g.phase is Phase.TAKING:
+        elif g.phase is _Phase.TAKING:
             r = g.restart
             moved = math.hypot(obs.bx - r.x, obs.by - r.y)
             if moved >= self.p.in_play_distance:
                 self._log(now, "ball_in_play", team=r.team, x=obs.bx, y=obs.by, value=moved,
                           limit=self.p.in_play_distance,
                           detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play")
-                g.go(Phase.PLAY)
-        if g.phase in (Phase.TAKING, Phase.PLAY) and g.stage.kind == "shootout":
+                g.go(_Phase.PLAY)
+        if g.phase in (_Phase.TAKING, _Phase.PLAY) and g.stage.kind == "shootout":
             self._shootout_check(now)
-        if g.phase not in (Phase.PAUSED, Phase.ENDED):
+        if g.phase not in (_Phase.PAUSED, _Phase.ENDED):
             phase = g.phase
             shootout = g.stage.kind == "shootout"
             for rule in self.rules:
@@ -272,7 +277,7 @@ class MslReferee(OperatorTakeover, Judge):
         m.touches.on_restart()
         for rule in self.rules:
             rule.on_restart()
-        g.go(Phase.PREPARE)
+        g.go(_Phase.PREPARE)
         self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team,
                    f"{r.describe()} ({reason})")
 
@@ -288,16 +293,16 @@ class MslReferee(OperatorTakeover, Judge):
         if r.kind != "dropped_ball":
             m.touches.arm_taker()
         self._kick_step = self.ctx.step()
-        g.go(Phase.PLAY if r.kind == "dropped_ball" else Phase.TAKING)
+        g.go(_Phase.PLAY if r.kind == "dropped_ball" else _Phase.TAKING)
         self._send(now, MatchMode.STARTROBOT, "", f"START: the {r.describe()}")
 
     def _stop(self, now: float, restart: Restart, reason: str) -> None:
         """Stop play (STOP to every team); ``restart`` follows when the stoppage is over."""
         g = self.m.game
-        if g.phase is Phase.PAUSED:
-            g.paused_phase = Phase.STOPPED
+        if g.phase is _Phase.PAUSED:
+            g.paused_phase = _Phase.STOPPED
         else:
-            g.go(Phase.STOPPED)
+            g.go(_Phase.STOPPED)
         g.next_restart = restart
         g.hold = False
         self._cause = reason
@@ -358,7 +363,7 @@ class MslReferee(OperatorTakeover, Judge):
             extra = " (shoot-out " + ", ".join(f"{t} {self.shootout.goals(t)}" for t in self.teams) + ")"
         self._send(now, MatchMode.STOPROBOT, "", "the match is over")
         g.stage_index = len(g.stages) - 1
-        g.go(Phase.ENDED)
+        g.go(_Phase.ENDED)
         g.version += 1
         self._log(now, "match_end", team=winner or "", detail=f"final score {score}{extra}: "
                                                              + (f"{winner} wins" if winner else "a draw"))
@@ -397,8 +402,8 @@ class MslReferee(OperatorTakeover, Judge):
                                "robot": obs.names[call.robot] if call.robot >= 0 else ""})
         if call.card and call.robot >= 0:
             self.discipline.card(call.robot, call.card, now, call.detail)
-        if call.in_play and g.phase is Phase.TAKING:
-            g.go(Phase.PLAY)
+        if call.in_play and g.phase is _Phase.TAKING:
+            g.go(_Phase.PLAY)
         if call.restart is not None:
             self._stop(now, call.restart, call.detail)
 

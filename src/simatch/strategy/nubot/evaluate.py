@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import math
 
-from .geometry import segment_distance
-
 BALL_RADIUS = 0.11
 ROBOT_RADIUS = 0.25
 REACT_ACC = 3.0          # how fast an opponent starts moving to block [m/s^2]
@@ -69,13 +67,26 @@ def lane_clear(bx: float, by: float, cx: float, cy: float, opps: list, speed: fl
     when one can get in the way). Opponents that can reach the lane while the ball passes count."""
     worst = math.inf
     length = math.hypot(cx - bx, cy - by)
+    # (segment_distance and reach inline, the same float operations: this runs for every candidate of
+    # every decision with the ball)
+    dx, dy = cx - bx, cy - by
+    ll = dx * dx + dy * dy
+    v = max(speed, 0.5)
+    body = ROBOT_RADIUS + BALL_RADIUS
     for ox, oy, _, _ in opps:
-        d, s = segment_distance(ox, oy, bx, by, cx, cy)
+        if ll < 1e-12:
+            d, s = math.hypot(ox - bx, oy - by), 0.0
+        else:
+            s = ((ox - bx) * dx + (oy - by) * dy) / ll
+            s = 0.0 if s < 0.0 else 1.0 if s > 1.0 else s
+            d = math.hypot(ox - bx - s * dx, oy - by - s * dy)
         along = s * length
         if exclude_near_end and (1.0 - s) * length < exclude_near_end and d > 0.6:
             continue
-        margin = d - (ROBOT_RADIUS + BALL_RADIUS + reach(along / max(speed, 0.5)))
-        worst = min(worst, margin)
+        t = along / v
+        margin = d - (body + min(MAX_REACH, 0.5 * REACT_ACC * t * t))
+        if margin < worst:
+            worst = margin
     return worst
 
 

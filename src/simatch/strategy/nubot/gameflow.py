@@ -13,7 +13,10 @@ import enum
 import math
 
 from ...scene.commands import MatchMode, is_ours
+from ..roles import members
 from .observation import Observation
+
+_MatchMode = members(MatchMode)     # (plain attributes, see roles.members: this runs for every robot and tick)
 
 IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
 #: our restart's ball moved this far (beyond perception noise; opponents keep 3 m away): our taker touched
@@ -36,10 +39,13 @@ class Phase(enum.IntEnum):
     TEST = 6
 
 
+_Phase = members(Phase)
+
+
 class GameFlow:
     def __init__(self, restart_wait: float):
         self.restart_wait = restart_wait
-        self.phase = Phase.STOP
+        self.phase = _Phase.STOP
         self.kind = 0                  # the set piece being set up or taken (MatchMode value)
         self.t0 = 0.0                  # when START came for the restart
         self.ball0 = (0.0, 0.0)        # where the ball was then
@@ -61,17 +67,17 @@ class GameFlow:
         mode = obs.mode
         last = self._last_mode
         self._last_mode = mode
-        if mode == MatchMode.STOPROBOT:
-            self.phase = Phase.STOP
+        if mode == _MatchMode.STOPROBOT:
+            self.phase = _Phase.STOP
             return
-        if mode == MatchMode.PARKINGROBOT:
-            self.phase = Phase.PARK
+        if mode == _MatchMode.PARKINGROBOT:
+            self.phase = _Phase.PARK
             return
-        if mode == MatchMode.TEST:
-            self.phase = Phase.TEST
+        if mode == _MatchMode.TEST:
+            self.phase = _Phase.TEST
             return
         if 1 <= mode <= 13:
-            self.phase = Phase.SETUP
+            self.phase = _Phase.SETUP
             self.kind = mode
             self.taker = 0
             return
@@ -80,7 +86,7 @@ class GameFlow:
             if 1 <= last <= 13:
                 self._restart(obs, obs.mtype if 1 <= obs.mtype <= 13 else last)
             else:
-                self.phase = Phase.PLAY
+                self.phase = _Phase.PLAY
         self._follow(obs)
 
     def _restart(self, obs: Observation, kind: int) -> None:
@@ -90,21 +96,21 @@ class GameFlow:
         self.taker = 0
         self.first_holder = 0
         self._ours = 0
-        if kind == MatchMode.DROPBALL:
-            self.phase = Phase.PLAY
+        if kind == _MatchMode.DROPBALL:
+            self.phase = _Phase.PLAY
             self.pass_pending = True
         elif is_ours(kind):
-            self.phase = Phase.OUR_RESTART
-            self.pass_pending = kind != MatchMode.OUR_PENALTY
+            self.phase = _Phase.OUR_RESTART
+            self.pass_pending = kind != _MatchMode.OUR_PENALTY
         else:
-            self.phase = Phase.OPP_RESTART
+            self.phase = _Phase.OPP_RESTART
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
         self._regain(obs)
         shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
         moved = shift >= IN_PLAY_DISTANCE
-        if self.phase == Phase.OUR_RESTART:
+        if self.phase == _Phase.OUR_RESTART:
             if shift >= TAKEN_DISTANCE and not self.taker:
                 # from its first touch on, the taker may not touch the ball again before another robot did;
                 # the others keep their distance until the ball is in play (or the restart times out)
@@ -113,11 +119,11 @@ class GameFlow:
                 self.taker, self.taker_since = taker.id, obs.t
                 self.first_holder = taker.id
             if moved or obs.t - self.t0 > self.restart_wait:
-                self.phase = Phase.PLAY
-        elif self.phase == Phase.OPP_RESTART:
+                self.phase = _Phase.PLAY
+        elif self.phase == _Phase.OPP_RESTART:
             if moved or obs.t - self.t0 > self.restart_wait:
-                self.phase = Phase.PLAY
-        if self.phase != Phase.PLAY or not (self.taker or self.pass_pending):
+                self.phase = _Phase.PLAY
+        if self.phase != _Phase.PLAY or not (self.taker or self.pass_pending):
             return
         holder = _holder(obs)
         touched = _opponent_touching(obs)
@@ -131,7 +137,7 @@ class GameFlow:
             if holder is not None and self.first_holder == 0:
                 self.first_holder = holder.id
             elif (holder is not None and holder.id != self.first_holder) or (
-                    touched and self.kind == MatchMode.DROPBALL):
+                    touched and self.kind == _MatchMode.DROPBALL):
                 self.pass_pending = False
 
     def _regain(self, obs: Observation) -> None:
@@ -139,8 +145,13 @@ class GameFlow:
         bx, by = obs.bx, obs.by
         on = _holder(obs)
         if on is None:
-            on = min(obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by), default=None)
-            if on is not None and math.hypot(on.x - bx, on.y - by) > ON_BALL:
+            # the team-mate nearest to the ball (the first of equals), if it is on it
+            near = math.inf
+            for m in obs.mates:
+                d = math.hypot(m.x - bx, m.y - by)
+                if on is None or d < near:
+                    on, near = m, d
+            if on is not None and near > ON_BALL:
                 on = None
         if on is None:
             if _opponent_touching(obs):
@@ -157,9 +168,16 @@ class GameFlow:
 
 def _holder(obs: Observation):
     """The team-mate holding the ball, if any."""
-    return next((m for m in obs.mates if m.holding), None)
+    for m in obs.mates:
+        if m.holding:
+            return m
+    return None
 
 
 def _opponent_touching(obs: Observation) -> bool:
     """An opponent is close enough to the ball to be touching it."""
-    return any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < TOUCH_DISTANCE for o in obs.opps)
+    bx, by = obs.bx, obs.by
+    for o in obs.opps:
+        if math.hypot(o[0] - bx, o[1] - by) < TOUCH_DISTANCE:
+            return True
+    return False

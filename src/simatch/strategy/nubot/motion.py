@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from .avoidance import no_charging, sub_target
-from .geometry import wrap
+from .geometry import TWO_PI
 from .observation import Observation
 from .params import NubotParams
 
@@ -51,6 +51,7 @@ class Motion:
         self.touch = 2.0 * params.robot_radius + 0.05               # robots closer than this touch
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
+        self._two_turn_acc = 2.0 * params.turn_acceleration
 
     # -----------------------------------------------------------------------------------------------------
     def limits(self, obs: Observation, vmax: float, wmax: float) -> tuple[float, float]:
@@ -77,24 +78,29 @@ class Motion:
         circle the robot must not enter (a restart's ball), whatever avoiding others asks; ``max_x`` a
         line it must not cross (the half-way line at a kick-off)."""
         me = obs.me
-        vmax, wmax = self.limits(obs, vmax, wmax)
+        mx, my = me.x, me.y
+        c = obs.coach
+        if c is not None:                       # (self.limits, inline: this runs for every robot and tick)
+            if c.max_vel > 0.0:
+                vmax = min(vmax, c.max_vel)
+            if c.max_w > 0.0:
+                wmax = min(wmax, c.max_w)
         # keep targets on the floor, inside the boards
         tx = min(max(tx, -self.xlim), self.xlim)
         ty = min(max(ty, -self.ylim), self.ylim)
-        dx, dy = tx - me.x, ty - me.y
-        d = math.hypot(dx, dy)
+        d = math.hypot(tx - mx, ty - my)
         vx = vy = 0.0
         if d > 0.01 or end_speed > 0.0:
             sx, sy = tx, ty
             if boxes:
-                sx, sy = self.areas.route(me.x, me.y, tx, ty, boxes)
+                sx, sy = self.areas.route(mx, my, tx, ty, boxes)
             if avoid:
                 ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
-                sx, sy, self.side = sub_target(me.x, me.y, sx, sy, obs.opp_array, obs.mate_array, me.id, obs.bx,
+                sx, sy, self.side = sub_target(mx, my, sx, sy, obs.opp_array, obs.mate_array, me.id, obs.bx,
                                                obs.by, ball, self.clearance, LOOK_AHEAD, self.side)
             a = self.p.braking if brake is None else brake
             speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
-            ex, ey = sx - me.x, sy - me.y
+            ex, ey = sx - mx, sy - my
             e = math.hypot(ex, ey)
             if e > 1e-9:
                 vx, vy = ex / e * speed, ey / e * speed
@@ -104,13 +110,21 @@ class Motion:
         if n > vmax:
             vx, vy = vx / n * vmax, vy / n * vmax
         if gentle and obs.opps:
-            vx, vy = no_charging(me.x, me.y, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed,
+            vx, vy = no_charging(mx, my, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed,
                                  CHARGE_BRAKING)
         if fence is not None:
-            vx, vy = self.keep_out_of_circle(me.x, me.y, vx, vy, *fence)
+            vx, vy = self.keep_out_of_circle(mx, my, vx, vy, fence[0], fence[1], fence[2])
         if max_x is not None:
-            vx = min(vx, 2.0 * (max_x - me.x))
-        w = 0.0 if face is None else self.turn_rate(wrap(face - me.yaw), wmax)
+            vx = min(vx, 2.0 * (max_x - mx))
+        yaw = me.yaw
+        if face is None:
+            w = 0.0
+        else:                                   # (self.turn_rate(wrap(face - yaw), wmax), inline)
+            err = math.remainder(face - yaw, TWO_PI)
+            aerr = abs(err)
+            w = min(wmax, math.sqrt(self._two_turn_acc * aerr), HEADING_GAIN * aerr)
+            if not err >= 0.0:
+                w = -w
         # turning while driving costs the wheels |v| |w| of acceleration: keep the product within what they
         # can give, so that the robot keeps its speed (it turns fully once it slows down near the target)
         speed = math.hypot(vx, vy)
@@ -121,7 +135,9 @@ class Motion:
             else:
                 w = math.copysign(SPIN_COUPLING / speed, w)
         self.last = (vx, vy, w)
-        return self.body(me.yaw, vx, vy, w)
+        h = yaw + 0.5 * w * self.period         # (self.body, inline)
+        c, s = math.cos(h), math.sin(h)
+        return (c * vx + s * vy, -s * vx + c * vy, w)
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)

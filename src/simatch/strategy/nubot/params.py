@@ -7,6 +7,8 @@ safety margins under the MSL limits the referee judges (3 m dribbling, 3 m / 2 m
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from pydantic import BaseModel, ConfigDict, Field
 
 
@@ -61,3 +63,9 @@ class NubotParams(BaseModel):
     active_hysteresis: float = Field(0.35, ge=0.0, le=10.0,
                                      description="the active robot keeps its role unless another reaches the "
                                                  "ball this much sooner [s]")
+
+
+def plain(params: NubotParams) -> SimpleNamespace:
+    """The parameters' values as plain attributes (read them, never write them): the strategy reads them
+    for every robot and tick, and a pydantic model's attribute costs about four times a plain one."""
+    return SimpleNamespace(**{name: getattr(params, name) for name in type(params).model_fields})

@@ -19,14 +19,18 @@ import math
 import numba
 import numpy as np
 
-from ..roles import Role
+from ..roles import Role, members
 from .ballpath import BallPath, intercepts
 from .gameflow import GameFlow, Phase
-from .geometry import wrap
-from .observation import Observation
+from .geometry import TWO_PI
+from .observation import Observation, _array as _rows
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
 from .setpieces import formation, spread
+
+# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
+_Phase = members(Phase)
+_Role = members(Role)
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -105,9 +109,9 @@ def assign(robots: list, slots: list[tuple], hysteresis: float,
     if not slots:
         return {}
     # a robot that took its role only a moment ago holds on to it harder (roles last a while)
-    r = np.array([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
-                  for m in robots], dtype=float)
-    q = np.array([(sl[1], sl[2], sl[0]) for sl in slots], dtype=float)
+    r = _rows([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+               for m in robots], 4)
+    q = _rows([(sl[1], sl[2], sl[0]) for sl in slots], 3)
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
     best = _assign(r, q, cx, cy, cr)
     return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
@@ -190,18 +194,23 @@ class Analyst:
                 pic.holder = m.id
         opps = obs.opps
         if pic.holder == 0:
-            pic.opp_holds = any(math.hypot(o[0] - obs.bx, o[1] - obs.by) < OPP_CONTROL for o in opps)
+            bx, by = obs.bx, obs.by
+            for o in opps:
+                if math.hypot(o[0] - bx, o[1] - by) < OPP_CONTROL:
+                    pic.opp_holds = True
+                    break
         self._passes(obs, pic)
-        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
+        if flow.phase in (_Phase.SETUP, _Phase.OUR_RESTART, _Phase.OPP_RESTART):
             self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
             return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         turn = 0.7 / p.max_turn
-        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(wrap(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw)))
+        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(math.remainder(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw,
+                                                                     TWO_PI)))
                 for m in mates] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
         if rows:
-            a = np.array(rows).T.copy()
+            a = _rows(rows, 5).T.copy()
             res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
             for k, m in enumerate(mates):
                 pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
@@ -226,7 +235,7 @@ class Analyst:
                 d = math.hypot(dx, dy)
                 # hysteresis on what the receiver tells the team: a pass slightly off does not swap the
                 # roles back and forth
-                on_it = obs.by_id[info.catch_id].role == Role.CATCHOFPASS
+                on_it = obs.by_id[info.catch_id].role == _Role.CATCHOFPASS
                 heading = PASS_KEPT if on_it else PASS_HEADING
                 if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < heading * d * obs.ball_speed:
                     continue
@@ -242,7 +251,7 @@ class Analyst:
         goalie = next((m for m in mates if m.is_goalie), None)
         holder = obs.by_id.get(pic.holder) if pic.holder else None
         if goalie is not None:
-            pic.roles[goalie.id] = Role.GOALIE
+            pic.roles[goalie.id] = _Role.GOALIE
             if holder is goalie:
                 pic.goalie_plays = True
             elif holder is None:
@@ -257,19 +266,19 @@ class Analyst:
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
-            fresh = next((m for m in field if m.role == Role.ACTIVE and m.role_time < MIN_ACTIVE_TIME
+            fresh = next((m for m in field if m.role == _Role.ACTIVE and m.role_time < MIN_ACTIVE_TIME
                           and m.id != flow.taker), None)
             if fresh is not None:
                 best, active = -math.inf, fresh      # a robot that just took the ball on keeps it a moment
             for m in field:
                 if m.id == flow.taker:
                     continue
-                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == Role.ACTIVE else 0.0)
+                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == _Role.ACTIVE else 0.0)
                 if score < best:
                     best, active = score, m
         if active is not None:
             pic.active = active.id
-            pic.roles[active.id] = Role.ACTIVE if pic.receiver != active.id else Role.CATCHOFPASS
+            pic.roles[active.id] = _Role.ACTIVE if pic.receiver != active.id else _Role.CATCHOFPASS
         our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
         # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
         said = [m.attacking for m in mates if m.attacking >= 0]
@@ -285,17 +294,17 @@ class Analyst:
             receiver = next((m for m in rest if m.id == pic.receiver), None)
         n_assist = 2 if len(rest) >= 4 else 1
         assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-        order = ([Role.ASSISTANT, Role.PASSIVE, Role.MIDFIELD] if pic.attacking
-                 else [Role.PASSIVE, Role.MIDFIELD, Role.ASSISTANT])
+        order = ([_Role.ASSISTANT, _Role.PASSIVE, _Role.MIDFIELD] if pic.attacking
+                 else [_Role.PASSIVE, _Role.MIDFIELD, _Role.ASSISTANT])
         if n_assist == 2:
-            order = [Role.ASSISTANT, Role.ASSISTANT] + [r for r in order if r != Role.ASSISTANT]
+            order = [_Role.ASSISTANT, _Role.ASSISTANT] + [r for r in order if r != _Role.ASSISTANT]
         slots: list[tuple] = []
         used = 0
         for role in order[:len(rest)]:
-            if role == Role.ASSISTANT:
+            if role == _Role.ASSISTANT:
                 x, y = assist[min(used, len(assist) - 1)]
                 used += 1
-            elif role == Role.PASSIVE:
+            elif role == _Role.PASSIVE:
                 x, y = passive_point(areas, bx, by, pic.attacking)
             else:
                 x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
@@ -316,7 +325,7 @@ class Analyst:
         bx, by = obs.bx, obs.by
         ox = np.array([o[0] for o in obs.opps])
         oy = np.array([o[1] for o in obs.opps])
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == _Role.ASSISTANT), None)
         score = score_spots(cx, cy, bx, by, ox, oy, self.areas.L2, 3.0, 8.5, prev)
         out = []
         for k in np.argsort(-score)[:12].tolist():
@@ -332,11 +341,11 @@ class Analyst:
         field = [m for m in mates if not m.is_goalie]
         for m in mates:
             if m.is_goalie:
-                pic.roles[m.id] = Role.GOALIE
-        bx, by = (obs.bx, obs.by) if flow.phase == Phase.SETUP else flow.ball0
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == Role.ASSISTANT), None)
+                pic.roles[m.id] = _Role.GOALIE
+        bx, by = (obs.bx, obs.by) if flow.phase == _Phase.SETUP else flow.ball0
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == _Role.ASSISTANT), None)
         slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
-        hyst = SETUP_HYSTERESIS if flow.phase == Phase.SETUP else RESTART_HYSTERESIS
+        hyst = SETUP_HYSTERESIS if flow.phase == _Phase.SETUP else RESTART_HYSTERESIS
         keep = self.p.dropball_distance if flow.kind == 13 else (
             self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
         chosen = assign(field, slots, hyst, around=(bx, by, keep))
@@ -344,9 +353,9 @@ class Analyst:
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
-            if role == Role.ACTIVE:
+            if role == _Role.ACTIVE:
                 pic.active = rid
-        if flow.phase == Phase.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
+        if flow.phase == _Phase.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
                 and flow.kind != 1:
             # the taker aims at the receiver: it waits for the ball where it is announced, facing it
             info = pic.pass_info

@@ -30,6 +30,8 @@ class Areas:
         self.own_pa = (-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
         self.opp_pa = (L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
         self.opp_ga = (L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
+        self._with_opp_area = (self.own_pa, self.opp_ga)
+        self._without_opp_area = (self.own_pa, self.opp_pa)
 
     # exact lines (robot centre over the line counts as inside)
     def in_own_penalty_area(self, x: float, y: float) -> bool:
@@ -46,18 +48,20 @@ class Areas:
 
     def keep_out(self, x: float, y: float, own_pa: bool = True, opp_pa: bool = True) -> tuple[float, float]:
         """The point moved out of the areas a field robot may not stand in."""
+        # (push_out_of_box returns a point outside the box unchanged: the test first, inline, saves the call)
         if own_pa:
-            x, y = push_out_of_box(x, y, *self.own_pa)
-        if opp_pa:
-            x, y = push_out_of_box(x, y, *self.opp_pa)
-        else:
-            x, y = push_out_of_box(x, y, *self.opp_ga)
+            x0, x1, hw = self.own_pa
+            if x0 < x < x1 and -hw < y < hw:
+                x, y = push_out_of_box(x, y, x0, x1, hw)
+        x0, x1, hw = self.opp_pa if opp_pa else self.opp_ga
+        if x0 < x < x1 and -hw < y < hw:
+            x, y = push_out_of_box(x, y, x0, x1, hw)
         return x, y
 
-    def forbidden(self, opp_area: bool) -> list[tuple[float, float, float]]:
+    def forbidden(self, opp_area: bool) -> tuple[tuple[float, float, float], ...]:
         """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
         goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
-        return [self.own_pa, self.opp_pa if not opp_area else self.opp_ga]
+        return self._with_opp_area if opp_area else self._without_opp_area     # (shared: read only)
 
     def route(self, px: float, py: float, tx: float, ty: float,
               boxes: list[tuple[float, float, float]]) -> tuple[float, float]:
@@ -75,6 +79,9 @@ class Areas:
                 ex, ey = push_out_of_box(px, py, x0, x1, hw)
                 return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
         for x0, x1, hw in boxes:
+            if ((px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw)
+                    or (py >= hw and ty >= hw)):
+                continue            # both ends on the same side of the box: the way cannot cross it
             if segment_hits_box(px, py, tx, ty, x0, x1, hw):
                 cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15        # the corners on the field side
                 best = min(((cx, hw + 0.15), (cx, -hw - 0.15)),
@@ -83,7 +90,11 @@ class Areas:
         return tx, ty
 
     def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
-        return clamp(x, -self.L2 + margin, self.L2 - margin), clamp(y, -self.W2 + margin, self.W2 - margin)
+        # (clamp, inline)
+        lo, hi = -self.L2 + margin, self.L2 - margin
+        x = lo if x < lo else hi if x > hi else x
+        lo, hi = -self.W2 + margin, self.W2 - margin
+        return x, (lo if y < lo else hi if y > hi else y)
 
 
 def guard_point(areas: Areas, bx: float, by: float, fraction: float, min_s: float, gap: float) -> tuple[float, float]:

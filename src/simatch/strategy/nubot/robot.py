@@ -19,7 +19,7 @@ import math
 
 from ...scene.commands import MatchMode, is_ours
 from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
-from ..roles import Action, Role
+from ..roles import Action, Role, members
 from ..worldmodel import WorldModel
 from .active import BallPlayer
 from .gameflow import GameFlow, Phase
@@ -27,11 +27,17 @@ from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
 from .observation import Observation, TeamView
-from .params import NubotParams
+from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
+
+# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
+_Phase = members(Phase)
+_Role = members(Role)
+_Action = members(Action)
+_MatchMode = members(MatchMode)
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -58,6 +64,7 @@ class _Shared:
 
     def __init__(self, params: NubotParams, field):
         self.params = params
+        params = plain(params)
         self.areas = Areas(field, params.robot_radius + 0.15)
         self.spots = spot_grid(self.areas)
         self.analyst = Analyst(params, self.areas, self.spots)
@@ -76,8 +83,8 @@ class NubotRobot(RobotStrategy):
     def __init__(self, ctx: RobotContext, shared: _Shared | None = None):
         super().__init__(ctx)
         params = ctx.params if isinstance(ctx.params, NubotParams) else NubotParams.model_validate(ctx.params or {})
-        self.p = params
         self.shared = shared or _Shared(params, ctx.field)
+        self.p = params = plain(params)
         areas = self.shared.areas
         goal_half = 0.5 * ctx.field.goal_width
         self.areas = areas
@@ -90,7 +97,7 @@ class NubotRobot(RobotStrategy):
         ids = sorted(ctx.ids)
         k = ids.index(ctx.id) if ctx.id in ids else 0
         self.park_at = (-areas.L2 + 1.0 + PARK_SPACING * k, -(areas.W2 + PARK_OUTSIDE))
-        self.role = Role.NOROLE
+        self.role = _Role.NOROLE
         self.picture: Picture | None = None
         self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
         self.picture_tick = -1
@@ -126,27 +133,27 @@ class NubotRobot(RobotStrategy):
         me = obs.me
         phase = flow.phase
         self.steady = None
-        if phase == Phase.STOP:
-            return Command(role=self.role, action=Action.NO_ACTION)
-        if phase == Phase.PARK:
+        if phase == _Phase.STOP:
+            return Command(role=self.role, action=_Action.NO_ACTION)
+        if phase == _Phase.PARK:
             return self.park(obs)
         pic = self.picture
         if not (odd and pic is not None and pic.phase == phase and self.picture_tick == obs.tick - 1):
             pic = self.team_picture(obs)
             self.picture, self.picture_tick = pic, obs.tick
-        if phase == Phase.TEST:
+        if phase == _Phase.TEST:
             cmd = self.tests.decide(obs, pic)
         else:
-            role = pic.roles.get(me.id, Role.NOROLE)
+            role = pic.roles.get(me.id, _Role.NOROLE)
             if me.is_goalie:
                 cmd = self.keeper.decide(obs, pic, flow)
-            elif phase == Phase.OUR_RESTART and role == Role.ACTIVE and flow.taker != me.id:
+            elif phase == _Phase.OUR_RESTART and role == _Role.ACTIVE and flow.taker != me.id:
                 cmd = self.taker.take(obs, pic, flow)
-            elif phase != Phase.PLAY:
+            elif phase != _Phase.PLAY:
                 cmd = self.hold_slot(obs, pic, role)
             elif me.holding:
                 cmd = self.player.play(obs, pic, flow, role)
-            elif role in (Role.ACTIVE, Role.CATCHOFPASS):
+            elif role in (_Role.ACTIVE, _Role.CATCHOFPASS):
                 cmd = self.player.fetch(obs, pic, role)
             else:
                 cmd = self.hold_slot(obs, pic, role)
@@ -157,7 +164,7 @@ class NubotRobot(RobotStrategy):
         self.role = cmd.role
         # told to the team, for the hysteresis of attacking and of the active role
         cmd.user = (1.0 if pic.attacking else 0.0, obs.t - self.role_since)
-        if (not odd and phase in (Phase.PLAY, Phase.SETUP) and cmd.action == Action.POSITIONED
+        if (not odd and phase in (_Phase.PLAY, _Phase.SETUP) and cmd.action == _Action.POSITIONED
                 and cmd.pass_intent is None and pic.receiver != me.id and not me.holding):
             self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
         return cmd
@@ -178,7 +185,8 @@ class NubotRobot(RobotStrategy):
         near = STEADY_SET_PIECE_DISTANCE if 1 <= mode <= 13 else STEADY_BALL_DISTANCE
         if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < near * near:
             return None
-        if len(v.obstacles.distance) and v.obstacles.distance.min() < STEADY_ROBOT_DISTANCE:
+        dist = v.obstacles.distance
+        if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:     # (plain floats: a few, every tick)
             return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
@@ -196,7 +204,7 @@ class NubotRobot(RobotStrategy):
         keep = self.keep_from_ball(obs)
         fence = None
         if keep is not None:
-            taker = role == Role.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MatchMode.DROPBALL
+            taker = role == _Role.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != _MatchMode.DROPBALL
             x, y = self.round_the_ball(obs, x, y, keep, taker)
             if not taker:
                 fence = (obs.bx, obs.by, keep)
@@ -205,11 +213,11 @@ class NubotRobot(RobotStrategy):
             ball = TAKER_BALL_CLEARANCE          # the restart's taker must not touch the ball again yet
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
             x, y = self.out_of_the_way(obs, x, y)
-        kickoff = keep is not None and self.flow.kind in (MatchMode.OUR_KICKOFF, MatchMode.OPP_KICKOFF)
+        kickoff = keep is not None and self.flow.kind in (_MatchMode.OUR_KICKOFF, _MatchMode.OPP_KICKOFF)
         vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=ball,
                                    boxes=self.areas.forbidden(False), fence=fence,
                                    max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None)
-        return Command(vx=vx, vy=vy, w=w, role=role, action=Action.POSITIONED, intent=(x, y))
+        return Command(vx=vx, vy=vy, w=w, role=role, action=_Action.POSITIONED, intent=(x, y))
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
@@ -231,8 +239,8 @@ class NubotRobot(RobotStrategy):
         """The distance the rules keep this robot from the ball while a restart is being set up or taken
         (None in play)."""
         flow, p = self.flow, self.p
-        if flow.phase in (Phase.SETUP, Phase.OUR_RESTART, Phase.OPP_RESTART):
-            if flow.kind == MatchMode.DROPBALL:
+        if flow.phase in (_Phase.SETUP, _Phase.OUR_RESTART, _Phase.OPP_RESTART):
+            if flow.kind == _MatchMode.DROPBALL:
                 return p.dropball_distance
             if is_ours(flow.kind):
                 return p.mate_distance
@@ -285,7 +293,7 @@ class NubotRobot(RobotStrategy):
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at
         vx, vy, w = self.motion.go(obs, x, y, 0.5 * math.pi, self.p.max_speed, self.p.max_turn)
-        return Command(vx=vx, vy=vy, w=w, role=Role.NOROLE, action=Action.POSITIONED, intent=(x, y))
+        return Command(vx=vx, vy=vy, w=w, role=_Role.NOROLE, action=_Action.POSITIONED, intent=(x, y))
 
 
 class NubotTeam(TeamStrategy):

@@ -1,0 +1,41 @@
+"""Load nubot's compiled kernels before they are needed.
+
+Some kernels are first used only once open play begins (interceptions, receiving spots), seconds into a
+match: loading a kernel from the on-disk cache (or, on a fresh clone, compiling it) then costs tens of
+milliseconds at that moment. `load_kernels` calls each one once on a tiny example with the argument types
+of a match, so that a benchmark can load them all before it starts its clock.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .avoidance import no_charging, sub_target
+from .ballpath import BallPath, intercepts
+from .picture import assign
+from .positions import score_spots
+
+
+class _Robot:
+    """The attributes `assign` reads of a team-mate."""
+
+    def __init__(self, rid: int, x: float, y: float):
+        self.id, self.x, self.y, self.role, self.role_time = rid, x, y, -1, 1e9
+
+
+def load_kernels() -> None:
+    """Call every nubot kernel once (the results are thrown away)."""
+    opps = np.array([(1.0, 0.5, 0.0, 0.0), (3.0, -1.0, 0.1, 0.0)])
+    mates = np.array([(0.0, 0.0, 0.0, 0.0, 1.0), (-2.0, 1.0, 0.0, 0.0, 2.0)])
+    sub_target(0.0, 0.0, 4.0, 0.0, opps, mates, 1, 2.0, 0.2, 0.45, 1.1, 0.3, 0)
+    no_charging(0.0, 0.0, 0.5, 0.0, 1.0, 0.0, opps, 0.55, 0.5, 2.0)
+    path = BallPath(0.5, 0.2, 0.11, 1.0, 0.3, 0.0, 0.4, 0.11, 12.0, 8.0)
+    rows = np.array([(0.0, 0.0, 0.0, 0.0, 0.1), (1.0, 0.5, 0.0, 0.0, 0.0)]).T.copy()
+    intercepts(path, rows[0], rows[1], rows[2], rows[3], 3.0, 2.5, rows[4])
+    cx, cy = np.linspace(-5.0, 5.0, 4), np.linspace(-3.0, 3.0, 4)
+    for near in (None, (1.0, 1.0)):
+        score_spots(cx, cy, 0.0, 0.0, np.array([1.0]), np.array([0.5]), 11.0, 3.0, 8.5, near)
+    robots = [_Robot(2, 0.0, 0.0), _Robot(3, 1.0, 1.0)]
+    slots = [(1, 2.0, 0.0, 0.0, 0.0), (2, -2.0, 1.0, 0.0, 0.0)]
+    assign(robots, slots, 0.5)
+    assign(robots, slots, 0.5, around=(0.0, 0.0, 1.0))
