@@ -122,9 +122,9 @@ class LockstepGate(Node):
         active = self._active()
         self._waiting = {p.id for p in active}
         self._await(active)
+        self._opened = opened = time.monotonic()
         self._tick_pub.put(protocol.dumps({"step": step, "tick": self._tick}))
         bus.flush_feeds()                              # each team's inputs of this tick, then the tick
-        self._opened = opened = time.monotonic()
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
         while self._waiting:
             left = limit - time.monotonic()
