@@ -33,6 +33,21 @@ def pair():
         server.close()
 
 
+@pytest.fixture
+def low_latency_pair():
+    """(server bus, client bus) on Zenoh's low-latency transport, with its sample cap."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit",
+                      max_sample=MAX_SAMPLE)
+    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint], low_latency=True), wait=10), "unit",
+                      eager=True, max_sample=MAX_SAMPLE)
+    try:
+        yield server, client
+    finally:
+        client.close()
+        server.close()
+
+
 def pump_until(bus, predicate, timeout: float = 5.0) -> None:
     deadline = time.monotonic() + timeout
     while not predicate():
@@ -143,7 +158,10 @@ def test_safe_defaults():
     assert get("scouting/multicast/enabled") is False and get("scouting/gossip/enabled") is False
     assert get("listen/endpoints") == [] and get("connect/endpoints") == ["tcp/127.0.0.1:1"]
     assert get("transport/shared_memory/enabled") is False          # killed processes would leave /dev/shm files
-    assert get("transport/unicast/lowlatency") is True and get("transport/unicast/qos/enabled") is False
+    assert get("transport/unicast/lowlatency") is False               # the ordinary transport unless asked
+    low = zenoh_config("client", connect=["tcp/127.0.0.1:1"], low_latency=True)
+    assert json.loads(low.get_json("transport/unicast/lowlatency")) is True
+    assert json.loads(low.get_json("transport/unicast/qos/enabled")) is False
 
 
 def test_the_interpreter_exits_even_if_nobody_closes_the_bus():
@@ -207,9 +225,9 @@ def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives
     assert feed.entries == []
 
 
-def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arrive_whole(pair):
+def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arrive_whole(low_latency_pair):
     """The low-latency transport breaks a link with a larger sample: the bus never sends one."""
-    server, client = pair
+    server, client = low_latency_pair
     got = []
     server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: got.append(len(payload)))
     server.subscribe_raw("cyan/big", lambda topic, payload, att, t: got.append(("big", len(payload))))
@@ -231,7 +249,8 @@ def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arriv
 def test_a_client_without_the_low_latency_transport_still_plays_with_one_that_has_it():
     """A client in another language (or an older tool) keeps Zenoh's ordinary transport: same samples."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint])), "unit")
+    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit",
+                      max_sample=MAX_SAMPLE)
     client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint], low_latency=False), wait=10), "unit",
                       eager=True)
     try:

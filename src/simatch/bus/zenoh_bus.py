@@ -48,11 +48,18 @@ log = logging.getLogger(__name__)
 #: the endpoint a server listens on and a team connects to when none is given: loopback only
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
-#: the largest payload a sample may carry [bytes]. Zenoh's low-latency transport (`zenoh_config`) writes
-#: each sample as one frame of at most three quarters of its 64 KiB batch, and a larger one breaks the
-#: link (measured with eclipse-zenoh 1.10: 49,000 bytes arrive, 49,500 are lost with the next sample).
-#: Larger messages are not sent (logged); bundles and feeds are cut into several samples below it.
+#: the largest payload a sample may carry on Zenoh's low-latency transport [bytes]: it writes each sample
+#: as one frame of at most three quarters of its 64 KiB batch, and a larger one breaks the link (measured
+#: with eclipse-zenoh 1.10: 49,000 bytes arrive, 49,500 are lost with the next sample). A bus on that
+#: transport (``ZenohBus(max_sample=MAX_SAMPLE)``) sends no larger message (logged) and cuts bundles and
+#: feeds into several samples below it; on the ordinary transport Zenoh fragments large samples itself.
 MAX_SAMPLE = 48_000
+
+#: ``SIMATCH_ZENOH_LOW_LATENCY=1`` in the environment: simatch's server, team and robot processes ask for
+#: the low-latency transport (see `zenoh_config`). Off by default: it cut the tail of a lockstep round trip
+#: (p99 0.7-0.8 against 1-3 ms on a busy 2-core machine) but moved neither the lockstep real-time factor nor
+#: the real-time latency measurably, and it caps every sample at `MAX_SAMPLE`.
+LOW_LATENCY = os.environ.get("SIMATCH_ZENOH_LOW_LATENCY", "") == "1"
 
 #: Zenoh's runtime threads in a simatch process (Zenoh reads ``ZENOH_RUNTIME`` when its runtime starts; a
 #: value the user sets wins): one receiving worker instead of two. Every sample's callback needs the GIL,
@@ -84,17 +91,18 @@ def check_run_name(run: str) -> str:
 
 def zenoh_config(mode: str = "peer", listen: Sequence[str] = (), connect: Sequence[str] = (),
                  user: str | None = None, password: str | None = None, users_file: str | None = None,
-                 access_control: dict | None = None, low_latency: bool = True) -> zenoh.Config:
+                 access_control: dict | None = None, low_latency: bool | None = None) -> zenoh.Config:
     """A Zenoh configuration with simatch's safe defaults: no scouting, only the endpoints given, no shared
     memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'.
 
-    ``low_latency``: Zenoh's low-latency unicast transport, used when both ends of a link ask for it (a
-    client that does not gets the ordinary transport from the same server). A sample is written to the
-    socket by the thread that puts it, where the ordinary transport hands it to a sending thread first:
-    one wake-up less per sample, which is what a tick costs on a machine with few cores (the command
-    latency of a real-time run with one process per robot halves). It has no priorities (qos is off) and
-    carries samples of at most `MAX_SAMPLE` bytes."""
+    ``low_latency`` (default: `LOW_LATENCY`): Zenoh's low-latency unicast transport, used when both ends of
+    a link ask for it (a client that does not gets the ordinary transport from the same server). A sample is
+    written to the socket by the thread that puts it, where the ordinary transport hands it to a sending
+    thread first: one wake-up less per sample. It has no priorities (qos is off) and carries samples of at
+    most `MAX_SAMPLE` bytes: give the bus on such a session ``max_sample=MAX_SAMPLE``."""
     conf = zenoh.Config()
+    if low_latency is None:
+        low_latency = LOW_LATENCY
 
     def put(key: str, value: Any) -> None:
         conf.insert_json5(key, json.dumps(value))
@@ -348,8 +356,11 @@ class ZenohBus:
                  on_refused: Callable[[str, str], None] | None = None,
                  on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
                  wake_on_data: bool = True, drop_when_congested: bool = False, prepare_on_arrival: bool = True,
-                 owns_session: bool = True, entry_verifier: EntryVerifier | None = None):
+                 owns_session: bool = True, entry_verifier: EntryVerifier | None = None,
+                 max_sample: int | None = None):
         self.run = check_run_name(run)
+        #: the largest sample this bus sends (None: no limit; `MAX_SAMPLE` on the low-latency transport)
+        self.max_sample = max_sample
         self.session = session
         self.stats = BusStats()
         self.local = InProcessBus(run)
@@ -379,7 +390,7 @@ class ZenohBus:
         self._routes_lock = threading.Lock()     # Zenoh's threads fill the routes; the owner changes subscriptions
         self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)   # refusals inside bundles
         self._closed = False
-        #: samples not sent because they were larger than MAX_SAMPLE, by topic
+        #: samples not sent because they were larger than ``max_sample``, by topic
         self.oversize: dict[str, int] = {}
         _SESSIONS.add(self)
 
@@ -489,9 +500,10 @@ class ZenohBus:
 
     def _runs(self, topic: str, entries: list) -> list[list]:
         """The entries of a bundle on ``topic`` in runs that each fit in a sample (one run, nearly always)."""
-        if sum(map(_bundle.size, entries)) + len(_bundle.MAGIC) <= MAX_SAMPLE:
+        cap = self.max_sample
+        if cap is None or sum(map(_bundle.size, entries)) + len(_bundle.MAGIC) <= cap:
             return [entries]
-        runs, too_large = _bundle.split(entries, MAX_SAMPLE)
+        runs, too_large = _bundle.split(entries, cap)
         for entry in too_large:
             self._fits(entry[0], _bundle.size(entry))
         return runs
@@ -522,14 +534,15 @@ class ZenohBus:
                 self.stats.published += 1
 
     def _fits(self, topic: str, size: int) -> bool:
-        """Whether a sample of ``size`` bytes may be sent (see `MAX_SAMPLE`); if not, it is counted in
+        """Whether a sample of ``size`` bytes may be sent (see ``max_sample``); if not, it is counted in
         ``oversize`` and logged (the first time for each topic, then every hundredth)."""
-        if size <= MAX_SAMPLE:
+        cap = self.max_sample
+        if cap is None or size <= cap:
             return True
         n = self.oversize[topic] = self.oversize.get(topic, 0) + 1
         if n == 1 or n % 100 == 0:
             log.error("not sent: a sample of %d bytes on %s (at most %d bytes; %d so far)", size, topic,
-                      MAX_SAMPLE, n)
+                      cap, n)
         return False
 
     def _put_signed(self, topic: str, payload: bytes, count: bool = True) -> None:

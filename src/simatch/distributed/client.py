@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 from ..bus import LockstepClock
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, TransportError, ZenohBus, open_session,
+                              zenoh_config)
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
@@ -83,7 +84,8 @@ class TeamProcess:
             session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
         except TransportError as exc:
             raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
-        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), wake_on_data=False)
+        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), wake_on_data=False,
+                            max_sample=MAX_SAMPLE if LOW_LATENCY else None)
         self.stats = self.bus.stats
         try:
             self._setup()

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import topics
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, MAX_SAMPLE, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, open_session, zenoh_config
 from ..scene.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
@@ -60,7 +60,7 @@ class Server:
         self.late_after = 4 if realtime else 1
         teams = {t: spec.teams[t].robot_ids() for t in spec.teams}
         offered = len(protocol.dumps(protocol.scene_offer(scene, seed, run, self.mode)))
-        if offered > MAX_SAMPLE:
+        if LOW_LATENCY and offered > MAX_SAMPLE:
             raise ValueError(f"the scene is too large to offer to the team processes ({offered} bytes with its "
                              f"overrides; at most {MAX_SAMPLE})")
         self.credentials_dir = Path(credentials_dir) if credentials_dir else credentials.default_dir(run)
@@ -73,7 +73,7 @@ class Server:
         session = open_session(conf, what=f"listening on {', '.join(listen)}")
         self.bus = ZenohBus(session, run, verifier=self.fair.check, entry_verifier=self.fair.check_entry,
                             on_refused=self._refused, on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True,
-                            prepare_on_arrival=not realtime)
+                            prepare_on_arrival=not realtime, max_sample=MAX_SAMPLE if LOW_LATENCY else None)
         self.registry = Registry(spec)
         self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}   # rate limit of refusal/malformed events
         self.ended = False
