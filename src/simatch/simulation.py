@@ -12,7 +12,10 @@ scene and seed give the same run, bit for bit.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import signal
+import threading
 import time as _time
 from typing import Any, Callable, Mapping
 
@@ -98,6 +101,8 @@ class Simulation:
         self._sub_events = self.bus.subscribe(topics.EVENTS, msgs.GameEvent, self._on_event)
         self._pub_operator = self.bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
         self._stepping = False             # inside a physics step (nodes at work) rather than between steps
+        self._running = False              # inside `run`
+        self._stop: BaseException | None = None   # raised by `run` at its next step boundary (`stop_soon`)
         check_models(self.scene)
         self.simulator = Simulator(spec, self.seed)
         self._sensor = self.clock.add(SimulatorNode(self.simulator))
@@ -189,34 +194,76 @@ class Simulation:
             seconds = max(0.0, seconds - self.time)
         steps = int(round(seconds / self.dt))
         chunk = max(1, int(round(0.1 / self.dt)))
-        step = self.clock.step
         t0 = _time.perf_counter()
         anchor: tuple[float, float, float] | None = None      # (wall, sim, pace) when pacing began
         done = 0
-        while done < steps and not (until_done and self.judge.done):
-            n = min(chunk, steps - done)
-            self._stepping = True
-            try:
-                for _ in range(n):
-                    step()
-                    if until_done and self.judge.done:
-                        break
-            finally:
-                self._stepping = False
-            done += n
-            if progress is not None:
-                progress(self.time)
-            pace = 1.0 if realtime else self.pace
-            if pace:
-                now = _time.perf_counter()
-                if anchor is None or anchor[2] != pace:
-                    anchor = (now, self.time, pace)
-                ahead = (self.time - anchor[1]) / pace - (now - anchor[0])
-                if ahead > 0:
-                    _time.sleep(ahead)
-            else:
-                anchor = None
-        self._wall += _time.perf_counter() - t0
+        self._running = True
+        try:
+            while done < steps and not (until_done and self.judge.done):
+                self._raise_stop()
+                done += self._run_chunk(min(chunk, steps - done), until_done, progress)
+                pace = 1.0 if realtime else self.pace
+                if pace:
+                    now = _time.perf_counter()
+                    if anchor is None or anchor[2] != pace:
+                        anchor = (now, self.time, pace)
+                    ahead = (self.time - anchor[1]) / pace - (now - anchor[0])
+                    if ahead > 0:
+                        _time.sleep(ahead)
+                else:
+                    anchor = None
+            self._raise_stop()
+        finally:
+            self._running, self._stop = False, None
+            self._wall += _time.perf_counter() - t0
+
+    def _run_chunk(self, n: int, until_done: bool, progress) -> int:
+        step = self.clock.step
+        self._stepping = True
+        try:
+            for _ in range(n):
+                step()
+                if until_done and self.judge.done:
+                    break
+        finally:
+            self._stepping = False
+        if progress is not None:
+            progress(self.time)
+        return n
+
+    def stop_soon(self, exc: BaseException) -> bool:
+        """Make the `run` in progress raise ``exc`` at its next step boundary (within a tenth of a simulated
+        second), for signal handlers: an exception raised by a handler at an arbitrary point can land inside a
+        node's step or a compiled kernel's dispatch and leave a half-done step or a garbled error. Returns False
+        when no run is in progress (or a stop is already pending): then the caller should raise it at once."""
+        if not self._running or self._stop is not None:
+            return False
+        self._stop = exc
+        return True
+
+    @contextlib.contextmanager
+    def stopping_on(self, signum: int, exc_type: type[BaseException]):
+        """While the block runs, signal ``signum`` makes the run raise ``exc_type`` at its next step boundary
+        (`stop_soon`) rather than wherever the signal lands; a second one raises at once. Only in the main
+        thread (the only one that receives signals); elsewhere a no-op."""
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+
+        def handler(signo, frame):
+            if not self.stop_soon(exc_type()):
+                raise exc_type()
+
+        previous = signal.signal(signum, handler)
+        try:
+            yield
+        finally:
+            signal.signal(signum, previous)
+
+    def _raise_stop(self) -> None:
+        exc, self._stop = self._stop, None
+        if exc is not None:
+            raise exc
 
     # --- the simulation interface ---------------------------------------------------------------------------
     def model_states(self):

@@ -33,3 +33,13 @@ def test_every_truncation_is_refused_or_a_whole_prefix_of_entries():
         except bundle.BundleError:
             continue
         assert [e.topic for e in out] in ([], ["a/b"])
+
+
+def test_split_cuts_in_order_below_the_limit_and_sets_aside_what_fits_nowhere():
+    entries = [(f"t/{k}", "", bytes(100 + k)) for k in range(10)] + [("big", "", bytes(5000))] + [("z", "", b"1")]
+    runs, too_large = bundle.split(entries, 400)
+    assert too_large == [("big", "", bytes(5000))]
+    assert [e for run in runs for e in run] == entries[:10] + entries[11:]       # same order, nothing lost
+    assert all(len(bundle.pack(run)) <= 400 for run in runs) and len(runs) > 1
+    assert sum(map(bundle.size, entries[:2])) + len(bundle.MAGIC) == len(bundle.pack(entries[:2]))
+    assert bundle.split([], 400) == ([], [])

@@ -73,6 +73,15 @@ def test_what_a_team_may_send(creds):
     assert check("cyan", "events", own) is None
     assert "may log only its own strategy_error events" in check("cyan", "events", fake)
     assert "unsigned" in fp.check("cyan/2/VelCmd", b"x", None) and fp.check("cyan/2/VelCmd", b"x", None).who == ""
+    # the verdicts are remembered per (sender, topic): asked again, the same answers (events stay per payload)
+    assert "may not command magenta/2" in check("cyan", "magenta/2/VelCmd") and check("magenta", "magenta/2/VelCmd") is None
+    assert check("cyan", "cyan/2/VelCmd") is None and check("cyan", "events", own) is None
+    assert "may log only" in check("cyan", "events", fake)
+    att = creds["cyan"].signer("m1")("cyan/lockstep/bundle", b"SMB1")
+    assert fp.check_entry(att, "cyan/2/VelCmd", b"") is None and "may not command" in fp.check_entry(att, "magenta/1/VelCmd", b"")
+    for k in range(10_000):                            # a sender inventing topics cannot grow the memory
+        fp.check_entry(att, f"cyan/x{k}", b"")
+    assert len(fp._verdicts) <= 4096 and "has no robot 7" in fp.check_entry(att, "cyan/7/VelCmd", b"")
 
 
 def test_access_control_lets_a_team_hear_only_its_own(creds):
@@ -118,3 +127,11 @@ def test_a_team_process_rebuilds_the_servers_scene_with_its_own_strategy():
         protocol.loads(b'{"tick": 1}', "proc", "tick")
     with pytest.raises(protocol.ProtocolError, match="not JSON"):
         protocol.loads(b"\xff", "proc")
+
+
+def test_the_ack_is_the_protocols_json():
+    proc = protocol.new_proc_id()
+    for tick, sent in ((0, 0.0), (12345, 98765.4321), (7, 1e-9)):
+        raw = protocol.ack(proc, tick, sent)
+        assert raw == protocol.dumps({"proc": proc, "tick": tick, "sent": sent})
+        assert protocol.loads(raw, "proc", "tick", "sent") == {"proc": proc, "tick": tick, "sent": sent}

@@ -14,7 +14,7 @@ import zenoh
 
 from simatch import msgs
 from simatch.bus import InProcessBus, LockstepClock
-from simatch.bus.zenoh_bus import ZenohBus, open_session, zenoh_config
+from simatch.bus.zenoh_bus import MAX_SAMPLE, ZenohBus, open_session, zenoh_config
 from simatch.strategy.node import StrategyPub
 
 from .cluster import ROOT, free_port
@@ -143,6 +143,7 @@ def test_safe_defaults():
     assert get("scouting/multicast/enabled") is False and get("scouting/gossip/enabled") is False
     assert get("listen/endpoints") == [] and get("connect/endpoints") == ["tcp/127.0.0.1:1"]
     assert get("transport/shared_memory/enabled") is False          # killed processes would leave /dev/shm files
+    assert get("transport/unicast/lowlatency") is True and get("transport/unicast/qos/enabled") is False
 
 
 def test_the_interpreter_exits_even_if_nobody_closes_the_bus():
@@ -204,3 +205,66 @@ def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives
     client.pump(0.0)
     assert got == [("vision", 0), ("vision", 1), ("tick", b"t1")]
     assert feed.entries == []
+
+
+def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arrive_whole(pair):
+    """The low-latency transport breaks a link with a larger sample: the bus never sends one."""
+    server, client = pair
+    got = []
+    server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: got.append(len(payload)))
+    server.subscribe_raw("cyan/big", lambda topic, payload, att, t: got.append(("big", len(payload))))
+    server.accept_bundles("cyan/lockstep/bundle", verify=False)
+    client.put_raw("cyan/big", bytes(MAX_SAMPLE + 1))                 # refused here, counted
+    assert client.oversize == {"cyan/big": 1}
+    client.begin_batch()
+    sizes = [MAX_SAMPLE // 3] * 7 + [MAX_SAMPLE * 2, 10]               # ~2.3 samples' worth, one too large
+    for n in sizes:
+        client.put_raw("cyan/lockstep/ack", bytes(n))
+    client.send_batch("cyan/lockstep/bundle")
+    assert client.oversize == {"cyan/big": 1, "cyan/lockstep/ack": 1}
+    client.put_raw("cyan/big", b"after")                              # the link still works
+    pump_until(server, lambda: len(got) == 9)
+    assert got == [n for n in sizes if n <= MAX_SAMPLE] + [("big", 5)]
+    assert server.stats.malformed == 0
+
+
+def test_a_client_without_the_low_latency_transport_still_plays_with_one_that_has_it():
+    """A client in another language (or an older tool) keeps Zenoh's ordinary transport: same samples."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint])), "unit")
+    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint], low_latency=False), wait=10), "unit",
+                      eager=True)
+    try:
+        got = []
+        server.subscribe("cyan/2/VelCmd", msgs.VelCmd, lambda m: got.append(m.tick))
+        client.subscribe("cyan/2/OmniVisionInfo", msgs.OmniVisionInfo, lambda m: got.append(-m.tick))
+        vel = client.publisher("cyan/2/VelCmd", msgs.VelCmd)
+        vision = server.publisher("cyan/2/OmniVisionInfo", msgs.OmniVisionInfo)
+        pump_until(client, lambda: vel.matching)
+        pump_until(server, lambda: vision.matching)
+        vel.put(msgs.new(msgs.VelCmd, tick=3))
+        vision.put(msgs.new(msgs.OmniVisionInfo, tick=4))
+        pump_until(server, lambda: 3 in got)
+        pump_until(client, lambda: -4 in got)
+    finally:
+        client.close()
+        server.close()
+
+
+def test_an_owner_is_woken_only_when_a_sample_says_so(pair):
+    """``subscribe_raw(wakes=...)`` decides in Zenoh's thread which samples wake a waiting owner (a lockstep
+    server: only the last answer of a tick); the others wait in the queue, in order."""
+    server, client = pair
+    seen = []
+    server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: seen.append(payload),
+                         wakes=lambda topic, payload: payload == b"last")
+    pub = client.raw_publisher("cyan/lockstep/ack")
+    pump_until(client, lambda: pub.matching)
+    pub.put(b"first")
+    pub.put(b"second")
+    assert server.wait(0.5) is False                 # queued, but nobody woken
+    pub.put(b"last")
+    assert server.wait(5.0) is True
+    time.sleep(0.05)
+    server.pump(0.0)
+    assert seen == [b"first", b"second", b"last"]

@@ -7,6 +7,7 @@ once, when a publisher is declared, never per message.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 from . import topics as _topics
@@ -44,8 +45,9 @@ class _Subscription:
 
     def _bind(self, pub: _Publisher) -> None:
         if self.any_type:
-            topic, cb = pub.topic, self.callback
-            bound: Callback = lambda msg: cb(topic, msg)  # noqa: E731
+            # partial, not a lambda: called in C, so a wildcard listener (the recorder hears some two thousand
+            # messages per simulated second) costs no extra Python frame per delivery
+            bound: Callback = partial(self.callback, pub.topic)
         else:
             if self.msgtype is not None and pub.msgtype is not None and _name(self.msgtype) != _name(pub.msgtype):
                 raise TypeError(

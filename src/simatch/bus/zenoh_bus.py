@@ -26,6 +26,7 @@ from __future__ import annotations
 import atexit
 import json
 import logging
+import os
 import re
 import threading
 import time
@@ -46,6 +47,19 @@ log = logging.getLogger(__name__)
 
 #: the endpoint a server listens on and a team connects to when none is given: loopback only
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+#: the largest payload a sample may carry [bytes]. Zenoh's low-latency transport (`zenoh_config`) writes
+#: each sample as one frame of at most three quarters of its 64 KiB batch, and a larger one breaks the
+#: link (measured with eclipse-zenoh 1.10: 49,000 bytes arrive, 49,500 are lost with the next sample).
+#: Larger messages are not sent (logged); bundles and feeds are cut into several samples below it.
+MAX_SAMPLE = 48_000
+
+#: Zenoh's runtime threads in a simatch process (Zenoh reads ``ZENOH_RUNTIME`` when its runtime starts; a
+#: value the user sets wins): one receiving worker instead of two. Every sample's callback needs the GIL,
+#: so a second worker adds no parallelism, only wake-ups: idle workers are woken to steal the task the
+#: other one just got. Measured on 2 cores with 11 processes: the server's receiving threads went from
+#: about 9 to 4 context switches per control tick, a robot process's from 4 to 3.
+RUNTIME = "(rx: (worker_threads: 1), app: (worker_threads: 1), acc: (worker_threads: 1))"
 
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")
 _ENCODING_PREFIX = "application/cdr;"
@@ -70,9 +84,16 @@ def check_run_name(run: str) -> str:
 
 def zenoh_config(mode: str = "peer", listen: Sequence[str] = (), connect: Sequence[str] = (),
                  user: str | None = None, password: str | None = None, users_file: str | None = None,
-                 access_control: dict | None = None) -> zenoh.Config:
+                 access_control: dict | None = None, low_latency: bool = True) -> zenoh.Config:
     """A Zenoh configuration with simatch's safe defaults: no scouting, only the endpoints given, no shared
-    memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'."""
+    memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'.
+
+    ``low_latency``: Zenoh's low-latency unicast transport, used when both ends of a link ask for it (a
+    client that does not gets the ordinary transport from the same server). A sample is written to the
+    socket by the thread that puts it, where the ordinary transport hands it to a sending thread first:
+    one wake-up less per sample, which is what a tick costs on a machine with few cores (the command
+    latency of a real-time run with one process per robot halves). It has no priorities (qos is off) and
+    carries samples of at most `MAX_SAMPLE` bytes."""
     conf = zenoh.Config()
 
     def put(key: str, value: Any) -> None:
@@ -84,6 +105,9 @@ def zenoh_config(mode: str = "peer", listen: Sequence[str] = (), connect: Sequen
     put("listen/endpoints", list(listen))
     put("connect/endpoints", list(connect))
     put("transport/shared_memory/enabled", False)
+    if low_latency:
+        put("transport/unicast/lowlatency", True)
+        put("transport/unicast/qos/enabled", False)
     if user is not None or users_file is not None:
         usrpwd: dict[str, Any] = {"user": user, "password": password}
         if users_file is not None:
@@ -105,6 +129,7 @@ def _close_all() -> None:
 
 def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh.Session:
     """Open a session, retrying for up to ``wait`` seconds (e.g. while the server starts)."""
+    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME)     # before Zenoh's runtime starts (its first session)
     deadline = time.monotonic() + wait
     while True:
         try:
@@ -120,7 +145,7 @@ class _RemoteSub:
     """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
 
     __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes", "fed",
-                 "bundled", "__weakref__")
+                 "bundled", "early", "__weakref__")
 
     def __init__(self, topic: str, msgtype: Any, callback, any_type: bool = False, raw: bool = False,
                  verify: bool = True, wakes: bool = True):
@@ -131,6 +156,9 @@ class _RemoteSub:
         self.raw = raw
         self.verify = verify
         self.wakes = wakes
+        #: ``early(topic, payload) -> bool``, run in Zenoh's thread as a sample is queued: whether it wakes
+        #: the owner (None: ``wakes`` says)
+        self.early: Callable[[str, bytes], bool] | None = None
         self.closed = False
         self.zsub = None
         self.fed = False           # served by a feed (`ZenohBus.take_feed`), not by a Zenoh subscriber of its own
@@ -211,6 +239,8 @@ class RawPublisher(_Matching):
         bus = self._bus
         if bus._gather(self.topic, payload):
             return
+        if not bus._fits(self.topic, len(payload)):
+            return
         if not self.matching:
             if self.always:
                 bus._put_signed(self.topic, payload, count)
@@ -255,6 +285,8 @@ class _Publisher(_Matching):
             for feed in fed:
                 feed.entries.append((self.topic, self.typename, data))
             if not remote:
+                return
+            if not bus._fits(self.topic, len(data)):
                 return
             batch = bus._batch
             if batch is not None:
@@ -347,6 +379,8 @@ class ZenohBus:
         self._routes_lock = threading.Lock()     # Zenoh's threads fill the routes; the owner changes subscriptions
         self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)   # refusals inside bundles
         self._closed = False
+        #: samples not sent because they were larger than MAX_SAMPLE, by topic
+        self.oversize: dict[str, int] = {}
         _SESSIONS.add(self)
 
     # --- the Bus interface -------------------------------------------------------------------------------
@@ -385,12 +419,19 @@ class ZenohBus:
 
     # --- raw samples (protocols built on the bus, e.g. lockstep) -------------------------------------------
     def subscribe_raw(self, topic: str, callback: Callable[[str, bytes, Optional[bytes], float], None],
-                      verify: bool = True) -> _Subscription:
+                      verify: bool = True, wakes: Callable[[str, bytes], bool] | None = None) -> _Subscription:
         """Remote samples on ``topic`` as ``callback(topic, payload, attachment, arrival)``, delivered in
         order with every other sample (``arrival``: `time.monotonic()` when it came in: the
-        same clock in every process of a machine)."""
-        return _Subscription(self, topic, None, self._declare_remote(_RemoteSub(topic, None, callback, raw=True,
-                                                                                 verify=verify)))
+        same clock in every process of a machine).
+
+        ``wakes(topic, payload)``: runs in Zenoh's receiving thread as each sample is queued (before it is
+        checked: it only decides when the owner looks, never what is used) and says whether the sample
+        wakes an owner waiting in `wait`/`take` (by default every raw sample does). Each wake-up is a
+        context switch and a GIL hand-off: a lockstep server waits for one answer per process and needs to
+        look only once the last one is in."""
+        rsub = _RemoteSub(topic, None, callback, raw=True, verify=verify)
+        rsub.early = wakes
+        return _Subscription(self, topic, None, self._declare_remote(rsub))
 
     def put_raw(self, topic: str, payload: bytes) -> None:
         """Send bytes to the other processes (signed like every sample of this process), for occasional
@@ -441,8 +482,19 @@ class ZenohBus:
         its receivers subscribe to ``topic`` exactly); returns how many entries it carried."""
         entries, self._batch = self._batch, None
         if entries:
-            self.raw_publisher(topic).put(_bundle.pack(entries), count=False)
+            pub = self.raw_publisher(topic)
+            for run in self._runs(topic, entries):
+                pub.put(_bundle.pack(run), count=False)
         return len(entries or ())
+
+    def _runs(self, topic: str, entries: list) -> list[list]:
+        """The entries of a bundle on ``topic`` in runs that each fit in a sample (one run, nearly always)."""
+        if sum(map(_bundle.size, entries)) + len(_bundle.MAGIC) <= MAX_SAMPLE:
+            return [entries]
+        runs, too_large = _bundle.split(entries, MAX_SAMPLE)
+        for entry in too_large:
+            self._fits(entry[0], _bundle.size(entry))
+        return runs
 
     def declare_feed(self, topic: str, covers: Sequence[str]) -> Feed:
         """A feed on ``topic`` of what is published on the topics ``covers`` matches (see the class)."""
@@ -458,8 +510,10 @@ class ZenohBus:
         signer = self.signer
         for feed in self._feeds:
             entries, feed.entries = feed.entries, []
-            if entries and feed.matching:
-                data = _bundle.pack(entries)
+            if not (entries and feed.matching):
+                continue
+            for run in self._runs(feed.topic, entries):
+                data = _bundle.pack(run)
                 try:
                     feed._z.put(data, attachment=signer(feed.topic, data) if signer is not None else None)
                 except zenoh.ZError as exc:
@@ -467,7 +521,20 @@ class ZenohBus:
                     continue
                 self.stats.published += 1
 
+    def _fits(self, topic: str, size: int) -> bool:
+        """Whether a sample of ``size`` bytes may be sent (see `MAX_SAMPLE`); if not, it is counted in
+        ``oversize`` and logged (the first time for each topic, then every hundredth)."""
+        if size <= MAX_SAMPLE:
+            return True
+        n = self.oversize[topic] = self.oversize.get(topic, 0) + 1
+        if n == 1 or n % 100 == 0:
+            log.error("not sent: a sample of %d bytes on %s (at most %d bytes; %d so far)", size, topic,
+                      MAX_SAMPLE, n)
+        return False
+
     def _put_signed(self, topic: str, payload: bytes, count: bool = True) -> None:
+        if not self._fits(topic, len(payload)):
+            return
         attachment = self.signer(topic, payload) if self.signer is not None else None
         self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
                          allowed_destination=zenoh.Locality.REMOTE)
@@ -650,7 +717,7 @@ class ZenohBus:
                 return                                   # not a message (e.g. a lockstep protocol sample)
             # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
             pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
-            self._queue((rsub, topic, payload, attachment, encoding, clock(), pre), rsub.wakes)
+            self._queue((rsub, topic, payload, attachment, encoding, clock(), pre), _wakes(rsub, topic, payload))
 
         rsub.zsub = self.session.declare_subscriber(self.key(rsub.topic), _ZCallback(on_sample, indirect=False),
                                                     allowed_origin=zenoh.Locality.REMOTE)
@@ -693,7 +760,7 @@ class ZenohBus:
     def _queue_all(self, items: list) -> None:
         with self._queue_lock:
             self._inbox.extend(items)
-            waking = sum(1 for item in items if item[0].wakes)
+            waking = sum(1 for item in items if _wakes(item[0], item[1], item[2]))
             if waking:
                 self._waking += waking
                 self._wake.set()
@@ -825,6 +892,18 @@ class ZenohBus:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _wakes(rsub: _RemoteSub, topic: str, payload) -> bool:
+    """Whether a sample being queued wakes the owner (in Zenoh's thread: never raises)."""
+    early = rsub.early
+    if early is None:
+        return rsub.wakes
+    try:
+        return bool(early(topic, payload))
+    except Exception:                # the owner will look at it anyway
+        log.exception("deciding whether a sample on %s wakes the owner failed", topic)
+        return True
 
 
 def _type_of(encoding: str) -> str:

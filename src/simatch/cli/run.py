@@ -10,6 +10,7 @@ import argparse
 import contextlib
 import importlib
 import json
+import signal
 import sys
 from typing import Any, Callable
 
@@ -170,7 +171,8 @@ def main(args) -> int:
         duration = run_duration(sim, args)
         progress = Progress(duration, not args.quiet, match_status(sim))
         try:
-            sim.run(seconds=duration, progress=progress, realtime=args.realtime)
+            with sim.stopping_on(signal.SIGINT, KeyboardInterrupt):
+                sim.run(seconds=duration, progress=progress, realtime=args.realtime)
         finally:
             progress.close()
         out = sim.result()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import signal
 import sys
 
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
@@ -75,7 +76,8 @@ def main(args) -> int:
                 server.wait_for_teams()
                 progress = Progress(duration, not args.quiet, match_status(server.sim))
                 try:
-                    server.sim.run(seconds=duration, progress=progress)
+                    with server.sim.stopping_on(signal.SIGINT, KeyboardInterrupt):   # at a step boundary
+                        server.sim.run(seconds=duration, progress=progress)
                 finally:
                     progress.close()
             except KeyboardInterrupt:

@@ -191,8 +191,7 @@ class TeamProcess:
             bus.begin_batch()
         try:
             clock.step()
-            bus.put_raw(protocol.ack_topic(self.team),
-                        protocol.dumps({"proc": self.proc, "tick": tick, "sent": time.monotonic()}))
+            bus.put_raw(protocol.ack_topic(self.team), protocol.ack(self.proc, tick, time.monotonic()))
         finally:
             if self.bundles:
                 bus.send_batch(protocol.bundle_topic(self.team))

@@ -16,6 +16,8 @@ sent at tick k-1: the same data flow as embedded, which is why the state digests
 
 from __future__ import annotations
 
+import json
+import threading
 import time
 from typing import Callable
 
@@ -47,18 +49,46 @@ class LockstepGate(Node):
         self._tick = -1
         self._opened = 0.0
         self._waiting: set[str] = set()
+        #: the answers still awaited for tick ``_early_tick`` (process id -> team), as Zenoh's receiving
+        #: thread sees them: it wakes the gate only for the last one (see `_last_answer`)
+        self._early: dict[str, str] = {}
+        self._early_tick = -1
+        self._early_lock = threading.Lock()
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
         self.control_steps = ctx.steps(self.period, "control period")
         self.bus = ctx.bus
-        self._sub = self.bus.subscribe_raw(protocol.ACKS, self._ack)
+        self._sub = self.bus.subscribe_raw(protocol.ACKS, self._ack, wakes=self._last_answer)
         #: the tick goes into each team's feed, and alone to processes that take no feed
         self._tick_pub = self.bus.raw_publisher(protocol.TICK, always=False)
 
     def forget(self, proc_id: str) -> None:
         """Stop waiting for a process (it left or died)."""
         self._waiting.discard(proc_id)
+
+    def _last_answer(self, topic: str, payload: bytes) -> bool:
+        """In Zenoh's thread, as an answer is queued: is it the last one the gate waits for? Only then is
+        the gate woken (one wake-up per tick instead of one per process). This only decides when the gate
+        looks: the gate itself then checks every answer (`_ack`), and if one was not what it claimed it
+        goes back to waiting for the rest."""
+        try:
+            msg = json.loads(payload)
+            proc, tick = msg["proc"], msg["tick"]
+        except (ValueError, TypeError, KeyError, UnicodeDecodeError):
+            return False
+        with self._early_lock:
+            if tick != self._early_tick or not isinstance(proc, str) or \
+                    self._early.get(proc) != protocol.team_of(topic):
+                return False
+            del self._early[proc]
+            return not self._early
+
+    def _await(self, procs) -> None:
+        """Tell Zenoh's thread which answers of this tick are still awaited."""
+        with self._early_lock:
+            self._early = {p.id: p.team for p in procs}
+            self._early_tick = self._tick
 
     def _ack(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
         try:
@@ -89,16 +119,23 @@ class LockstepGate(Node):
         pending: list = []
         self._absorb(bus.take(0.0), pending)          # joins, late answers, requests since the last tick
         self._tick = step // self.control_steps
-        self._waiting = {p.id for p in self._active()}
+        active = self._active()
+        self._waiting = {p.id for p in active}
+        self._await(active)
+        self._opened = opened = time.monotonic()
         self._tick_pub.put(protocol.dumps({"step": step, "tick": self._tick}))
         bus.flush_feeds()                              # each team's inputs of this tick, then the tick
-        self._opened = opened = time.monotonic()
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
         while self._waiting:
             left = limit - time.monotonic()
             if left <= 0:
                 break
             self._absorb(bus.take(left), pending)
+            if self._waiting:      # woken by something else, or an answer was refused: look again
+                self._await([p for p in active if p.id in self._waiting])
+                self._absorb(bus.take(0.0), pending)           # answers queued before that
+        with self._early_lock:
+            self._early = {}
         if self._waiting:
             self.missed += len(self._waiting)
             self._on_missed(set(self._waiting), now)

@@ -95,6 +95,11 @@ def dumps(obj: Mapping[str, Any]) -> bytes:
     return json.dumps(obj, separators=(",", ":")).encode()
 
 
+def ack(proc: str, tick: int, sent: float) -> bytes:
+    """The ``ack`` of a tick (what `dumps` would write, without its cost on every tick of every process)."""
+    return f'{{"proc":{json.dumps(proc)},"tick":{int(tick)},"sent":{float(sent)!r}}}'.encode()
+
+
 def loads(payload: bytes, *required: str) -> dict:
     """A protocol message; ProtocolError if it is not a JSON object with the ``required`` keys."""
     try:

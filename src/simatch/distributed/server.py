@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import topics
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import DEFAULT_ENDPOINT, MAX_SAMPLE, ZenohBus, open_session, zenoh_config
 from ..scene.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
@@ -59,6 +59,10 @@ class Server:
         #: answer is normal (it applies at the next tick) and only a silent process should stop being waited for
         self.late_after = 4 if realtime else 1
         teams = {t: spec.teams[t].robot_ids() for t in spec.teams}
+        offered = len(protocol.dumps(protocol.scene_offer(scene, seed, run, self.mode)))
+        if offered > MAX_SAMPLE:
+            raise ValueError(f"the scene is too large to offer to the team processes ({offered} bytes with its "
+                             f"overrides; at most {MAX_SAMPLE})")
         self.credentials_dir = Path(credentials_dir) if credentials_dir else credentials.default_dir(run)
         self.creds = credentials.ensure(self.credentials_dir, [*teams, credentials.ADMIN])
         self.fair = FairPlay(run, self.creds, teams)

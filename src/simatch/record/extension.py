@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import signal
 import sys
-import threading
 
 from ..cli import UsageError
 
@@ -34,7 +33,8 @@ class RecordExtension:
 
 
 class _Terminated(BaseException):
-    """SIGTERM, raised in the main thread so that the recording is finalised on the way out."""
+    """SIGTERM, raised in the main thread (at a step boundary while the run steps) so that the recording is
+    finalised on the way out."""
 
 
 @contextlib.contextmanager
@@ -45,13 +45,9 @@ def _recording(sim, path: str, links: bool):
         recorder = Recorder.for_run(sim, path, links=links, command_line=["simatch"] + sys.argv[1:])
     except RecordError as exc:
         raise UsageError(str(exc)) from None
-    previous = None
-    if threading.current_thread() is threading.main_thread():
-        def on_term(signum, frame):
-            raise _Terminated()
-        previous = signal.signal(signal.SIGTERM, on_term)
     try:
-        yield recorder
+        with sim.stopping_on(signal.SIGTERM, _Terminated):
+            yield recorder
     except _Terminated:
         recorder.close("terminated")
         raise SystemExit(128 + signal.SIGTERM) from None
@@ -62,6 +58,4 @@ def _recording(sim, path: str, links: bool):
         recorder.close(f"failed: {type(exc).__name__}: {exc}")
         raise
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
         recorder.close("complete")

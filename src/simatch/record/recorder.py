@@ -187,8 +187,11 @@ class Recorder:
         self._log.forget()
 
     def _on_model_states(self, topic: str, msg) -> None:
-        step = _step_of(msg)
-        if step is not None and step % self._game_every == 0:
+        try:                 # every physics step: kept to one attribute read and a modulo
+            step = int(msg.step)
+        except (AttributeError, TypeError, ValueError):
+            return
+        if step % self._game_every == 0:
             try:
                 pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
                 self._log.record(self._game, self._scene3d.game_update(msg.name, pose))
@@ -263,11 +266,7 @@ class RunRecorder(Recorder):
         super().close(status, out)
 
 
-def _step_of(msg) -> int | None:
-    try:
-        return int(msg.step)
-    except (AttributeError, TypeError, ValueError):
-        return None
+
 
 
 def _check_path(path: Path) -> None:
