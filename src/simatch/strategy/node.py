@@ -75,14 +75,14 @@ class RobotNode(Node):
         self.publish(now, world.tick, cmd, vx, vy, w)
 
     def _velocity(self, cmd: Command) -> tuple[float, float, float]:
+        if cmd.target is None and cmd.target_ori is None:
+            return cmd.vx, cmd.vy, cmd.w           # a velocity command: no limits to look up
         coach = self.world.coach
         max_vel, max_w = cmd.max_vel, cmd.max_w
         if coach is not None and coach.max_vel > 0:
             max_vel = min(max_vel, coach.max_vel)
         if coach is not None and coach.max_w > 0:
             max_w = min(max_w, coach.max_w)
-        if cmd.target is None and cmd.target_ori is None:
-            return cmd.vx, cmd.vy, cmd.w
         me = self.world.me
         vx, vy, w = velocity_towards(me.x, me.y, me.yaw, cmd, max_vel, max_w)
         if cmd.target is None:

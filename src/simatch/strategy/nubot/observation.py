@@ -162,7 +162,8 @@ def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, floa
     n = len(o.x)
     if n == 0:
         return []
-    rest = [q for q in zip(o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()) if (q[0], q[1]) not in spots]
+    x, y, vx, vy = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
+    rest = [(x[k], y[k], vx[k], vy[k]) for k in range(n) if (x[k], y[k]) not in spots]
     if n - len(rest) < len(mates) - 1:
         # some team-mates are not where the team list says (noisy perception): match by distance
         rest = [q for q in rest
