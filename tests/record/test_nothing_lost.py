@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from simatch.record import Recording, verify
+from simatch.record import Recording, RecordingError, verify
 
 SIMATCH = [sys.executable, "-m", "simatch"]
 
@@ -65,8 +65,11 @@ def _run_until_recording(path, *extra):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and proc.poll() is None:
-        if path.exists() and Recording(path).end_ns >= 1_995_000_000:     # two simulated seconds on disk
-            return proc
+        try:
+            if path.exists() and Recording(path).end_ns >= 1_995_000_000:     # two simulated seconds on disk
+                return proc
+        except RecordingError:       # caught between the file's creation and its header: not an MCAP file yet
+            pass
         time.sleep(0.2)
     _stop(proc)
     raise AssertionError(f"the run did not start recording: {proc.stderr.read()}")
