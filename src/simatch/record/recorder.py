@@ -266,9 +266,6 @@ class RunRecorder(Recorder):
         super().close(status, out)
 
 
-
-
-
 def _check_path(path: Path) -> None:
     if path.exists():
         raise RecordError(f"{path} already exists: remove it or record to another file (nothing was overwritten)")

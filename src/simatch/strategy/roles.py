@@ -66,3 +66,8 @@ def members(enum_cls: type[enum.Enum]) -> types.SimpleNamespace:
     that runs for every robot and tick: on Python 3.11 every attribute lookup on an Enum class takes the
     metaclass's slow path (it defines ``__getattr__``) and costs about eight times a plain attribute."""
     return types.SimpleNamespace(**enum_cls.__members__)
+
+
+#: `Role` and `Action` members as plain attributes (`members`), for the hot paths of strategies
+ROLES = members(Role)
+ACTIONS = members(Action)

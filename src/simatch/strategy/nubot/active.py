@@ -25,9 +25,9 @@ import math
 import numpy as np
 
 from ..base import Command, PassIntent
-from ..roles import Action, Role, members
+from ..roles import ACTIONS, ROLES
 from .evaluate import lane_clear, pass_speed, position_value, shot_window
-from .gameflow import GameFlow, Phase
+from .gameflow import GameFlow, PHASES
 from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion
 from .observation import Observation
@@ -35,10 +35,6 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Phase = members(Phase)
-_Role = members(Role)
-_Action = members(Action)
 
 MOUTH = 0.29            # robot centre to a held ball's centre [m]
 PASS_KEEP = 1.5         # a pass being lined up keeps its receiver unless another is this much better
@@ -127,7 +123,7 @@ class BallPlayer:
         return self.announce if self.announce is not None and obs.t <= self.announce_until else None
 
     # --- without the ball --------------------------------------------------------------------------------
-    def fetch(self, obs: Observation, pic: Picture, role: int = _Role.ACTIVE, stay_out_own_area: bool = True) -> Command:
+    def fetch(self, obs: Observation, pic: Picture, role: int = ROLES.ACTIVE, stay_out_own_area: bool = True) -> Command:
         p, me = self.p, obs.me
         bx, by = obs.bx, obs.by
         vbx, vby = obs.bvx, obs.bvy
@@ -138,7 +134,7 @@ class BallPlayer:
         feed = (0.0, 0.0)
         end = 0.0
         vmax = p.max_speed
-        action = _Action.CATCH_BALL
+        action = ACTIONS.CATCH_BALL
         t, tx, ty = pic.catch.get(me.id, (0.0, bx, by))
         if pic.opp_holds or speed < 0.4:
             tx, ty = bx, by
@@ -156,7 +152,7 @@ class BallPlayer:
                 err = abs(wrap(face - me.yaw))
                 give = max(0.0, speed - p.catch_speed + 0.6)
                 feed = (ux * give, uy * give)
-                action = _Action.CATCH_POSITIONED
+                action = ACTIONS.CATCH_POSITIONED
             elif dball < 1.0:
                 tx, ty = bx + vbx * 0.15, by + vby * 0.15
                 end = 0.6
@@ -175,7 +171,7 @@ class BallPlayer:
                 ux, uy = math.cos(face), math.sin(face)
                 tx, ty = obs.bx - ux * (RELEASE_DISTANCE + 0.3), obs.by - uy * (RELEASE_DISTANCE + 0.3)
                 vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=False)
-                return Command(vx=vx, vy=vy, w=w, dribble=False, role=role, action=_Action.CATCH_BALL_SLOW,
+                return Command(vx=vx, vy=vy, w=w, dribble=False, role=role, action=ACTIONS.CATCH_BALL_SLOW,
                                intent=(tx, ty))
         boxes = self.areas.forbidden(self.may_enter_opp_area(obs)) if stay_out_own_area else ()
         vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed,
@@ -183,14 +179,14 @@ class BallPlayer:
         return Command(vx=vx, vy=vy, w=w, dribble=dball < 2.0, role=role, action=action, intent=(tx, ty))
 
     # --- with the ball -------------------------------------------------------------------------------------
-    def play(self, obs: Observation, pic: Picture, flow: GameFlow, role: int = _Role.ACTIVE) -> Command:
+    def play(self, obs: Observation, pic: Picture, flow: GameFlow, role: int = ROLES.ACTIVE) -> Command:
         p, me = self.p, obs.me
         L2 = self.areas.L2
         used = math.hypot(me.x - self.dribble_from[0], me.y - self.dribble_from[1]) if self.dribble_from else 0.0
         left = p.dribble_limit - used
         opps = obs.opps
         bx, by = obs.bx, obs.by
-        can_score = (not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == _Phase.PLAY)
+        can_score = (not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == PHASES.PLAY)
         threat = self.threat_time(obs)
         prev = self.plan
         plan = None
@@ -411,9 +407,9 @@ class BallPlayer:
             err = abs(wrap(face - me.yaw))
             vmax = p.dribble_speed * max(0.15, math.cos(min(err, 1.5)))
             vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.dribble_turn, avoid=True,
-                                       boxes=self.areas.forbidden(self.may_enter_opp_area(obs)) if role != _Role.GOALIE
+                                       boxes=self.areas.forbidden(self.may_enter_opp_area(obs)) if role != ROLES.GOALIE
                                        else ())
-            return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=_Action.MOVE_WITH_BALL,
+            return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=ACTIONS.MOVE_WITH_BALL,
                            intent=(tx, ty))
         tx, ty, speed = plan[1], plan[2], plan[3]
         # a shot leans against the robot's drift; a pass does not need it (the receiver gives way along the
@@ -423,16 +419,16 @@ class BallPlayer:
         d = math.hypot(tx - me.x, ty - me.y)
         if kind == "shoot":
             tol = max(0.02, min(0.06, 0.35 * plan[4])) if plan[4] > 0.0 else 0.05
-            action = _Action.TURN_FOR_SHOOT
+            action = ACTIONS.TURN_FOR_SHOOT
         else:
             tol = max(0.03, min(0.12, 0.45 / max(d, 0.5)))
-            action = _Action.TURN_TO_PASS
+            action = ACTIONS.TURN_TO_PASS
         vx, vy, w = self.motion.go(obs, me.x, me.y, face, 0.5, p.dribble_turn, avoid=False)
         kick = 0.0
         spin = 2.5 if kind == "clear" else 1.2     # turning adds the mouth's sideways speed to the kick
         if abs(err) < tol and abs(me.w) < spin and me.holding:
             kick = speed
-            action = _Action.AT_SHOOT_SITUATION if kind == "shoot" else _Action.STATIC_PASS
+            action = ACTIONS.AT_SHOOT_SITUATION if kind == "shoot" else ACTIONS.STATIC_PASS
         # a kick slower than the dribbler can take would be taken straight back by the robot's own dribbler:
         # for those the dribbler lets go as the kicker fires (the ball must then lie in the mouth); a faster
         # kick fires from the held ball

@@ -16,7 +16,8 @@ from ...scene.commands import MatchMode, is_ours
 from ..roles import members
 from .observation import Observation
 
-_MatchMode = members(MatchMode)     # (plain attributes, see roles.members: this runs for every robot and tick)
+#: `MatchMode` and `Phase` members as plain attributes (`roles.members`), for every module of the team
+MODES = members(MatchMode)
 
 IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
 #: our restart's ball moved this far (beyond perception noise; opponents keep 3 m away): our taker touched
@@ -39,13 +40,13 @@ class Phase(enum.IntEnum):
     TEST = 6
 
 
-_Phase = members(Phase)
+PHASES = members(Phase)
 
 
 class GameFlow:
     def __init__(self, restart_wait: float):
         self.restart_wait = restart_wait
-        self.phase = _Phase.STOP
+        self.phase = PHASES.STOP
         self.kind = 0                  # the set piece being set up or taken (MatchMode value)
         self.t0 = 0.0                  # when START came for the restart
         self.ball0 = (0.0, 0.0)        # where the ball was then
@@ -67,17 +68,17 @@ class GameFlow:
         mode = obs.mode
         last = self._last_mode
         self._last_mode = mode
-        if mode == _MatchMode.STOPROBOT:
-            self.phase = _Phase.STOP
+        if mode == MODES.STOPROBOT:
+            self.phase = PHASES.STOP
             return
-        if mode == _MatchMode.PARKINGROBOT:
-            self.phase = _Phase.PARK
+        if mode == MODES.PARKINGROBOT:
+            self.phase = PHASES.PARK
             return
-        if mode == _MatchMode.TEST:
-            self.phase = _Phase.TEST
+        if mode == MODES.TEST:
+            self.phase = PHASES.TEST
             return
         if 1 <= mode <= 13:
-            self.phase = _Phase.SETUP
+            self.phase = PHASES.SETUP
             self.kind = mode
             self.taker = 0
             return
@@ -86,7 +87,7 @@ class GameFlow:
             if 1 <= last <= 13:
                 self._restart(obs, obs.mtype if 1 <= obs.mtype <= 13 else last)
             else:
-                self.phase = _Phase.PLAY
+                self.phase = PHASES.PLAY
         self._follow(obs)
 
     def _restart(self, obs: Observation, kind: int) -> None:
@@ -96,21 +97,21 @@ class GameFlow:
         self.taker = 0
         self.first_holder = 0
         self._ours = 0
-        if kind == _MatchMode.DROPBALL:
-            self.phase = _Phase.PLAY
+        if kind == MODES.DROPBALL:
+            self.phase = PHASES.PLAY
             self.pass_pending = True
         elif is_ours(kind):
-            self.phase = _Phase.OUR_RESTART
-            self.pass_pending = kind != _MatchMode.OUR_PENALTY
+            self.phase = PHASES.OUR_RESTART
+            self.pass_pending = kind != MODES.OUR_PENALTY
         else:
-            self.phase = _Phase.OPP_RESTART
+            self.phase = PHASES.OPP_RESTART
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
         self._regain(obs)
         shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
         moved = shift >= IN_PLAY_DISTANCE
-        if self.phase == _Phase.OUR_RESTART:
+        if self.phase == PHASES.OUR_RESTART:
             if shift >= TAKEN_DISTANCE and not self.taker:
                 # from its first touch on, the taker may not touch the ball again before another robot did;
                 # the others keep their distance until the ball is in play (or the restart times out)
@@ -119,11 +120,11 @@ class GameFlow:
                 self.taker, self.taker_since = taker.id, obs.t
                 self.first_holder = taker.id
             if moved or obs.t - self.t0 > self.restart_wait:
-                self.phase = _Phase.PLAY
-        elif self.phase == _Phase.OPP_RESTART:
+                self.phase = PHASES.PLAY
+        elif self.phase == PHASES.OPP_RESTART:
             if moved or obs.t - self.t0 > self.restart_wait:
-                self.phase = _Phase.PLAY
-        if self.phase != _Phase.PLAY or not (self.taker or self.pass_pending):
+                self.phase = PHASES.PLAY
+        if self.phase != PHASES.PLAY or not (self.taker or self.pass_pending):
             return
         holder = _holder(obs)
         touched = _opponent_touching(obs)
@@ -137,7 +138,7 @@ class GameFlow:
             if holder is not None and self.first_holder == 0:
                 self.first_holder = holder.id
             elif (holder is not None and holder.id != self.first_holder) or (
-                    touched and self.kind == _MatchMode.DROPBALL):
+                    touched and self.kind == MODES.DROPBALL):
                 self.pass_pending = False
 
     def _regain(self, obs: Observation) -> None:

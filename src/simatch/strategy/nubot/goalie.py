@@ -17,10 +17,10 @@ import math
 from collections import deque
 
 from ..base import Command
-from ..roles import Action, Role, members
+from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .ballpath import GRAVITY
-from .gameflow import GameFlow, Phase
+from .gameflow import GameFlow, PHASES
 from .geometry import clamp
 from .motion import Motion
 from .observation import Observation
@@ -28,10 +28,6 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Phase = members(Phase)
-_Role = members(Role)
-_Action = members(Action)
 
 LOB_MIN, LOB_MAX = 3.0, 9.0   # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
 
@@ -83,15 +79,15 @@ class Goalkeeper:
         me = obs.me
         if obs.ball_seen:
             self.tracker.add(obs.t, obs.bx, obs.by, obs.bz)
-        if flow.phase == _Phase.PLAY and pic.goalie_plays:
+        if flow.phase == PHASES.PLAY and pic.goalie_plays:
             return self.play_ball(obs, pic, flow)
         target, urgent = self.block_point(obs)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
         vmax = self.p.max_speed + (1.0 if urgent else 0.0)
         vx, vy, w = self.motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False,
                                    brake=6.0 if urgent else None)
-        return Command(vx=vx, vy=vy, w=w, dribble=False, role=_Role.GOALIE,
-                       action=_Action.CATCH_POSITIONED if urgent else _Action.POSITIONED, intent=target)
+        return Command(vx=vx, vy=vy, w=w, dribble=False, role=ROLES.GOALIE,
+                       action=ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, intent=target)
 
     # --- where to stand ------------------------------------------------------------------------------------
     def block_point(self, obs: Observation) -> tuple[tuple[float, float], bool]:
@@ -144,7 +140,7 @@ class Goalkeeper:
         me = obs.me
         a = self.areas
         if not me.holding:
-            cmd = self.player.fetch(obs, pic, role=_Role.GOALIE, stay_out_own_area=False)
+            cmd = self.player.fetch(obs, pic, role=ROLES.GOALIE, stay_out_own_area=False)
             if cmd.intent is not None:
                 # stay inside the penalty area
                 tx = clamp(cmd.intent[0], -a.L2 + 0.2, -a.L2 + a.pa_depth - 0.1)
@@ -158,7 +154,7 @@ class Goalkeeper:
             plan = ("pass", best[2], best[3], best[4], best[1])
         else:
             plan = self.clearance(obs)
-        return self.player.execute(obs, plan, _Role.GOALIE)
+        return self.player.execute(obs, plan, ROLES.GOALIE)
 
     def clearance(self, obs: Observation) -> tuple:
         """A lob up the field, to the side with more room, landing at the team-mate nearest to that point (MSL:

@@ -54,16 +54,6 @@ class Motion:
         self._two_turn_acc = 2.0 * params.turn_acceleration
 
     # -----------------------------------------------------------------------------------------------------
-    def limits(self, obs: Observation, vmax: float, wmax: float) -> tuple[float, float]:
-        """The speed limits the coach allows (CoachInfo max_vel / max_w) applied to ours."""
-        c = obs.coach
-        if c is not None:
-            if c.max_vel > 0.0:
-                vmax = min(vmax, c.max_vel)
-            if c.max_w > 0.0:
-                wmax = min(wmax, c.max_w)
-        return vmax, wmax
-
     def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
            avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
            feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
@@ -80,7 +70,7 @@ class Motion:
         me = obs.me
         mx, my = me.x, me.y
         c = obs.coach
-        if c is not None:                       # (self.limits, inline: this runs for every robot and tick)
+        if c is not None:                       # the speed limits the coach allows (CoachInfo max_vel / max_w)
             if c.max_vel > 0.0:
                 vmax = min(vmax, c.max_vel)
             if c.max_w > 0.0:
@@ -141,7 +131,7 @@ class Motion:
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)
-        w = min(wmax, math.sqrt(2.0 * self.p.turn_acceleration * a), HEADING_GAIN * a)
+        w = min(wmax, math.sqrt(self._two_turn_acc * a), HEADING_GAIN * a)
         return w if err >= 0.0 else -w
 
     @staticmethod

@@ -19,18 +19,15 @@ import math
 import numba
 import numpy as np
 
-from ..roles import Role, members
+from ..roles import ROLES
 from .ballpath import BallPath, intercepts
-from .gameflow import GameFlow, Phase
+from .gameflow import GameFlow, PHASES
 from .geometry import TWO_PI
 from .observation import Observation, _array as _rows
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
 from .setpieces import formation, spread
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Phase = members(Phase)
-_Role = members(Role)
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -200,7 +197,7 @@ class Analyst:
                     pic.opp_holds = True
                     break
         self._passes(obs, pic)
-        if flow.phase in (_Phase.SETUP, _Phase.OUR_RESTART, _Phase.OPP_RESTART):
+        if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
             self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
             return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
@@ -235,7 +232,7 @@ class Analyst:
                 d = math.hypot(dx, dy)
                 # hysteresis on what the receiver tells the team: a pass slightly off does not swap the
                 # roles back and forth
-                on_it = obs.by_id[info.catch_id].role == _Role.CATCHOFPASS
+                on_it = obs.by_id[info.catch_id].role == ROLES.CATCHOFPASS
                 heading = PASS_KEPT if on_it else PASS_HEADING
                 if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < heading * d * obs.ball_speed:
                     continue
@@ -251,7 +248,7 @@ class Analyst:
         goalie = next((m for m in mates if m.is_goalie), None)
         holder = obs.by_id.get(pic.holder) if pic.holder else None
         if goalie is not None:
-            pic.roles[goalie.id] = _Role.GOALIE
+            pic.roles[goalie.id] = ROLES.GOALIE
             if holder is goalie:
                 pic.goalie_plays = True
             elif holder is None:
@@ -266,19 +263,19 @@ class Analyst:
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
-            fresh = next((m for m in field if m.role == _Role.ACTIVE and m.role_time < MIN_ACTIVE_TIME
+            fresh = next((m for m in field if m.role == ROLES.ACTIVE and m.role_time < MIN_ACTIVE_TIME
                           and m.id != flow.taker), None)
             if fresh is not None:
                 best, active = -math.inf, fresh      # a robot that just took the ball on keeps it a moment
             for m in field:
                 if m.id == flow.taker:
                     continue
-                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == _Role.ACTIVE else 0.0)
+                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == ROLES.ACTIVE else 0.0)
                 if score < best:
                     best, active = score, m
         if active is not None:
             pic.active = active.id
-            pic.roles[active.id] = _Role.ACTIVE if pic.receiver != active.id else _Role.CATCHOFPASS
+            pic.roles[active.id] = ROLES.ACTIVE if pic.receiver != active.id else ROLES.CATCHOFPASS
         our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
         # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
         said = [m.attacking for m in mates if m.attacking >= 0]
@@ -294,17 +291,17 @@ class Analyst:
             receiver = next((m for m in rest if m.id == pic.receiver), None)
         n_assist = 2 if len(rest) >= 4 else 1
         assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-        order = ([_Role.ASSISTANT, _Role.PASSIVE, _Role.MIDFIELD] if pic.attacking
-                 else [_Role.PASSIVE, _Role.MIDFIELD, _Role.ASSISTANT])
+        order = ([ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD] if pic.attacking
+                 else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT])
         if n_assist == 2:
-            order = [_Role.ASSISTANT, _Role.ASSISTANT] + [r for r in order if r != _Role.ASSISTANT]
+            order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
         slots: list[tuple] = []
         used = 0
         for role in order[:len(rest)]:
-            if role == _Role.ASSISTANT:
+            if role == ROLES.ASSISTANT:
                 x, y = assist[min(used, len(assist) - 1)]
                 used += 1
-            elif role == _Role.PASSIVE:
+            elif role == ROLES.PASSIVE:
                 x, y = passive_point(areas, bx, by, pic.attacking)
             else:
                 x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
@@ -325,7 +322,7 @@ class Analyst:
         bx, by = obs.bx, obs.by
         ox = np.array([o[0] for o in obs.opps])
         oy = np.array([o[1] for o in obs.opps])
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == _Role.ASSISTANT), None)
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
         score = score_spots(cx, cy, bx, by, ox, oy, self.areas.L2, 3.0, 8.5, prev)
         out = []
         for k in np.argsort(-score)[:12].tolist():
@@ -341,11 +338,11 @@ class Analyst:
         field = [m for m in mates if not m.is_goalie]
         for m in mates:
             if m.is_goalie:
-                pic.roles[m.id] = _Role.GOALIE
-        bx, by = (obs.bx, obs.by) if flow.phase == _Phase.SETUP else flow.ball0
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == _Role.ASSISTANT), None)
+                pic.roles[m.id] = ROLES.GOALIE
+        bx, by = (obs.bx, obs.by) if flow.phase == PHASES.SETUP else flow.ball0
+        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
         slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
-        hyst = SETUP_HYSTERESIS if flow.phase == _Phase.SETUP else RESTART_HYSTERESIS
+        hyst = SETUP_HYSTERESIS if flow.phase == PHASES.SETUP else RESTART_HYSTERESIS
         keep = self.p.dropball_distance if flow.kind == 13 else (
             self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
         chosen = assign(field, slots, hyst, around=(bx, by, keep))
@@ -353,9 +350,9 @@ class Analyst:
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
-            if role == _Role.ACTIVE:
+            if role == ROLES.ACTIVE:
                 pic.active = rid
-        if flow.phase == _Phase.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
+        if flow.phase == PHASES.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
                 and flow.kind != 1:
             # the taker aims at the receiver: it waits for the ball where it is announced, facing it
             info = pic.pass_info

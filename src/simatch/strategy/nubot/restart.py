@@ -10,22 +10,17 @@ from __future__ import annotations
 
 import math
 
-from ...scene.commands import MatchMode
 from ..base import Command, PassIntent
-from ..roles import Action, Role, members
+from ..roles import ACTIONS, ROLES
 from .active import MOUTH, BallPlayer
 from .evaluate import pass_speed, shot_window
-from .gameflow import GameFlow
+from .gameflow import GameFlow, MODES
 from .geometry import unit, wrap
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Role = members(Role)
-_Action = members(Action)
-_MatchMode = members(MatchMode)
 
 KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
 KICKOFF_MAX_X = -0.01   # the kick-off taker's centre stays behind this line (the referee: 0) [m]
@@ -50,9 +45,9 @@ class RestartTaker:
     def receiver(self, obs: Observation, pic: Picture, flow: GameFlow):
         """The team-mate to pass to: the one set up as receiver (assistant), unless an opponent marks it
         and another one is clearly freer; kept once chosen for this restart unless it gets marked."""
-        designated = next((m for m in obs.mates if pic.roles.get(m.id) == _Role.ASSISTANT and m is not obs.me),
+        designated = next((m for m in obs.mates if pic.roles.get(m.id) == ROLES.ASSISTANT and m is not obs.me),
                           None)
-        if flow.kind == _MatchMode.OUR_KICKOFF:
+        if flow.kind == MODES.OUR_KICKOFF:
             return designated
         if self.restart != flow.t0:
             self.restart, self.choice = flow.t0, designated.id if designated is not None else 0
@@ -66,15 +61,15 @@ class RestartTaker:
         bx, by = obs.bx, obs.by
         if obs.ball_speed > 0.3 and math.hypot(bx - flow.ball0[0], by - flow.ball0[1]) > 0.05:
             # kicked: the taker may not touch the ball again before another robot did; it stays put
-            return Command(role=_Role.PASSOFPASS, action=_Action.NO_ACTION, pass_intent=self.player.pass_intent(obs))
+            return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION, pass_intent=self.player.pass_intent(obs))
         receiver = None
-        if flow.kind == _MatchMode.OUR_PENALTY:
+        if flow.kind == MODES.OUR_PENALTY:
             aim_y, _ = shot_window(bx, by, obs.opps, self.L2, self.goal_half, p.shot_speed)
             ax, ay, speed = self.L2 + 0.3, aim_y, p.shot_speed
         else:
             slot = pic.slots.get(me.id)
             mate = self.receiver(obs, pic, flow)
-            if flow.kind == _MatchMode.OUR_KICKOFF and slot is not None:
+            if flow.kind == MODES.OUR_KICKOFF and slot is not None:
                 ax, ay = slot[2], slot[3]                  # the point in front of the receiver
                 arrival = KICKOFF_ARRIVAL
             elif mate is not None:
@@ -89,7 +84,7 @@ class RestartTaker:
             speed = pass_speed(math.hypot(ax - bx, ay - by), arrival, p.ball_deceleration)
         ux, uy = unit(ax - bx, ay - by)
         face = math.atan2(uy, ux)
-        if receiver is not None and flow.kind != _MatchMode.OUR_KICKOFF:
+        if receiver is not None and flow.kind != MODES.OUR_KICKOFF:
             # the moment it is lined up, the receiver's current place counts (it may still be moving)
             ax, ay = receiver.x, receiver.y
         err = abs(wrap(face - me.yaw))
@@ -99,13 +94,13 @@ class RestartTaker:
         off = abs(rx * uy - ry * ux)                # distance off the kick line
         kick = 0.0
         # at a kick-off the taker stays in its half until the ball is in play, whatever its momentum
-        max_x = KICKOFF_MAX_X if flow.kind == _MatchMode.OUR_KICKOFF else None
+        max_x = KICKOFF_MAX_X if flow.kind == MODES.OUR_KICKOFF else None
         if behind < 0.2 or off > 0.5:
             # beside or in front of the ball: go round it to the line-up point
             tx, ty = bx - LINE_UP * ux, by - LINE_UP * uy
             vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=True,
                                        ball_obstacle=0.45, fence=(bx, by, ROUND_CLEARANCE), max_x=max_x)
-            action = _Action.POSITIONED_STATIC
+            action = ACTIONS.POSITIONED_STATIC
         else:
             # behind it: close in along the line, converging onto it; drive through the ball only when lined
             # up, with the kicker armed (it fires as the ball enters the mouth, before any push)
@@ -119,11 +114,11 @@ class RestartTaker:
                                        max_x=max_x)
             if armed:
                 kick = speed
-                action = _Action.STATIC_PASS if receiver is not None else _Action.AT_SHOOT_SITUATION
+                action = ACTIONS.STATIC_PASS if receiver is not None else ACTIONS.AT_SHOOT_SITUATION
             else:
-                action = _Action.POSITIONED_STATIC
+                action = ACTIONS.POSITIONED_STATIC
         lx, ly = bx - LINE_UP * ux, by - LINE_UP * uy
-        cmd = Command(vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=_Role.ACTIVE, action=action,
+        cmd = Command(vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=ROLES.ACTIVE, action=action,
                       intent=(lx, ly))
         if receiver is not None:
             intent = PassIntent(catch_id=receiver.id, pass_x=bx, pass_y=by, catch_x=ax, catch_y=ay,

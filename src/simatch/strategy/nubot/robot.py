@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import math
 
-from ...scene.commands import MatchMode, is_ours
+from ...scene.commands import is_ours
 from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
-from ..roles import Action, Role, members
+from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
 from .active import BallPlayer
-from .gameflow import GameFlow, Phase
+from .gameflow import GameFlow, MODES, PHASES
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
@@ -33,11 +33,6 @@ from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Phase = members(Phase)
-_Role = members(Role)
-_Action = members(Action)
-_MatchMode = members(MatchMode)
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -97,7 +92,7 @@ class NubotRobot(RobotStrategy):
         ids = sorted(ctx.ids)
         k = ids.index(ctx.id) if ctx.id in ids else 0
         self.park_at = (-areas.L2 + 1.0 + PARK_SPACING * k, -(areas.W2 + PARK_OUTSIDE))
-        self.role = _Role.NOROLE
+        self.role = ROLES.NOROLE
         self.picture: Picture | None = None
         self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
         self.picture_tick = -1
@@ -133,27 +128,27 @@ class NubotRobot(RobotStrategy):
         me = obs.me
         phase = flow.phase
         self.steady = None
-        if phase == _Phase.STOP:
-            return Command(role=self.role, action=_Action.NO_ACTION)
-        if phase == _Phase.PARK:
+        if phase == PHASES.STOP:
+            return Command(role=self.role, action=ACTIONS.NO_ACTION)
+        if phase == PHASES.PARK:
             return self.park(obs)
         pic = self.picture
         if not (odd and pic is not None and pic.phase == phase and self.picture_tick == obs.tick - 1):
             pic = self.team_picture(obs)
             self.picture, self.picture_tick = pic, obs.tick
-        if phase == _Phase.TEST:
+        if phase == PHASES.TEST:
             cmd = self.tests.decide(obs, pic)
         else:
-            role = pic.roles.get(me.id, _Role.NOROLE)
+            role = pic.roles.get(me.id, ROLES.NOROLE)
             if me.is_goalie:
                 cmd = self.keeper.decide(obs, pic, flow)
-            elif phase == _Phase.OUR_RESTART and role == _Role.ACTIVE and flow.taker != me.id:
+            elif phase == PHASES.OUR_RESTART and role == ROLES.ACTIVE and flow.taker != me.id:
                 cmd = self.taker.take(obs, pic, flow)
-            elif phase != _Phase.PLAY:
+            elif phase != PHASES.PLAY:
                 cmd = self.hold_slot(obs, pic, role)
             elif me.holding:
                 cmd = self.player.play(obs, pic, flow, role)
-            elif role in (_Role.ACTIVE, _Role.CATCHOFPASS):
+            elif role in (ROLES.ACTIVE, ROLES.CATCHOFPASS):
                 cmd = self.player.fetch(obs, pic, role)
             else:
                 cmd = self.hold_slot(obs, pic, role)
@@ -164,7 +159,7 @@ class NubotRobot(RobotStrategy):
         self.role = cmd.role
         # told to the team, for the hysteresis of attacking and of the active role
         cmd.user = (1.0 if pic.attacking else 0.0, obs.t - self.role_since)
-        if (not odd and phase in (_Phase.PLAY, _Phase.SETUP) and cmd.action == _Action.POSITIONED
+        if (not odd and phase in (PHASES.PLAY, PHASES.SETUP) and cmd.action == ACTIONS.POSITIONED
                 and cmd.pass_intent is None and pic.receiver != me.id and not me.holding):
             self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
         return cmd
@@ -204,7 +199,7 @@ class NubotRobot(RobotStrategy):
         keep = self.keep_from_ball(obs)
         fence = None
         if keep is not None:
-            taker = role == _Role.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != _MatchMode.DROPBALL
+            taker = role == ROLES.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MODES.DROPBALL
             x, y = self.round_the_ball(obs, x, y, keep, taker)
             if not taker:
                 fence = (obs.bx, obs.by, keep)
@@ -213,11 +208,11 @@ class NubotRobot(RobotStrategy):
             ball = TAKER_BALL_CLEARANCE          # the restart's taker must not touch the ball again yet
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
             x, y = self.out_of_the_way(obs, x, y)
-        kickoff = keep is not None and self.flow.kind in (_MatchMode.OUR_KICKOFF, _MatchMode.OPP_KICKOFF)
+        kickoff = keep is not None and self.flow.kind in (MODES.OUR_KICKOFF, MODES.OPP_KICKOFF)
         vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=ball,
                                    boxes=self.areas.forbidden(False), fence=fence,
                                    max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None)
-        return Command(vx=vx, vy=vy, w=w, role=role, action=_Action.POSITIONED, intent=(x, y))
+        return Command(vx=vx, vy=vy, w=w, role=role, action=ACTIONS.POSITIONED, intent=(x, y))
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
@@ -239,8 +234,8 @@ class NubotRobot(RobotStrategy):
         """The distance the rules keep this robot from the ball while a restart is being set up or taken
         (None in play)."""
         flow, p = self.flow, self.p
-        if flow.phase in (_Phase.SETUP, _Phase.OUR_RESTART, _Phase.OPP_RESTART):
-            if flow.kind == _MatchMode.DROPBALL:
+        if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
+            if flow.kind == MODES.DROPBALL:
                 return p.dropball_distance
             if is_ours(flow.kind):
                 return p.mate_distance
@@ -293,7 +288,7 @@ class NubotRobot(RobotStrategy):
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at
         vx, vy, w = self.motion.go(obs, x, y, 0.5 * math.pi, self.p.max_speed, self.p.max_turn)
-        return Command(vx=vx, vy=vy, w=w, role=_Role.NOROLE, action=_Action.POSITIONED, intent=(x, y))
+        return Command(vx=vx, vy=vy, w=w, role=ROLES.NOROLE, action=ACTIONS.POSITIONED, intent=(x, y))
 
 
 class NubotTeam(TeamStrategy):

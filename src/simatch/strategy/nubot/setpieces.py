@@ -20,15 +20,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from ...scene.commands import MatchMode
-from ..roles import Role, members
+from ..roles import ROLES
+from .gameflow import MODES
 from .geometry import clamp, unit
 from .params import NubotParams
 from .positions import Areas, guard_point, outlet_point, passive_point, score_spots
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Role = members(Role)
-_MatchMode = members(MatchMode)
 
 SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
@@ -82,72 +79,72 @@ def kickoff_side(opps: list) -> float:
 def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: NubotParams,
               spots: tuple[np.ndarray, np.ndarray], receiver_near: tuple[float, float] | None) -> list[tuple]:
     """The four field-robot slots for set piece ``kind`` with the ball at (bx, by)."""
-    M = _MatchMode
+    M = MODES
     slots: list[tuple] = []
     if kind == M.OUR_KICKOFF:
         side = kickoff_side(opps)
         lx, ly = KICKOFF_LEAD[0], side * KICKOFF_LEAD[1]
         ux, uy = unit(lx - bx, ly - by)
-        slots.append((_Role.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, lx, ly))
+        slots.append((ROLES.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, lx, ly))
         rx, ry = push_from(-0.45, side * 2.35, bx, by, p.mate_distance + 0.15)
-        slots.append((_Role.ASSISTANT, rx, ry, bx, by))
-        slots.append((_Role.PASSIVE, -4.5, -side * 1.0, bx, by))
-        slots.append((_Role.MIDFIELD, -2.2, -side * 2.6, bx, by))
+        slots.append((ROLES.ASSISTANT, rx, ry, bx, by))
+        slots.append((ROLES.PASSIVE, -4.5, -side * 1.0, bx, by))
+        slots.append((ROLES.MIDFIELD, -2.2, -side * 2.6, bx, by))
     elif kind == M.OPP_KICKOFF:
         # a block in front of the ball and two robots on the half-way line, near the receivers
         r = p.opponent_distance + 0.1
-        slots.append((_Role.ACTIVE, -r, 0.0, bx, by))
-        slots.append((_Role.MIDFIELD, -0.6, r + 0.3, bx, by))
-        slots.append((_Role.ASSISTANT, -0.6, -r - 0.3, bx, by))
-        slots.append((_Role.PASSIVE, -6.0, 0.0, bx, by))
+        slots.append((ROLES.ACTIVE, -r, 0.0, bx, by))
+        slots.append((ROLES.MIDFIELD, -0.6, r + 0.3, bx, by))
+        slots.append((ROLES.ASSISTANT, -0.6, -r - 0.3, bx, by))
+        slots.append((ROLES.PASSIVE, -6.0, 0.0, bx, by))
     elif kind == M.OUR_PENALTY:
         gx = areas.L2
         ux, uy = unit(gx - bx, -by)
-        slots.append((_Role.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, gx, 0.0))
+        slots.append((ROLES.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, gx, 0.0))
         x = min(bx - p.opponent_distance - 0.1, areas.opp_pa[0] - 0.3)
-        slots.append((_Role.ASSISTANT, x, 2.0, bx, by))
-        slots.append((_Role.MIDFIELD, x, -2.0, bx, by))
-        slots.append((_Role.PASSIVE, -2.0, 0.0, bx, by))
+        slots.append((ROLES.ASSISTANT, x, 2.0, bx, by))
+        slots.append((ROLES.MIDFIELD, x, -2.0, bx, by))
+        slots.append((ROLES.PASSIVE, -2.0, 0.0, bx, by))
     elif kind == M.OPP_PENALTY:
         x = max(bx + p.opponent_distance + 0.1, areas.own_pa[1] + 0.3)
-        slots.append((_Role.ACTIVE, x, 1.3, bx, by))
-        slots.append((_Role.PASSIVE, x, -1.3, bx, by))
-        slots.append((_Role.MIDFIELD, x, 4.0, bx, by))
-        slots.append((_Role.ASSISTANT, x, -4.0, bx, by))
+        slots.append((ROLES.ACTIVE, x, 1.3, bx, by))
+        slots.append((ROLES.PASSIVE, x, -1.3, bx, by))
+        slots.append((ROLES.MIDFIELD, x, 4.0, bx, by))
+        slots.append((ROLES.ASSISTANT, x, -4.0, bx, by))
     elif kind == M.DROPBALL:
         d = p.dropball_distance
         gx, gy = guard_point(areas, bx, by, 1.0, 0.0, d)
         if math.hypot(gx - bx, gy - by) < d - 1e-6 or math.hypot(gx - bx, gy - by) > d + 0.5:
             ux, uy = unit(-areas.L2 - bx, -by)
             gx, gy = bx + d * ux, by + d * uy
-        slots.append((_Role.ACTIVE, gx, gy, bx, by))
+        slots.append((ROLES.ACTIVE, gx, gy, bx, by))
         px, py = passive_point(areas, bx, by, False)
-        slots.append((_Role.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
+        slots.append((ROLES.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
         ax, ay = outlet_point(areas, bx, by)
-        slots.append((_Role.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
+        slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
         mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
-        slots.append((_Role.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
+        slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
     elif kind % 2 == 1:      # our throw-in, goal kick, corner, free kick
         rx, ry = restart_spot(areas, bx, by, opps, spots, p, receiver_near)
         ux, uy = unit(rx - bx, ry - by)
-        slots.append((_Role.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, rx, ry))
-        slots.append((_Role.ASSISTANT, rx, ry, bx, by))
+        slots.append((ROLES.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, rx, ry))
+        slots.append((ROLES.ASSISTANT, rx, ry, bx, by))
         px, py = passive_point(areas, bx, by, bx > 0.0)
-        slots.append((_Role.PASSIVE, px, py, bx, by))
+        slots.append((ROLES.PASSIVE, px, py, bx, by))
         mx, my = clamp(bx - 3.5, -areas.L2 + 4.0, areas.L2 - 4.5), (by - 3.0 if by > 0 else by + 3.0)
-        slots.append((_Role.MIDFIELD, mx, my, bx, by))
+        slots.append((ROLES.MIDFIELD, mx, my, bx, by))
     else:                    # their throw-in, goal kick, corner, free kick
         r = p.opponent_distance + 0.1
         wx, wy = guard_point(areas, bx, by, 1.0, 0.0, r)
-        slots.append((_Role.ACTIVE, wx, wy, bx, by))
+        slots.append((ROLES.ACTIVE, wx, wy, bx, by))
         px, py = passive_point(areas, bx, by, False)
-        slots.append((_Role.PASSIVE, px, py, bx, by))
+        slots.append((ROLES.PASSIVE, px, py, bx, by))
         # markers on the opponents most likely to receive: away from the ball, nearest to our goal
         free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
         free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
         zones = [(clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
                  outlet_point(areas, bx, by)]
-        for k, role in enumerate((_Role.MIDFIELD, _Role.ASSISTANT)):
+        for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
             if k < len(free):
                 o = free[k]
                 ux, uy = unit(-areas.L2 - o[0], -o[1])
@@ -199,8 +196,8 @@ def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotP
     """Make a slot respect the distances and areas of set piece ``kind`` (and keep ``SLOT_GAP`` from the
     points already ``taken``)."""
     role, x, y, fx, fy = slot
-    M = _MatchMode
-    taker = role == _Role.ACTIVE and kind % 2 == 1 and kind != M.DROPBALL
+    M = MODES
+    taker = role == ROLES.ACTIVE and kind % 2 == 1 and kind != M.DROPBALL
     if kind == M.DROPBALL:
         r = p.dropball_distance
     elif kind % 2 == 1:
@@ -219,7 +216,7 @@ def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r
     """The point moved out of the areas, to ``r`` from the ball and (at a kick-off) into our half; where
     those pushes undo each other (near a box), or the point is taken by another slot, the nearest point
     round the ball that satisfies all of them."""
-    kickoff = kind in (_MatchMode.OUR_KICKOFF, _MatchMode.OPP_KICKOFF)
+    kickoff = kind in (MODES.OUR_KICKOFF, MODES.OPP_KICKOFF)
 
     def legal(px: float, py: float) -> bool:
         if kickoff and px > -0.35 + 1e-6:

@@ -21,7 +21,7 @@ import math
 
 from ...scene.commands import TestMode
 from ..base import Command
-from ..roles import Action, Role, members
+from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .evaluate import pass_speed
 from .motion import Motion
@@ -29,9 +29,6 @@ from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 
-# enum members as plain attributes (see roles.members: this code runs for every robot and tick)
-_Role = members(Role)
-_Action = members(Action)
 
 ARRIVED = 0.12           # [m]
 ARRIVED_YAW = 0.08       # [rad]
@@ -57,22 +54,22 @@ class TestModes:
         if mode == TestMode.PASS_BALL and me.id == c.id_b:
             return self.receive(obs, pic, b)
         if me.id != c.id_a:
-            return Command(role=_Role.NOROLE, action=_Action.NO_ACTION)
+            return Command(role=ROLES.NOROLE, action=ACTIONS.NO_ACTION)
         if mode in (TestMode.MOVE_NOBALL_NOAVOID, TestMode.MOVE_NOBALL_AVOID):
             return self.move(obs, a, c.angle_a, avoid=mode == TestMode.MOVE_NOBALL_AVOID)
         if mode in (TestMode.MOVE_BALL_NOAVOID, TestMode.MOVE_BALL_AVOID):
             if not me.holding:
-                return self.player.fetch(obs, pic, _Role.ACTIVE, stay_out_own_area=False)
+                return self.player.fetch(obs, pic, ROLES.ACTIVE, stay_out_own_area=False)
             return self.carry(obs, a, c.angle_a, avoid=mode == TestMode.MOVE_BALL_AVOID)
         if mode == TestMode.CATCH_BALL:
             if me.holding:
-                return Command(dribble=True, role=_Role.ACTIVE, action=_Action.CATCH_BALL)
-            return self.player.fetch(obs, pic, _Role.ACTIVE, stay_out_own_area=False)
+                return Command(dribble=True, role=ROLES.ACTIVE, action=ACTIONS.CATCH_BALL)
+            return self.player.fetch(obs, pic, ROLES.ACTIVE, stay_out_own_area=False)
         if mode == TestMode.SHOOT_BALL:
             if not me.holding:
-                return self.player.fetch(obs, pic, _Role.ACTIVE, stay_out_own_area=False)
+                return self.player.fetch(obs, pic, ROLES.ACTIVE, stay_out_own_area=False)
             speed = c.kick_force if c.kick_force > 0.0 else self.p.shot_speed
-            return self.player.execute(obs, ("shoot", a[0], a[1], speed, 0.0), _Role.ACTIVE)
+            return self.player.execute(obs, ("shoot", a[0], a[1], speed, 0.0), ROLES.ACTIVE)
         if mode == TestMode.PASS_BALL:
             return self.give(obs, pic, a, c.id_b, c.kick_force)
         if mode == TestMode.LOCATION_TEST:
@@ -83,18 +80,18 @@ class TestModes:
             return self.move(obs, goal, yaw, avoid=True)
         if mode == TestMode.CIRCLE_TEST:
             return self.circle(obs, a, b)
-        return Command(role=_Role.NOROLE, action=_Action.NO_ACTION)
+        return Command(role=ROLES.NOROLE, action=ACTIONS.NO_ACTION)
 
     def move(self, obs: Observation, a, yaw: float, avoid: bool) -> Command:
         vx, vy, w = self.motion.go(obs, a[0], a[1], yaw, self.p.max_speed, self.p.max_turn, avoid=avoid)
-        return Command(vx=vx, vy=vy, w=w, role=_Role.NOROLE, action=_Action.POSITIONED, intent=a)
+        return Command(vx=vx, vy=vy, w=w, role=ROLES.NOROLE, action=ACTIONS.POSITIONED, intent=a)
 
     def carry(self, obs: Observation, a, yaw: float, avoid: bool) -> Command:
         me = obs.me
         d = math.hypot(a[0] - me.x, a[1] - me.y)
         face = math.atan2(a[1] - me.y, a[0] - me.x) if d > 0.4 else yaw
         vx, vy, w = self.motion.go(obs, a[0], a[1], face, self.p.dribble_speed, self.p.dribble_turn, avoid=avoid)
-        return Command(vx=vx, vy=vy, w=w, dribble=True, role=_Role.ACTIVE, action=_Action.MOVE_WITH_BALL, intent=a)
+        return Command(vx=vx, vy=vy, w=w, dribble=True, role=ROLES.ACTIVE, action=ACTIONS.MOVE_WITH_BALL, intent=a)
 
     def give(self, obs: Observation, pic: Picture, a, to: int, force: float) -> Command:
         me = obs.me
@@ -102,17 +99,17 @@ class TestModes:
         if self.passed and me.holding:
             self.passed = False           # the kick did not fire: try again
         if self.passed:
-            return Command(role=_Role.PASSOFPASS, action=_Action.NO_ACTION,
+            return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION,
                            pass_intent=self.player.pass_intent(obs))
         if not me.holding:
-            return self.player.fetch(obs, pic, _Role.ACTIVE, stay_out_own_area=False)
+            return self.player.fetch(obs, pic, ROLES.ACTIVE, stay_out_own_area=False)
         if math.hypot(a[0] - me.x, a[1] - me.y) > 0.3:
             return self.carry(obs, a, me.yaw, avoid=True)
         if mate is None:
-            return Command(dribble=True, role=_Role.ACTIVE, action=_Action.NO_ACTION)
+            return Command(dribble=True, role=ROLES.ACTIVE, action=ACTIONS.NO_ACTION)
         d = math.hypot(mate.x - obs.bx, mate.y - obs.by)
         speed = force if force > 0.0 else pass_speed(d, self.p.pass_arrival_speed, self.p.ball_deceleration)
-        cmd = self.player.execute(obs, ("pass", mate.x, mate.y, speed, to), _Role.ACTIVE)
+        cmd = self.player.execute(obs, ("pass", mate.x, mate.y, speed, to), ROLES.ACTIVE)
         if cmd.kick_speed > 0.0:
             self.passed = True
         return cmd
@@ -120,15 +117,15 @@ class TestModes:
     def receive(self, obs: Observation, pic: Picture, b) -> Command:
         me = obs.me
         if me.holding:
-            return Command(dribble=True, role=_Role.CATCHOFPASS, action=_Action.CATCH_BALL)
+            return Command(dribble=True, role=ROLES.CATCHOFPASS, action=ACTIONS.CATCH_BALL)
         rx, ry = me.x - obs.bx, me.y - obs.by
         speed = obs.ball_speed
         coming = speed > 0.3 and (rx * obs.bvx + ry * obs.bvy) > 0.7 * speed * math.hypot(rx, ry)
         if coming or math.hypot(rx, ry) < 0.8:
-            return self.player.fetch(obs, pic, _Role.CATCHOFPASS, stay_out_own_area=False)
+            return self.player.fetch(obs, pic, ROLES.CATCHOFPASS, stay_out_own_area=False)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
         vx, vy, w = self.motion.go(obs, b[0], b[1], face, self.p.max_speed, self.p.max_turn)
-        return Command(vx=vx, vy=vy, w=w, dribble=True, role=_Role.CATCHOFPASS, action=_Action.CATCH_POSITIONED,
+        return Command(vx=vx, vy=vy, w=w, dribble=True, role=ROLES.CATCHOFPASS, action=ACTIONS.CATCH_POSITIONED,
                        intent=b)
 
     def circle(self, obs: Observation, a, b) -> Command:
@@ -144,4 +141,4 @@ class TestModes:
         face = math.atan2(ty, tx)
         w = self.motion.turn_rate(math.remainder(face - me.yaw, 2 * math.pi), self.p.max_turn) + CIRCLE_SPEED / r
         bx, by, w = self.motion.body(me.yaw, vx, vy, w)
-        return Command(vx=bx, vy=by, w=w, role=_Role.NOROLE, action=_Action.CIRCLE_TEST, intent=a)
+        return Command(vx=bx, vy=by, w=w, role=ROLES.NOROLE, action=ACTIONS.CIRCLE_TEST, intent=a)
