@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from simatch import msgs
@@ -54,9 +55,15 @@ def test_key_expressions():
 
 
 def test_messages_round_trip_through_cdr_bit_for_bit():
-    m = msgs.new(msgs.VelCmd, stamp=1.0 / 3.0, tick=7, vx=0.1, vy=-2.0 / 3.0, w=1e-300)
+    # float32 fields hold numbers rounded where they are made (msgs.f32s): they come back bit for bit
+    vx, vy, w = msgs.f32s(0.1, -2.0 / 3.0, 1e-40)
+    m = msgs.new(msgs.VelCmd, stamp=1.0 / 3.0, tick=7, vx=vx, vy=vy, w=w)
     back = msgs.decode(msgs.VelCmd, msgs.encode(m))
     assert (back.stamp, back.tick, back.vx, back.vy, back.w) == (m.stamp, m.tick, m.vx, m.vy, m.w)
+    assert back.vx != 0.1 and back.vx == pytest.approx(0.1, rel=1e-7) and back.w != 0.0     # (a float32 subnormal)
+    states = msgs.new(msgs.ModelStates, stamp=1.0 / 3.0, pose=np.array([1.0 / 3.0]), fingerprint=2**64 - 1)
+    back = msgs.decode(msgs.ModelStates, msgs.encode(states))
+    assert back.stamp == 1.0 / 3.0 and back.pose[0] == np.float32(1.0 / 3.0) and back.fingerprint == 2**64 - 1
     with pytest.raises(msgs.MessageError, match="malformed simatch_msgs/msg/VelCmd"):
         msgs.decode("VelCmd", b"\x00\x01\x00\x00\x01")
     assert len(msgs.names()) >= 17

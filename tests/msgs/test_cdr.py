@@ -91,12 +91,12 @@ def test_values_the_c_encoder_leaves_to_python_are_encoded_as_rosbags_does():
     codec = Codec(msgs.typestore)
     odd = [(msgs.new(msgs.ModelStates, stamp=np.float32(0.5), step=np.uint64(7), name=("a", "b"),
                      pose=[1, 2.5, 3], twist=np.arange(12.0)[::2]),
-            msgs.new(msgs.ModelStates, stamp=0.5, step=7, name=["a", "b"], pose=np.array([1, 2.5, 3]),
-                     twist=np.arange(0.0, 12.0, 2.0))),
+            msgs.new(msgs.ModelStates, stamp=0.5, step=7, name=["a", "b"], pose=np.array([1, 2.5, 3], dtype=np.float32),
+                     twist=np.arange(0.0, 12.0, 2.0, dtype=np.float32))),     # float64 into float32[]
            (msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
             msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0))),
            (msgs.new(msgs.OmniVisionInfo, robots=(msgs.new(msgs.RobotInfo, wheel_speeds=[0.5, 1]),)),
-            msgs.new(msgs.OmniVisionInfo, robots=[msgs.new(msgs.RobotInfo, wheel_speeds=np.array([0.5, 1.0]))]))]
+            msgs.new(msgs.OmniVisionInfo, robots=[msgs.new(msgs.RobotInfo, wheel_speeds=np.array([0.5, 1.0], dtype=np.float32))]))]
     for m, same in odd:
         assert codec.encode(m) == _rosbags(msgs.typestore, same)
     for bad in (msgs.new(msgs.VelCmd, vx="fast"), msgs.new(msgs.Clock, step=-1), msgs.new(msgs.GameEvent, type=3)):
@@ -135,7 +135,7 @@ def test_memo_encodes_what_it_meets_again_once_and_right(accelerate):
     """Teammates share one list of RobotInfo; a team's TeamStrategy holds the StrategyInfo its robots published:
     with the memo each is encoded once (until forget), and the bytes stay rosbags'."""
     codec = Codec(msgs.typestore, memo=True, accelerate=accelerate)
-    robots = [msgs.new(msgs.RobotInfo, id=i, x=float(i), wheel_speeds=np.arange(4.0)) for i in (1, 2)]
+    robots = [msgs.new(msgs.RobotInfo, id=i, x=float(i), wheel_speeds=np.arange(4.0, dtype=np.float32)) for i in (1, 2)]
     for rid in (1, 2):
         a = msgs.new(msgs.OmniVisionInfo, robot_id=rid, robots=robots)
         assert codec.encode(a) == _rosbags(msgs.typestore, a)

@@ -13,8 +13,8 @@ def test_fields_follow_the_msg_file():
 
 def test_positional_builds_the_same_message_as_keywords():
     cls = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
-    assert cls(1.5, 7, 0.1, -0.2, 0.3) == msgs.VelCmd(stamp=1.5, tick=7, vx=0.1, vy=-0.2, w=0.3)
-    assert msgs.decode(msgs.VelCmd, msgs.encode(cls(1.5, 7, 0.1, -0.2, 0.3))) == cls(1.5, 7, 0.1, -0.2, 0.3)
+    assert cls(1.5, 7, 0.5, -0.25, 0.375) == msgs.VelCmd(stamp=1.5, tick=7, vx=0.5, vy=-0.25, w=0.375)
+    assert msgs.decode(msgs.VelCmd, msgs.encode(cls(1.5, 7, 0.5, -0.25, 0.375))) == cls(1.5, 7, 0.5, -0.25, 0.375)
 
 
 @pytest.mark.parametrize("order", ["stamp tick vy vx w", "stamp tick vx vy", "stamp tick vx vy w extra"])

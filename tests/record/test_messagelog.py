@@ -52,7 +52,8 @@ def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback(kind):
     log.add("model_states", 4, "simatch_msgs/msg/ModelStates")
     log.now = 7_000_000
     vel = msgs.new(msgs.VelCmd, stamp=0.007, tick=1, vx=1.5, w=-0.25)
-    states = msgs.new(msgs.ModelStates, stamp=0.007, step=1, name=["ball"], pose=np.arange(7.0), twist=np.ones(6))
+    states = msgs.new(msgs.ModelStates, stamp=0.007, step=1, name=["ball"], pose=np.arange(7.0, dtype=np.float32),
+                      twist=np.ones(6, dtype=np.float32))
     log("cyan/1/VelCmd", vel)
     log("model_states", states)
     log("cyan/1/Unknown", vel)                                     # not added: the fallback's
@@ -81,8 +82,8 @@ def test_clock_messages_set_the_time_and_end_chunks(kind):
     for step in range(0, 230):
         if step % 5 == 0:
             log("clock", msgs.new(msgs.Clock, stamp=step * 0.005, step=step, tick=step // 5))
-        log("model_states", msgs.new(msgs.ModelStates, step=np.uint64(step), name=[], pose=np.zeros(0),
-                                      twist=np.zeros(0)))
+        log("model_states", msgs.new(msgs.ModelStates, step=np.uint64(step), name=[], pose=np.zeros(0, dtype=np.float32),
+                                      twist=np.zeros(0, dtype=np.float32)))
         log("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=step))
     assert log.now == 229 * 5_000_000
     assert [(first, last) for _, _, first, last in chunks] == [(0, 495_000_000), (500_000_000, 995_000_000)]
@@ -134,10 +135,12 @@ def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, ac
     own = copy.deepcopy(np.dtype("<f8"))
     pose = np.arange(14.0)
     pairs = [(msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=("a", "b"), pose=pose.tolist(), twist=np.arange(24.0)[::2]),
-              msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=["a", "b"], pose=pose, twist=np.arange(0.0, 24.0, 2.0))),
+              msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=["a", "b"], pose=pose.astype(np.float32),
+                       twist=np.arange(0.0, 24.0, 2.0, dtype=np.float32))),
              (msgs.new(msgs.ModelStates, stamp=np.float32(0.5), step=np.uint64(1), name=["a"],
                        pose=np.arange(7.0).astype(own), twist=np.ones(6, dtype=">f8")),
-              msgs.new(msgs.ModelStates, stamp=0.5, step=1, name=["a"], pose=np.arange(7.0), twist=np.ones(6))),
+              msgs.new(msgs.ModelStates, stamp=0.5, step=1, name=["a"], pose=np.arange(7.0, dtype=np.float32),
+                       twist=np.ones(6, dtype=np.float32))),
              (msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
               msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0)))]
     assert pairs[1][0].pose.dtype is own

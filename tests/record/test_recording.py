@@ -81,7 +81,8 @@ def test_the_3d_scene_shows_field_robots_and_ball(recording):
     assert ids == list(state.name)
     for k, e in enumerate(last.entities):
         p = (e.spheres or e.cylinders)[0].pose.position
-        assert (p.x, p.y) == (pose[k, 0], pose[k, 1])
+        assert (p.x, p.y) == (round(pose[k, 0] * 1024) / 1024, round(pose[k, 1] * 1024) / 1024)   # to a mm grid
+        assert abs(p.x - pose[k, 0]) <= 0.5 / 1024 and abs(p.y - pose[k, 1]) <= 0.5 / 1024
     cyan = last.entities[ids.index("cyan/2")]
     assert cyan.texts[0].text == "2" and cyan.cylinders[0].color.b > 0.5 and cyan.cylinders[0].color.r < 0.2
 

@@ -87,4 +87,4 @@ def test_latency_shows_the_world_as_it_was(field_sim):
         sim.step()
     seen = got["cyan/3"].ball.x
     # the last observation (at step 95) shows the ball of step 75 (0.1 s earlier)
-    assert seen == pytest.approx(history[75], abs=1e-9)
+    assert seen == msgs.f32(history[75])             # at the perception's float32 precision

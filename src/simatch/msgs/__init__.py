@@ -4,8 +4,13 @@ The definitions are loaded at import time into a ``rosbags`` type store, with no
 same types serve the in-process bus (plain objects, never serialised), the wire between processes (CDR),
 the recordings (rosbag2-compatible MCAP) and any ROS 2 bridge.
 
-Every floating-point field is ``float64``: a value that crosses a process boundary comes back bit for bit,
-which is what lets a distributed lockstep run reproduce an embedded one exactly.
+Precision: what the simulator states exactly (times, model and link poses, the game's numbers) is
+``float64``; what robots perceive and command (perception, VelCmd, ActionCmd, StrategyInfo) is ``float32``,
+as in the original Simatch's messages — seven significant digits, far finer than any robot senses or
+drives, at half the bytes on the wire and in a recording (and model-state twists, see ModelStates.msg).
+A float32 value is rounded where it is made (`f32`), so the in-process bus carries the very numbers the
+wire would: a value that crosses a process boundary comes back bit for bit, which is what lets a
+distributed lockstep run reproduce an embedded one exactly.
 
 Usage::
 
@@ -17,6 +22,8 @@ Usage::
 
 from __future__ import annotations
 
+import math
+import struct
 from importlib import resources
 from typing import Any, Callable
 
@@ -38,6 +45,8 @@ __all__ = [
     "decode",
     "definition",
     "names",
+    "f32",
+    "f32s",
 ]
 
 
@@ -157,6 +166,32 @@ def positional(msgtype: Any, order: str):
     if want != have:
         raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
     return typestore.types[msgtype_name(msgtype)]
+
+
+_FLOAT32 = [struct.Struct(f"<{n}f") for n in range(17)]
+
+
+def f32(value: float) -> float:
+    """``value`` rounded to a float32 field's precision (round to nearest, as the wire does). Beyond
+    float32's range it becomes an infinity, as in IEEE 754 arithmetic (the wire would refuse it); NaN stays
+    NaN. Raises TypeError for what is not a number."""
+    try:
+        return _FLOAT32[1].unpack(_FLOAT32[1].pack(value))[0]
+    except OverflowError:
+        return math.copysign(math.inf, value)
+    except struct.error:
+        raise TypeError(f"not a number: {value!r}") from None
+
+
+def f32s(*values: float) -> tuple[float, ...]:
+    """Several values rounded as `f32` does, in one call (the messages' hot paths round a few at once)."""
+    try:
+        st = _FLOAT32[len(values)]
+        return st.unpack(st.pack(*values))
+    except (OverflowError, IndexError):
+        return tuple(f32(v) for v in values)
+    except struct.error:
+        return tuple(f32(v) for v in values)           # TypeError naming the value that is not a number
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -10,7 +10,7 @@
 * Metadata records: ``simatch`` (written first: format, version, scene text, overrides, seed, command
   line, run name, timestep) and ``simatch_end`` (written when the file is finalised: how the run ended,
   simulated seconds, state digest, message counts, topics that could not be recorded).
-* Chunks hold half a simulated second each (zstd, level 1; no message or chunk indexes, which would add
+* Chunks hold half a simulated second each (zstd, level 3; no message or chunk indexes, which would add
   16 bytes per message outside the compression: readers read the file from start to end). A chunk is
   handed to the writer thread as soon as its half second ends, and at most one is in its hands, so a
   process killed at any moment leaves on disk everything up to at most one simulated second before.

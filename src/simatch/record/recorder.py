@@ -51,8 +51,9 @@ WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
 CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
-#: zstd level of the chunks: the data is mostly float64 noise, higher levels gain 1-4 % for 2-6 times the time
-COMPRESSION_LEVEL = 1
+#: zstd level of the chunks: level 3 costs what level 1 does here and saves 1 %; levels 5-9 save 2-3 % more
+#: for three to five times the writer thread's time (measured on a match, docs/recording.md "Cost")
+COMPRESSION_LEVEL = 3
 
 
 class RecordError(Exception):

@@ -5,8 +5,9 @@ from outside the run's nodes (``operator`` topic: Python API calls, commands giv
 operator actions on a judge). A new embedded `Simulation` of that scene and seed is stepped in lockstep
 with the recording; before each physics step the operator commands recorded for that step are applied
 again, and the model states the simulator publishes are compared with the recorded ones, byte for byte
-(CDR), at every physics step. The first step where they differ is reported with the model, the field and
-both values.
+(CDR), at every physics step: their float32 numbers and the fingerprint of the exact float64 states (see
+ModelStates.msg), so the check is bit for bit on the simulator's own numbers. The first step where they
+differ is reported with the model, the field and both values.
 
 Operator commands name what they did (`OperatorCommand.call`): a `Simulation` method of the Python API
 (`WORLD_CALLS`), ``coach`` (a command given to ``sim.coaches[target]``), or ``judge.<method>`` for a judge
@@ -231,17 +232,28 @@ def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
         return Difference(t, step, "(models)", "name", ", ".join(theirs.name), ", ".join(mine.name), 1)
     for what, fields, a, b in (("pose", POSE_FIELDS, theirs.pose, mine.pose),
                                ("twist", TWIST_FIELDS, theirs.twist, mine.twist)):
+        # widened to float64 (exact for float32): bit for bit, also telling -0.0 from 0.0
         a = np.asarray(a, dtype=float).reshape(-1, len(fields))
         b = np.asarray(b, dtype=float).reshape(-1, len(fields))
-        diff = a.view(np.uint64) != b.view(np.uint64)           # bit for bit (also tells -0.0 from 0.0)
+        diff = a.view(np.uint64) != b.view(np.uint64)
         if diff.any():
             row, col = map(int, np.argwhere(diff)[0])
-            total = int((np.asarray(theirs.pose).view(np.uint64) != np.asarray(mine.pose).view(np.uint64)).sum()
-                        + (np.asarray(theirs.twist).view(np.uint64) != np.asarray(mine.twist).view(np.uint64)).sum())
+            total = _bits_differing(theirs.pose, mine.pose) + _bits_differing(theirs.twist, mine.twist)
             return Difference(t, step, theirs.name[row], fields[col], float(a[row, col]), float(b[row, col]), total)
+    if theirs.fingerprint != mine.fingerprint:     # equal at float32, different in the exact float64 states
+        return Difference(t, step, "(every model)", "fingerprint of the exact states", theirs.fingerprint,
+                          mine.fingerprint, 1)
     if theirs.stamp != mine.stamp:
         return Difference(t, step, "(header)", "stamp", theirs.stamp, mine.stamp, 1)
     return Difference(t, step, "(message)", "bytes", "differ", "differ", 0)
 
 
 __all__ = ["Difference", "RecordingError", "Verdict", "VerifyError", "apply_operator", "verify"]
+
+
+def _bits_differing(a, b) -> int:
+    """How many numbers of two equally long arrays differ bit for bit (compared as float64: exact for float32)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape:
+        return max(a.size, b.size)
+    return int((a.view(np.uint64) != b.view(np.uint64)).sum())

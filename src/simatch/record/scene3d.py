@@ -9,6 +9,11 @@ next game update replaces.
 
 A game update always has the same layout (same robots, same labels), so it is encoded once as a template
 and each update only writes the poses into a copy: a few microseconds instead of a full encoding.
+
+The scene is for the eye: positions are snapped to a grid of 1/1024 m (a millimetre) and the robots'
+orientation quaternions to 1/4096 (a hundredth of a degree); the ball, a plain sphere, is drawn without
+its spin. Snapped numbers end in zero bits, so the updates compress to half; the exact states are the
+recording's ``/model_states``.
 """
 
 from __future__ import annotations
@@ -37,6 +42,8 @@ NAMED_COLORS = {
 }
 
 _POSE = struct.Struct("<7d")      # geometry_msgs/Pose in CDR: position x y z, orientation x y z w
+_SHOWN = [0, 1, 2, 3, 6]                                   # x y z qw qz of a ModelStates pose row
+_GRID = np.array([1024.0, 1024.0, 1024.0, 4096.0, 4096.0])  # steps per metre, per unit of a quaternion
 
 
 def color_rgb(name: str) -> tuple[float, float, float]:
@@ -166,11 +173,11 @@ class SceneBuilder:
             self._build_template(list(names))
         buf = bytearray(self._template)
         pack = _POSE.pack_into
-        rows = pose.tolist()
+        rows = (np.round(pose[:, _SHOWN] * _GRID) / _GRID).tolist()       # x y z qw qz, snapped
         for k, off, kind, z in self._slots:
-            x, y, pz, qw, qx, qy, qz = rows[k]
+            x, y, pz, qw, qz = rows[k]
             if kind == "ball":
-                pack(buf, off, x, y, pz, qx, qy, qz, qw)
+                pack(buf, off, x, y, pz, 0.0, 0.0, 0.0, 1.0)
             elif kind == "text":
                 pack(buf, off, x, y, z, 0.0, 0.0, 0.0, 1.0)
             else:        # robots are planar: their quaternion is a turn about z

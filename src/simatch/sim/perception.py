@@ -8,6 +8,11 @@ the robot's team frame: the world frame for a team that attacks +x, the world tu
 Realism knobs from the scene, all off by default (and then the perception is exact): Gaussian noise on
 positions, velocities and headings, the ball or an obstacle missed with a probability, and a latency
 (the observation shows the world as it was that long ago).
+
+The numbers are float32, as the messages define them (and as the original's were): they are rounded
+here, where they are made, so that a strategy reads the same numbers whether its perception came through
+the in-process bus (objects as built) or over the wire (decoded) — embedded and distributed runs decide
+alike.
 """
 
 from __future__ import annotations
@@ -25,7 +30,8 @@ _BallInfo = msgs.positional(msgs.BallInfo, "state x y z vx vy vz angle distance 
 _ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius")
 _RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds")
 _OmniVisionInfo = msgs.positional(msgs.OmniVisionInfo, "stamp tick robot_id ball obstacles robots")
-_EMPTY = np.zeros(0)
+_EMPTY = np.zeros(0, dtype=np.float32)
+_F32 = np.float32
 
 
 @dataclass
@@ -66,7 +72,7 @@ class Perception:
         self._turn = np.where(self.sign > 0, 0.0, np.pi)
         m = max(n - 1, 0)
         self._no_own_noise, self._no_ball_noise, self._no_obs_noise = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4))
-        self._orad = self.radii[self.others] if n > 1 else np.zeros((n, 0))
+        self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(np.float32)
         self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
         self._nw = [int(k) for k in n_wheels]
@@ -108,6 +114,7 @@ class Perception:
                 ball_noise[:, 2:] = rng.normal(0.0, vel, (n, 2))
                 obs_noise[:, :, 2:] = rng.normal(0.0, vel, (n, m, 2))
         own, balls, obs = perceive(snap.robots, snap.ball, self.sign, self.others, own_noise, ball_noise, obs_noise)
+        own, balls, obs = own.astype(_F32), balls.astype(_F32), obs.astype(_F32)     # the messages' precision
         seen = [True] * n if spec.ball_dropout == 0 else (rng.random(n) >= spec.ball_dropout).tolist()
         keep = None
         if spec.obstacle_dropout > 0 and n > 1:
@@ -116,14 +123,14 @@ class Perception:
         # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
         tx, ty, tyaw, tvx, tvy, tw = own.T.tolist()
         valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
-        wheels = list(snap.wheels)
+        wheels = list(snap.wheels.astype(_F32))
         ids, nw, holder = self._ids, self._nw, snap.holder
         team_infos = {}
         for team, idx in self.members.items():
             team_infos[team] = [_RobotInfo(ids[i], tx[i], ty[i], tyaw[i], tvx[i], tvy[i], tw[i], valid[i], stuck[i],
                                            holder == i, wheels[i][: nw[i]]) for i in idx]
         sx, sy, svx, svy, bang, bdist = balls.T.tolist()
-        bz, bvz = float(snap.ball[2]), float(snap.ball[5])
+        bz, bvz = float(_F32(snap.ball[2])), float(_F32(snap.ball[5]))
         if n > 1:
             if keep is None:
                 rows = zip(*(list(a) for a in obs), self._orad_rows)     # each robot's row of every array

@@ -28,6 +28,8 @@ from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world
 
+_f32s = msgs.f32s
+
 #: Commands beyond these are refused as absurd (anything a robot could follow is far below them).
 MAX_COMMAND_SPEED = 50.0      # m/s
 MAX_COMMAND_TURN = 100.0      # rad/s
@@ -218,7 +220,7 @@ class Simulator:
                 self._fresh(i)
             if not self.usable[i]:
                 return True
-        self.drive.command(i, float(vx), float(vy), float(w))
+        self.drive.command(i, *_f32s(vx, vy, w))     # at VelCmd's precision, however the command came
         return True
 
     def command_all(self, V: np.ndarray, dribble: np.ndarray | None = None) -> None:
@@ -272,7 +274,7 @@ class Simulator:
             self.ball.set_dribbler(i, on)
         if kick_speed > 0.0 and usable:
             window = self.scene.control.period if window is None else window
-            self.ball.request_kick(i, float(kick_speed), bool(lob), self.step_index + max(1, round(window / self.dt)))
+            self.ball.request_kick(i, msgs.f32(kick_speed), bool(lob), self.step_index + max(1, round(window / self.dt)))
         return True
 
     def _fresh(self, i: int) -> None:

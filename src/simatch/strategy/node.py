@@ -30,6 +30,7 @@ _MOVE, _NO_ACTION = msgs.ActionCmd.MOVE, msgs.ActionCmd.NO_ACTION
 _LOB, _GROUND = msgs.ActionCmd.KICK_LOB, msgs.ActionCmd.KICK_GROUND
 #: the "no pass" entry shared by every StrategyInfo without a pass (messages are read-only)
 _NO_PASS = msgs.new(msgs.PassCommands)
+_f32s = msgs.f32s
 
 
 class RobotNode(Node):
@@ -92,7 +93,8 @@ class RobotNode(Node):
         return vx, vy, w
 
     def publish(self, now: float, tick: int, cmd: Command, vx: float, vy: float, w: float) -> None:
-        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
+        # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
+        self.pub_vel.put(_VelCmd(now, tick, *_f32s(vx, vy, w)))
         target, ori = cmd.target, cmd.target_ori
         if target is None:
             move, tx, ty = _NO_ACTION, 0.0, 0.0
@@ -100,8 +102,10 @@ class RobotNode(Node):
             move, (tx, ty) = _MOVE, target
         rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
         tvx, tvy = cmd.target_vel
-        self.pub_action.put(_ActionCmd(now, tick, move, rotate, 0, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w,
-                                       cmd.dribble, cmd.kick_speed, _LOB if cmd.lob else _GROUND))
+        tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w,
+                                                            cmd.kick_speed)
+        self.pub_action.put(_ActionCmd(now, tick, move, rotate, 0, tx, ty, ori, tvx, tvy, max_vel, max_w,
+                                       cmd.dribble, kick, _LOB if cmd.lob else _GROUND))
         if self.pub_info.active:
             self.pub_info.put(self.strategy_info(now, tick, cmd))
 
@@ -110,12 +114,13 @@ class RobotNode(Node):
         if p is None:
             pass_cmd = _NO_PASS
         else:
+            px, py, cx, cy = _f32s(p.pass_x, p.pass_y, p.catch_x, p.catch_y)
             pass_cmd = msgs.PassCommands(
-                pass_id=self.rid, catch_id=p.catch_id, pass_x=p.pass_x, pass_y=p.pass_y, catch_x=p.catch_x,
-                catch_y=p.catch_y, is_passout=bool(p.kicked), is_dynamic_pass=bool(p.dynamic),
-                is_static_pass=bool(p.static), is_valid=True)
+                pass_id=self.rid, catch_id=p.catch_id, pass_x=px, pass_y=py, catch_x=cx, catch_y=cy,
+                is_passout=bool(p.kicked), is_dynamic_pass=bool(p.dynamic), is_static_pass=bool(p.static),
+                is_valid=True)
         intent = cmd.intent if cmd.intent is not None else cmd.target
-        ix, iy = intent if intent is not None else (math.nan, math.nan)
+        ix, iy = _f32s(*intent) if intent is not None else (math.nan, math.nan)
         return _StrategyInfo(
             now, tick, self.rid, cmd.role, cmd.action, self._holding(), False, 0.0, ix, iy,
             np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32, 0, 0, pass_cmd,

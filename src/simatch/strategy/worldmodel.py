@@ -119,9 +119,10 @@ class WorldModel:
 
     @property
     def obstacles(self) -> np.ndarray:
-        """(K, 4): x, y, vx, vy of every other robot I see (team frame)."""
+        """(K, 4): x, y, vx, vy of every other robot I see (team frame), as float64 (the perception's
+        float32 numbers, exactly)."""
         o = self.vision.obstacles
-        return np.stack((o.x, o.y, o.vx, o.vy), axis=1) if len(o.x) else np.zeros((0, 4))
+        return np.stack((o.x, o.y, o.vx, o.vy), axis=1).astype(np.float64) if len(o.x) else np.zeros((0, 4))
 
     @property
     def opponents(self) -> np.ndarray:
