@@ -229,10 +229,16 @@ class Feed(_Matching):
         self.topic = topic
         self.covers = tuple(covers)
         self.entries: list[tuple[str, str, bytes]] = []
+        self._covered: dict[str, bool] = {}      # topic -> covered: a raw sample (the tick) asks at every tick
         self._watch(zpub)
 
     def covering(self, topic: str) -> bool:
-        return any(_topics.matches(c, topic) for c in self.covers)
+        known = self._covered.get(topic)
+        if known is None:
+            known = any(_topics.matches(c, topic) for c in self.covers)
+            if len(self._covered) < 4096:
+                self._covered[topic] = known
+        return known
 
 
 class RawPublisher(_Matching):
