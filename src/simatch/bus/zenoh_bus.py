@@ -70,6 +70,9 @@ RUNTIME = "(rx: (worker_threads: 1), app: (worker_threads: 1), acc: (worker_thre
 
 #: the ``pre`` of an inbox item that was neither refused nor decoded in advance (see `ZenohBus.deliver`)
 _UNCHECKED = (None, None, None)
+#: the names of Zenoh's sending threads (its "tx" runtime's workers)
+_SENDER_THREAD = re.compile(r"^tx-\d+$")
+
 _RUN_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")
 _ENCODING_PREFIX = "application/cdr;"
 
@@ -149,6 +152,29 @@ def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh
                 first = str(exc).split(" at ", 1)[0]
                 raise TransportError(f"cannot open the Zenoh session{' ' + what if what else ''}: {first}") from None
             time.sleep(0.2)
+
+
+def calm_sending_threads() -> int:
+    """Make Zenoh's sending threads of this process ``SCHED_BATCH`` (Linux; elsewhere nothing): they still
+    get their share of the CPU, but waking one no longer preempts the thread that woke it. On the ordinary
+    transport every put wakes the sending thread; without this, a lockstep server putting its feeds was
+    preempted by it right after the first one, and on a busy 2-core machine the next team's feed then left
+    0.6-0.7 ms later (median; measured per put: 0.66 ms of wall time for 0.04 ms of CPU), which that team
+    lost at every tick. The sending thread now runs once the putting thread waits (or on an idle core).
+    Returns how many threads were changed."""
+    if not hasattr(os, "sched_setscheduler") or not os.path.isdir("/proc/self/task"):
+        return 0
+    changed = 0
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{tid}/comm", encoding="utf-8") as f:
+                name = f.read().strip()
+            if _SENDER_THREAD.match(name):
+                os.sched_setscheduler(int(tid), os.SCHED_BATCH, os.sched_param(0))
+                changed += 1
+        except (OSError, ValueError):       # the thread ended meanwhile, or the system does not allow it
+            continue
+    return changed
 
 
 class _RemoteSub:

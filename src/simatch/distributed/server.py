@@ -25,7 +25,8 @@ import numpy as np
 
 from .. import msgs
 from ..bus import topics
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, calm_sending_threads,
+                              open_session, zenoh_config)
 from ..scene.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
@@ -147,6 +148,7 @@ class Server:
                         host=str(req.get("host", "")))
             self.registry.join(proc)
             self.bus.refresh_matching()      # its subscriptions came before its join
+            calm_sending_threads()           # Zenoh starts them with the first link: the feeds leave together
         except (protocol.ProtocolError, JoinError, TypeError, ValueError) as exc:
             query.reply_err(protocol.dumps({"error": str(exc)}))
             return
