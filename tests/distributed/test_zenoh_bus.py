@@ -14,7 +14,7 @@ import pytest
 import zenoh
 
 from simatch import msgs
-from simatch.bus import InProcessBus, LockstepClock, bundle
+from simatch.bus import InProcessBus, LockstepClock
 from simatch.bus.zenoh_bus import MAX_SAMPLE, ZenohBus, calm_sending_threads, open_session, zenoh_config
 from simatch.strategy.node import StrategyPub
 
@@ -199,55 +199,6 @@ def test_a_batch_leaves_as_one_bundle_and_its_entries_arrive_as_if_alone(pair):
     pump_until(server, lambda: len(got) == 4)
     assert got == [("vel", 0), ("vel", 1), ("vel", 2), ("ack", b"done")]
     assert server.stats.delivered == 3 and server.stats.malformed == 0
-
-
-def test_a_bundle_left_to_the_owner_is_checked_and_opened_when_taken_and_its_answer_wakes_it():
-    """``prepare_on_arrival=False`` (a real-time server): Zenoh's thread only reads a bundle's framing; the
-    owner checks it whole and entry by entry when it takes it, exactly as if it had been opened on arrival."""
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-
-    def verifier(topic, payload, attachment):
-        return None if attachment == b"ok" else "forged"
-
-    def entry_verifier(attachment, topic, payload):
-        return "not yours" if topic.startswith("magenta/") else None
-
-    refused, malformed, got, woken = [], [], [], []
-    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint])), "unit", verifier=verifier,
-                      entry_verifier=entry_verifier, prepare_on_arrival=False, wake_on_data=False,
-                      on_refused=lambda topic, why: refused.append((topic, why)),
-                      on_malformed=lambda topic, what: malformed.append(topic))
-    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint]), wait=10), "unit", eager=True)
-    try:
-        server.subscribe("cyan/*/VelCmd", msgs.VelCmd, lambda m: got.append(("vel", m.tick)))
-        server.subscribe("magenta/*/VelCmd", msgs.VelCmd, lambda m: got.append(("stolen", m.tick)))
-        server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: got.append(("ack", payload)),
-                             verify=False, wakes=lambda topic, payload: woken.append(payload) or True)
-        server.accept_bundles("cyan/lockstep/bundle")
-        vel = msgs.msgtype_name(msgs.VelCmd)
-        good = bundle.pack([("cyan/2/VelCmd", vel, msgs.encode(msgs.new(msgs.VelCmd, tick=1))),
-                            ("magenta/3/VelCmd", vel, msgs.encode(msgs.new(msgs.VelCmd, tick=2))),
-                            ("cyan/lockstep/ack", "", b"a1")])
-        key = client.key("cyan/lockstep/bundle")
-        time.sleep(0.5)                          # the subscriptions reach the client
-        client.session.put(key, good, attachment=b"forged")
-        client.session.put(key, b"SMB1\xff", attachment=b"ok")
-        client.session.put(key, good, attachment=b"ok")
-        assert server.wait(5.0)                  # woken by the answers (and the broken bundle), unopened
-        deadline = time.monotonic() + 5
-        while len(woken) < 2 and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert woken == [b"a1", b"a1"]           # read from the framing, before anything is checked
-        assert all(item[0] is server._unopened for item in list(server._inbox))
-        items = server.take(0.0)
-        assert all(item[0] is not server._unopened for item in items)
-        server.deliver(items)
-        assert got == [("vel", 1), ("ack", b"a1")]                   # the forged bundle: nothing used
-        assert refused == [("cyan/lockstep/bundle", "forged"), ("magenta/3/VelCmd", "not yours")]
-        assert malformed == ["cyan/lockstep/bundle"]
-    finally:
-        client.close()
-        server.close()
 
 
 @pytest.mark.skipif(not hasattr(os, "sched_getscheduler"), reason="Linux scheduling policies")

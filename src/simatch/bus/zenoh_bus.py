@@ -366,9 +366,7 @@ class ZenohBus:
     ``prepare_on_arrival``: check and decode each data sample in Zenoh's receiving thread as it arrives
     (while the owner waits for the rest: a lockstep server decodes one team's commands while the other
     team still thinks), rather than when the owner delivers it (which leaves the cores to the teams while
-    they answer: better for the latency of a real-time run with many processes). Without it, a bundle
-    that must be checked is also checked and opened by the owner (in `take`): Zenoh's thread only reads its
-    framing, so that the answers it carries wake the owner as if they had arrived alone.
+    they answer: better for the latency of a real-time run with many processes).
 
     ``wake_on_data=False``: a waiting owner wakes only for raw (protocol) samples, not for each data sample:
     a lockstep process needs to act only when a tick opens or closes, and every wake-up costs a context
@@ -425,8 +423,6 @@ class ZenohBus:
         self._routes: dict[tuple[str, bool, bool], tuple[_RemoteSub, ...]] = {}   # bundle entry -> subscriptions
         self._routes_lock = threading.Lock()     # Zenoh's threads fill the routes; the owner changes subscriptions
         self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)   # refusals inside bundles
-        self._unopened = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)  # bundles not yet opened
-        self._unopened_count = 0
         self._closed = False
         #: samples not sent because they were larger than ``max_sample``, by topic
         self.oversize: dict[str, int] = {}
@@ -620,17 +616,12 @@ class ZenohBus:
         n = len(self.prefix)
         clock = time.monotonic
         notices = self._notices
-        #: checked (and routed) by the owner when it takes them, not here: see ``prepare_on_arrival``
-        defer = verify and not fed and handle is None and not self.prepare_on_arrival
 
         def on_sample(sample) -> None:
             att = sample.attachment
             topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
             attachment = att.to_bytes() if att is not None else None
             arrival = clock()
-            if defer:
-                self._queue_unopened(topic, payload, attachment, arrival)
-                return
             try:
                 items = self._open_bundle(topic, payload, attachment, arrival, fed, verify)
             except Exception as exc:      # never fail in Zenoh's thread: the owner reports it
@@ -650,58 +641,17 @@ class ZenohBus:
                                                allowed_origin=zenoh.Locality.REMOTE)
         self._declared.append(zsub)
 
-    def _queue_unopened(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
-        """Queue a bundle whole, to be checked and opened by the owner when it takes it (`take`): in Zenoh's
-        thread only its framing is read, so that the answers it carries can wake the owner (``early``, as if
-        they had arrived alone); nothing in it is used before it is checked."""
-        try:
-            entries = _bundle.unpack(payload)
-        except _bundle.BundleError:
-            entries = None                 # refused whole when opened; the owner hears of it at once
-        waking = 1 if entries is None else 0
-        routes = self._routes
-        with self._queue_lock:
-            self._inbox.append((self._unopened, topic, payload, attachment, "", arrival, entries))
-            self._unopened_count += 1
-            for entry_topic, msgtype, data in entries or ():
-                raw = not msgtype
-                subs = routes.get((entry_topic, raw, False))
-                if subs is None:
-                    subs = self._route(entry_topic, raw, False)
-                for rsub in subs:
-                    if _wakes(rsub, entry_topic, data):
-                        waking += 1
-            if waking:
-                self._waking += waking
-                self._wake.set()
-
-    def _open_unopened(self, items: list) -> list:
-        """`take`'s items with each bundle queued whole (`_queue_unopened`) replaced by its checked entries."""
-        out = []
-        for item in items:
-            if item[0] is self._unopened:
-                rsub, topic, payload, attachment, _, arrival, entries = item
-                try:
-                    out.extend(self._open_bundle(topic, payload, attachment, arrival, False, True, entries))
-                except Exception as exc:    # reported by `deliver`, like any payload that fails
-                    out.append((self._notices, topic, payload, None, "", arrival, (None, None, exc)))
-            else:
-                out.append(item)
-        return out
-
     def _open_bundle(self, topic: str, payload: bytes, attachment, arrival: float, fed: bool,
-                     verify: bool, entries: list | None = None) -> list:
+                     verify: bool) -> list:
         """The inbox items of one bundle: its entries, each with what `deliver` needs to know
-        (``pre``: why refused / decoded message / error), or one notice if the bundle is refused or broken
-        (``entries``: its entries if already read, `_queue_unopened`)."""
+        (``pre``: why refused / decoded message / error), or one notice if the bundle is refused or broken."""
         notices = self._notices
         if verify and self.verifier is not None:
             why = self.verifier(topic, payload, attachment)
             if why is not None:
                 return [(notices, topic, payload, None, "", arrival, (why, None, None))]
         try:
-            if entries is None:
-                entries = _bundle.unpack(payload)
+            entries = _bundle.unpack(payload)
         except _bundle.BundleError as exc:
             return [(notices, topic, payload, None, "", arrival, (None, None, msgs.MessageError(str(exc))))]
         check = self.entry_verifier if verify else None
@@ -889,8 +839,7 @@ class ZenohBus:
             out = list(self._inbox)
             self._inbox.clear()
             self._waking = 0
-            unopened, self._unopened_count = self._unopened_count, 0
-        return self._open_unopened(out) if unopened else out
+        return out
 
     def deliver(self, items: Iterable) -> int:
         """Check, decode and hand samples (from `take`) to their callbacks, in the given order."""
