@@ -4,6 +4,7 @@ client, as a team opens), its safe defaults, and what it does with samples it ca
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -14,7 +15,7 @@ import zenoh
 
 from simatch import msgs
 from simatch.bus import InProcessBus, LockstepClock
-from simatch.bus.zenoh_bus import MAX_SAMPLE, ZenohBus, open_session, zenoh_config
+from simatch.bus.zenoh_bus import MAX_SAMPLE, ZenohBus, calm_sending_threads, open_session, zenoh_config
 from simatch.strategy.node import StrategyPub
 
 from .cluster import ROOT, free_port
@@ -198,6 +199,32 @@ def test_a_batch_leaves_as_one_bundle_and_its_entries_arrive_as_if_alone(pair):
     pump_until(server, lambda: len(got) == 4)
     assert got == [("vel", 0), ("vel", 1), ("vel", 2), ("ack", b"done")]
     assert server.stats.delivered == 3 and server.stats.malformed == 0
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_getscheduler"), reason="Linux scheduling policies")
+def test_zenohs_sending_threads_are_made_batch_and_nothing_else(pair):
+    """A put wakes Zenoh's sending thread; as SCHED_BATCH it no longer preempts the putting thread."""
+    server, client = pair
+    pump_until(client, lambda: True)
+
+    def policies() -> dict:
+        out = {}
+        for tid in os.listdir("/proc/self/task"):
+            with open(f"/proc/self/task/{tid}/comm", encoding="utf-8") as f:
+                out[int(tid)] = (f.read().strip(), os.sched_getscheduler(int(tid)))
+        return out
+
+    assert calm_sending_threads() >= 1
+    after = policies()
+    senders = [policy for name, policy in after.values() if name.startswith("tx-")]
+    assert senders and all(policy == os.SCHED_BATCH for policy in senders)
+    assert all(policy != os.SCHED_BATCH for name, policy in after.values() if not name.startswith("tx-"))
+    got = []
+    server.subscribe("cyan/1/VelCmd", msgs.VelCmd, got.append)
+    vel = client.publisher("cyan/1/VelCmd", msgs.VelCmd)
+    pump_until(client, lambda: vel.matching)
+    vel.put(msgs.new(msgs.VelCmd, vx=1.0))
+    pump_until(server, lambda: got)          # samples still leave
 
 
 def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives_twice(pair):

@@ -84,39 +84,50 @@ def split(entries: Iterable[tuple[str, str, bytes]], limit: int) -> tuple[list[l
     return runs, too_large
 
 
-def _text(data: bytes, i: int, n: int, what: str) -> tuple[str, int]:
-    """The UTF-8 text of the u16-length-prefixed field at ``i``, and the offset after it."""
-    end = i + 2
-    if end > n:
-        raise BundleError(f"broken bundle: {what} length runs past its end")
-    end += _U16.unpack_from(data, i)[0]
-    if end > n:
-        raise BundleError(f"broken bundle: {what} runs past its end")
-    return data[i + 2:end].decode(), end
+#: topic and type names seen in bundles, by their bytes: the same few dozen names come in every tick, so
+#: each is decoded once (bounded: a sender that invents names only makes the cache start again)
+_NAMES: dict[bytes, str] = {}
+_NAMES_MAX = 4096
+_new_entry = tuple.__new__
+
+
+def _name(raw: bytes) -> str:
+    text = raw.decode()
+    if len(_NAMES) >= _NAMES_MAX:
+        _NAMES.clear()
+    _NAMES[raw] = text
+    return text
 
 
 def unpack(data: bytes) -> list[Entry]:
     """The entries of a bundle; BundleError if it is not one (nothing of a broken bundle is used).
 
     Written for speed (a server opens every process's bundle at every tick, on the tick's critical path):
-    plain offsets into ``data``, no memoryviews or per-field closures."""
+    plain offsets into ``data``, every bound checked before it is used, names decoded once (`_NAMES`)."""
     if data[:4] != MAGIC:
         raise BundleError("not a bundle (no SMB1 header)")
     out = []
     add = out.append
-    u32 = _U32.unpack_from
+    u16, u32 = _U16.unpack_from, _U32.unpack_from
+    names = _NAMES
     n, i = len(data), 4
     try:
         while i < n:
-            topic, i = _text(data, i, n, "a topic")
-            msgtype, i = _text(data, i, n, "a type name")
-            end = i + 4
-            if end > n:
-                raise BundleError("broken bundle: a payload length runs past its end")
-            end += u32(data, i)[0]
+            if i + 2 > n:
+                raise BundleError("broken bundle: a topic length runs past its end")
+            j = i + 2 + u16(data, i)[0]
+            if j + 2 > n:
+                raise BundleError("broken bundle: a topic (or the type length after it) runs past its end")
+            k = j + 2 + u16(data, j)[0]
+            if k + 4 > n:
+                raise BundleError("broken bundle: a type name (or the payload length after it) runs past its end")
+            end = k + 4 + u32(data, k)[0]
+            raw = data[i + 2:j]
+            topic = names.get(raw) or _name(raw)
             if end > n:
                 raise BundleError(f"broken bundle: the payload on {topic!r} runs past its end")
-            add(Entry(topic, msgtype, data[i + 4:end]))
+            raw = data[j + 2:k]
+            add(_new_entry(Entry, (topic, names.get(raw) or _name(raw) if raw else "", data[k + 4:end])))
             i = end
     except UnicodeDecodeError as exc:
         raise BundleError(f"broken bundle: {exc}") from None

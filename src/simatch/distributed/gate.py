@@ -54,6 +54,8 @@ class LockstepGate(Node):
         self._early: dict[str, str] = {}
         self._early_tick = -1
         self._early_lock = threading.Lock()
+        #: answers already parsed by Zenoh's thread (`_last_answer`), by payload, for `_ack`
+        self._parsed: dict[bytes, dict] = {}
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -78,6 +80,8 @@ class LockstepGate(Node):
         except (ValueError, TypeError, KeyError, UnicodeDecodeError):
             return False
         with self._early_lock:
+            if isinstance(msg, dict) and len(self._parsed) < 1024:
+                self._parsed[payload] = msg        # read once: `_ack` takes it from here
             if tick != self._early_tick or not isinstance(proc, str) or \
                     self._early.get(proc) != protocol.team_of(topic):
                 return False
@@ -91,10 +95,14 @@ class LockstepGate(Node):
             self._early_tick = self._tick
 
     def _ack(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
-        try:
-            msg = protocol.loads(payload, "proc", "tick")
-        except protocol.ProtocolError:
-            return
+        with self._early_lock:
+            msg = self._parsed.pop(payload, None)
+        if msg is None:
+            try:
+                msg = protocol.loads(payload, "proc", "tick")
+            except protocol.ProtocolError:
+                return
+        # (a payload parsed by `_last_answer` is the same JSON object, which had "proc" and "tick")
         proc = self._on_ack(msg, protocol.team_of(topic), arrival)
         if proc is not None and msg["tick"] == self._tick and proc.id in self._waiting:
             self._waiting.discard(proc.id)
@@ -136,6 +144,7 @@ class LockstepGate(Node):
                 self._absorb(bus.take(0.0), pending)           # answers queued before that
         with self._early_lock:
             self._early = {}
+            self._parsed.clear()      # (an answer handled later is parsed again)
         if self._waiting:
             self.missed += len(self._waiting)
             self._on_missed(set(self._waiting), now)

@@ -25,7 +25,8 @@ import numpy as np
 
 from .. import msgs
 from ..bus import topics
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, calm_sending_threads,
+                              open_session, zenoh_config)
 from ..scene.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
@@ -81,6 +82,7 @@ class Server:
             self.sim = Simulation(scene, seed=seed, bus=self.bus, run_name=run, teams="external")
             self.pub_events = self.bus.publisher(topics.EVENTS, msgs.GameEvent)
             self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
+            self._topic_order: dict[str, tuple] = {}      # a robot's topic -> its place (see `_order`)
             clock = self.sim.clock
             self.gate = clock.add(LockstepGate(spec.control.period, deadline, realtime, self.registry.active,
                                                self._on_ack, self._on_missed, self._order))
@@ -146,6 +148,7 @@ class Server:
                         host=str(req.get("host", "")))
             self.registry.join(proc)
             self.bus.refresh_matching()      # its subscriptions came before its join
+            calm_sending_threads()           # Zenoh starts them with the first link: the feeds leave together
         except (protocol.ProtocolError, JoinError, TypeError, ValueError) as exc:
             query.reply_err(protocol.dumps({"error": str(exc)}))
             return
@@ -222,10 +225,15 @@ class Server:
     def _order(self, item: tuple) -> tuple:
         """Received samples in the embedded run's order: by robot (scene order), then as they arrived."""
         topic = item[1]
+        known = self._topic_order.get(topic)
+        if known is not None:
+            return known
         head = topic.split("/", 2)
         if len(head) >= 2:
             i = self._robot_order.get(f"{head[0]}/{head[1]}")
             if i is not None:
+                if len(self._topic_order) < 4096:     # the same few dozen topics every tick (bounded all the same)
+                    self._topic_order[topic] = (i,)
                 return (i,)
         if topic == topics.EVENTS:
             try:
