@@ -46,8 +46,8 @@ from .writer import McapWriter, WriterError
 log = logging.getLogger(__name__)
 
 #: single-level topics recorded besides every ``<team>/...`` topic (link_states only on request)
-WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.BALL_CONTACTS, topics.EVENTS, topics.GAME_STATE,
-                topics.OPERATOR)
+WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.BALL_CONTACTS, topics.EVENTS,
+                topics.GAME_STATE, topics.OPERATOR)
 TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
 CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}

@@ -5,9 +5,10 @@ from outside the run's nodes (``operator`` topic: Python API calls, commands giv
 operator actions on a judge). A new embedded `Simulation` of that scene and seed is stepped in lockstep
 with the recording; before each physics step the operator commands recorded for that step are applied
 again, and the model states the simulator publishes are compared with the recorded ones, byte for byte
-(CDR), at every physics step: their float32 numbers and the fingerprint of the exact float64 states (see
-ModelStates.msg), so the check is bit for bit on the simulator's own numbers. The first step where they
-differ is reported with the model, the field and both values.
+(CDR), at every physics step, and so are the fingerprints of the exact float64 states (StateFingerprint,
+every control tick): the model states are float32, the fingerprints tell any difference of the
+simulator's own numbers. The first step where they differ is reported with the model, the field and both
+values.
 
 Operator commands name what they did (`OperatorCommand.call`): a `Simulation` method of the Python API
 (`WORLD_CALLS`), ``coach`` (a command given to ``sim.coaches[target]``), or ``judge.<method>`` for a judge
@@ -160,7 +161,9 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     latest: list = [None]
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))
-    sub = sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m))
+    prints = _Fingerprints()
+    subs = [sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
+            sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated)]
     pending: list = []
     last_report = -1.0
 
@@ -181,14 +184,17 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     try:
         # a sample is compared once the next one is read: the commands made during its step come after it
         held: tuple[int, bytes] | None = None
-        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR}):
+        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT}):
             if topic == topics.OPERATOR:
                 op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
                 if op is not None:
                     pending.append(op)
                 continue
+            if topic == topics.STATE_FINGERPRINT:
+                prints.recorded(rec.decode("simatch_msgs/msg/StateFingerprint", data, topic))
+                continue
             _, step = _STEP.unpack_from(data)
-            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim):
+            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
                 held = None
                 break
             held = (step, bytes(data)) if step >= sim.simulator.step_index else None
@@ -196,9 +202,10 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
                 last_report = verdict.until
                 progress(verdict.until)
         if held is not None:
-            _check(held, step_to, latest, encode, verdict, rec, sim)
+            _check(held, step_to, latest, encode, verdict, rec, sim, prints)
     finally:
-        sub.close()
+        for sub in subs:
+            sub.close()
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
     verdict.problems = problems + rec.problems
@@ -206,7 +213,35 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     return verdict
 
 
-def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim) -> bool:
+class _Fingerprints:
+    """The exact states' fingerprints (StateFingerprint, every control tick), recorded and re-simulated, by
+    physics step: the model states are float32, these tell a difference below float32 too."""
+
+    def __init__(self):
+        self.theirs: dict[int, int] = {}
+        self.mine: dict[int, int] = {}
+
+    def recorded(self, msg) -> None:
+        if msg is not None:
+            self.theirs[int(msg.step)] = int(msg.fingerprint)
+
+    def simulated(self, msg) -> None:
+        self.mine[int(msg.step)] = int(msg.fingerprint)
+
+    def first_difference(self, upto: int, dt: float) -> Difference | None:
+        """Compare every recorded fingerprint up to step ``upto`` (re-simulated by now), then forget them."""
+        found = None
+        for step in sorted(k for k in self.theirs if k <= upto):
+            theirs, mine = self.theirs.pop(step), self.mine.get(step)
+            if found is None and theirs != mine:
+                found = Difference(step * dt, step, "(every model)", "fingerprint of the exact states", theirs,
+                                   "none" if mine is None else mine, 1)
+        for step in [k for k in self.mine if k <= upto]:
+            del self.mine[step]
+        return found
+
+
+def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim, prints: _Fingerprints) -> bool:
     """Re-simulate the held sample's step and compare; False at the first difference."""
     step, data = held
     step_to(step)
@@ -218,6 +253,11 @@ def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim)
     if encode(mine) != data:
         verdict.identical = False
         verdict.first_difference = _difference(rec, data, mine, sim.dt)
+        return False
+    differs = prints.first_difference(step, sim.dt)
+    if differs is not None:
+        verdict.identical = False
+        verdict.first_difference = differs
         return False
     return True
 
@@ -240,9 +280,6 @@ def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
             row, col = map(int, np.argwhere(diff)[0])
             total = _bits_differing(theirs.pose, mine.pose) + _bits_differing(theirs.twist, mine.twist)
             return Difference(t, step, theirs.name[row], fields[col], float(a[row, col]), float(b[row, col]), total)
-    if theirs.fingerprint != mine.fingerprint:     # equal at float32, different in the exact float64 states
-        return Difference(t, step, "(every model)", "fingerprint of the exact states", theirs.fingerprint,
-                          mine.fingerprint, 1)
     if theirs.stamp != mine.stamp:
         return Difference(t, step, "(header)", "stamp", theirs.stamp, mine.stamp, 1)
     return Difference(t, step, "(message)", "bytes", "differ", "differ", 0)

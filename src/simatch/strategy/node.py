@@ -93,8 +93,6 @@ class RobotNode(Node):
         return vx, vy, w
 
     def publish(self, now: float, tick: int, cmd: Command, vx: float, vy: float, w: float) -> None:
-        # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
-        self.pub_vel.put(_VelCmd(now, tick, *_f32s(vx, vy, w)))
         target, ori = cmd.target, cmd.target_ori
         if target is None:
             move, tx, ty = _NO_ACTION, 0.0, 0.0
@@ -102,8 +100,10 @@ class RobotNode(Node):
             move, (tx, ty) = _MOVE, target
         rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
         tvx, tvy = cmd.target_vel
-        tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w,
-                                                            cmd.kick_speed)
+        # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
+        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel,
+                                                                       cmd.max_w, cmd.kick_speed)
+        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
         self.pub_action.put(_ActionCmd(now, tick, move, rotate, 0, tx, ty, ori, tvx, tvy, max_vel, max_w,
                                        cmd.dribble, kick, _LOB if cmd.lob else _GROUND))
         if self.pub_info.active:
