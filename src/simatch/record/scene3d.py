@@ -11,7 +11,7 @@ A game update always has the same layout (same robots, same labels), so it is en
 and each update only writes the poses into a copy: a few microseconds instead of a full encoding.
 
 The scene is for the eye: positions are snapped to a grid of 1/1024 m (a millimetre) and the robots'
-orientation quaternions to 1/4096 (a hundredth of a degree); the ball, a plain sphere, is drawn without
+orientation quaternions to 1/4096 (three hundredths of a degree); the ball, a plain sphere, is drawn without
 its spin. Snapped numbers end in zero bits, so the updates compress to half; the exact states are the
 recording's ``/model_states``.
 """
