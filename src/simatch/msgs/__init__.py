@@ -4,10 +4,10 @@ The definitions are loaded at import time into a ``rosbags`` type store, with no
 same types serve the in-process bus (plain objects, never serialised), the wire between processes (CDR),
 the recordings (rosbag2-compatible MCAP) and any ROS 2 bridge.
 
-Precision: what the simulator states exactly (times, model and link poses, the game's numbers) is
-``float64``; what robots perceive and command (perception, VelCmd, ActionCmd, StrategyInfo) is ``float32``,
-as in the original Simatch's messages — seven significant digits, far finer than any robot senses or
-drives, at half the bytes on the wire and in a recording (and model-state twists, see ModelStates.msg).
+Precision: times and the game's numbers are ``float64``; what robots perceive and command (perception,
+VelCmd, ActionCmd, StrategyInfo) and the model and link states are ``float32``, as in the original
+Simatch's messages — seven significant digits, far finer than any robot senses or drives, at half the
+bytes on the wire and in a recording (the exact states are identified by StateFingerprint).
 A float32 value is rounded where it is made (`f32`), so the in-process bus carries the very numbers the
 wire would: a value that crosses a process boundary comes back bit for bit, which is what lets a
 distributed lockstep run reproduce an embedded one exactly.
@@ -188,10 +188,8 @@ def f32s(*values: float) -> tuple[float, ...]:
     try:
         st = _FLOAT32[len(values)]
         return st.unpack(st.pack(*values))
-    except (OverflowError, IndexError):
+    except (OverflowError, IndexError, struct.error):  # out of range, many values, or not a number (TypeError)
         return tuple(f32(v) for v in values)
-    except struct.error:
-        return tuple(f32(v) for v in values)           # TypeError naming the value that is not a number
 
 
 # ---------------------------------------------------------------------------------------------------

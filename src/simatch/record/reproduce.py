@@ -270,15 +270,17 @@ def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
         return Difference(t, step, "?", "?", "undecodable", "", 0)
     if list(theirs.name) != list(mine.name):
         return Difference(t, step, "(models)", "name", ", ".join(theirs.name), ", ".join(mine.name), 1)
-    for what, fields, a, b in (("pose", POSE_FIELDS, theirs.pose, mine.pose),
-                               ("twist", TWIST_FIELDS, theirs.twist, mine.twist)):
-        # widened to float64 (exact for float32): bit for bit, also telling -0.0 from 0.0
-        a = np.asarray(a, dtype=float).reshape(-1, len(fields))
-        b = np.asarray(b, dtype=float).reshape(-1, len(fields))
-        diff = a.view(np.uint64) != b.view(np.uint64)
+    # widened to float64 (exact for float32), compared bit for bit (which also tells -0.0 from 0.0)
+    def rows(values, fields):
+        return np.asarray(values, dtype=float).reshape(-1, len(fields))
+
+    groups = [(fields, rows(a, fields), rows(b, fields))
+              for fields, a, b in ((POSE_FIELDS, theirs.pose, mine.pose), (TWIST_FIELDS, theirs.twist, mine.twist))]
+    diffs = [a.view(np.uint64) != b.view(np.uint64) for _, a, b in groups]
+    for (fields, a, b), diff in zip(groups, diffs):
         if diff.any():
             row, col = map(int, np.argwhere(diff)[0])
-            total = _bits_differing(theirs.pose, mine.pose) + _bits_differing(theirs.twist, mine.twist)
+            total = int(sum(d.sum() for d in diffs))
             return Difference(t, step, theirs.name[row], fields[col], float(a[row, col]), float(b[row, col]), total)
     if theirs.stamp != mine.stamp:
         return Difference(t, step, "(header)", "stamp", theirs.stamp, mine.stamp, 1)
@@ -286,11 +288,3 @@ def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
 
 
 __all__ = ["Difference", "RecordingError", "Verdict", "VerifyError", "apply_operator", "verify"]
-
-
-def _bits_differing(a, b) -> int:
-    """How many numbers of two equally long arrays differ bit for bit (compared as float64: exact for float32)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if a.shape != b.shape:
-        return max(a.size, b.size)
-    return int((a.view(np.uint64) != b.view(np.uint64)).sum())

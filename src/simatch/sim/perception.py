@@ -72,7 +72,7 @@ class Perception:
         self._turn = np.where(self.sign > 0, 0.0, np.pi)
         m = max(n - 1, 0)
         self._no_own_noise, self._no_ball_noise, self._no_obs_noise = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4))
-        self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(np.float32)
+        self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(_F32)
         self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
         self._nw = [int(k) for k in n_wheels]
@@ -130,7 +130,7 @@ class Perception:
             team_infos[team] = [_RobotInfo(ids[i], tx[i], ty[i], tyaw[i], tvx[i], tvy[i], tw[i], valid[i], stuck[i],
                                            holder == i, wheels[i][: nw[i]]) for i in idx]
         sx, sy, svx, svy, bang, bdist = balls.T.tolist()
-        bz, bvz = float(_F32(snap.ball[2])), float(_F32(snap.ball[5]))
+        bz, bvz = msgs.f32s(snap.ball[2], snap.ball[5])
         if n > 1:
             if keep is None:
                 rows = zip(*(list(a) for a in obs), self._orad_rows)     # each robot's row of every array
