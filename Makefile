@@ -20,7 +20,8 @@ bench: setup
 
 setup: $(VENV)/.installed
 
-$(VENV)/.installed: pyproject.toml
+# setup.py and the C encoder too: a changed extension is rebuilt by the next make
+$(VENV)/.installed: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[test]'

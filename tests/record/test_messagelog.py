@@ -199,3 +199,62 @@ def test_a_clock_message_with_an_absurd_step_does_not_move_the_time(kind):
     log("clock", msgs.new(msgs.Clock, step=2**62))
     assert log.now == 200_000_000
     assert [t for _, t, _ in _records(log.take()[0])] == [200_000_000] * 3
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(kind):
+    """Every 10th physics step of the model states, the log writes the 3D scene's game update itself; what
+    its template does not take (no template yet, other models, poses that are no float buffer, too few rows)
+    goes to the fallback, which sets a new template or says what is wrong. The log's bytes are the scene
+    builder's, orientations and snapping included."""
+    from simatch.record.scene3d import GRID, TURN_GRID, SceneBuilder
+    from simatch.scene.loader import load_scene
+
+    builder = SceneBuilder(load_scene("msl_5v5").spec)
+    log = _log(kind, lambda topic, msg: None)
+    log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
+    log.timing(5_000_000, 500_000_000, lambda: None)
+    handed, refused = [], []
+
+    def fallback(msg):
+        handed.append(int(msg.step))
+        try:
+            template, slots = builder.template(list(msg.name))
+            log.pose_template(list(msg.name), template, slots, GRID, TURN_GRID)
+            log.record(7, builder.game_update(list(msg.name), np.asarray(msg.pose, dtype=float).reshape(-1, 7)))
+        except ValueError:
+            refused.append(int(msg.step))
+
+    log.poses("model_states", 7, 10, fallback)
+    rng = np.random.default_rng(5)
+    three, two = ["ball", "cyan/1", "magenta/2"], ["ball", "cyan/1"]
+    expected = []
+    for step in range(56):
+        names = three if step < 25 else two
+        yaw = rng.uniform(-3.2, 3.2, len(names))
+        pose = np.column_stack([rng.uniform(-9, 9, (len(names), 3)), np.cos(yaw / 2), np.zeros((len(names), 2)),
+                                np.sin(yaw / 2)]).astype(np.float32).ravel()
+        if step == 40:
+            pose = pose.astype(np.float64).tolist()                    # a list: the fallback's
+        if step == 50:
+            pose = pose[:7]                                            # one row for two models: refused
+        log("model_states", msgs.new(msgs.ModelStates, step=step, name=list(names), pose=pose,
+                                      twist=np.zeros(6 * len(names), dtype=np.float32)))
+        if step % 10 == 0 and step != 50:
+            expected.append((step * 5_000_000, builder.game_update(names, np.asarray(pose, dtype=float).reshape(-1, 7))))
+    scene = [(t, data) for cid, t, data in _records(log.take()[0]) if cid == 7]
+    assert scene == expected
+    assert handed == [0, 30, 40, 50] and refused == [50]
+
+
+def test_the_pose_template_refuses_slots_outside_it():
+    for kind in KINDS:
+        log = _log(kind, lambda topic, msg: None)
+        with pytest.raises(ValueError):
+            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 1024.0, 4096.0)    # poses() first
+        log.poses("model_states", 7, 10, lambda msg: None)
+        for slots in ([(10, 0, 0.0, False)], [(2, 0, 0.0, False)], [(4, -1, 0.0, False)]):
+            with pytest.raises(ValueError):
+                log.pose_template(["ball"], b"\x00" * 64, slots, 1024.0, 4096.0)
+        with pytest.raises(ValueError):
+            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 0.0, 4096.0)

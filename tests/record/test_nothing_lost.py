@@ -14,7 +14,8 @@ import time
 
 import pytest
 
-from simatch.record import Recording, RecordingError, verify
+import simatch
+from simatch.record import Recorder, RecordError, Recording, RecordingError, verify
 
 SIMATCH = [sys.executable, "-m", "simatch"]
 
@@ -39,7 +40,29 @@ def _stop(proc: subprocess.Popen) -> None:
         proc.wait(timeout=30)
 
 
-def test_sigkill_leaves_every_second_but_the_last(tmp_path):
+def _writers_of(path) -> list[int]:
+    """The processes that hold ``path`` open (a recording's writer process)."""
+    found = []
+    for entry in os.scandir("/proc"):
+        if entry.name.isdigit():
+            try:
+                if any(os.readlink(fd.path) == str(path) for fd in os.scandir(f"/proc/{entry.name}/fd")):
+                    found.append(int(entry.name))
+            except OSError:                      # gone meanwhile, or not ours to look at
+                pass
+    return found
+
+
+def _until_no_writer(path, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while _writers_of(path):
+        assert time.monotonic() < deadline, f"the writer process of {path} did not end"
+        time.sleep(0.05)
+
+
+def test_sigkill_leaves_every_chunk_but_the_one_being_filled(tmp_path):
+    """The run's process killed: its writer process still writes every chunk it was handed, then ends by
+    itself; only the half second being filled is lost."""
     path = tmp_path / "killed.mcap"
     proc = subprocess.Popen([sys.executable, "-c", KILLED_CHILD, str(path)], stdout=subprocess.PIPE, text=True)
     try:
@@ -50,13 +73,35 @@ def test_sigkill_leaves_every_second_but_the_last(tmp_path):
         proc.wait(timeout=30)
     finally:
         _stop(proc)
+    _until_no_writer(path)
     rec = Recording(path)
     assert not rec.finalised and any("not finalised" in p for p in rec.problems)
     steps = [m.step for _, _, m in rec.messages(topics={"model_states"})]
     assert steps == list(range(len(steps)))                    # intact from the start, no gap
-    assert steps[-1] * 0.005 >= killed_at - 1.0
+    assert steps[-1] * 0.005 >= killed_at - 0.5 - 0.005 - 1e-9  # all but the chunk being filled
     verdict = verify(path)                                      # what is there re-simulates bit for bit
     assert verdict.identical and not verdict.complete and verdict.compared == len(steps)
+
+
+def test_a_killed_writer_process_does_not_stop_the_run(tmp_path):
+    """The writer process dies mid-run: the run goes on, closing says what happened, and what was written
+    before reads back."""
+    path = tmp_path / "lost.mcap"
+    with simatch.Simulation("msl_5v5", seed=2, overrides={"judge.kind": "none"}) as sim:
+        rec = Recorder.for_run(sim, path)
+        for coach in sim.coaches.values():
+            coach.start_play()
+        sim.run(seconds=1.6)
+        writers = _writers_of(path)
+        assert len(writers) == 1
+        os.kill(writers[0], signal.SIGKILL)
+        _until_no_writer(path)
+        sim.run(seconds=1.6)
+        assert sim.time >= 3.2
+        with pytest.raises(RecordError, match="writer process"):
+            rec.close()
+    got = Recording(path)
+    assert not got.finalised and got.duration >= 0.9
 
 
 def _run_until_recording(path, *extra):
@@ -86,6 +131,7 @@ def test_ctrl_c_and_sigterm_finalise_the_file(tmp_path, sig, code, status):
     finally:
         _stop(proc)
     assert proc.returncode == code, proc.stderr.read()
+    assert not _writers_of(path)                               # the writer process ended before the run
     rec = Recording(path)
     assert rec.finalised and not rec.problems
     assert rec.end["status"] == status and rec.duration >= 1.9

@@ -14,14 +14,15 @@ Scenes:
   the time (the liveliest data, the largest file), and the strategies cost almost nothing, so the
   recording's own cost weighs most.
 
-Times: the CPU time of the process (all threads, the writer's too), which other jobs on a shared machine
-disturb far less than wall time, and the CPU time of the simulation thread alone (``main``): the recording's
-compression and file writes run in a thread of their own, so with a free core that is what the run waits
-for. Each pair is measured five times, alternating, and the fastest run of each kind counts (on a shared
-machine three pairs left the figure moving by a third from one bench to the next); wall-time
-figures are reported beside them. Besides the ratios, the milliseconds of CPU time the recording adds per
-simulated second (all threads, and the simulation thread alone) and what the plain run costs per simulated
-second: the match itself may get faster, which raises the ratio for the same recording cost.
+Times: the CPU time of the process and its writer process (the recorder's compression and file writes,
+`simatch.record.writer`), which other jobs on a shared machine disturb far less than wall time, and the
+CPU time of the simulation thread alone (``main``): with a free core that is what the run waits for. Each
+pair is measured five times, alternating, and the fastest run of each kind counts (on a shared machine
+three pairs left the figure moving by a third from one bench to the next); wall-time figures (the run
+time a user waits) are reported beside them. Besides the ratios, the milliseconds of CPU time the recording
+adds per simulated second (both processes, and the simulation thread alone) and what the plain run costs
+per simulated second: the match itself may get faster, which raises the ratio for the same recording
+cost.
 """
 
 from __future__ import annotations
@@ -87,12 +88,19 @@ def _one(label: str, seconds: float, seed: int, path: Path | None) -> tuple[floa
                 sim.set_model_state(name, x=x, y=y)
             for coach in sim.coaches.values():
                 coach.start_play()
-        c0, m0, t0 = time.process_time(), time.thread_time(), time.perf_counter()
+        c0, k0, m0, t0 = time.process_time(), _children(), time.thread_time(), time.perf_counter()
         sim.run(seconds=seconds, until_done=False)
         if recorder is not None:
-            recorder.close()
-        cpu, main, wall = time.process_time() - c0, time.thread_time() - m0, time.perf_counter() - t0
+            recorder.close()          # waits for the writer process: its CPU time is counted below
+        cpu = time.process_time() - c0 + _children() - k0
+        main, wall = time.thread_time() - m0, time.perf_counter() - t0
         return cpu, main, wall, sim.state_digest(), (path.stat().st_size if path else 0)
+
+
+def _children() -> float:
+    """CPU seconds of the ended child processes (the recorder's writer process)."""
+    t = os.times()
+    return t.children_user + t.children_system
 
 
 def topic_sizes(path: Path, seconds: float) -> dict[str, float]:

@@ -23,6 +23,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <limits.h>
+#include <math.h>
 #include <string.h>
 #include <structmember.h>
 
@@ -232,14 +233,23 @@ typedef struct {
     Py_ssize_t fixed;              /* sequences: the fixed length of an array, or -1 */
     PyObject *name;                /* the attribute (interned) */
     Program *sub;                  /* K_MSG, K_MSEQ: the nested message's program */
+    Py_ssize_t offset;             /* where instances of the program's `type` hold this field (slotted) */
 } Op;
+/* Field reads: the message classes of simatch.msgs have __slots__, so an instance holds each field at a fixed
+ * offset. A program learns the offsets from the first message's class (its `type`, kept with the class's
+ * version tag, which changes whenever the class is modified) and then reads fields there directly: looking
+ * each name up, as PyObject_GetAttr does, was the larger part of encoding a message. Any other class (a
+ * dict-based one, a class with a property or __getattribute__ of its own) is read with PyObject_GetAttr. */
 struct Program {
     Py_ssize_t count;
+    PyTypeObject *type;            /* the class last met (a strong reference), or NULL */
+    unsigned int version;          /* its version tag then */
+    int slotted;                   /* read its instances' fields at `offset` */
     Op ops[];
 };
 
-static int encode_program(const Program *program, PyObject *msg);
-static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first);
+static int encode_program(Program *program, PyObject *msg);
+static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_first);
 
 /* the dtype of the wire's element type (`ref`, from `setup`): that very object, or one of the same class with
  * the same scalar type and byte order (a machine-native one: this module only runs on little-endian ones) */
@@ -335,7 +345,7 @@ static int put_bytes_object(PyObject *data) {
 }
 
 /* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
-static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int align_first) {
+static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_first) {
     long phase = phase_now();
     Py_ssize_t start = out->n;
     if (memo_now != NULL) {
@@ -385,11 +395,42 @@ static int put_items(PyObject *v, Py_ssize_t fixed, const Program *program, int 
     return r;
 }
 
-static int encode_program(const Program *program, PyObject *msg) {
+/* how instances of `tp` hold the program's fields: slotted if the generic attribute lookup finds every field
+ * as a slot (a member descriptor of an object that raises AttributeError when unset) */
+static void learn(Program *program, PyTypeObject *tp) {
+    Py_XSETREF(program->type, (PyTypeObject *)Py_NewRef(tp));
+    program->slotted = 0;
+    if (tp->tp_getattro != PyObject_GenericGetAttr)
+        goto done;
+    for (Py_ssize_t i = 0; i < program->count; i++) {
+        Op *op = &program->ops[i];
+        PyObject *d = _PyType_Lookup(tp, op->name);            /* borrowed */
+        if (d == NULL || !Py_IS_TYPE(d, &PyMemberDescr_Type))
+            goto done;
+        PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
+        if (member->type != T_OBJECT_EX || (member->flags & READ_RESTRICTED) || member->offset <= 0)
+            goto done;
+        op->offset = member->offset;
+    }
+    program->slotted = PyType_HasFeature(tp, Py_TPFLAGS_VALID_VERSION_TAG);
+done:
+    program->version = tp->tp_version_tag;                      /* the look-ups above assign one */
+}
+
+static int encode_program(Program *program, PyObject *msg) {
+    PyTypeObject *tp = Py_TYPE(msg);
+    if (tp != program->type || tp->tp_version_tag != program->version)
+        learn(program, tp);
+    int slotted = program->slotted;
     for (Py_ssize_t i = 0; i < program->count; i++) {
         const Op *op = &program->ops[i];
-        PyObject *v = PyObject_GetAttr(msg, op->name);
-        if (v == NULL) {
+        PyObject *v;
+        if (slotted) {
+            v = *(PyObject **)((char *)msg + op->offset);
+            if (v == NULL)                                     /* a field never set */
+                return FALLBACK;
+            Py_INCREF(v);
+        } else if ((v = PyObject_GetAttr(msg, op->name)) == NULL) {
             PyErr_Clear();
             return FALLBACK;
         }
@@ -420,6 +461,7 @@ static void free_program(Program *program) {
         Py_XDECREF(program->ops[i].name);
         free_program(program->ops[i].sub);
     }
+    Py_XDECREF(program->type);
     PyMem_Free(program);
 }
 
@@ -501,7 +543,7 @@ static PyObject *compile(PyObject *self, PyObject *program) {
     return capsule;
 }
 
-static const Program *program_of(PyObject *capsule) {
+static Program *program_of(PyObject *capsule) {
     return PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE);    /* NULL, with an exception, if it is not one */
 }
 
@@ -537,7 +579,7 @@ static PyObject *encode(PyObject *self, PyObject *args) {
     int keep = 0;
     if (!PyArg_ParseTuple(args, "OO|OpO", &program, &msg, &memo, &keep, &target))
         return NULL;
-    const Program *compiled = program_of(program);
+    Program *compiled = program_of(program);
     if (compiled == NULL)
         return NULL;
     if (target != Py_None && !PyByteArray_Check(target)) {
@@ -596,6 +638,30 @@ static PyObject *encode(PyObject *self, PyObject *args) {
 #define CLOCK_STEP 1               /* add(..., clock=): the message's `step` sets the log time */
 #define CLOCK_TICK 2               /* ... and opens a new memo period */
 
+/* A pose template (``log.poses``): every `every` physics steps, a message on `topic` (model states: `name`, and
+ * `pose` as rows of x y z qw qx qy qz) also yields a record on `channel`: a copy of `template` (a message
+ * encoded once, header included) with a geometry_msgs/Pose (7 float64: position, then quaternion x y z w)
+ * written at each slot's offset from its row, snapped to a grid. The recorder's 3D scene is made so: a
+ * Python callback and a field-by-field update for each of them cost more than a millisecond per
+ * simulated second. Whatever this does not take as it is (no template yet, other names, a pose that is
+ * not a contiguous float buffer of enough rows) goes to `fallback(msg)`, which may set a new template. */
+typedef struct {
+    Py_ssize_t offset;             /* of the Pose in the template */
+    Py_ssize_t row;                /* of the model in `pose` */
+    double z;                      /* the height drawn, or NaN: the row's (snapped) */
+    int turn;                      /* the orientation: the row's turn about z (snapped), else none */
+} PoseSlot;
+
+typedef struct {
+    PyObject *topic, *fallback;    /* NULL: no pose template */
+    long channel;
+    long long every;
+    PyObject *names, *template;    /* NULL until `pose_template` */
+    PoseSlot *slots;
+    Py_ssize_t nslots;
+    double grid, turn_grid;        /* steps per metre, per unit of a quaternion */
+} Poses;
+
 typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
@@ -605,18 +671,21 @@ typedef struct {
     PyObject *memo_now, *memo_old;
     long long now, first, last;    /* log time; of the first and last message since the last take (-1: none) */
     long long step_ns, chunk_ns, next_chunk;
+    long long step;                /* the physics step of the last clock message (-1: none usable) */
     Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
+    Poses poses;
 } Log;
 
 typedef struct {
     long id;
     int keep;                      /* remember each message's body in the memo */
     int clock;                     /* CLOCK_* flags */
-    const Program *program;
+    int poses;                     /* the topic of the pose template */
+    Program *program;
     PyObject *owner;               /* the program's capsule */
 } Channel;
 
-static PyObject *step_name = NULL; /* "step" */
+static PyObject *step_name = NULL, *name_name = NULL, *pose_name = NULL; /* "step", "name", "pose" */
 
 static void channel_free(PyObject *capsule) {
     Channel *ch = PyCapsule_GetPointer(capsule, NULL);
@@ -669,6 +738,18 @@ static int check_channel(long cid) {
     return 0;
 }
 
+/* the record begun at `start` is written (r == 0): count it and write its header; else take it back */
+static int finish_record(Log *log, Py_ssize_t start, long cid, int r) {
+    if (r == 0)
+        r = count_message(log, cid);
+    if (r != 0) {
+        log->buf.n = start;
+        return r;
+    }
+    put_head(log, start, cid);
+    return 0;
+}
+
 /* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
 static int log_message(Log *log, const Channel *ch, PyObject *msg) {
     Py_ssize_t start = log->buf.n;
@@ -682,14 +763,7 @@ static int log_message(Log *log, const Channel *ch, PyObject *msg) {
     if (r == 0 && ch->keep)
         r = memo_keep(msg, 0, start + RECORD_HEAD + 4);
     leave(saved);
-    if (r == 0)
-        r = count_message(log, ch->id);
-    if (r != 0) {
-        log->buf.n = start;
-        return r;
-    }
-    put_head(log, start, ch->id);
-    return 0;
+    return finish_record(log, start, ch->id, r);
 }
 
 static int forget(Log *log) {
@@ -729,11 +803,81 @@ static int clock_message(Log *log, const Channel *ch, PyObject *msg) {
             Py_DECREF(i);
         }
     }
+    log->step = step;
     if (step < 0)
         PyErr_Clear();
     else if (advance(log, step) < 0)
         return FAILED;
     return (ch->clock & CLOCK_TICK) ? forget(log) : 0;
+}
+
+static double snap(double v, double grid) {
+    return nearbyint(v * grid) / grid;          /* to nearest, ties to even: as numpy's round */
+}
+
+/* the pose template's record for a model-states message (see Poses); FALLBACK: for `poses.fallback` */
+static int pose_record(Log *log, PyObject *msg) {
+    Poses *ps = &log->poses;
+    if (ps->template == NULL)
+        return FALLBACK;
+    PyObject *names = PyObject_GetAttr(msg, name_name);
+    int same = names == NULL ? -1 : PyObject_RichCompareBool(names, ps->names, Py_EQ);
+    Py_XDECREF(names);
+    if (same <= 0) {
+        PyErr_Clear();
+        return FALLBACK;
+    }
+    PyObject *pose = PyObject_GetAttr(msg, pose_name);
+    Py_buffer view;
+    if (pose == NULL || PyObject_GetBuffer(pose, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
+        Py_XDECREF(pose);
+        PyErr_Clear();
+        return FALLBACK;
+    }
+    Py_DECREF(pose);
+    int f32 = format_fits(K_F32, view.format, view.itemsize), f64 = format_fits(K_F64, view.format, view.itemsize);
+    Py_ssize_t values = view.itemsize ? view.len / view.itemsize : 0, rows = values / 7;
+    int r = (f32 || f64) && values % 7 == 0 ? 0 : FALLBACK;
+    for (Py_ssize_t i = 0; i < ps->nslots && r == 0; i++)
+        if (ps->slots[i].row >= rows)
+            r = FALLBACK;
+    Py_ssize_t start = log->buf.n, size = PyBytes_GET_SIZE(ps->template);
+    State saved = enter(&log->buf, 0, NULL, NULL);
+    if (r == 0 && (r = reserve(RECORD_HEAD + size)) == 0) {
+        char *at = out->p + start + RECORD_HEAD;
+        memcpy(at, PyBytes_AS_STRING(ps->template), size);
+        for (Py_ssize_t i = 0; i < ps->nslots; i++) {
+            const PoseSlot *slot = &ps->slots[i];
+            double p[7], v[7];
+            for (int j = 0; j < 7; j++)
+                p[j] = f32 ? (double)((const float *)view.buf)[slot->row * 7 + j]
+                           : ((const double *)view.buf)[slot->row * 7 + j];
+            v[0] = snap(p[0], ps->grid);
+            v[1] = snap(p[1], ps->grid);
+            v[2] = isnan(slot->z) ? snap(p[2], ps->grid) : slot->z;
+            v[3] = v[4] = 0.0;
+            v[5] = slot->turn ? snap(p[6], ps->turn_grid) : 0.0;
+            v[6] = slot->turn ? snap(p[3], ps->turn_grid) : 1.0;
+            memcpy(at + slot->offset, v, sizeof v);
+        }
+        out->n = start + RECORD_HEAD + size;
+    }
+    leave(saved);
+    PyBuffer_Release(&view);
+    return finish_record(log, start, ps->channel, r);
+}
+
+/* after a message on the pose template's topic was logged */
+static int poses_after(Log *log, PyObject *msg) {
+    Poses *ps = &log->poses;
+    if (ps->fallback == NULL || log->step < 0 || log->step % ps->every != 0)
+        return 0;
+    int r = pose_record(log, msg);
+    if (r != FALLBACK)
+        return r;
+    PyObject *done = PyObject_CallOneArg(ps->fallback, msg);
+    Py_XDECREF(done);
+    return done == NULL ? FAILED : 0;
 }
 
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
@@ -751,6 +895,13 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
             r = clock_message(log, ch, args[1]);
             if (r == 0)
                 r = log_message(log, ch, args[1]);
+            if (r == FALLBACK && ch->poses) {     /* the message by the fallback, then its poses */
+                PyObject *done = PyObject_Vectorcall(log->fallback, args, 2, NULL);
+                Py_XDECREF(done);
+                r = done == NULL ? FAILED : 0;
+            }
+            if (r == 0 && ch->poses)
+                r = poses_after(log, args[1]);
             Py_DECREF(entry);
         } else {
             r = log_message(log, ch, args[1]);
@@ -781,14 +932,16 @@ static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
         PyErr_SetString(PyExc_TypeError, "programs(typename) must return (compiled program, keep)");
         return NULL;
     }
-    const Program *program = program_of(PyTuple_GET_ITEM(found, 0));
+    Program *program = program_of(PyTuple_GET_ITEM(found, 0));
     int keep = program == NULL ? -1 : PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
     Channel *ch = keep < 0 ? NULL : PyMem_Malloc(sizeof(Channel));
     if (ch == NULL) {
         Py_DECREF(found);
         return keep < 0 ? NULL : PyErr_NoMemory();
     }
-    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), program, Py_NewRef(PyTuple_GET_ITEM(found, 0))};
+    int poses = log->poses.topic != NULL && PyUnicode_Compare(topic, log->poses.topic) == 0;
+    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), poses, program,
+                    Py_NewRef(PyTuple_GET_ITEM(found, 0))};
     Py_DECREF(found);
     PyObject *entry = PyCapsule_New(ch, NULL, channel_free);
     if (entry == NULL) {
@@ -820,6 +973,88 @@ static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
     Py_RETURN_NONE;
 }
 
+static void poses_clear(Poses *ps) {
+    Py_CLEAR(ps->topic);
+    Py_CLEAR(ps->fallback);
+    Py_CLEAR(ps->names);
+    Py_CLEAR(ps->template);
+    PyMem_Free(ps->slots);
+    ps->slots = NULL;
+    ps->nslots = 0;
+}
+
+static PyObject *log_poses(Log *log, PyObject *args, PyObject *kwds) {
+    PyObject *topic, *fallback;
+    long cid;
+    long long every;
+    static char *kwlist[] = {"topic", "channel_id", "every", "fallback", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "UlLO", kwlist, &topic, &cid, &every, &fallback)
+        || check_channel(cid) < 0)
+        return NULL;
+    if (every <= 0 || !PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_ValueError, "poses(topic, channel_id, every > 0, fallback callable)");
+        return NULL;
+    }
+    poses_clear(&log->poses);
+    log->poses = (Poses){Py_NewRef(topic), Py_NewRef(fallback), cid, every, NULL, NULL, NULL, 0, 0.0, 0.0};
+    PyObject *key, *value;
+    Py_ssize_t pos = 0;
+    while (PyDict_Next(log->channels, &pos, &key, &value)) {
+        Channel *ch = PyCapsule_GetPointer(value, NULL);
+        if (ch == NULL)
+            return NULL;
+        ch->poses = PyUnicode_Compare(key, topic) == 0;
+    }
+    Py_RETURN_NONE;
+}
+
+static PyObject *log_pose_template(Log *log, PyObject *args, PyObject *kwds) {
+    PyObject *names, *template, *slots;
+    double grid, turn_grid;
+    static char *kwlist[] = {"names", "template", "slots", "grid", "turn_grid", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OSOdd", kwlist, &names, &template, &slots, &grid, &turn_grid))
+        return NULL;
+    if (log->poses.fallback == NULL) {
+        PyErr_SetString(PyExc_ValueError, "pose_template: call poses() first");
+        return NULL;
+    }
+    if (!(grid > 0.0) || !(turn_grid > 0.0)) {
+        PyErr_SetString(PyExc_ValueError, "pose_template: grids must be positive");
+        return NULL;
+    }
+    PyObject *seq = PySequence_Fast(slots, "pose_template: slots must be a sequence");
+    if (seq == NULL)
+        return NULL;
+    Py_ssize_t n = PySequence_Fast_GET_SIZE(seq), size = PyBytes_GET_SIZE(template);
+    PoseSlot *parsed = PyMem_Calloc(n ? n : 1, sizeof(PoseSlot));
+    if (parsed == NULL) {
+        Py_DECREF(seq);
+        return PyErr_NoMemory();
+    }
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PoseSlot *slot = &parsed[i];
+        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(seq, i), "nndp;slot: (offset, row, z, turn)",
+                              &slot->offset, &slot->row, &slot->z, &slot->turn)
+            || slot->offset < 4 || slot->offset + 56 > size || slot->row < 0) {
+            if (!PyErr_Occurred())
+                PyErr_SetString(PyExc_ValueError, "pose_template: a slot outside the template");
+            PyMem_Free(parsed);
+            Py_DECREF(seq);
+            return NULL;
+        }
+    }
+    Py_DECREF(seq);
+    Poses *ps = &log->poses;
+    Py_XSETREF(ps->names, Py_NewRef(names));
+    Py_XSETREF(ps->template, Py_NewRef(template));
+    PyMem_Free(ps->slots);
+    ps->slots = parsed;
+    ps->nslots = n;
+    ps->grid = grid;
+    ps->turn_grid = turn_grid;
+    Py_RETURN_NONE;
+}
+
 static PyObject *log_record(Log *log, PyObject *args) {
     long cid;
     Py_buffer data;
@@ -834,13 +1069,8 @@ static PyObject *log_record(Log *log, PyObject *args) {
     }
     leave(saved);
     PyBuffer_Release(&data);
-    if (r == 0)
-        r = count_message(log, cid);
-    if (r != 0) {
-        log->buf.n = start;
+    if (finish_record(log, start, cid, r) != 0)
         return NULL;
-    }
-    put_head(log, start, cid);
     Py_RETURN_NONE;
 }
 
@@ -904,6 +1134,10 @@ static int log_traverse(Log *log, visitproc visit, void *arg) {
     Py_VISIT(log->on_chunk);
     Py_VISIT(log->memo_now);
     Py_VISIT(log->memo_old);
+    Py_VISIT(log->poses.topic);
+    Py_VISIT(log->poses.fallback);
+    Py_VISIT(log->poses.names);
+    Py_VISIT(log->poses.template);
     return 0;
 }
 
@@ -914,6 +1148,7 @@ static int log_clear(Log *log) {
     Py_CLEAR(log->on_chunk);
     Py_CLEAR(log->memo_now);
     Py_CLEAR(log->memo_old);
+    poses_clear(&log->poses);
     return 0;
 }
 
@@ -938,7 +1173,7 @@ static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     if (log == NULL)
         return NULL;
     log->vectorcall = log_vectorcall;
-    log->first = log->last = -1;
+    log->first = log->last = log->step = -1;
     log->channels = PyDict_New();
     log->memo_now = PyDict_New();
     log->memo_old = PyDict_New();
@@ -956,6 +1191,10 @@ static PyMethodDef log_methods[] = {
      "add(topic, channel_id, typename, clock=0): record topic on that channel"},
     {"timing", (PyCFunction)(void (*)(void))log_timing, METH_VARARGS | METH_KEYWORDS,
      "timing(step_ns, chunk_ns, on_chunk): how clock messages set the time and end chunks"},
+    {"poses", (PyCFunction)(void (*)(void))log_poses, METH_VARARGS | METH_KEYWORDS,
+     "poses(topic, channel_id, every, fallback): a pose template's record every `every` steps of topic"},
+    {"pose_template", (PyCFunction)(void (*)(void))log_pose_template, METH_VARARGS | METH_KEYWORDS,
+     "pose_template(names, template, slots, grid, turn_grid): the template for model states of these names"},
     {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
     {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
     {"take", (PyCFunction)log_take, METH_NOARGS,
@@ -1031,7 +1270,9 @@ static PyMethodDef methods[] = {
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    if (PyType_Ready(&LogType) < 0 || (step_name = PyUnicode_InternFromString("step")) == NULL)
+    if (PyType_Ready(&LogType) < 0 || (step_name = PyUnicode_InternFromString("step")) == NULL
+        || (name_name = PyUnicode_InternFromString("name")) == NULL
+        || (pose_name = PyUnicode_InternFromString("pose")) == NULL)
         return NULL;
     PyObject *m = PyModule_Create(&module);
     if (m == NULL)

@@ -12,8 +12,9 @@
   simulated seconds, state digest, message counts, topics that could not be recorded).
 * Chunks hold half a simulated second each (zstd, level 3; no message or chunk indexes, which would add
   16 bytes per message outside the compression: readers read the file from start to end). A chunk is
-  handed to the writer thread as soon as its half second ends, and at most one is in its hands, so a
-  process killed at any moment leaves on disk everything up to at most one simulated second before.
+  handed to the writer process as soon as its half second ends, and the writer process writes whatever it
+  was handed even when the run's process is killed, so a kill loses at most the half second being filled
+  (`simatch.record.writer`).
 """
 
 from __future__ import annotations

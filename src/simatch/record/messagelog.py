@@ -22,15 +22,24 @@ Interface of both:
   records (schemas and channels, which must precede their first message in the chunk).
 * ``log.take() -> (bytes, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
   and the log times of its first and last message (-1 if it holds none).
+* ``log.poses(topic, channel_id, every, fallback)`` and ``log.pose_template(names, template, slots, grid,
+  turn_grid)``: a pose template (the recorder's 3D scene). After a message on ``topic`` (model states:
+  ``name``, ``pose`` as rows of x y z qw qx qy qz) of a physics step that is a multiple of ``every``, a
+  record on ``channel_id``: `fill_poses` of the template, if its names are the template's; anything else
+  (no template yet, other names, a pose that is not a float buffer of enough rows) goes to
+  ``fallback(msg)``, which may set a new template and records what it makes itself.
 * ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
   last take.
 """
 
 from __future__ import annotations
 
+import math
 import operator
 import struct
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
+
+import numpy as np
 
 from .. import msgs
 from ..msgs import cdr
@@ -46,6 +55,36 @@ _MAX_NS = 2**63 - 1          # log times are signed 64-bit in the C log
 Fallback = Callable[[str, Any], None]
 CLOCK_STEP = 1              # the message's step sets the log time
 CLOCK_TICK = 2              # ... and opens a new memo period
+
+
+#: a slot of a pose template: (byte offset of a geometry_msgs/Pose in the template, row of the model in the
+#: poses, height drawn or NaN for the row's own, whether the row's turn about z is drawn)
+PoseSlot = tuple[int, int, float, bool]
+_POSE = struct.Struct("<7d")
+
+
+def fill_poses(template: bytes, slots: Sequence[PoseSlot], pose, grid: float, turn_grid: float) -> bytes:
+    """``template`` with a Pose written at each slot from ``pose`` (rows of x y z qw qx qy qz): the position
+    snapped to multiples of 1/``grid``, the height the slot's (or the row's, snapped, if NaN), the
+    orientation the row's turn about z snapped to 1/``turn_grid`` (or none). The C log writes the same
+    bytes."""
+    rows = np.asarray(pose, dtype=np.float64).reshape(-1, 7)
+    needed = 1 + max((slot[1] for slot in slots), default=-1)
+    if len(rows) < needed:
+        raise ValueError(f"{len(rows)} poses where the template shows {needed} models")
+    snapped = (np.round(rows * _GRIDS(grid, turn_grid)) / _GRIDS(grid, turn_grid)).tolist()
+    buf = bytearray(template)
+    for offset, row, z, turn in slots:
+        x, y, pz, qw, _, _, qz = snapped[row]
+        if turn:
+            _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, qz, qw)
+        else:
+            _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, 0.0, 1.0)
+    return bytes(buf)
+
+
+def _GRIDS(grid: float, turn_grid: float) -> np.ndarray:
+    return np.array([grid, grid, grid, turn_grid, turn_grid, turn_grid, turn_grid])
 
 
 def new_log(fallback: Fallback, *, accelerate: bool = True):
@@ -68,6 +107,9 @@ class MessageLog:
         self._first = self._last = -1
         self._step_ns = self._chunk_ns = self._next_chunk = 0
         self._on_chunk: Callable[[], None] | None = None
+        self._step = -1
+        self._poses: tuple[str, int, int, Callable[[Any], None]] | None = None
+        self._template: tuple[Any, bytes, list[PoseSlot], float, float] | None = None
 
     @property
     def size(self) -> int:
@@ -97,16 +139,55 @@ class MessageLog:
             n = append(msg, buf)
         except Exception:           # the fallback encodes it again and reports what is wrong
             del buf[start:]
-            return self._fallback(topic, msg)
-        now = self.now
-        _pack_header(buf, start, OPCODE_MESSAGE, MESSAGE_FIXED + n, cid, 0, now, now)
-        self._counted(cid)
+            self._fallback(topic, msg)
+        else:
+            now = self.now
+            _pack_header(buf, start, OPCODE_MESSAGE, MESSAGE_FIXED + n, cid, 0, now, now)
+            self._counted(cid)
+        if self._poses is not None and clock and topic == self._poses[0]:
+            self._poses_after(msg)
+
+    def poses(self, topic: str, channel_id: int, every: int, fallback: Callable[[Any], None]) -> None:
+        if every <= 0 or not callable(fallback):
+            raise ValueError("poses(topic, channel_id, every > 0, fallback callable)")
+        self._poses = (topic, _channel(channel_id), every, fallback)
+        self._template = None
+
+    def pose_template(self, names, template: bytes, slots: Sequence[PoseSlot], grid: float,
+                      turn_grid: float) -> None:
+        if self._poses is None:
+            raise ValueError("pose_template: call poses() first")
+        if not (grid > 0.0 and turn_grid > 0.0):
+            raise ValueError("pose_template: grids must be positive")
+        checked = []
+        for offset, row, z, turn in slots:
+            if offset < 4 or offset + _POSE.size > len(template) or row < 0:
+                raise ValueError("pose_template: a slot outside the template")
+            checked.append((operator.index(offset), operator.index(row), float(z), bool(turn)))
+        self._template = (names, bytes(template), checked, float(grid), float(turn_grid))
+
+    def _poses_after(self, msg) -> None:
+        _, cid, every, fallback = self._poses
+        if self._step < 0 or self._step % every:
+            return
+        data = None
+        if self._template is not None:
+            names, template, slots, grid, turn_grid = self._template
+            try:
+                if msg.name == names:
+                    data = fill_poses(template, slots, _float_buffer(msg.pose), grid, turn_grid)
+            except Exception:         # not as the template expects: the fallback says what is wrong
+                data = None
+        if data is None:
+            return fallback(msg)
+        self.record(cid, data)
 
     def _clock(self, msg, clock: int) -> None:
         try:
             step = operator.index(msg.step)
         except (AttributeError, TypeError, ValueError):
             step = -1
+        self._step = step
         if self._step_ns > 0 and 0 <= step <= _MAX_NS // self._step_ns:     # else ignored, as by the C log
             now = step * self._step_ns
             if now != self.now:
@@ -142,6 +223,14 @@ class MessageLog:
 
     def forget(self) -> None:
         self._codec.forget()
+
+
+def _float_buffer(pose):
+    """``pose`` as the C log takes it: a float32 or float64 buffer (else ValueError)."""
+    view = memoryview(pose)
+    if view.format not in ("f", "d", "<f", "<d", "=f", "=d", "@f", "@d"):
+        raise ValueError(f"poses of format {view.format!r}")
+    return np.frombuffer(view.cast("B"), dtype=np.float32 if view.format[-1] == "f" else np.float64)
 
 
 def _channel(channel_id: int) -> int:

@@ -4,8 +4,9 @@ It listens on the bus, not inside the simulator, so it records an embedded run t
 run (a server's bus) the same way. Its message log (`simatch.record.messagelog`: in C where the extension is
 built) is the bus callback of every recorded topic: it encodes each message to CDR on arrival (with the memo
 of `simatch.msgs.cdr.Codec`: what teammates share and what a team's TeamStrategy repeats is encoded once) and
-appends its record to the current chunk; every half simulated second the chunk goes to the writer thread
-(`simatch.record.writer`), which compresses and writes it while the simulation goes on.
+appends its record to the current chunk; every half simulated second the chunk goes to the writer process
+(`simatch.record.writer`), which compresses and writes it while the simulation goes on. The 3D scene's game
+updates are written by the log too (its pose template), from the model states it logs.
 
 The hot path is one Python-to-C call per message: measured, every Python frame and attribute access on it
 cost a visible share of a match's time. Bus deliveries come from the thread that runs the bus (the in-process
@@ -31,7 +32,6 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Iterable
 
-import numpy as np
 
 from .. import msgs
 from ..bus import topics
@@ -39,8 +39,8 @@ from ..msgs.cdr import Codec
 from ..scene.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
-from .messagelog import CLOCK_STEP, CLOCK_TICK, new_log
-from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, SceneBuilder
+from .messagelog import CLOCK_STEP, CLOCK_TICK, fill_poses, new_log
+from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, GRID, TURN_GRID, SceneBuilder
 from .writer import McapWriter, WriterError
 
 log = logging.getLogger(__name__)
@@ -52,7 +52,7 @@ TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
 CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
 #: zstd level of the chunks: level 3 costs what level 1 does here and saves 1 %; levels 5-9 save 2-3 % more
-#: for three to five times the writer thread's time (measured on a match, docs/recording.md "Cost")
+#: for three to five times the writer process's time (measured on a match, docs/recording.md "Cost")
 COMPRESSION_LEVEL = 3
 
 
@@ -119,10 +119,10 @@ class Recorder:
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
         self._log.record(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
+        # the 3D scene's game updates: the log writes the poses of the model states into the update's template
+        self._log.poses(topics.MODEL_STATES, self._game, self._game_every, self._scene_update)
         wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
         self._subs = [bus.subscribe_all(pattern, self._log) for pattern in wanted]
-        # after the log's: the log time is that of the model states' step
-        self._subs.append(bus.subscribe_all(topics.MODEL_STATES, self._on_model_states))
 
     # --- channels --------------------------------------------------------------------------------------------
     def _raw_channel(self, channel_topic: str, typestore, typename: str) -> int:
@@ -175,7 +175,7 @@ class Recorder:
 
     # --- chunks and the 3D scene ----------------------------------------------------------------------------
     def _end_chunk(self) -> None:
-        """What was recorded since the last chunk goes to the writer thread as one chunk (the message log calls
+        """What was recorded since the last chunk goes to the writer process as one chunk (the message log calls
         this when the time moves into a new chunk)."""
         data, counts, first, last = self._log.take()
         if data:
@@ -187,17 +187,16 @@ class Recorder:
             self._chunk_end = last
         self._log.forget()
 
-    def _on_model_states(self, topic: str, msg) -> None:
-        try:                 # every physics step: kept to one attribute read and a modulo
-            step = int(msg.step)
-        except (AttributeError, TypeError, ValueError):
-            return
-        if step % self._game_every == 0:
-            try:
-                pose = np.asarray(msg.pose, dtype=float).reshape(-1, 7)
-                self._log.record(self._game, self._scene3d.game_update(msg.name, pose))
-            except Exception as exc:
-                log.warning("recording: no 3D scene update at step %d: %s", step, exc)
+    def _scene_update(self, msg) -> None:
+        """The game update of model states that the log's pose template does not take as they are: the first
+        ones (the template is made for their models), other models, poses in another form."""
+        try:
+            names = list(msg.name)
+            template, slots = self._scene3d.template(names)
+            self._log.pose_template(names, template, slots, GRID, TURN_GRID)
+            self._log.record(self._game, fill_poses(template, slots, msg.pose, GRID, TURN_GRID))
+        except Exception as exc:
+            log.warning("recording: no 3D scene update at step %s: %s", getattr(msg, "step", "?"), exc)
 
     # --- end ---------------------------------------------------------------------------------------------------
     @property

@@ -8,7 +8,8 @@ viewer that seeks shows the latest message of each channel: the field must not b
 next game update replaces.
 
 A game update always has the same layout (same robots, same labels), so it is encoded once as a template
-and each update only writes the poses into a copy: a few microseconds instead of a full encoding.
+(`SceneBuilder.template`) and each update only writes the poses into a copy (`simatch.record.messagelog`'s
+pose template: the recorder's message log does it in C as it logs the model states, with no Python call).
 
 The scene is for the eye: positions are snapped to a grid of 1/1024 m (a millimetre) and the robots'
 orientation quaternions to 1/4096 (three hundredths of a degree); the ball, a plain sphere, is drawn without
@@ -25,9 +26,10 @@ import struct
 
 import numpy as np
 
+from ..msgs.cdr import Codec
 from ..scene.schema import Scene
 from . import foxglove_msgs as fg
-from ..msgs.cdr import Codec
+from .messagelog import PoseSlot, fill_poses
 
 FIELD_TOPIC = "/scene/field"
 GAME_TOPIC = "/scene/game"
@@ -41,9 +43,8 @@ NAMED_COLORS = {
     "grey": (0.5, 0.5, 0.5), "pink": (1.0, 0.6, 0.75), "brown": (0.55, 0.35, 0.15),
 }
 
-_POSE = struct.Struct("<7d")      # geometry_msgs/Pose in CDR: position x y z, orientation x y z w
-_SHOWN = [0, 1, 2, 3, 6]                                   # x y z qw qz of a ModelStates pose row
-_GRID = np.array([1024.0, 1024.0, 1024.0, 4096.0, 4096.0])  # steps per metre, per unit of a quaternion
+GRID = 1024.0              # positions drawn: steps per metre
+TURN_GRID = 4096.0         # orientations drawn: steps per unit of a quaternion
 
 
 def color_rgb(name: str) -> tuple[float, float, float]:
@@ -70,7 +71,7 @@ class SceneBuilder:
         self._T = fg.typestore.types
         self._template: bytes | None = None
         self._names: list[str] | None = None
-        self._slots: list[tuple[int, int, str, float]] = []   # (model index, byte offset, kind, z)
+        self._slots: list[PoseSlot] = []
 
     # --- message helpers -----------------------------------------------------------------------------------
     def _msg(self, short: str, **fields):
@@ -169,20 +170,15 @@ class SceneBuilder:
     # --- the game ------------------------------------------------------------------------------------------
     def game_update(self, names: list[str], pose: np.ndarray) -> bytes:
         """``names`` and ``pose`` (M x 7: x y z qw qx qy qz, world frame) as in ModelStates."""
+        template, slots = self.template(names)
+        return fill_poses(template, slots, pose, GRID, TURN_GRID)
+
+    def template(self, names: list[str]) -> tuple[bytes, list[PoseSlot]]:
+        """The game update of these models encoded once, and where each pose lies in it: the ball with its
+        own height, the robots (planar: their quaternion is a turn about z) and their labels at a fixed height."""
         if self._template is None or names != self._names:
             self._build_template(list(names))
-        buf = bytearray(self._template)
-        pack = _POSE.pack_into
-        rows = (np.round(pose[:, _SHOWN] * _GRID) / _GRID).tolist()       # x y z qw qz, snapped
-        for k, off, kind, z in self._slots:
-            x, y, pz, qw, qz = rows[k]
-            if kind == "ball":
-                pack(buf, off, x, y, pz, 0.0, 0.0, 0.0, 1.0)
-            elif kind == "text":
-                pack(buf, off, x, y, z, 0.0, 0.0, 0.0, 1.0)
-            else:        # robots are planar: their quaternion is a turn about z
-                pack(buf, off, x, y, z, 0.0, 0.0, qz, qw)
-        return bytes(buf)
+        return self._template, self._slots
 
     def _robot_shape(self, team: str) -> tuple[float, float]:
         spec = self.scene.teams.get(team)
@@ -225,5 +221,5 @@ class SceneBuilder:
             off = template.find(pattern)
             if off < 0 or template.find(pattern, off + 1) >= 0:
                 raise RuntimeError(f"scene template: pose sentinel {value} not found exactly once")
-            slots.append((k, off, kind, z))
+            slots.append((off, k, math.nan if kind == "ball" else z, kind == "robot"))
         self._template, self._names, self._slots = template, names, slots

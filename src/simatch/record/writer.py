@@ -1,5 +1,5 @@
 """The MCAP writer of recordings: message records packed on the simulation thread, chunks compressed and
-written by a background thread.
+written by a writer process.
 
 Why not a library writer: ``foxglove-sdk``'s ``log`` costs about 2 us a message (some 4 ms per simulated
 second of 5v5) and the ``mcap`` library's pure-Python writer builds a record object per message; a recorder
@@ -10,16 +10,24 @@ Chunk records.
 
 How the work is split: the recorder's message log (`simatch.record.messagelog`) appends each message's
 record (header and CDR bytes) to one buffer per chunk (no object per message); `end_chunk` hands a chunk's
-records to the writer thread, which compresses them with zstd and writes the chunk. zstd and the file write
-release the GIL, so on a machine with a free core that work overlaps the simulation.
+records over a pipe to a **writer process** (`simatch.record.writer_process`), which compresses them with
+zstd and writes the chunk. Why a process and not a thread: a writer thread needs the GIL a few times per chunk
+(to take the job, after compressing, after each write), and every such hand-over stopped the simulation
+thread; measured on a 5v5 match, the thread's hand-overs and compression cost the simulation thread
+1.5 ms per simulated second (5 % of the match), the process costs it the copy into the pipe.
 
 Integrity: each chunk's zstd frame carries zstd's content checksum (XXH64 of the records, checked by every
 zstd decoder, so by every MCAP reader), and the chunk's own CRC32 field is 0 ("not computed", as the MCAP
 specification allows). Measured on a 5v5 match: the CRC32 of a megabyte of records per simulated second
 cost 0.3 ms, the zstd checksum 0.1 ms; both catch any damaged byte (tests/record/test_nothing_lost.py).
 
-At most one chunk is in the writer's hands: a process killed at any moment loses the chunk being filled and
-at most the one being written.
+Nothing handed over is lost when the recording process is killed: the writer process writes every chunk it
+was handed, then exits (the file is then not finalised: no summary), so a kill loses only the chunk being
+filled, half a simulated second. At most two chunks are in the writer's hands (it acknowledges each chunk
+once written; a third waits for that), so even a kill of the writer process itself loses at most one
+simulated second more. The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
+a Ctrl-C or a kill of the run's process group does not reach it) and ends when the recording process
+closes the pipe or dies.
 
 What is written (see `simatch.record.layout`): magic, header, the metadata given, chunks (schemas and
 channels inside the chunk of their first message, where the caller puts the records `schema` and `channel`
@@ -32,28 +40,29 @@ chunk indexes: those would add 16 bytes per message outside the compression (abo
 from __future__ import annotations
 
 import logging
-import queue
-import struct
-import threading
-import zlib
+import os
+import pickle
+import subprocess
+import sys
 from pathlib import Path
 
-import zstandard
 from mcap.data_stream import RecordBuilder
-from mcap.opcode import Opcode
-from mcap.records import (Channel, DataEnd, Footer, Header, Metadata, MetadataIndex, Schema, Statistics,
-                          SummaryOffset)
+from mcap.records import Channel, Header, Metadata, Schema
+
+from . import writer_process
+from .writer_process import ACK, CHUNK, FLUSH, FRAME, MAGIC, METADATA, RAW, SPAN, SUMMARY
 
 log = logging.getLogger(__name__)
 
-MAGIC = b"\x89MCAP0\r\n"
-_CHUNK_HEADER = struct.Struct("<BQQQQI")
-_ZSTD = struct.pack("<I", 4) + b"zstd"
-_U64 = struct.Struct("<Q")
+#: chunks handed over and not yet written, at most: one being written and one in the pipe (the writer process
+#: starts in some 35 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
+MAX_HANDED = 2
+_PIPE_SIZE = 1 << 20                  # a chunk (about half a megabyte) fits: handed over in one copy
+_PACKAGE_PARENT = str(Path(__file__).resolve().parents[2])     # the folder holding the simatch package
 
 
 class WriterError(Exception):
-    """The recording could not be written (its folder, the disk)."""
+    """The recording could not be written (its folder, the disk, the writer process)."""
 
 
 class McapWriter:
@@ -61,28 +70,38 @@ class McapWriter:
 
     def __init__(self, path: str | Path, *, profile: str, library: str, compression_level: int = 1):
         try:
-            self._file = open(path, "xb", buffering=0)          # never overwrites an existing file
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)   # never overwrites a file
         except OSError as exc:
             raise WriterError(f"cannot write {path}: {exc.strerror or exc}") from None
         self.path = Path(path)
-        self.error: BaseException | None = None
-        self._level = compression_level
-        self._pos = 0                        # bytes written (by the writer thread)
+        self.error: str | None = None
         self._schemas: list[Schema] = []
         self._channels: list[Channel] = []
-        self._metadata_index: list[MetadataIndex] = []
         self._counts: dict[int, int] = {}
         self._message_count = 0
         self._chunk_count = 0
         self._times: tuple[int, int] | None = None
         self._records = RecordBuilder()
         self._closed = False
-        self._jobs: queue.SimpleQueue = queue.SimpleQueue()
-        self._slot = threading.Semaphore(1)                 # one chunk at most in the writer thread's hands
-        self._thread = threading.Thread(target=self._work, name=f"mcap-writer {self.path.name}", daemon=True)
-        self._thread.start()
+        self._pending = 0                                   # acknowledgements still to come
+        to_child, self._out = os.pipe()
+        self._back, from_child = os.pipe()
+        _widen(self._out)
+        env = dict(os.environ)        # the very simatch this process runs, wherever it was imported from
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [_PACKAGE_PARENT, env.get("PYTHONPATH")]))
+        try:
+            self._proc = subprocess.Popen(
+                [sys.executable, "-m", writer_process.__name__, str(to_child), str(from_child), str(fd), str(compression_level)],
+                pass_fds=(to_child, from_child, fd), stdin=subprocess.DEVNULL, start_new_session=True, env=env)
+        except OSError as exc:
+            for end in (self._out, self._back):
+                os.close(end)
+            raise WriterError(f"cannot start the writer process: {exc}") from None
+        finally:
+            for end in (to_child, from_child, fd):
+                os.close(end)
         Header(profile=profile, library=library).write(self._records)
-        self._jobs.put(("raw", MAGIC + self._records.end()))
+        self._send(RAW, MAGIC + self._records.end())
 
     # --- on the caller's thread -------------------------------------------------------------------------------
     def schema(self, name: str, encoding: str, data: bytes) -> tuple[int, bytes]:
@@ -103,7 +122,7 @@ class McapWriter:
 
     def end_chunk(self, data: bytes, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
         """Hand one chunk's records (messages from ``start_ns`` to ``end_ns``; ``counts`` per channel id) to the
-        writer thread. Waits while the previous chunk is still being written."""
+        writer process. Waits while the previous chunk is still being written."""
         if not data:
             return
         n = 0
@@ -113,107 +132,86 @@ class McapWriter:
         self._message_count += n
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
-        self._slot.acquire()
-        self._jobs.put(("chunk", data, start_ns, end_ns))
+        self._acknowledged(MAX_HANDED - 1)
+        if self._send(CHUNK, SPAN.pack(start_ns, end_ns), data):
+            self._pending += 1
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
         """A Metadata record, written after everything handed over before it."""
         Metadata(name=name, metadata=data).write(self._records)
-        self._jobs.put(("metadata", name, self._records.end()))
+        self._send(METADATA, pickle.dumps((name, self._records.end())))
 
     def flush(self) -> None:
         """Wait until everything handed over is on disk (in the operating system's hands)."""
-        done = threading.Event()
-        self._jobs.put(("event", done))
-        while not done.wait(0.5):
-            if not self._thread.is_alive():
-                break
+        if self._send(FLUSH, b""):
+            self._pending += 1
+        self._acknowledged(0)
 
     def close(self) -> None:
         """Write the summary and the footer, and close the file. Raises WriterError if writing failed."""
         if self._closed:
             return
         self._closed = True
-        self._jobs.put(("summary",))
-        self._jobs.put(None)
-        self._thread.join()
-        self._file.close()
+        first, last = self._times or (0, 0)
+        self._send(SUMMARY, pickle.dumps({
+            "schemas": self._schemas, "channels": self._channels, "counts": dict(self._counts),
+            "messages": self._message_count, "chunks": self._chunk_count, "first": first, "last": last}))
+        os.close(self._out)
+        status = b""
+        try:
+            while chunk := os.read(self._back, 4096):
+                status += chunk
+        finally:
+            os.close(self._back)
+            self._proc.wait()
+        status = status[self._pending:].decode(errors="replace").strip()      # after the acknowledgements due
+        if self.error is None and status != "ok":
+            self.error = status or f"the writer process ended with status {self._proc.returncode}"
         if self.error is not None:
             raise WriterError(f"writing {self.path} failed: {self.error}")
 
-    # --- the writer thread ---------------------------------------------------------------------------------
-    def _work(self) -> None:
-        compressor = zstandard.ZstdCompressor(level=self._level, write_checksum=True)
-        while True:
-            job = self._jobs.get()
-            if job is None:
+    def _send(self, kind: int, *parts: bytes) -> bool:
+        """One frame to the writer process (False, and the error noted, if it is gone)."""
+        if self.error is not None:
+            return False
+        head = FRAME.pack(kind, sum(len(p) for p in parts))
+        try:
+            _write_all(self._out, [head, *parts])
+        except OSError as exc:           # the writer process died: keep the run going, say so at the end
+            self._failed(f"the writer process is gone ({exc.strerror or exc})")
+            return False
+        return True
+
+    def _acknowledged(self, left: int) -> None:
+        """Wait until at most ``left`` chunks or flushes are unacknowledged."""
+        while self._pending > left and self.error is None:
+            got = os.read(self._back, self._pending - left)
+            if not got:
+                self._failed("the writer process ended unexpectedly")
                 return
-            try:
-                if self.error is None:
-                    self._do(job, compressor)
-            except BaseException as exc:          # the disk, mostly: stop writing, keep the run going
-                self.error = exc
-                log.error("recording: writing %s failed (%s); the rest of the run is not recorded", self.path, exc)
-            finally:
-                if job[0] == "chunk":
-                    self._slot.release()
-                elif job[0] == "event":
-                    job[1].set()
+            self._pending -= got.count(ACK)
 
-    def _write(self, data: bytes) -> None:
-        view = memoryview(data)
-        while view:
-            n = self._file.write(view)
-            view = view[n:]
-        self._pos += len(data)
+    def _failed(self, why: str) -> None:
+        self.error = why
+        self._pending = 0
+        log.error("recording: writing %s failed (%s); the rest of the run is not recorded", self.path, why)
 
-    def _do(self, job, compressor) -> None:
-        kind = job[0]
-        if kind == "raw":
-            self._write(job[1])
-        elif kind == "chunk":
-            _, data, start_ns, end_ns = job
-            packed = compressor.compress(data)
-            length = 8 + 8 + 8 + 4 + len(_ZSTD) + 8 + len(packed)
-            head = _CHUNK_HEADER.pack(Opcode.CHUNK, length, start_ns, end_ns, len(data), 0)   # CRC: zstd's
-            self._write(head + _ZSTD + _U64.pack(len(packed)))
-            self._write(packed)
-        elif kind == "metadata":
-            _, name, record = job
-            self._metadata_index.append(MetadataIndex(offset=self._pos, length=len(record), name=name))
-            self._write(record)
-        elif kind == "summary":
-            self._write(self._summary())
 
-    def _summary(self) -> bytes:
-        builder = RecordBuilder()
-        DataEnd(data_section_crc=0).write(builder)
-        data_end = builder.end()
-        start = self._pos + len(data_end)
-        offsets: list[SummaryOffset] = []
+def _widen(fd: int) -> None:
+    try:
+        import fcntl
 
-        def group(opcode, records) -> None:
-            at = builder.count
-            for record in records:
-                record.write(builder)
-            if builder.count > at:
-                offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + at,
-                                             group_length=builder.count - at))
+        fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, _PIPE_SIZE)
+    except (ImportError, AttributeError, OSError):       # not Linux, or a lower limit: smaller copies, the same bytes
+        pass
 
-        first, last = self._times or (0, 0)
-        group(Opcode.SCHEMA, self._schemas)
-        group(Opcode.CHANNEL, self._channels)
-        group(Opcode.STATISTICS, [Statistics(
-            message_count=self._message_count, schema_count=len(self._schemas),
-            channel_count=len(self._channels), attachment_count=0, metadata_count=len(self._metadata_index),
-            chunk_count=self._chunk_count, message_start_time=first, message_end_time=last,
-            channel_message_counts=dict(self._counts))])
-        group(Opcode.METADATA_INDEX, self._metadata_index)
-        offset_start = start + builder.count
-        for record in offsets:
-            record.write(builder)
-        summary = builder.end()
-        crc = zlib.crc32(summary)
-        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, start, offset_start), crc)
-        Footer(summary_start=start, summary_offset_start=offset_start, summary_crc=crc).write(builder)
-        return data_end + summary + builder.end() + MAGIC
+
+def _write_all(fd: int, parts: list) -> None:
+    views = [memoryview(p).cast("B") for p in parts if len(p)]
+    while views:
+        n = os.writev(fd, views)
+        while views and n >= len(views[0]):
+            n -= len(views[0])
+            views.pop(0)
+        if n:
+            views[0] = views[0][n:]

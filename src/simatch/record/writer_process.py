@@ -1,0 +1,149 @@
+"""The writer process of a recording (started by `simatch.record.writer.McapWriter`, which says why):
+frames in over a pipe, the MCAP file out.
+
+``python -m simatch.record.writer_process FRAMES_FD ACKS_FD FILE_FD LEVEL``: reads frames (kind, payload
+length, payload) from FRAMES_FD until it is closed, writes the file FILE_FD, and answers on ACKS_FD one
+`ACK` per chunk written or flush done, then, once the frames end, ``ok`` or what went wrong. It imports
+only what it needs to start (some 30 ms): the run does not wait for it.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import struct
+import sys
+import zlib
+
+MAGIC = b"\x89MCAP0\r\n"
+FRAME = struct.Struct("<BQ")          # a frame's kind and payload length
+RAW, CHUNK, METADATA, SUMMARY, FLUSH = 1, 2, 3, 4, 5
+SPAN = struct.Struct("<QQ")           # a chunk's payload starts with its first and last log time
+ACK = b"A"
+_CHUNK_HEADER = struct.Struct("<BQQQQI")
+_ZSTD = struct.pack("<I", 4) + b"zstd"
+_U64 = struct.Struct("<Q")
+_OPCODE_CHUNK = 0x06
+
+
+class FileWriter:
+    """Frames in, the file out."""
+
+    def __init__(self, frames: int, acks: int, fd: int, level: int):
+        import zstandard
+
+        self._in = os.fdopen(frames, "rb", buffering=0)
+        self._acks = acks
+        self._file = os.fdopen(fd, "wb", buffering=0)
+        self._compressor = zstandard.ZstdCompressor(level=level, write_checksum=True)
+        self._pos = 0
+        self._metadata_index: list = []          # (offset, length, name)
+        self.error: str | None = None
+
+    def run(self) -> None:
+        while (head := self._read(FRAME.size)) is not None:
+            kind, size = FRAME.unpack(head)
+            payload = self._read(size)
+            if payload is None:
+                break                                          # the recording process died mid-frame
+            if self.error is None:
+                try:
+                    self._do(kind, payload)
+                except Exception as exc:    # the disk, mostly: write nothing more, keep acknowledging
+                    self.error = f"{type(exc).__name__}: {exc}"
+            if kind in (CHUNK, FLUSH):
+                os.write(self._acks, ACK)
+                _summary_imports()          # while the run goes on, not when it waits for the end
+        self._file.close()
+        os.write(self._acks, b"ok\n" if self.error is None else (self.error + "\n").encode())
+
+    def _read(self, n: int) -> bytearray | None:
+        buf = bytearray(n)
+        view, got = memoryview(buf), 0
+        while got < n:
+            k = self._in.readinto(view[got:])
+            if not k:
+                return None
+            got += k
+        return buf
+
+    def _write(self, data) -> None:
+        view = memoryview(data)
+        while view:
+            n = self._file.write(view)
+            view = view[n:]
+        self._pos += len(data)
+
+    def _do(self, kind: int, payload: bytearray) -> None:
+        if kind == RAW:
+            self._write(payload)
+        elif kind == CHUNK:
+            start_ns, end_ns = SPAN.unpack_from(payload)
+            data = memoryview(payload)[SPAN.size:]
+            packed = self._compressor.compress(data)
+            length = 8 + 8 + 8 + 4 + len(_ZSTD) + 8 + len(packed)
+            head = _CHUNK_HEADER.pack(_OPCODE_CHUNK, length, start_ns, end_ns, len(data), 0)   # CRC: zstd's
+            self._write(head + _ZSTD + _U64.pack(len(packed)) + packed)
+        elif kind == METADATA:
+            import pickle
+
+            name, record = pickle.loads(payload)
+            self._metadata_index.append((self._pos, len(record), name))
+            self._write(record)
+        elif kind == SUMMARY:
+            import pickle
+
+            self._write(self._summary(pickle.loads(payload)))
+
+    def _summary(self, s: dict) -> bytes:
+        from mcap.data_stream import RecordBuilder
+        from mcap.opcode import Opcode
+        from mcap.records import DataEnd, Footer, MetadataIndex, Statistics, SummaryOffset
+
+        builder = RecordBuilder()
+        DataEnd(data_section_crc=0).write(builder)
+        data_end = builder.end()
+        start = self._pos + len(data_end)
+        offsets: list = []
+
+        def group(opcode, records) -> None:
+            at = builder.count
+            for record in records:
+                record.write(builder)
+            if builder.count > at:
+                offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + at,
+                                             group_length=builder.count - at))
+
+        index = [MetadataIndex(offset=o, length=n, name=name) for o, n, name in self._metadata_index]
+        group(Opcode.SCHEMA, s["schemas"])
+        group(Opcode.CHANNEL, s["channels"])
+        group(Opcode.STATISTICS, [Statistics(
+            message_count=s["messages"], schema_count=len(s["schemas"]), channel_count=len(s["channels"]),
+            attachment_count=0, metadata_count=len(index), chunk_count=s["chunks"],
+            message_start_time=s["first"], message_end_time=s["last"], channel_message_counts=s["counts"])])
+        group(Opcode.METADATA_INDEX, index)
+        offset_start = start + builder.count
+        for record in offsets:
+            record.write(builder)
+        summary = builder.end()
+        crc = zlib.crc32(summary)
+        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, start, offset_start), crc)
+        Footer(summary_start=start, summary_offset_start=offset_start, summary_crc=crc).write(builder)
+        return data_end + summary + builder.end() + MAGIC
+
+
+def _summary_imports() -> None:
+    import pickle  # noqa: F401
+    import mcap.records  # noqa: F401
+
+
+def main(argv: list[str]) -> int:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)      # the recording process decides when it ends
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    frames, acks, fd, level = map(int, argv)
+    FileWriter(frames, acks, fd, level).run()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
