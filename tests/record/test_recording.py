@@ -105,6 +105,20 @@ def test_an_existing_file_is_never_overwritten(tmp_path):
     assert path.read_bytes() == b"precious"
 
 
+def test_a_writer_process_that_cannot_start_is_a_clear_error(tmp_path, monkeypatch):
+    import subprocess
+
+    def refuse(*args, **kwargs):
+        raise OSError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(subprocess, "Popen", refuse)
+    path = tmp_path / "never.mcap"
+    with simatch.Simulation("omni_circle") as sim:
+        with pytest.raises(RecordError, match="cannot start the writer process"):
+            Recorder.for_run(sim, path)
+    assert not path.exists()                       # nothing left behind to refuse the next attempt
+
+
 FOREIGN_READER = textwrap.dedent('''
     import json, sys
     from pathlib import Path

@@ -72,7 +72,8 @@ def fill_poses(template: bytes, slots: Sequence[PoseSlot], pose, grid: float, tu
     needed = 1 + max((slot[1] for slot in slots), default=-1)
     if len(rows) < needed:
         raise ValueError(f"{len(rows)} poses where the template shows {needed} models")
-    snapped = (np.round(rows * _GRIDS(grid, turn_grid)) / _GRIDS(grid, turn_grid)).tolist()
+    steps = np.array([grid, grid, grid, turn_grid, turn_grid, turn_grid, turn_grid])
+    snapped = (np.round(rows * steps) / steps).tolist()
     buf = bytearray(template)
     for offset, row, z, turn in slots:
         x, y, pz, qw, _, _, qz = snapped[row]
@@ -81,10 +82,6 @@ def fill_poses(template: bytes, slots: Sequence[PoseSlot], pose, grid: float, tu
         else:
             _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, 0.0, 1.0)
     return bytes(buf)
-
-
-def _GRIDS(grid: float, turn_grid: float) -> np.ndarray:
-    return np.array([grid, grid, grid, turn_grid, turn_grid, turn_grid, turn_grid])
 
 
 def new_log(fallback: Fallback, *, accelerate: bool = True):

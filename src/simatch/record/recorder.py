@@ -32,7 +32,6 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Iterable
 
-
 from .. import msgs
 from ..bus import topics
 from ..msgs.cdr import Codec

@@ -92,10 +92,12 @@ class McapWriter:
         try:
             self._proc = subprocess.Popen(
                 [sys.executable, "-m", writer_process.__name__, str(to_child), str(from_child), str(fd), str(compression_level)],
-                pass_fds=(to_child, from_child, fd), stdin=subprocess.DEVNULL, start_new_session=True, env=env)
+                pass_fds=(to_child, from_child, fd), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                start_new_session=True, env=env)
         except OSError as exc:
             for end in (self._out, self._back):
                 os.close(end)
+            os.unlink(path)                                  # the empty file made above: nothing recorded
             raise WriterError(f"cannot start the writer process: {exc}") from None
         finally:
             for end in (to_child, from_child, fd):
