@@ -55,10 +55,9 @@ from .writer_process import ACK, CHUNK, FLUSH, FRAME, MAGIC, METADATA, RAW, SPAN
 log = logging.getLogger(__name__)
 
 #: chunks handed over and not yet written, at most: one being written and one in the pipe (the writer process
-#: starts in some 35 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
+#: starts in some 30 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
 MAX_HANDED = 2
 _PIPE_SIZE = 1 << 20                  # a chunk (about half a megabyte) fits: handed over in one copy
-_PACKAGE_PARENT = str(Path(__file__).resolve().parents[2])     # the folder holding the simatch package
 
 
 class WriterError(Exception):
@@ -87,13 +86,12 @@ class McapWriter:
         to_child, self._out = os.pipe()
         self._back, from_child = os.pipe()
         _widen(self._out)
-        env = dict(os.environ)        # the very simatch this process runs, wherever it was imported from
-        env["PYTHONPATH"] = os.pathsep.join(filter(None, [_PACKAGE_PARENT, env.get("PYTHONPATH")]))
-        try:
+        try:       # the file itself (it needs only zstd and mcap), -P: nothing of its folder on the path
             self._proc = subprocess.Popen(
-                [sys.executable, "-m", writer_process.__name__, str(to_child), str(from_child), str(fd), str(compression_level)],
+                [sys.executable, "-P", writer_process.__file__, str(to_child), str(from_child), str(fd),
+                 str(compression_level)],
                 pass_fds=(to_child, from_child, fd), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                start_new_session=True, env=env)
+                start_new_session=True)
         except OSError as exc:
             for end in (self._out, self._back):
                 os.close(end)

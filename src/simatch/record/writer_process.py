@@ -1,10 +1,11 @@
 """The writer process of a recording (started by `simatch.record.writer.McapWriter`, which says why):
 frames in over a pipe, the MCAP file out.
 
-``python -m simatch.record.writer_process FRAMES_FD ACKS_FD FILE_FD LEVEL``: reads frames (kind, payload
+``python -P .../writer_process.py FRAMES_FD ACKS_FD FILE_FD LEVEL``: reads frames (kind, payload
 length, payload) from FRAMES_FD until it is closed, writes the file FILE_FD, and answers on ACKS_FD one
-`ACK` per chunk written or flush done, then, once the frames end, ``ok`` or what went wrong. It imports
-only what it needs to start (some 30 ms): the run does not wait for it.
+`ACK` per chunk written or flush done, then, once the frames end, ``ok`` or what went wrong. It is run as
+a file, not as a module of simatch, and imports only the standard library, zstd and (for the summary)
+mcap: it starts in some 30 ms, and the run does not wait for it.
 """
 
 from __future__ import annotations
@@ -138,6 +139,10 @@ def _summary_imports() -> None:
 
 
 def main(argv: list[str]) -> int:
+    if len(argv) != 4 or not all(a.isdigit() for a in argv):
+        print("usage: writer_process.py FRAMES_FD ACKS_FD FILE_FD LEVEL (started by simatch's recorder)",
+              file=sys.stderr)
+        return 2
     signal.signal(signal.SIGINT, signal.SIG_IGN)      # the recording process decides when it ends
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     frames, acks, fd, level = map(int, argv)
