@@ -122,7 +122,7 @@ class McapWriter:
 
     def end_chunk(self, data: bytes, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
         """Hand one chunk's records (messages from ``start_ns`` to ``end_ns``; ``counts`` per channel id) to the
-        writer process. Waits while the previous chunk is still being written."""
+        writer process. Waits while `MAX_HANDED` chunks are still to be written."""
         if not data:
             return
         n = 0
