@@ -887,33 +887,24 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
         return NULL;
     }
     PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
-    if (entry != NULL) {
-        const Channel *ch = PyCapsule_GetPointer(entry, NULL);
-        int r = 0;
-        if (ch->clock) {                   /* may call on_chunk (Python): keep the entry alive meanwhile */
-            Py_INCREF(entry);
-            r = clock_message(log, ch, args[1]);
-            if (r == 0)
-                r = log_message(log, ch, args[1]);
-            if (r == FALLBACK && ch->poses) {     /* the message by the fallback, then its poses */
-                PyObject *done = PyObject_Vectorcall(log->fallback, args, 2, NULL);
-                Py_XDECREF(done);
-                r = done == NULL ? FAILED : 0;
-            }
-            if (r == 0 && ch->poses)
-                r = poses_after(log, args[1]);
-            Py_DECREF(entry);
-        } else {
-            r = log_message(log, ch, args[1]);
-        }
-        if (r == 0)
-            Py_RETURN_NONE;
-        if (r == FAILED)
-            return NULL;
-    } else if (PyErr_Occurred()) {
-        return NULL;
+    if (entry == NULL)             /* a topic not added: the fallback's */
+        return PyErr_Occurred() ? NULL : PyObject_Vectorcall(log->fallback, args, 2, NULL);
+    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
+    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
+    int r = ch->clock ? clock_message(log, ch, args[1]) : 0;
+    if (r == 0)
+        r = log_message(log, ch, args[1]);
+    if (r == FALLBACK) {           /* the fallback encodes it, or says what is wrong; its poses follow all the same */
+        PyObject *done = PyObject_Vectorcall(log->fallback, args, 2, NULL);
+        Py_XDECREF(done);
+        r = done == NULL ? FAILED : 0;
     }
-    return PyObject_Vectorcall(log->fallback, args, 2, NULL);
+    if (r == 0 && ch->poses)
+        r = poses_after(log, args[1]);
+    Py_DECREF(entry);
+    if (r != 0)
+        return NULL;
+    Py_RETURN_NONE;
 }
 
 static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
@@ -1035,7 +1026,7 @@ static PyObject *log_pose_template(Log *log, PyObject *args, PyObject *kwds) {
         PoseSlot *slot = &parsed[i];
         if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(seq, i), "nndp;slot: (offset, row, z, turn)",
                               &slot->offset, &slot->row, &slot->z, &slot->turn)
-            || slot->offset < 4 || slot->offset + 56 > size || slot->row < 0) {
+            || slot->offset < 4 || slot->offset + 7 * (Py_ssize_t)sizeof(double) > size || slot->row < 0) {
             if (!PyErr_Occurred())
                 PyErr_SetString(PyExc_ValueError, "pose_template: a slot outside the template");
             PyMem_Free(parsed);

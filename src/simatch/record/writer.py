@@ -50,7 +50,7 @@ from mcap.data_stream import RecordBuilder
 from mcap.records import Channel, Header, Metadata, Schema
 
 from . import writer_process
-from .writer_process import ACK, CHUNK, FLUSH, FRAME, MAGIC, METADATA, RAW, SPAN, SUMMARY
+from .writer_process import ACK, CHUNK, FLUSH, FRAME, MAGIC, METADATA, RAW, SPAN, SUMMARY, write_all
 
 log = logging.getLogger(__name__)
 
@@ -176,7 +176,7 @@ class McapWriter:
             return False
         head = FRAME.pack(kind, sum(len(p) for p in parts))
         try:
-            _write_all(self._out, [head, *parts])
+            write_all(self._out, [head, *parts])
         except OSError as exc:           # the writer process died: keep the run going, say so at the end
             self._failed(f"the writer process is gone ({exc.strerror or exc})")
             return False
@@ -204,14 +204,3 @@ def _widen(fd: int) -> None:
         fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, _PIPE_SIZE)
     except (ImportError, AttributeError, OSError):       # not Linux, or a lower limit: smaller copies, the same bytes
         pass
-
-
-def _write_all(fd: int, parts: list) -> None:
-    views = [memoryview(p).cast("B") for p in parts if len(p)]
-    while views:
-        n = os.writev(fd, views)
-        while views and n >= len(views[0]):
-            n -= len(views[0])
-            views.pop(0)
-        if n:
-            views[0] = views[0][n:]

@@ -20,6 +20,7 @@ from .simulator import Simulator
 # built positionally (every physics step; see msgs.positional)
 _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
 _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerprint")
+_Clock = msgs.positional(msgs.Clock, "stamp step tick")
 _F32 = np.float32             # the states' numbers, as the messages define them
 _sha256 = hashlib.sha256
 _from_bytes = int.from_bytes
@@ -33,9 +34,6 @@ def fingerprint(pose: np.ndarray, twist: np.ndarray) -> int:
     h = _sha256(pose)
     h.update(twist)
     return _from_bytes(h.digest()[:8], "little")
-
-
-_Clock = msgs.positional(msgs.Clock, "stamp step tick")
 
 
 class SimulatorNode(Node):
