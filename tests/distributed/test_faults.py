@@ -1,6 +1,7 @@
 """Faults in a distributed run: a robot process that dies (its robot stops by the watchdog within 0.1 s of
 simulated time, the match goes on, the event is logged, a restarted process rejoins), one that hangs (not
-waited for until it answers again), and a team that never connects (the server says so and plays without it)."""
+waited for until it answers again), and a team that never connects (the server says so and plays without it);
+and how the server times the answers it waits for."""
 
 from __future__ import annotations
 
@@ -75,6 +76,25 @@ def test_a_dead_robot_process_stops_its_robot_and_a_restarted_one_rejoins(procs,
     assert events(server, "watchdog_resume")
     assert not sim.simulator.watchdog_tripped[i]
     assert sim.simulator.last_command_step[i] * sim.dt >= sim.time - 0.03     # commanded again, every tick
+
+
+@pytest.mark.slow
+def test_the_server_times_each_answer_and_its_parts(procs, server):
+    """Each answer's round trip is the sum of its parts, read from the process's clock (same machine)."""
+    procs.robot("cyan/2")
+    join(server, procs)
+    server.sim.run(seconds=0.5)
+    server.reset_stats()
+    server.sim.run(seconds=1.0)
+    gate, st = server.gate, server.stats()
+    assert st["ticks"] == 40 and st["answers"] == 40 - st["missed"] >= 35
+    assert len(gate.feeds) == len(gate.thinking) == len(gate.transits) == len(gate.latencies)
+    for whole, parts in zip(gate.latencies, zip(gate.feeds, gate.thinking, gate.transits)):
+        assert min(parts) >= 0.0 and sum(parts) == pytest.approx(whole, abs=1e-6)
+    assert len(gate.completions) == 40 - st["missed"]       # one process: the tick ends with its answer
+    assert sorted(gate.completions) == sorted(gate.latencies)
+    for name in ("latency", "tick", "feed", "processing", "transit"):
+        assert 0.0 <= st[f"{name}_p50_ms"] <= st[f"{name}_p99_ms"] < 1000.0
 
 
 @pytest.mark.slow

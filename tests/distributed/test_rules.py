@@ -135,3 +135,5 @@ def test_the_ack_is_the_protocols_json():
         raw = protocol.ack(proc, tick, sent)
         assert raw == protocol.dumps({"proc": proc, "tick": tick, "sent": sent})
         assert protocol.loads(raw, "proc", "tick", "sent") == {"proc": proc, "tick": tick, "sent": sent}
+        raw = protocol.ack(proc, tick, sent, got=sent - 0.25)
+        assert raw == protocol.dumps({"proc": proc, "tick": tick, "sent": sent, "got": sent - 0.25})

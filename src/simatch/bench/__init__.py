@@ -17,4 +17,5 @@ BENCHMARKS: dict[str, str] = {
     "distributed_rtt": "simatch.bench.distributed:rtt",
     "distributed_lockstep": "simatch.bench.distributed:lockstep",
     "distributed_realtime": "simatch.bench.distributed:realtime",
+    "distributed_realtime_bus": "simatch.bench.distributed:realtime_bus",
 }

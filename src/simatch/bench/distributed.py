@@ -10,11 +10,17 @@ processes, over Zenoh on loopback.
   the automatic referee) in lockstep with two team processes, against the same run embedded (same scene
   and seed: the digests must be equal).
 * ``distributed_realtime``: the same match ``--realtime`` with one process per robot (11 processes): the
-  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and the
-  commands' transit alone.
+  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and its
+  parts (see `Server.stats`): until the tick reached the robot process, until its answer was ready, and
+  the answer's transit; ``tick``: until the last of the ten answers of a tick arrived.
+* ``distributed_realtime_bus``: the same eleven processes in real time with the plumbing strategy
+  (``startpose``) for every robot, thrown across the field every 4 s: what the bus and the processes cost
+  without the shipped strategy's decisions (the difference to ``distributed_realtime`` is theirs).
 
-Both match figures start after a warm-up of a few simulated seconds, past the kick-off (processes start,
-the default team's compiled kernels load), as ``match_rtf`` does.
+Every figure starts after a warm-up of a few simulated seconds, past the kick-off (processes start, the
+default team's compiled kernels load), as ``match_rtf`` does. The lockstep match runs a simulated minute by
+default: its real-time factor changes with the phase of play (set pieces cost the strategy more), and a
+shorter run is over in two seconds of wall time, too short for a steady figure on a shared machine.
 """
 
 from __future__ import annotations
@@ -36,6 +42,9 @@ SCENE = "msl_5v5"
 #: the round trip's load: one robot driving back to its start pose (the bus's figure, not a strategy's)
 RTT_OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "none",
                  "teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]], "perception.position_noise": 0.02}
+#: the eleven processes' load without the shipped strategy: every robot drives back to its start pose
+BUS_OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose",
+                 "perception.position_noise": 0.02}
 SCATTER_EVERY = 4.0
 WARM_UP = 3.0          # simulated seconds before the figures start: past the kick-off at 2 s
 
@@ -55,15 +64,17 @@ def _scatter(sim, k: int) -> None:
 
 
 def _play(sim, seconds: float) -> float:
-    """Start the coaches and run ``seconds``, scattering the robots every few seconds; returns wall seconds."""
+    """Start the coaches and run ``seconds`` more, scattering the robots every few seconds; returns wall
+    seconds."""
     for coach in sim.coaches.values():
         coach.start_play()
     wall = 0.0
     k = 0
-    while sim.time < seconds - 1e-9:
+    end = sim.time + seconds
+    while sim.time < end - 1e-9:
         _scatter(sim, k)
         t0 = time.perf_counter()
-        sim.run(seconds=min(SCATTER_EVERY, seconds - sim.time))
+        sim.run(seconds=min(SCATTER_EVERY, end - sim.time))
         wall += time.perf_counter() - t0
         k += 1
     return wall
@@ -108,8 +119,13 @@ def rtt(seconds: float | None = None) -> dict:
         _play(server.sim, seconds)
         st = server.stats()
     return {"distributed_rtt_p50_ms": st["latency_p50_ms"], "distributed_rtt_p99_ms": st["latency_p99_ms"],
-            "distributed_rtt_transit_p50_ms": st["transit_p50_ms"],
-            "distributed_rtt_transit_p99_ms": st["transit_p99_ms"], "distributed_rtt_samples": st["answers"]}
+            **_parts("distributed_rtt", st, ("feed", "processing", "transit")),
+            "distributed_rtt_samples": st["answers"]}
+
+
+def _parts(prefix: str, st: dict, names) -> dict:
+    """The p50/p99 of parts of the round trip (`Server.stats`), under ``prefix``."""
+    return {f"{prefix}_{name}_{q}_ms": st[f"{name}_{q}_ms"] for name in names for q in ("p50", "p99")}
 
 
 def _match(sim, seconds: float, server=None) -> float:
@@ -125,7 +141,7 @@ def _match(sim, seconds: float, server=None) -> float:
 def lockstep(seconds: float | None = None) -> dict:
     from ..simulation import Simulation
 
-    seconds = seconds or 20.0
+    seconds = seconds or 60.0
     with Simulation(load_scene(SCENE), seed=0) as sim:
         embedded_wall = _match(sim, seconds)
         embedded_digest = sim.state_digest()
@@ -140,25 +156,37 @@ def lockstep(seconds: float | None = None) -> dict:
     return {"distributed_lockstep_rtf": round(rtf, 2), "distributed_lockstep_embedded_rtf": round(emb, 2),
             "distributed_lockstep_ratio": round(rtf / emb, 3), "distributed_lockstep_digest_equal": digest == embedded_digest,
             "distributed_lockstep_latency_p50_ms": st["latency_p50_ms"],
-            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"], "distributed_lockstep_missed": st["missed"],
+            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"],
+            **_parts("distributed_lockstep", st, ("tick", "feed", "processing", "transit")),
+            "distributed_lockstep_missed": st["missed"],
             "distributed_lockstep_load": round(os.getloadavg()[0], 2)}
 
 
 def realtime(seconds: float | None = None) -> dict:
-    seconds = seconds or 30.0
-    with _server(realtime=True) as (server, launch):
+    return _realtime("distributed_realtime", seconds or 30.0)
+
+
+def realtime_bus(seconds: float | None = None) -> dict:
+    return _realtime("distributed_realtime_bus", seconds or 30.0, BUS_OVERRIDES)
+
+
+def _realtime(prefix: str, seconds: float, overrides: dict | None = None) -> dict:
+    """One process per robot in real time: the shipped match, or (``overrides``) robots thrown about."""
+    with _server(realtime=True, overrides=overrides) as (server, launch):
         for team in ("cyan", "magenta"):
             for rid in range(1, 6):
                 launch("robot", f"{team}/{rid}")
         server.wait_for_teams()
-        wall = _match(server.sim, seconds, server)
+        if overrides is None:
+            wall = _match(server.sim, seconds, server)
+        else:
+            server.sim.run(seconds=WARM_UP, until_done=False)
+            server.reset_stats()
+            wall = _play(server.sim, seconds)
         st = server.stats()
-    return {"distributed_realtime_processes": 1 + st["processes"], "distributed_realtime_rtf": round(seconds / wall, 4),
-            "distributed_realtime_latency_p50_ms": st["latency_p50_ms"],
-            "distributed_realtime_latency_p99_ms": st["latency_p99_ms"],
-            "distributed_realtime_latency_max_ms": st["latency_max_ms"],
-            "distributed_realtime_transit_p50_ms": st["transit_p50_ms"],
-            "distributed_realtime_transit_p99_ms": st["transit_p99_ms"], "distributed_realtime_missed": st["missed"],
-            "distributed_realtime_late_steps": st["realtime_late_steps"],
-            "distributed_realtime_max_lag_ms": st["realtime_max_lag_ms"],
-            "distributed_realtime_load": round(os.getloadavg()[0], 2)}
+    return {f"{prefix}_processes": 1 + st["processes"], f"{prefix}_rtf": round(seconds / wall, 4),
+            f"{prefix}_latency_p50_ms": st["latency_p50_ms"], f"{prefix}_latency_p99_ms": st["latency_p99_ms"],
+            f"{prefix}_latency_max_ms": st["latency_max_ms"],
+            **_parts(prefix, st, ("tick", "feed", "processing", "transit")), f"{prefix}_missed": st["missed"],
+            f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
+            f"{prefix}_load": round(os.getloadavg()[0], 2)}

@@ -193,7 +193,7 @@ class TeamProcess:
             bus.begin_batch()
         try:
             clock.step()
-            bus.put_raw(protocol.ack_topic(self.team), protocol.ack(self.proc, tick, time.monotonic()))
+            bus.put_raw(protocol.ack_topic(self.team), protocol.ack(self.proc, tick, time.monotonic(), arrival))
         finally:
             if self.bundles:
                 bus.send_batch(protocol.bundle_topic(self.team))

@@ -42,13 +42,20 @@ class LockstepGate(Node):
         self._on_ack = on_ack
         self._on_missed = on_missed
         self._order = order
-        self.latencies: list[float] = []      # tick opened -> ack arrived [s], every answer in time
-        self.transits: list[float] = []       # ack sent -> ack arrived [s] (same machine: the same clock)
+        # every answer in time [s]; the parts need the process's clock to be this one's (same machine)
+        self.latencies: list[float] = []      # tick opened -> answer arrived: the whole round trip
+        self.feeds: list[float] = []          # tick opened -> the tick reached the process ("got")
+        self.thinking: list[float] = []       # the tick reached the process -> its answer left ("sent")
+        self.transits: list[float] = []       # the answer left -> it arrived here
+        #: per tick that every process answered in time: opened -> the last answer arrived [s] (what the
+        #: server waits at the barrier)
+        self.completions: list[float] = []
         self.ticks = 0
         self.missed = 0
         self._tick = -1
         self._opened = 0.0
         self._waiting: set[str] = set()
+        self._last_arrival = 0.0
         #: the answers still awaited for tick ``_early_tick`` (process id -> team), as Zenoh's receiving
         #: thread sees them: it wakes the gate only for the last one (see `_last_answer`)
         self._early: dict[str, str] = {}
@@ -106,10 +113,15 @@ class LockstepGate(Node):
         proc = self._on_ack(msg, protocol.team_of(topic), arrival)
         if proc is not None and msg["tick"] == self._tick and proc.id in self._waiting:
             self._waiting.discard(proc.id)
-            self.latencies.append(arrival - self._opened)
-            sent = msg.get("sent")
+            opened = self._opened
+            self.latencies.append(arrival - opened)
+            self._last_arrival = max(self._last_arrival, arrival)
+            sent, got = msg.get("sent"), msg.get("got")
             if isinstance(sent, float) and 0.0 <= arrival - sent < 60.0:
                 self.transits.append(arrival - sent)
+                if isinstance(got, float) and opened <= got <= sent:
+                    self.feeds.append(got - opened)
+                    self.thinking.append(sent - got)
             proc.streak = 0
 
     def _absorb(self, items, pending: list) -> None:
@@ -130,7 +142,7 @@ class LockstepGate(Node):
         active = self._active()
         self._waiting = {p.id for p in active}
         self._await(active)
-        self._opened = opened = time.monotonic()
+        self._opened = opened = self._last_arrival = time.monotonic()
         self._tick_pub.put(protocol.dumps({"step": step, "tick": self._tick}))
         bus.flush_feeds()                              # each team's inputs of this tick, then the tick
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
@@ -149,6 +161,8 @@ class LockstepGate(Node):
             self.missed += len(self._waiting)
             self._on_missed(set(self._waiting), now)
             self._waiting.clear()
+        elif active:
+            self.completions.append(self._last_arrival - opened)
         pending.sort(key=self._order)
         bus.deliver(pending)
         self.ticks += 1

@@ -7,8 +7,10 @@ payloads are small JSON objects so that a client in any language can speak them:
     lockstep/scene         query   -> the scene offer: scene text, overrides, seed, mode (no registration)
     lockstep/join          query   -> register a process serving some robots: {"ok": true, "step"} or an error
     lockstep/tick          server  -> {"step", "tick"}: every input of this control tick has been sent; answer it
-    <team>/lockstep/ack    client  -> {"proc", "tick", "sent"}: this process has sent its commands for that
-                                     tick (``sent``, optional: its monotonic clock, to measure the transit)
+    <team>/lockstep/ack    client  -> {"proc", "tick", "sent", "got"}: this process has sent its commands for
+                                     that tick (optional, its monotonic clock: ``got`` when the tick reached
+                                     it, ``sent`` when its commands left; on one machine they split the
+                                     round trip into its parts, see `Server.stats`)
     <team>/lockstep/bye    client  -> {"proc"}: this process leaves on purpose
     lockstep/end           server  -> {"reason"}: the run is over; every client exits
     <team>/lockstep/bundle client  -> a bundle (`simatch.bus.bundle`) of what a process sends for one tick:
@@ -95,9 +97,10 @@ def dumps(obj: Mapping[str, Any]) -> bytes:
     return json.dumps(obj, separators=(",", ":")).encode()
 
 
-def ack(proc: str, tick: int, sent: float) -> bytes:
+def ack(proc: str, tick: int, sent: float, got: float | None = None) -> bytes:
     """The ``ack`` of a tick (what `dumps` would write, without its cost on every tick of every process)."""
-    return f'{{"proc":{json.dumps(proc)},"tick":{int(tick)},"sent":{float(sent)!r}}}'.encode()
+    more = "" if got is None else f',"got":{float(got)!r}'
+    return f'{{"proc":{json.dumps(proc)},"tick":{int(tick)},"sent":{float(sent)!r}{more}}}'.encode()
 
 
 def loads(payload: bytes, *required: str) -> dict:

@@ -292,26 +292,22 @@ class Server:
         return self.sim.result()
 
     def stats(self) -> dict:
-        """How the distributed run went: processes, answers, lateness, and two latencies of the commands:
-        ``latency`` from the tick opening (perception and game command sent) to the answer arriving (the
-        whole round trip, the robot's decision included), ``transit`` from the answer leaving the process
-        (after its commands) to its arrival (the bus alone; meaningful when both run on one machine)."""
-        lat = np.array(self.gate.latencies) * 1e3
-        transit = np.array(self.gate.transits) * 1e3
-        out = {
-            "mode": self.mode,
-            "ticks": self.gate.ticks,
-            "processes": len(self.registry.procs),
-            "answers": int(lat.size),
-            "missed": self.gate.missed,
-            "latency_p50_ms": round(float(np.percentile(lat, 50)), 3) if lat.size else None,
-            "latency_p99_ms": round(float(np.percentile(lat, 99)), 3) if lat.size else None,
-            "latency_max_ms": round(float(lat.max()), 3) if lat.size else None,
-            "transit_p50_ms": round(float(np.percentile(transit, 50)), 3) if transit.size else None,
-            "transit_p99_ms": round(float(np.percentile(transit, 99)), 3) if transit.size else None,
-            "refused": self.bus.stats.refused,
-            "malformed": self.bus.stats.malformed,
-        }
+        """How the distributed run went: processes, answers, lateness, and how long the commands took
+        (p50/p99 [ms] of every answer in time):
+
+        * ``latency``: from the tick opening (perception and game command sent) to the answer arriving: the
+          whole round trip, the robots' decisions included; ``tick``: to the last answer of a tick that
+          every process answered in time (what the server waits at the barrier);
+        * its parts, from the clocks of processes on this machine: ``feed`` until the tick reached the
+          process (the bus, and the wait for a core), ``processing`` until its answer was ready (decoding,
+          the decisions, encoding), ``transit`` until it arrived here (packing and signing it, the bus)."""
+        gate = self.gate
+        out = {"mode": self.mode, "ticks": gate.ticks, "processes": len(self.registry.procs),
+               "answers": len(gate.latencies), "missed": gate.missed}
+        for name, values in (("latency", gate.latencies), ("tick", gate.completions), ("feed", gate.feeds),
+                             ("processing", gate.thinking), ("transit", gate.transits)):
+            out.update(_percentiles(name, values, max_too=name == "latency"))
+        out.update({"refused": self.bus.stats.refused, "malformed": self.bus.stats.malformed})
         if self.pacer is not None:
             out.update({f"realtime_{k}": v for k, v in self.pacer.stats().items()})
         return out
@@ -319,8 +315,8 @@ class Server:
     def reset_stats(self) -> None:
         """Start `stats` afresh (e.g. after a warm-up: loading, the first kick-off)."""
         gate = self.gate
-        gate.latencies.clear()
-        gate.transits.clear()
+        for values in (gate.latencies, gate.completions, gate.feeds, gate.thinking, gate.transits):
+            values.clear()
         gate.missed = 0
         gate.ticks = 0
         if self.pacer is not None:
@@ -335,3 +331,13 @@ class Server:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _percentiles(name: str, seconds: Sequence[float], max_too: bool = False) -> dict:
+    """``<name>_p50_ms``, ``<name>_p99_ms`` (and ``<name>_max_ms``) of durations in seconds (None if none)."""
+    ms = np.array(seconds) * 1e3
+    out = {f"{name}_p50_ms": round(float(np.percentile(ms, 50)), 3) if ms.size else None,
+           f"{name}_p99_ms": round(float(np.percentile(ms, 99)), 3) if ms.size else None}
+    if max_too:
+        out[f"{name}_max_ms"] = round(float(ms.max()), 3) if ms.size else None
+    return out
