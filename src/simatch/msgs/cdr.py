@@ -22,10 +22,13 @@ at one control tick is in its team's TeamStrategy at the next). Lists of strings
 
 Where setup.py could build the C extension (``_cdr_accel.c``), messages with sequences are encoded by it:
 `Codec` compiles each type's encoder program once (`program`), and the C encoder walks a message with it
-(what it does not take as it is, e.g. a list where an array is expected, goes to the Python encoder). The
-extension also holds ``Log``, the recorder's message log (`simatch.record.messagelog`). Setting the
-environment variable ``SIMATCH_CDR_PURE_PYTHON=1`` uses the pure-Python encoders everywhere, as on a
-machine without a C compiler; both write the same bytes.
+(what it does not take as it is, e.g. a list where an array is expected, goes to the Python encoder).
+Little-endian payloads are decoded by it too, with the same program and each message's class (every process
+of a distributed run decodes its perception at every control tick, on its critical path: half the time of
+the generated decoders, most of what is left being numpy's array constructor). The extension also holds
+``Log``, the recorder's message log (`simatch.record.messagelog`). Setting the environment variable
+``SIMATCH_CDR_PURE_PYTHON=1`` uses the pure-Python encoders and decoders everywhere, as on a machine without
+a C compiler; both write the same bytes and read the same messages (tests compare them).
 
 Output: XCDR1 little endian with the 4-byte encapsulation header, as ROS 2 and rosbag2 write it; a
 big-endian payload is handed to rosbags to read.
@@ -57,10 +60,14 @@ try:                                # the C encoder (setup.py builds it where a 
         raise ImportError(f"{PURE_PYTHON_ENV} is set")
     from ._cdr_accel import Log
     from ._cdr_accel import compile as _accel_compile
+    from ._cdr_accel import compile_decoder as _accel_compile_decoder
+    from ._cdr_accel import decode as _accel_decode
     from ._cdr_accel import encode as _accel_encode
     from ._cdr_accel import setup as _accel_setup
+    from ._cdr_accel import setup_decoding as _accel_setup_decoding
 except ImportError:                 # a machine without a C compiler
     _accel_encode = _accel_setup = _accel_compile = Log = None
+    _accel_decode = _accel_compile_decoder = _accel_setup_decoding = None
 
 if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
@@ -90,6 +97,10 @@ ACCELERATED = _accel_encode is not None
 #: ... and reads numpy arrays directly when it recognises their layout (otherwise: the buffer protocol)
 DIRECT_ARRAYS = ACCELERATED and _accel_setup(
     np.ndarray, {k: np.dtype(_DTYPE[b]) for b, k in _KIND.items()}, np.arange(3.0))
+#: little-endian payloads are decoded by the C decoder too (it makes its arrays with the ndarray type above)
+C_DECODER = DIRECT_ARRAYS and _accel_decode is not None
+if C_DECODER:
+    _accel_setup_decoding(MessageError)
 
 
 def _lenpad(size: int) -> list[struct.Struct]:
@@ -138,6 +149,8 @@ class Codec:
         self._parts: dict[str, Callable] = {}           # type -> enc(msg, out, pos) -> pos
         self._decoders: dict[str, Callable] = {}        # type -> decode(body) -> msg
         self._decoders_at: dict[str, Callable] = {}     # type -> dec(body, pos) -> (msg, pos)
+        self._c_decoders: dict[str, Any] = {}           # type -> the C decoder's compiled program
+        self.c_decoding = self.accelerate and C_DECODER
         self._seqs: dict[int, tuple] = {}               # memo: id(list) -> (list, phase, bytes)
         self._strings: dict[tuple, bytes] = {}
         self._elements = self._element_types()
@@ -203,13 +216,21 @@ class Codec:
     def decode(self, typename: str, data: bytes | bytearray | memoryview):
         """The ``typename`` message held in ``data``; primitive sequences are read-only numpy views of it.
         Raises `MessageError` if ``data`` is not such a message."""
+        if type(data) is not bytes:
+            data = bytes(data)
+        if self.c_decoding and data[:2] == b"\x00\x01":
+            program = self._c_decoders.get(typename)
+            if program is None:
+                program = self._c_decoder(typename)
+            try:
+                return _accel_decode(program, data)
+            except MessageError as exc:
+                raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {exc}") from None
         func = self._decoders.get(typename)
         if func is None:
             if typename not in self.typestore.fielddefs:
                 raise MessageError(f"unknown message type {typename!r}")
             func = self._generate_decoder(typename)
-        if type(data) is not bytes:
-            data = bytes(data)
         if data[:2] != b"\x00\x01":                # not little-endian CDR: rosbags reads it (or refuses)
             try:
                 return self.typestore.deserialize_cdr(data, typename)
@@ -323,6 +344,24 @@ class Codec:
         if found is None:
             found = self._compiled_programs[typename] = _accel_compile(self._program(typename))
         return found
+
+    def _c_decoder(self, typename: str):
+        """The C decoder's compiled program of a type (see _cdr_accel.c)."""
+        if typename not in self.typestore.fielddefs:
+            raise MessageError(f"unknown message type {typename!r}")
+        found = self._c_decoders[typename] = _accel_compile_decoder(self._decoder_program(typename))
+        return found
+
+    def _decoder_program(self, typename: str) -> tuple:
+        """The encoder's program with each message's class: (class, ((kind, field, argument), ...))."""
+        ops = []
+        for (kind, name, arg), (_, (_, info)) in zip(self._program(typename), self._fields(typename)):
+            if kind == _K_MSG:
+                arg = self._decoder_program(info)
+            elif kind == _K_MSEQ:
+                arg = (self._decoder_program(info[0][1]), arg[1], arg[2])
+            ops.append((kind, name, arg))
+        return self.typestore.types[typename], tuple(ops)
 
     def _program(self, typename: str) -> tuple:
         """The C encoder's program of a type: ((kind, attribute, argument), ...), see _cdr_accel.c."""
