@@ -45,8 +45,8 @@ class LockstepGate(Node):
         # every answer in time [s]; the parts need the process's clock to be this one's (same machine)
         self.latencies: list[float] = []      # tick opened -> answer arrived: the whole round trip
         self.feeds: list[float] = []          # tick opened -> the tick reached the process ("got")
-        self.thinking: list[float] = []       # the tick reached the process -> its answer left ("sent")
-        self.transits: list[float] = []       # the answer left -> it arrived here
+        self.thinking: list[float] = []       # the tick reached the process -> its answer was ready ("sent")
+        self.transits: list[float] = []       # the answer was ready -> it arrived here
         #: per tick that every process answered in time: opened -> the last answer arrived [s] (what the
         #: server waits at the barrier)
         self.completions: list[float] = []

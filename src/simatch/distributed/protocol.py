@@ -9,7 +9,7 @@ payloads are small JSON objects so that a client in any language can speak them:
     lockstep/tick          server  -> {"step", "tick"}: every input of this control tick has been sent; answer it
     <team>/lockstep/ack    client  -> {"proc", "tick", "sent", "got"}: this process has sent its commands for
                                      that tick (optional, its monotonic clock: ``got`` when the tick reached
-                                     it, ``sent`` when its commands left; on one machine they split the
+                                     it, ``sent`` when its answer was ready; on one machine they split the
                                      round trip into its parts, see `Server.stats`)
     <team>/lockstep/bye    client  -> {"proc"}: this process leaves on purpose
     lockstep/end           server  -> {"reason"}: the run is over; every client exits
