@@ -51,6 +51,8 @@ def test_overrides_on_the_command_line():
     (["run", "msl_5v5", "--set", "ball.mass=-2"], "ball.mass: expected greater than 0"),
     (["run", "msl_5v5", "--set", "ball.mas=2"], "ball.mas: unknown key"),
     (["run", "msl_5v5", "--duration", "-1"], "--duration must be positive"),
+    (["bench", "--only", "physics", "--seconds", "-1"], "--seconds must be positive"),
+    (["bench", "--only", "physics", "--seconds", "nan"], "--seconds must be positive"),
 ])
 def test_mistakes_exit_2_with_a_clear_message(args, message):
     proc = run(*args, check=False)
@@ -78,3 +80,25 @@ def test_a_match_summary_prints_the_event_log_it_is_asked_for():
     assert len([line for line in two.splitlines() if line.strip()[:1].isdigit() and "  " in line[:4]]) == 2
     bad = run(*short, "--events", "some", check=False)
     assert bad.returncode == 2 and "expected a number of events or 'all'" in bad.stderr
+
+
+@pytest.mark.slow
+def test_bench_runs_each_benchmark_in_its_own_process_and_prints_one_object():
+    proc = run("bench", "--only", "referee", "--only", "distributed_rtt", "--seconds", "1", "--json")
+    out = json.loads(proc.stdout)
+    assert proc.stdout.count("\n") == 1
+    assert out["referee_sim_seconds"] == 1.0 and out["distributed_rtt_samples"] == 40
+    bad = run("bench", "--only", "nosuchbench", check=False)
+    assert bad.returncode == 2 and "unknown benchmark(s) nosuchbench" in bad.stderr
+
+
+def test_a_benchmark_that_fails_alone_is_reported_with_what_it_said(monkeypatch):
+    from simatch.cli import UsageError
+    from simatch.cli import bench
+
+    def failing(cmd, **kwargs):
+        return subprocess.CompletedProcess(cmd, 1, stdout="", stderr="Traceback ...\nRuntimeError: no cores")
+
+    monkeypatch.setattr(bench.subprocess, "run", failing)
+    with pytest.raises(UsageError, match="benchmark physics failed \\(exit 1\\):\nTraceback ...\nRuntimeError: no cores"):
+        bench.run_alone("physics", 1.0)

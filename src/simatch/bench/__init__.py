@@ -1,7 +1,8 @@
 """Benchmarks (``simatch bench``): speed is measured here, never asserted by unit tests.
 
 Each benchmark is a function ``run(seconds: float | None) -> dict`` whose keys go into the one JSON object
-``simatch bench --json`` prints. They run in one process, one after another, on one core.
+``simatch bench --json`` prints. They run one after another, each in a fresh process (see
+`simatch.cli.bench`), on one core (the distributed ones start their team and robot processes).
 """
 
 from __future__ import annotations
