@@ -128,11 +128,14 @@ def _parts(prefix: str, st: dict, names) -> dict:
     return {f"{prefix}_{name}_{q}_ms": st[f"{name}_{q}_ms"] for name in names for q in ("p50", "p99")}
 
 
-def _match(sim, seconds: float, server=None) -> float:
-    """Run the warm-up, then ``seconds`` more of the match; returns the wall seconds of the latter."""
+def _match(sim, seconds: float, server=None, play=None) -> float:
+    """Run the warm-up, then ``seconds`` more of the match (or of ``play(sim, seconds)``); returns the wall
+    seconds of the latter."""
     sim.run(seconds=WARM_UP, until_done=False)
     if server is not None:
         server.reset_stats()
+    if play is not None:
+        return play(sim, seconds)
     t0 = time.perf_counter()
     sim.run(seconds=seconds, until_done=False)
     return time.perf_counter() - t0
@@ -155,9 +158,7 @@ def lockstep(seconds: float | None = None) -> dict:
     rtf, emb = seconds / wall, seconds / embedded_wall
     return {"distributed_lockstep_rtf": round(rtf, 2), "distributed_lockstep_embedded_rtf": round(emb, 2),
             "distributed_lockstep_ratio": round(rtf / emb, 3), "distributed_lockstep_digest_equal": digest == embedded_digest,
-            "distributed_lockstep_latency_p50_ms": st["latency_p50_ms"],
-            "distributed_lockstep_latency_p99_ms": st["latency_p99_ms"],
-            **_parts("distributed_lockstep", st, ("tick", "feed", "processing", "transit")),
+            **_parts("distributed_lockstep", st, ("latency", "tick", "feed", "processing", "transit")),
             "distributed_lockstep_missed": st["missed"],
             "distributed_lockstep_load": round(os.getloadavg()[0], 2)}
 
@@ -177,16 +178,10 @@ def _realtime(prefix: str, seconds: float, overrides: dict | None = None) -> dic
             for rid in range(1, 6):
                 launch("robot", f"{team}/{rid}")
         server.wait_for_teams()
-        if overrides is None:
-            wall = _match(server.sim, seconds, server)
-        else:
-            server.sim.run(seconds=WARM_UP, until_done=False)
-            server.reset_stats()
-            wall = _play(server.sim, seconds)
+        wall = _match(server.sim, seconds, server, play=None if overrides is None else _play)
         st = server.stats()
     return {f"{prefix}_processes": 1 + st["processes"], f"{prefix}_rtf": round(seconds / wall, 4),
-            f"{prefix}_latency_p50_ms": st["latency_p50_ms"], f"{prefix}_latency_p99_ms": st["latency_p99_ms"],
-            f"{prefix}_latency_max_ms": st["latency_max_ms"],
-            **_parts(prefix, st, ("tick", "feed", "processing", "transit")), f"{prefix}_missed": st["missed"],
+            **_parts(prefix, st, ("latency", "tick", "feed", "processing", "transit")),
+            f"{prefix}_latency_max_ms": st["latency_max_ms"], f"{prefix}_missed": st["missed"],
             f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
             f"{prefix}_load": round(os.getloadavg()[0], 2)}

@@ -704,19 +704,20 @@ static PyObject *read_primitive(In *in, int kind) {
     }
 }
 
-static int read_count(In *in, Py_ssize_t *n) {
+/* a u32 count (of elements, or of a string's bytes): its position, or -1 (MessageError) */
+static Py_ssize_t read_count(In *in, Py_ssize_t *n) {
     Py_ssize_t at = take(in, 4);
-    if (at < 0)
-        return -1;
-    uint32_t v;
-    memcpy(&v, in->p + at, 4);
-    *n = (Py_ssize_t)v;
-    return 0;
+    if (at >= 0) {
+        uint32_t v;
+        memcpy(&v, in->p + at, 4);
+        *n = (Py_ssize_t)v;
+    }
+    return at;
 }
 
 static PyObject *read_string(In *in) {
-    Py_ssize_t at = in->pos + ((-in->pos) & 3), k;
-    if (read_count(in, &k) < 0)
+    Py_ssize_t k, at = read_count(in, &k);
+    if (at < 0)
         return NULL;
     if (k < 1 || at + 4 + k > in->n || in->p[at + 3 + k] != 0)
         return malformed("bad string at byte %zd", at);
@@ -785,8 +786,6 @@ static PyObject *read_field(In *in, const Op *op) {
     Py_ssize_t n = op->fixed;
     if (n < 0 && read_count(in, &n) < 0)
         return NULL;
-    if (in->pos > in->n)
-        return malformed("%U: past the end", op->name);
     return op->kind == K_PSEQ ? read_array(in, op, n) : read_items(in, op, n);
 }
 
@@ -1116,6 +1115,12 @@ static int pose_record(Log *log, PyObject *msg) {
 }
 
 /* after a message on the pose template's topic was logged */
+/* the result of a call whose value is not wanted: 0, or FAILED (its exception set) */
+static int called(PyObject *result) {
+    Py_XDECREF(result);
+    return result == NULL ? FAILED : 0;
+}
+
 static int poses_after(Log *log, PyObject *msg) {
     Poses *ps = &log->poses;
     if (ps->fallback == NULL || log->step < 0 || log->step % ps->every != 0)
@@ -1123,9 +1128,7 @@ static int poses_after(Log *log, PyObject *msg) {
     int r = pose_record(log, msg);
     if (r != FALLBACK)
         return r;
-    PyObject *done = PyObject_CallOneArg(ps->fallback, msg);
-    Py_XDECREF(done);
-    return done == NULL ? FAILED : 0;
+    return called(PyObject_CallOneArg(ps->fallback, msg));
 }
 
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
@@ -1142,11 +1145,8 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
     int r = ch->clock ? clock_message(log, ch, args[1]) : 0;
     if (r == 0)
         r = log_message(log, ch, args[1]);
-    if (r == FALLBACK) {           /* the fallback encodes it, or says what is wrong; its poses follow all the same */
-        PyObject *done = PyObject_Vectorcall(log->fallback, args, 2, NULL);
-        Py_XDECREF(done);
-        r = done == NULL ? FAILED : 0;
-    }
+    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
+        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
     if (r == 0 && ch->poses)
         r = poses_after(log, args[1]);
     Py_DECREF(entry);
@@ -1212,11 +1212,14 @@ static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
     Py_RETURN_NONE;
 }
 
+/* the Python objects a Log holds, in one list each for the garbage collector's visit and clear */
+#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk) X(memo_now) X(memo_old)
+#define POSES_OBJECTS(X) X(topic) X(fallback) X(names) X(template)
+
 static void poses_clear(Poses *ps) {
-    Py_CLEAR(ps->topic);
-    Py_CLEAR(ps->fallback);
-    Py_CLEAR(ps->names);
-    Py_CLEAR(ps->template);
+#define CLEAR_POSES(field) Py_CLEAR(ps->field);
+    POSES_OBJECTS(CLEAR_POSES)
+#undef CLEAR_POSES
     PyMem_Free(ps->slots);
     ps->slots = NULL;
     ps->nslots = 0;
@@ -1367,26 +1370,19 @@ static PyObject *log_size(Log *log, void *closure) {
 }
 
 static int log_traverse(Log *log, visitproc visit, void *arg) {
-    Py_VISIT(log->channels);
-    Py_VISIT(log->programs);
-    Py_VISIT(log->fallback);
-    Py_VISIT(log->on_chunk);
-    Py_VISIT(log->memo_now);
-    Py_VISIT(log->memo_old);
-    Py_VISIT(log->poses.topic);
-    Py_VISIT(log->poses.fallback);
-    Py_VISIT(log->poses.names);
-    Py_VISIT(log->poses.template);
+#define VISIT_LOG(field) Py_VISIT(log->field);
+#define VISIT_POSES(field) Py_VISIT(log->poses.field);
+    LOG_OBJECTS(VISIT_LOG)
+    POSES_OBJECTS(VISIT_POSES)
+#undef VISIT_LOG
+#undef VISIT_POSES
     return 0;
 }
 
 static int log_clear(Log *log) {
-    Py_CLEAR(log->channels);
-    Py_CLEAR(log->programs);
-    Py_CLEAR(log->fallback);
-    Py_CLEAR(log->on_chunk);
-    Py_CLEAR(log->memo_now);
-    Py_CLEAR(log->memo_old);
+#define CLEAR_LOG(field) Py_CLEAR(log->field);
+    LOG_OBJECTS(CLEAR_LOG)
+#undef CLEAR_LOG
     poses_clear(&log->poses);
     return 0;
 }

@@ -77,10 +77,9 @@ def fill_poses(template: bytes, slots: Sequence[PoseSlot], pose, grid: float, tu
     buf = bytearray(template)
     for offset, row, z, turn in slots:
         x, y, pz, qw, _, _, qz = snapped[row]
-        if turn:
-            _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, qz, qw)
-        else:
-            _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, 0.0, 1.0)
+        if not turn:
+            qz, qw = 0.0, 1.0
+        _POSE.pack_into(buf, offset, x, y, pz if math.isnan(z) else z, 0.0, 0.0, qz, qw)
     return bytes(buf)
 
 
