@@ -74,6 +74,7 @@ def test_the_console_is_the_referees_operator(live, open_page):
     # automatic judging off (manual mode) and on again
     page.click("#auto")
     run_until(sim, lambda: sim.game["manual"])
+    sim.run(seconds=0.2)          # a frame after the change (wait_frame also takes one from 20 ms before it)
     wait_frame(page, sim.time)
     page.wait_for_function("document.getElementById('auto').textContent === 'off (manual)'")
     page.click("#auto")
