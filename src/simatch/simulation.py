@@ -288,6 +288,11 @@ class Simulation:
         self.simulator.apply_wrench(name, force, torque, duration)
         self._operator("apply_wrench", name, force=list(force), torque=list(torque), duration=duration)
 
+    def set_perception_phase(self, name: str, phase: int) -> None:
+        """Take robot ``name``'s perception (OmniVisionInfo) at physics step ``phase`` of each control period
+        instead of the first: a real-time server spreads its robot processes over the period this way."""
+        self._sensor.set_vision_phase(self.simulator.index_of(name), phase)
+
     # --- driving robots by hand -------------------------------------------------------------------------------
     def take_control(self, name: str) -> None:
         """Detach ``name`` from its strategy: from now on the caller drives it (send_vel, send_action)."""

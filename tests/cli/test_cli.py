@@ -88,8 +88,19 @@ def test_bench_runs_each_benchmark_in_its_own_process_and_prints_one_object():
     out = json.loads(proc.stdout)
     assert proc.stdout.count("\n") == 1
     assert out["referee_sim_seconds"] == 1.0 and out["distributed_rtt_samples"] == 40
+    for name in ("referee", "distributed_rtt"):          # what the host took meanwhile, beside each figure
+        assert 0.0 <= out[f"{name}_host_steal_pct"] <= 100.0
     bad = run("bench", "--only", "nosuchbench", check=False)
     assert bad.returncode == 2 and "unknown benchmark(s) nosuchbench" in bad.stderr
+
+
+def test_the_hosts_steal_is_read_from_proc_stat():
+    from simatch.bench import host
+
+    now = host.cpu_times()
+    assert now is not None and 0 <= now[0] <= now[1]           # this machine is Linux
+    assert host.steal_pct((10, 1000), (35, 1100)) == 25.0
+    assert host.steal_pct((10, 1000), (10, 1000)) is None and host.steal_pct(None, now) is None
 
 
 def test_a_benchmark_that_fails_alone_is_reported_with_what_it_said(monkeypatch):

@@ -59,7 +59,7 @@ def test_teams_are_confined_to_their_own_robots(procs):
         organise = admin.publisher("set_model_state", msgs.ModelState)
         relink = admin.publisher("set_link_state", msgs.LinkState)
         shove = admin.publisher("apply_wrench", msgs.ApplyWrench)
-        poison = admin.key("lockstep/feed/cyan")      # the team hears its perception only from its feed
+        poison = admin.key("lockstep/feed/cyan/0")      # the team hears its perception only from its feed
         ovi = msgs.msgtype_name(msgs.OmniVisionInfo)
         poisoned = bundle.pack([("cyan/2/OmniVisionInfo", ovi, b"junk")])
         mine_bundle = rogue.key("cyan/lockstep/bundle")
@@ -73,8 +73,8 @@ def test_teams_are_confined_to_their_own_robots(procs):
             rogue.session.put(rogue.key("magenta/4/VelCmd"), msgs.encode(msgs.new(msgs.VelCmd, vx=2.0)))  # unsigned
             data = b"\x00\x01\x00\x00not a VelCmd"
             rogue.session.put(own, data, attachment=rogue.signer("cyan/2/VelCmd", data))   # signed, malformed
-            admin.session.put(poison, poisoned, attachment=admin.signer("lockstep/feed/cyan", poisoned))
-            admin.session.put(poison, b"junk", attachment=admin.signer("lockstep/feed/cyan", b"junk"))
+            admin.session.put(poison, poisoned, attachment=admin.signer("lockstep/feed/cyan/0", poisoned))
+            admin.session.put(poison, b"junk", attachment=admin.signer("lockstep/feed/cyan/0", b"junk"))
             # a bundle may carry only what its sender may send alone; its signature covers every entry
             rogue.session.put(mine_bundle, smuggled, attachment=rogue.signer("cyan/lockstep/bundle", smuggled))
             rogue.session.put(mine_bundle, smuggled, attachment=rogue.signer("cyan/lockstep/bundle", b"other"))
@@ -103,7 +103,7 @@ def test_teams_are_confined_to_their_own_robots(procs):
     assert all(e["team"] == "cyan" for e in refused if "unsigned" not in e["detail"])
     assert any(e["type"] == "malformed_message" and "cyan/2/VelCmd" in e["detail"] for e in out["events"])
     stderr = procs.stderr(team)                              # the team process dropped the junk, and lived
-    assert "malformed sample on cyan/2/OmniVisionInfo" in stderr and "malformed sample on lockstep/feed/cyan" in stderr
+    assert "malformed sample on cyan/2/OmniVisionInfo" in stderr and "malformed sample on lockstep/feed/cyan/0" in stderr
 
     names = list(states[-1].name)
     pose = states[-1].pose.reshape(len(names), -1)

@@ -89,7 +89,7 @@ def test_access_control_lets_a_team_hear_only_its_own(creds):
     assert acl["enabled"] and acl["default_permission"] == "deny"
     rules = {r["id"]: r for r in acl["rules"]}
     hears = rules["cyan-hear"]["key_exprs"]
-    assert "simatch/m1/cyan/*/OmniVisionInfo" in hears and "simatch/m1/lockstep/tick" in hears
+    assert "simatch/m1/cyan/*/OmniVisionInfo" in hears and "simatch/m1/lockstep/tick/*" in hears
     assert not any("magenta" in k or "model_states" in k for k in hears)
     assert rules["cyan-hear"]["messages"] == ["declare_subscriber"] and rules["cyan-hear"]["flows"] == ["ingress"]
     policies = {tuple(p["subjects"]): p["rules"] for p in acl["policies"]}

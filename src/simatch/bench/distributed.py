@@ -10,9 +10,12 @@ processes, over Zenoh on loopback.
   the automatic referee) in lockstep with two team processes, against the same run embedded (same scene
   and seed: the digests must be equal).
 * ``distributed_realtime``: the same match ``--realtime`` with one process per robot (11 processes): the
-  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max, and its
-  parts (see `Server.stats`): until the tick reached the robot process, until its answer was ready, and
-  the answer's transit; ``tick``: until the last of the ten answers of a tick arrived.
+  real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max over
+  every answer (``late``: how many came after the server stopped waiting, ``missed``: ticks not answered
+  before the next), and its parts (see `Server.stats`): until the tick reached the robot process, until
+  its answer was ready, and the answer's transit; ``tick``: until the last answer of a step's processes
+  arrived (in real time the robot processes are spread over the physics steps of a control period, two
+  at a time: see `simatch.distributed.protocol`).
 * ``distributed_realtime_bus``: the same eleven processes in real time with the plumbing strategy
   (``startpose``) for every robot, thrown across the field every 4 s: what the bus and the processes cost
   without the shipped strategy's decisions (the difference to ``distributed_realtime`` is theirs).
@@ -182,6 +185,6 @@ def _realtime(prefix: str, seconds: float, overrides: dict | None = None) -> dic
         st = server.stats()
     return {f"{prefix}_processes": 1 + st["processes"], f"{prefix}_rtf": round(seconds / wall, 4),
             **_parts(prefix, st, ("latency", "tick", "feed", "processing", "transit")),
-            f"{prefix}_latency_max_ms": st["latency_max_ms"], f"{prefix}_missed": st["missed"],
-            f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
+            f"{prefix}_latency_max_ms": st["latency_max_ms"], f"{prefix}_answers": st["answers"],
+            f"{prefix}_late": st["late"], f"{prefix}_missed": st["missed"], f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
             f"{prefix}_load": round(os.getloadavg()[0], 2)}

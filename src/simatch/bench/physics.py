@@ -120,15 +120,16 @@ def run(seconds: float | None = None) -> dict:
         steps += sim.step_index
         kicks += sim.mechanics["kick"]
         catches += sim.mechanics["dribble_start"]
+    scrums = stats["scrum_ticks"]       # none in a run shorter than the first scrum (--seconds): no figure
     return {
         "physics_rtf": round(sim_time / wall, 1),
         "physics_rtf_per_seed": rtfs,
-        "physics_scrum_rtf": round(stats["scrum_ticks"] * sim.control_steps * sim.dt / max(stats["scrum_wall"], 1e-9), 1),
+        "physics_scrum_rtf": round(scrums * sim.control_steps * sim.dt / stats["scrum_wall"], 1) if scrums else None,
         "physics_steps_per_s": round(steps / wall),
         "physics_us_per_step": round(wall / steps * 1e6, 2),
         "physics_sim_seconds": round(sim_time, 3),
         "physics_mean_contacts": round(stats["contacts"] / max(1, stats["ticks"]), 2),
-        "physics_scrum_mean_contacts": round(stats["scrum_contacts"] / max(1, stats["scrum_ticks"]), 2),
+        "physics_scrum_mean_contacts": round(stats["scrum_contacts"] / scrums, 2) if scrums else None,
         "physics_kicks": int(kicks),
         "physics_ball_catches": int(catches),
     }

@@ -86,10 +86,13 @@ class Node:
 class LockstepClock:
     """Ticks nodes in phase order, one physics step at a time, in a single thread (the embedded run)."""
 
-    def __init__(self, bus: Bus, dt: float, seed: int):
+    def __init__(self, bus: Bus, dt: float, seed: int, offset: int = 0):
+        """``offset``: the step the nodes' periods count from (a node of period p ticks at the steps k with
+        (k - offset) % p == 0): a process of a later phase of a real-time run (see `simatch.distributed`)."""
         self.bus = bus
         self.dt = dt
         self.seed = seed
+        self.offset = offset
         self.step_index = 0
         self._nodes: list[Node] = []
         self._schedule: list[tuple[Node, int]] = []   # (node, period in steps), sorted by phase
@@ -133,13 +136,14 @@ class LockstepClock:
     def step(self) -> None:
         k = self.step_index
         now = k * self.dt
+        due = k - self.offset
         table = self._table
         if table:
-            for tick in table[k % len(table)]:
+            for tick in table[due % len(table)]:
                 tick(now)
         else:
             for node, period in self._schedule:
-                if k % period == 0:
+                if due % period == 0:
                     node.tick(now)
         self.step_index = k + 1
 

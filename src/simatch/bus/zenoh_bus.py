@@ -32,7 +32,7 @@ import threading
 import time
 import weakref
 from collections import deque
-from typing import Any, Callable, Iterable, Optional, Sequence
+from typing import Any, Callable, Collection, Iterable, Optional, Sequence
 
 import zenoh
 from zenoh.handlers import Callback as _ZCallback
@@ -377,7 +377,7 @@ class ZenohBus:
 
     * ``begin_batch()`` ... ``send_batch(topic)``: what this process sends to others in between (messages
       and protocol samples) leaves as one bundle on ``topic`` (a lockstep process's answer to a tick);
-    * ``declare_feed(topic, covers)`` ... ``flush_feeds()``: a copy of what is published on the topics
+    * ``declare_feed(topic, covers)`` ... ``flush_feeds([topics])``: a copy of what is published on the topics
       ``covers`` matches is gathered and sent as one bundle on ``topic`` (what a lockstep server sends to
       one team at a tick), while the topics are still sent one by one to whoever subscribes to them;
     * ``accept_bundles(pattern)``: bundles received on ``pattern`` are opened and each entry is handled as
@@ -551,11 +551,14 @@ class ZenohBus:
                 pub.feeds.append(feed)
         return feed
 
-    def flush_feeds(self) -> None:
-        """Send each feed's gathered entries as one bundle (feeds nobody listens to gather nothing)."""
+    def flush_feeds(self, only: Collection[str] | None = None) -> None:
+        """Send each feed's gathered entries as one bundle (feeds nobody listens to gather nothing); with
+        ``only``, just the feeds on those topics (the others keep gathering)."""
         signer = self.signer
         ready = []
         for feed in self._feeds:
+            if only is not None and feed.topic not in only:
+                continue
             entries, feed.entries = feed.entries, []
             if not (entries and feed.matching):
                 continue

@@ -13,7 +13,7 @@ import json
 import subprocess
 import sys
 
-from ..bench import BENCHMARKS
+from ..bench import BENCHMARKS, host
 from . import UsageError
 
 
@@ -29,8 +29,12 @@ def add_parser(sub) -> None:
 
 
 def run_here(name: str, seconds: float | None) -> dict:
+    """``name`` in this process; its figures and the CPU time the host stole meanwhile (`bench.host`)."""
     module, _, func = BENCHMARKS[name].partition(":")
-    return getattr(importlib.import_module(module), func)(seconds)
+    before = host.cpu_times()
+    out = getattr(importlib.import_module(module), func)(seconds)
+    out[f"{name}_host_steal_pct"] = host.steal_pct(before, host.cpu_times())
+    return out
 
 
 def run_alone(name: str, seconds: float | None) -> dict:

@@ -30,7 +30,8 @@ def add_parser(sub) -> None:
         description="Run a scene's simulator, judge and coaches, and wait for the teams (simatch team / simatch "
                     "robot) to connect. Lockstep by default: every control tick waits for every connected robot's "
                     "command (up to --deadline), so the run equals `simatch run` bit for bit; --realtime paces it "
-                    "at wall-clock speed. Prints what `simatch run` prints.")
+                    "at wall-clock speed, each process's robots sensing and deciding at their own physics step of "
+                    "the control period. Prints what `simatch run` prints.")
     add_run_options(p)
     p.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
                    help=f"Zenoh endpoint to listen on (repeatable; default {DEFAULT_ENDPOINT}, loopback only; "

@@ -2,8 +2,8 @@
 
 It needs no scene file: it asks the server for the scene (text, overrides, seed), builds the very nodes
 the embedded run builds (`build_team`: the same RobotNode, WorldModel, strategy and, for a whole team, its
-StrategyPub) and ticks them on a `LockstepClock` whose step follows the server's ``lockstep/tick``
-messages. The nodes talk over a `ZenohBus`, so their code is the embedded code.
+StrategyPub) and ticks them on a `LockstepClock` whose step follows the server's ``lockstep/tick/<phase>``
+messages (its phase: `protocol.phase_of`). The nodes talk over a `ZenohBus`, so their code is the embedded code.
 
 A team process may bring its own strategy (``strategy``, ``params``): they override the scene's
 ``teams.<team>.strategy`` and ``strategy_params`` here only.
@@ -59,6 +59,8 @@ class TeamProcess:
         self.say = say
         self.proc = protocol.new_proc_id()
         self.ticks = 0
+        self.phase = 0
+        self.tick_topic = protocol.tick_topic(0)
         self.skipped = 0              # ticks skipped because a newer one was already there
         self.ended: str | None = None
         self.joined = False
@@ -122,17 +124,23 @@ class TeamProcess:
         self.scene = scene
         self.seed = int(offer["seed"])
         self.mode = offer.get("mode", protocol.LOCKSTEP)
+        #: the robots it serves
+        self.served = self.robots if self.robots is not None else spec.teams[self.team].robot_ids()
+        #: the physics step of each control period at which this process's ticks open (see `protocol`)
+        self.phase = protocol.phase_of(spec, self.team, self.served, self.mode)
+        self.tick_topic = protocol.tick_topic(self.phase)
         #: one sample per tick each way (the server's feed in, this process's bundle out): see `protocol`
         self.bundles = bool(offer.get("bundles"))
         if self.bundles:         # the tick is answered in the thread that receives it: one hand-off less
-            bus.take_feed(protocol.feed_topic(self.team), protocol.feed_covers(self.team), self._answer)
+            bus.take_feed(protocol.feed_topic(self.team, self.phase), protocol.feed_covers(self.team, self.phase),
+                          self._answer)
         nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
         strategy = str(spec.teams[self.team].strategy)
         preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))   # not at the kick-off
-        self.clock = LockstepClock(bus, spec.physics.timestep, self.seed)
+        self.clock = LockstepClock(bus, spec.physics.timestep, self.seed, offset=self.phase)
         for node in nodes:
             self.clock.add(node)
-        bus.subscribe_raw(protocol.TICK, self._on_tick, verify=False)
+        bus.subscribe_raw(self.tick_topic, self._on_tick, verify=False)
         bus.subscribe_raw(protocol.END, self._on_end, verify=False)
         bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
         bus.declare_token(protocol.alive_topic(self.team, self.proc))
@@ -152,21 +160,25 @@ class TeamProcess:
             time.sleep(0.2)
 
     def _join(self) -> None:
-        robots = self.robots if self.robots is not None else self.scene.spec.teams[self.team].robot_ids()
-        req = {"proc": self.proc, "team": self.team, "robots": robots, "kind": self.kind,
+        req = {"proc": self.proc, "team": self.team, "robots": self.served, "kind": self.kind,
                "strategy_pub": self.robots is None, "host": socket.gethostname(), "pid": os.getpid()}
         deadline = time.monotonic() + self.wait
         while True:
             why = "no answer"
             for ok, payload in self.bus.query(protocol.JOIN, protocol.dumps(req), timeout=5.0):
                 if ok:
+                    reply = protocol.loads(payload)
+                    if reply.get("phase", self.phase) != self.phase:
+                        raise ClientError(f"the server puts {self.what} at phase {reply['phase']}, not "
+                                          f"{self.phase}: is it another version of simatch?")
                     # the server's subscriptions (and one it made for this join, e.g. a StrategyPub) were
                     # declared to this session before the answer: from now on, what matches is known
                     self.bus.refresh_matching()
                     self.joined = True
-                    where = "; its team's StrategyPub runs on the server" if protocol.loads(payload).get(
-                        "strategy_pub_on_server") else ""
-                    self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{where})")
+                    where = "; its team's StrategyPub runs on the server" if reply.get("strategy_pub_on_server") \
+                        else ""
+                    at = f", step {self.phase} of each control period" if self.phase else ""
+                    self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{at}{where})")
                     return
                 try:
                     why = protocol.loads(payload, "error")["error"]
@@ -231,7 +243,7 @@ class TeamProcess:
     def _latest_tick_only(self, items: list) -> list:
         """A process that fell behind (it was stopped, or slow) skips the ticks the server has already
         closed: of several queued ticks only the newest is answered (every input is still delivered)."""
-        ticks = [n for n, item in enumerate(items) if item[1] == protocol.TICK]
+        ticks = [n for n, item in enumerate(items) if item[1] == self.tick_topic]
         if len(ticks) < 2:
             return items
         self.skipped += len(ticks) - 1

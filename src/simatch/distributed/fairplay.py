@@ -132,8 +132,8 @@ class FairPlay:
             sends = keys(*(f"*/*/{leaf}" for leaf in ROBOT_OUTPUTS), f"{team}/{topics.TEAM_STRATEGY}",
                          topics.EVENTS, f"{team}/lockstep/**", *PRIVILEGED)
             hears = keys(f"{team}/*/{topics.OMNI_VISION}", f"{team}/{topics.RECEIVE_FROM_COACH}",
-                         f"{team}/{topics.TEAM_STRATEGY}", topics.CLOCK, topics.GAME_STATE, protocol.TICK,
-                         protocol.END, protocol.feed_topic(team))
+                         f"{team}/{topics.TEAM_STRATEGY}", topics.CLOCK, topics.GAME_STATE, protocol.TICKS,
+                         protocol.END, protocol.feeds_of(team))
             asks = keys(protocol.SCENE, protocol.JOIN)
             mine = [
                 (f"{team}-send", ["ingress"], ["put"], sends),

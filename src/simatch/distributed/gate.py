@@ -1,17 +1,20 @@
 """The lockstep barrier of a distributed run: the server's stand-in for the robot nodes of the embedded run.
 
-It is the first node of the ROBOT phase. At every control tick, once the simulator (SENSE), the judge and
+It is the first node of the ROBOT phase. At every control tick (in real time: at every physics step, for
+the processes of that step's phase, see `protocol.phase_of`), once the simulator (SENSE), the judge and
 coaches (JUDGE) and any StrategyPub the server runs (TEAM) have published, it
 
-1. opens the tick (``lockstep/tick``): each team or robot process runs its StrategyPub and RobotNodes for
-   that tick, exactly as the embedded clock would, and answers with its commands then an ``ack``;
-2. waits for the ack of every active process, up to a deadline (lockstep), or up to most of a control
-   period (real time: a late command applies at the next tick, as on a real robot);
+1. opens the tick (``lockstep/tick/<phase>``, and the feeds of that phase): each team or robot process
+   runs its StrategyPub and RobotNodes for that tick, exactly as the embedded clock would, and answers
+   with its commands then an ``ack``;
+2. waits for the ack of every active process of the phase, up to a deadline (lockstep), or up to most of
+   a physics step (real time: a later command applies at the next step, as on a real robot; a tick is
+   missed only if its answer has not come when the process's next tick opens);
 3. hands the commands, strategy infos and events it received to the simulator and the other nodes, sorted
    into the embedded run's order (robots in scene order, each robot's samples in the order it sent them).
 
-So commands of tick k apply before the physics of step k, and a StrategyPub at tick k fuses what robots
-sent at tick k-1: the same data flow as embedded, which is why the state digests are equal.
+So in lockstep commands of tick k apply before the physics of step k, and a StrategyPub at tick k fuses
+what robots sent at tick k-1: the same data flow as embedded, which is why the state digests are equal.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from __future__ import annotations
 import json
 import threading
 import time
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..bus import Node, NodeContext, Phase
 from . import protocol
@@ -31,11 +34,16 @@ class LockstepGate(Node):
 
     def __init__(self, period: float, deadline: float, realtime: bool, active: Callable[[], list],
                  on_ack: Callable[[dict, str, float], object], on_missed: Callable[[set, float], None],
-                 order: Callable[[tuple], object]):
-        """``active()`` lists the processes to wait for (objects with ``id``); ``on_ack(msg, team, arrival)``
-        returns the process that answered (or None); ``on_missed(ids, now)`` hears who did not answer in
-        time; ``order(item)`` sorts received samples into the embedded order."""
-        self.period = period
+                 order: Callable[[tuple], object], teams: Sequence[str] = (), phases: int = 1):
+        """``period``: the control period, of ``phases`` phases (1, or one per physics step);
+        ``active()`` lists the processes to wait for (objects with ``id`` and ``phase``);
+        ``on_ack(msg, team, arrival)`` returns the process that answered (or None); ``on_missed(ids, now)``
+        hears who did not answer in time; ``order(item)`` sorts received samples into the embedded order;
+        ``teams``: whose feeds the gate sends."""
+        self.control_period = period
+        self.period = period / phases
+        self.phases = phases
+        self.teams = tuple(teams)
         self.deadline = deadline
         self.realtime = realtime
         self._active = active
@@ -51,9 +59,14 @@ class LockstepGate(Node):
         #: server waits at the barrier)
         self.completions: list[float] = []
         self.ticks = 0
+        #: ticks not answered in time: by the deadline (lockstep), or before the process's next tick opened
+        #: (real time: an answer after the gate stopped waiting applies at the next physics step, ``late``)
         self.missed = 0
+        self.late = 0
+        #: per process, the tick it has yet to answer: (tick, when it opened); an answer is timed against it
+        #: whenever it comes, so the figures include the late ones
+        self._open: dict[str, tuple[int, float]] = {}
         self._tick = -1
-        self._opened = 0.0
         self._waiting: set[str] = set()
         self._last_arrival = 0.0
         #: the answers still awaited for tick ``_early_tick`` (process id -> team), as Zenoh's receiving
@@ -66,15 +79,22 @@ class LockstepGate(Node):
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
-        self.control_steps = ctx.steps(self.period, "control period")
+        self.control_steps = ctx.steps(self.control_period, "control period")
+        if self.control_steps % self.phases:
+            raise ValueError(f"a control period of {self.control_steps} steps has no {self.phases} phases")
         self.bus = ctx.bus
         self._sub = self.bus.subscribe_raw(protocol.ACKS, self._ack, wakes=self._last_answer)
-        #: the tick goes into each team's feed, and alone to processes that take no feed
-        self._tick_pub = self.bus.raw_publisher(protocol.TICK, always=False)
+        #: per phase, the tick goes into each team's feed of that phase, and alone to processes that take
+        #: no feed
+        every = self.control_steps // self.phases
+        self._tick_pubs = {phase: self.bus.raw_publisher(protocol.tick_topic(phase), always=False)
+                           for phase in range(0, self.control_steps, every)}
+        self._feeds = {phase: [protocol.feed_topic(team, phase) for team in self.teams] for phase in self._tick_pubs}
 
     def forget(self, proc_id: str) -> None:
         """Stop waiting for a process (it left or died)."""
         self._waiting.discard(proc_id)
+        self._open.pop(proc_id, None)
 
     def _last_answer(self, topic: str, payload: bytes) -> bool:
         """In Zenoh's thread, as an answer is queued: is it the last one the gate waits for? Only then is
@@ -111,11 +131,16 @@ class LockstepGate(Node):
                 return
         # (a payload parsed by `_last_answer` is the same JSON object, which had "proc" and "tick")
         proc = self._on_ack(msg, protocol.team_of(topic), arrival)
-        if proc is not None and msg["tick"] == self._tick and proc.id in self._waiting:
-            self._waiting.discard(proc.id)
-            opened = self._opened
+        entry = self._open.get(proc.id) if proc is not None else None
+        if entry is not None and msg["tick"] == entry[0]:
+            del self._open[proc.id]
+            opened = entry[1]
+            if proc.id in self._waiting:
+                self._waiting.discard(proc.id)
+                self._last_arrival = max(self._last_arrival, arrival)
+            else:
+                self.late += 1
             self.latencies.append(arrival - opened)
-            self._last_arrival = max(self._last_arrival, arrival)
             sent, got = msg.get("sent"), msg.get("got")
             if isinstance(sent, float) and 0.0 <= arrival - sent < 60.0:
                 self.transits.append(arrival - sent)
@@ -123,6 +148,8 @@ class LockstepGate(Node):
                     self.feeds.append(got - opened)
                     self.thinking.append(sent - got)
             proc.streak = 0
+        elif entry is not None and isinstance(msg["tick"], int) and msg["tick"] > entry[0]:
+            del self._open[proc.id]         # it skipped that tick (it was behind) and answers a newer one
 
     def _absorb(self, items, pending: list) -> None:
         """Protocol samples (acks, joins, liveliness) are handled at once; data waits to be sorted."""
@@ -139,12 +166,20 @@ class LockstepGate(Node):
         pending: list = []
         self._absorb(bus.take(0.0), pending)          # joins, late answers, requests since the last tick
         self._tick = step // self.control_steps
-        active = self._active()
+        phase = step % self.control_steps
+        active = [p for p in self._active() if p.phase == phase]
+        if self.realtime:       # a process whose last tick is still unanswered, a control period on, missed it
+            unanswered = {p.id for p in active if p.id in self._open}
+            if unanswered:
+                self.missed += len(unanswered)
+                self._on_missed(unanswered, now)
         self._waiting = {p.id for p in active}
         self._await(active)
-        self._opened = opened = self._last_arrival = time.monotonic()
-        self._tick_pub.put(protocol.dumps({"step": step, "tick": self._tick}))
-        bus.flush_feeds()                              # each team's inputs of this tick, then the tick
+        opened = self._last_arrival = time.monotonic()
+        for p in active:
+            self._open[p.id] = (self._tick, opened)
+        self._tick_pubs[phase].put(protocol.dumps({"step": step, "tick": self._tick}))
+        bus.flush_feeds(self._feeds[phase])           # each team's inputs of this tick, then the tick
         limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
         while self._waiting:
             left = limit - time.monotonic()
@@ -158,14 +193,16 @@ class LockstepGate(Node):
             self._early = {}
             self._parsed.clear()      # (an answer handled later is parsed again)
         if self._waiting:
-            self.missed += len(self._waiting)
-            self._on_missed(set(self._waiting), now)
+            if not self.realtime:
+                self.missed += len(self._waiting)
+                self._on_missed(set(self._waiting), now)
             self._waiting.clear()
         elif active:
             self.completions.append(self._last_arrival - opened)
         pending.sort(key=self._order)
         bus.deliver(pending)
-        self.ticks += 1
+        if phase == 0:
+            self.ticks += 1
 
     def stop(self) -> None:
         self._sub.close()

@@ -6,7 +6,8 @@ payloads are small JSON objects so that a client in any language can speak them:
 
     lockstep/scene         query   -> the scene offer: scene text, overrides, seed, mode (no registration)
     lockstep/join          query   -> register a process serving some robots: {"ok": true, "step"} or an error
-    lockstep/tick          server  -> {"step", "tick"}: every input of this control tick has been sent; answer it
+    lockstep/tick/<phase>  server  -> {"step", "tick"}: every input of this control tick has been sent to the
+                                     processes of that phase (`phase_of`); answer it
     <team>/lockstep/ack    client  -> {"proc", "tick", "sent", "got"}: this process has sent its commands for
                                      that tick (optional, its monotonic clock: ``got`` when the tick reached
                                      it, ``sent`` when its answer was ready; on one machine they split the
@@ -15,12 +16,20 @@ payloads are small JSON objects so that a client in any language can speak them:
     lockstep/end           server  -> {"reason"}: the run is over; every client exits
     <team>/lockstep/bundle client  -> a bundle (`simatch.bus.bundle`) of what a process sends for one tick:
                                      its commands, strategy infos and events, then its ack
-    lockstep/feed/<team>   server  -> a bundle of what the team's processes hear, sent when a tick opens:
-                                     what `feed_covers` names since the last tick, then the tick itself
+    lockstep/feed/<team>/<phase>  server -> a bundle of what the team's processes of that phase hear, sent
+                                     when their tick opens: what `feed_covers` names since their last
+                                     tick, then the tick itself
     lockstep/alive/server, <team>/lockstep/alive/<proc>   liveliness tokens (vanish when a process dies)
 
 Zenoh keeps the order of the samples of one session on one link, so an ``ack`` arrives after the commands
 it closes, and ``tick`` after the perception and game command it opens.
+
+**Phases.** In lockstep every process is of phase 0: all ticks open at the control tick's first physics
+step, as embedded. In real time the processes of a team are spread over the physics steps of a control
+period by the first robot they serve (`phase_of`; both teams alike, so neither is favoured): a process's
+perception is taken, and its tick opened, at its own step, as the robots of the original ran on timers of
+their own. On two cores ten robot processes woken at once queue for them (the last answers after all the
+others' work); spread out, two at a time, each answers in its own time.
 
 Bundles and feeds are how simatch's own processes talk (one sample per process and tick each way, instead
 of one per message: every sample costs a put, a wake-up and a GIL hand-off); the scene offer says the server
@@ -34,14 +43,15 @@ import json
 import os
 import socket
 import uuid
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from ..bus import topics
 from ..scene.loader import LoadedScene, scene_from_text
+from ..scene.schema import Scene
 
 SCENE = "lockstep/scene"
 JOIN = "lockstep/join"
-TICK = "lockstep/tick"
+TICKS = "lockstep/tick/*"
 END = "lockstep/end"
 SERVER_ALIVE = "lockstep/alive/server"
 ACKS = "*/lockstep/ack"
@@ -72,15 +82,40 @@ def bundle_topic(team: str) -> str:
     return f"{team}/lockstep/bundle"
 
 
-def feed_topic(team: str) -> str:
-    return f"lockstep/feed/{team}"
+def tick_topic(phase: int) -> str:
+    return f"lockstep/tick/{int(phase)}"
 
 
-def feed_covers(team: str) -> list[str]:
-    """What the feed of ``team`` carries: what its robot nodes and StrategyPub hear from the server (the
-    same list on both sides: a client takes these topics from the feed only)."""
+def feed_topic(team: str, phase: int) -> str:
+    return f"lockstep/feed/{team}/{int(phase)}"
+
+
+def feeds_of(team: str) -> str:
+    """The key expression of every feed of ``team`` (what its credential may hear)."""
+    return f"lockstep/feed/{team}/*"
+
+
+def feed_covers(team: str, phase: int) -> list[str]:
+    """What the feed of ``team``'s processes of ``phase`` carries: what its robot nodes and StrategyPub hear
+    from the server (the same list on both sides: a client takes these topics from the feed only)."""
     return [topics.robot_topic(team, "*", topics.OMNI_VISION), topics.team_topic(team, topics.RECEIVE_FROM_COACH),
-            topics.team_topic(team, topics.TEAM_STRATEGY), topics.GAME_STATE, TICK]
+            topics.team_topic(team, topics.TEAM_STRATEGY), topics.GAME_STATE, tick_topic(phase)]
+
+
+def phases(spec: Scene, mode: str) -> int:
+    """How many phases a control period has: one in lockstep, one per physics step in real time."""
+    return round(spec.control.period / spec.physics.timestep) if mode == REALTIME else 1
+
+
+def phase_of(spec: Scene, team: str, robots: Sequence[int], mode: str) -> int:
+    """The phase of a process serving ``robots`` of ``team``: the physics step of the control period at
+    which its perception is taken and its tick opens (see the module's text). Robot k of a team of n (in
+    the scene's order) is at step k * steps // n: a whole-team process at 0, one robot per process spread
+    evenly; both sides compute it from the scene, so a client knows its feed before it joins."""
+    steps = phases(spec, mode)
+    ids = spec.teams[team].robot_ids()
+    first = min((ids.index(r) for r in robots if r in ids), default=0)
+    return first * steps // max(len(ids), 1)
 
 
 def team_of(topic: str) -> str:

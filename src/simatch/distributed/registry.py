@@ -33,6 +33,7 @@ class Proc:
     streak: int = 0                 # ... in a row
     answered: int = 0
     host: str = ""
+    phase: int = 0                  # the physics step of the control period its ticks open at (protocol.phase_of)
 
     @property
     def label(self) -> str:

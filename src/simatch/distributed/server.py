@@ -84,13 +84,16 @@ class Server:
             self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
             self._topic_order: dict[str, tuple] = {}      # a robot's topic -> its place (see `_order`)
             clock = self.sim.clock
+            self.phases = protocol.phases(spec, self.mode)
             self.gate = clock.add(LockstepGate(spec.control.period, deadline, realtime, self.registry.active,
-                                               self._on_ack, self._on_missed, self._order))
+                                               self._on_ack, self._on_missed, self._order, teams=list(teams),
+                                               phases=self.phases))
             self.world_service = clock.add(WorldService(self.sim, self.emit))
             self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
             self.strategy_pubs: dict[str, StrategyPub] = {}
             for team in teams:          # one sample per process and tick each way (see protocol)
-                self.bus.declare_feed(protocol.feed_topic(team), protocol.feed_covers(team))
+                for phase in range(self.phases):
+                    self.bus.declare_feed(protocol.feed_topic(team, phase), protocol.feed_covers(team, phase))
                 self.bus.accept_bundles(protocol.bundle_topic(team))
             self.bus.serve(protocol.SCENE, self._on_scene)
             self.bus.serve(protocol.JOIN, self._on_join)
@@ -147,6 +150,9 @@ class Server:
                         strategy_pub=bool(req.get("strategy_pub", False)), joined_step=self.sim.simulator.step_index,
                         host=str(req.get("host", "")))
             self.registry.join(proc)
+            proc.phase = protocol.phase_of(self.scene.spec, team, proc.robots, self.mode)
+            for rid in proc.robots:          # its perception is taken when its tick opens
+                self.sim.set_perception_phase(f"{team}/{rid}", proc.phase)
             self.bus.refresh_matching()      # its subscriptions came before its join
             calm_sending_threads()           # Zenoh starts them with the first link: the feeds leave together
         except (protocol.ProtocolError, JoinError, TypeError, ValueError) as exc:
@@ -157,7 +163,8 @@ class Server:
         elif not proc.strategy_pub and not self.registry.team_has_strategy_pub(team):
             self._host_strategy_pub(team)
         query.reply(query.key_expr, protocol.dumps({"ok": True, "step": self.sim.simulator.step_index,
-                                                     "strategy_pub_on_server": team in self.strategy_pubs}))
+                                                     "strategy_pub_on_server": team in self.strategy_pubs,
+                                                     "phase": proc.phase}))
         robots = ",".join(str(r) for r in proc.robots)
         self.emit("process_joined", team=team, robot=proc.robots[0] if len(proc.robots) == 1 else 0,
                   value=len(proc.robots), detail=f"{proc.kind} process {proc.id} serves {team}/{robots}")
@@ -292,18 +299,20 @@ class Server:
         return self.sim.result()
 
     def stats(self) -> dict:
-        """How the distributed run went: processes, answers, lateness, and how long the commands took
-        (p50/p99 [ms] of every answer in time):
+        """How the distributed run went: processes, answers (``missed``: ticks not answered in time, see
+        `LockstepGate`; ``late``: answers that came after the gate stopped waiting, applied a step later),
+        and how long the commands took (p50/p99 [ms] of every answer, the late ones too):
 
         * ``latency``: from the tick opening (perception and game command sent) to the answer arriving: the
           whole round trip, the robots' decisions included; ``tick``: to the last answer of a tick that
-          every process answered in time (what the server waits at the barrier);
+          every process answered in time (what the server waits at the barrier; in real time, per physics
+          step, for that step's processes);
         * its parts, from the clocks of processes on this machine: ``feed`` until the tick reached the
           process (the bus, and the wait for a core), ``processing`` until its answer was ready (decoding,
           the decisions, encoding), ``transit`` until it arrived here (packing and signing it, the bus)."""
         gate = self.gate
         out = {"mode": self.mode, "ticks": gate.ticks, "processes": len(self.registry.procs),
-               "answers": len(gate.latencies), "missed": gate.missed}
+               "answers": len(gate.latencies), "missed": gate.missed, "late": gate.late}
         for name, values in (("latency", gate.latencies), ("tick", gate.completions), ("feed", gate.feeds),
                              ("processing", gate.thinking), ("transit", gate.transits)):
             out.update(_percentiles(name, values, max_too=name == "latency"))
@@ -317,7 +326,7 @@ class Server:
         gate = self.gate
         for values in (gate.latencies, gate.completions, gate.feeds, gate.thinking, gate.transits):
             values.clear()
-        gate.missed = 0
+        gate.missed = gate.late = 0
         gate.ticks = 0
         if self.pacer is not None:
             self.pacer.reset_stats()

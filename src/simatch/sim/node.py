@@ -2,7 +2,8 @@
 
 `SimulatorNode` (phase SENSE) publishes, every physics step, the model/link states (float32) and ball
 contacts, on every control tick the clock, the fingerprint of the exact states and each robot's
-OmniVisionInfo (each only when somebody listens); it takes every robot's VelCmd and ActionCmd.
+OmniVisionInfo (each only when somebody listens; a robot's perception may be taken at a later step of the
+control period, its phase: see `set_vision_phase`); it takes every robot's VelCmd and ActionCmd.
 `PhysicsNode` (phase ACT) applies the watchdog and advances the physics once every node has handled the
 step.
 """
@@ -44,6 +45,20 @@ class SimulatorNode(Node):
         self.sim = sim
         self.period = sim.dt
         self.control_steps = round(sim.scene.control.period / sim.dt)
+        #: each robot's perception phase: the physics step of the control period at which it is taken
+        #: (all 0, the control tick's first step, unless a real-time server spreads its processes out)
+        self.vision_phase = [0] * len(sim.ix.robots)
+        self._due: dict[int, list[int]] = {0: list(range(len(sim.ix.robots)))}
+
+    def set_vision_phase(self, robot: int, phase: int) -> None:
+        """Take robot ``robot``'s (index) perception at step ``phase`` of each control period from now on."""
+        if not 0 <= phase < self.control_steps:
+            raise ValueError(f"phase {phase} is not a step of a control period of {self.control_steps} steps")
+        self.vision_phase[robot] = int(phase)
+        due: dict[int, list[int]] = {}
+        for i, p in enumerate(self.vision_phase):
+            due.setdefault(p, []).append(i)
+        self._due = due
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -85,15 +100,17 @@ class SimulatorNode(Node):
         perception = sim.perception
         if perception.delay_steps:
             perception.record(sim.snapshot())
-        if k % self.control_steps == 0:
-            tick = k // self.control_steps
-            if self.pub_clock.active:
-                self.pub_clock.put(_Clock(now, k, tick))
-            if any(p.active for p in self.pub_vision):
-                snap = sim.snapshot()
-                for pub, info in zip(self.pub_vision, perception.observe(perception.delayed(snap), now, tick)):
-                    if pub.active:
-                        pub.put(info)
+        cs = self.control_steps
+        if k % cs == 0 and self.pub_clock.active:
+            self.pub_clock.put(_Clock(now, k, k // cs))
+        due = self._due.get(k % cs)
+        if due is not None:
+            pubs = self.pub_vision
+            if any(pubs[i].active for i in due):
+                infos = perception.observe(perception.delayed(sim.snapshot()), now, k // cs)
+                for i in due:
+                    if pubs[i].active:
+                        pubs[i].put(infos[i])
         arrays = None
         if self.pub_models.active:
             arrays = names, pose, twist = sim.model_state_arrays()
