@@ -250,6 +250,12 @@ def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives
     client.pump(0.0)
     assert got == [("vision", 0), ("vision", 1), ("tick", b"t1")]
     assert feed.entries == []
+    vision.put(msgs.new(msgs.OmniVisionInfo, tick=2))
+    server.flush_feeds(only=["lockstep/feed/magenta"])      # another feed's turn: this one keeps gathering
+    assert len(feed.entries) == 1
+    server.flush_feeds(only=["lockstep/feed/cyan"])
+    pump_until(client, lambda: len(got) == 4)
+    assert got[-1] == ("vision", 2) and feed.entries == []
 
 
 def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arrive_whole(low_latency_pair):
