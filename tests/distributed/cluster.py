@@ -18,6 +18,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 SIMATCH = [sys.executable, "-m", "simatch"]
 CHASER = "tests.distributed.strategies:Chaser"
+PLAIN = "tests.distributed.plain_client"
 
 
 def free_port() -> int:
@@ -45,10 +46,10 @@ class Processes:
         self.procs: list[subprocess.Popen] = []
         self.env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
 
-    def start(self, *args: str, name: str = "proc") -> subprocess.Popen:
+    def start(self, *args: str, name: str = "proc", program: list[str] = SIMATCH) -> subprocess.Popen:
         out = open(self.tmp / f"{name}-{len(self.procs)}.out", "w+")
         err = open(self.tmp / f"{name}-{len(self.procs)}.err", "w+")
-        p = subprocess.Popen([*SIMATCH, *args], stdout=out, stderr=err, cwd=ROOT, env=self.env)
+        p = subprocess.Popen([*program, *args], stdout=out, stderr=err, cwd=ROOT, env=self.env)
         p.out, p.err, p.name = out, err, name     # type: ignore[attr-defined]
         self.procs.append(p)
         return p
@@ -67,6 +68,12 @@ class Processes:
     def robot(self, robot: str, *args: str) -> subprocess.Popen:
         team = robot.split("/")[0]
         return self.start("robot", robot, *self.client_args(team), *args, name=f"robot-{robot.replace('/', '-')}")
+
+    def plain(self, who: str) -> subprocess.Popen:
+        """A team (TEAM) or robot (TEAM/ID) process that declines bundles: topic by topic (plain_client)."""
+        team = who.split("/")[0]
+        return self.start(who, *self.client_args(team)[:-2], program=[sys.executable, "-m", PLAIN],
+                          name=f"plain-{who.replace('/', '-')}")
 
     @staticmethod
     def wait(p: subprocess.Popen, timeout: float = 120.0) -> int:

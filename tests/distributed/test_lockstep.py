@@ -61,6 +61,18 @@ def test_one_process_per_robot_equals_embedded(procs):
 
 
 @pytest.mark.slow
+def test_processes_that_speak_topic_by_topic_play_beside_bundled_ones_and_equal_embedded(procs):
+    """A client that declines bundles (as one in another language may) gets the same data in the same order."""
+    server = procs.server(SCENE, *SETTINGS, "--deadline", "120")
+    plain = [procs.plain(f"cyan/{rid}") for rid in range(1, 6)] + [procs.plain("magenta")]
+    dist = procs.result(server)
+    for p in plain:
+        assert procs.wait(p) == 0, procs.stderr(p)
+        assert "(topic by topic): the server ended the run (finished) after 80 ticks" in procs.stderr(p)
+    assert dist["state_digest"] == embedded(procs)["state_digest"]
+
+
+@pytest.mark.slow
 def test_a_server_takes_the_options_of_run_such_as_recording(procs):
     from simatch.record import Recording
 

@@ -1,6 +1,6 @@
 """Real time spreads the processes over the physics steps of a control period (their phases): the rule both
 sides compute, the clock that ticks a process at its phase, the perception taken at it, and real robot
-processes answering at their own steps (and a hung one: late, then back)."""
+processes answering at their own steps, bundled or topic by topic (and a hung one: late, then back)."""
 
 from __future__ import annotations
 
@@ -91,7 +91,7 @@ def server(procs):
 
 @pytest.mark.slow
 def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
-    robots = {rid: procs.robot(f"cyan/{rid}") for rid in (2, 3)}
+    robots = {2: procs.robot("cyan/2"), 3: procs.plain("cyan/3")}     # cyan/3 topic by topic
     procs.robot("cyan/1")
     assert server.wait_for_teams(timeout=60) == {}
     assert sorted(p.phase for p in server.registry.procs.values()) == [0, 1, 3]
