@@ -6,6 +6,7 @@ Not a team strategy (it ignores game commands, so a test needs no referee)."""
 from __future__ import annotations
 
 import math
+import time
 
 from simatch.strategy import Command, RobotStrategy
 
@@ -36,3 +37,12 @@ class Chaser(RobotStrategy):
         phase = 0.7 * t + self.ctx.id
         return Command(target=(x0 + r * math.cos(phase), y0 + r * math.sin(phase)), target_ori=phase,
                        max_vel=2.0, user=(mine,), role=2)
+
+
+class SlowChaser(Chaser):
+    """A Chaser whose every decision takes 35 ms of wall time: more than a 25 ms control period (a robot
+    process that falls behind for good)."""
+
+    def decide(self, world) -> Command:
+        time.sleep(0.035)
+        return super().decide(world)

@@ -88,3 +88,23 @@ def test_latency_shows_the_world_as_it_was(field_sim):
     seen = got["cyan/3"].ball.x
     # the last observation (at step 95) shows the ball of step 75 (0.1 s earlier)
     assert seen == msgs.f32(history[75])             # at the perception's float32 precision
+
+
+def test_the_perception_of_some_robots_alone_is_what_they_get_among_all(field_sim):
+    """A real-time server takes each robot's perception at its own step: the messages of a few robots are
+    those of the whole observation (same noise, same dropouts), and nobody else's are made."""
+    sim = field_sim(**{"perception.position_noise": 0.05, "perception.ball_dropout": 0.3,
+                       "perception.obstacle_dropout": 0.3})
+    sim.step(3)
+    perception = sim.simulator.perception
+    snap = sim.simulator.snapshot()
+    state = perception.rng.bit_generator.state
+    every = perception.observe(snap, 1.0, 7)
+    for only in ([2], [0, 7], list(range(10))):
+        perception.rng.bit_generator.state = state
+        some = perception.observe(snap, 1.0, 7, only)
+        for i, msg in enumerate(some):
+            if i in only:
+                assert msgs.encode(msg) == msgs.encode(every[i])
+            else:
+                assert msg is None

@@ -186,5 +186,6 @@ def _realtime(prefix: str, seconds: float, overrides: dict | None = None) -> dic
     return {f"{prefix}_processes": 1 + st["processes"], f"{prefix}_rtf": round(seconds / wall, 4),
             **_parts(prefix, st, ("latency", "tick", "feed", "processing", "transit")),
             f"{prefix}_latency_max_ms": st["latency_max_ms"], f"{prefix}_answers": st["answers"],
-            f"{prefix}_late": st["late"], f"{prefix}_missed": st["missed"], f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
+            f"{prefix}_late": st["late"], f"{prefix}_missed": st["missed"],
+            f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
             f"{prefix}_load": round(os.getloadavg()[0], 2)}

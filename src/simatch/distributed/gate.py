@@ -8,8 +8,9 @@ coaches (JUDGE) and any StrategyPub the server runs (TEAM) have published, it
    runs its StrategyPub and RobotNodes for that tick, exactly as the embedded clock would, and answers
    with its commands then an ``ack``;
 2. waits for the ack of every active process of the phase, up to a deadline (lockstep), or up to most of
-   a physics step (real time: a later command applies at the next step, as on a real robot; a tick is
-   missed only if its answer has not come when the process's next tick opens);
+   the time until the next step at which a tick opens (real time: a later command applies at the next
+   step, as on a real robot; a tick is missed only if its answer has not come when the process's next
+   tick opens);
 3. hands the commands, strategy infos and events it received to the simulator and the other nodes, sorted
    into the embedded run's order (robots in scene order, each robot's samples in the order it sent them).
 
@@ -28,16 +29,21 @@ from ..bus import Node, NodeContext, Phase
 from . import protocol
 
 
+#: how many of a process's newest unanswered ticks are kept, to time their answers should they come
+OPEN_KEPT = 8
+
+
 class LockstepGate(Node):
     phase = Phase.ROBOT
     name = "lockstep_gate"
 
     def __init__(self, period: float, deadline: float, realtime: bool, active: Callable[[], list],
-                 on_ack: Callable[[dict, str, float], object], on_missed: Callable[[set, float], None],
+                 on_ack: Callable[[dict, str, float, bool], object], on_missed: Callable[[set, float], None],
                  order: Callable[[tuple], object], teams: Sequence[str] = (), phases: int = 1):
         """``period``: the control period, of ``phases`` phases (1, or one per physics step);
         ``active()`` lists the processes to wait for (objects with ``id`` and ``phase``);
-        ``on_ack(msg, team, arrival)`` returns the process that answered (or None); ``on_missed(ids, now)``
+        ``on_ack(msg, team, arrival, in_step)`` returns the process that answered (or None; ``in_step``: a
+        late process answering so is waited for again); ``on_missed(ids, now)``
         hears who did not answer in time; ``order(item)`` sorts received samples into the embedded order;
         ``teams``: whose feeds the gate sends."""
         self.control_period = period
@@ -63,9 +69,9 @@ class LockstepGate(Node):
         #: (real time: an answer after the gate stopped waiting applies at the next physics step, ``late``)
         self.missed = 0
         self.late = 0
-        #: per process, the tick it has yet to answer: (tick, when it opened); an answer is timed against it
-        #: whenever it comes, so the figures include the late ones
-        self._open: dict[str, tuple[int, float]] = {}
+        #: per process, the newest ticks it has yet to answer: tick -> [when it opened, counted as missed];
+        #: an answer is timed against its tick whenever it comes, so the figures include the late ones
+        self._open: dict[str, dict[int, list]] = {}
         self._tick = -1
         self._waiting: set[str] = set()
         self._last_arrival = 0.0
@@ -130,26 +136,33 @@ class LockstepGate(Node):
             except protocol.ProtocolError:
                 return
         # (a payload parsed by `_last_answer` is the same JSON object, which had "proc" and "tick")
-        proc = self._on_ack(msg, protocol.team_of(topic), arrival)
-        entry = self._open.get(proc.id) if proc is not None else None
-        if entry is not None and msg["tick"] == entry[0]:
-            del self._open[proc.id]
-            opened = entry[1]
-            if proc.id in self._waiting:
-                self._waiting.discard(proc.id)
-                self._last_arrival = max(self._last_arrival, arrival)
-            else:
-                self.late += 1
-            self.latencies.append(arrival - opened)
-            sent, got = msg.get("sent"), msg.get("got")
-            if isinstance(sent, float) and 0.0 <= arrival - sent < 60.0:
-                self.transits.append(arrival - sent)
-                if isinstance(got, float) and opened <= got <= sent:
-                    self.feeds.append(got - opened)
-                    self.thinking.append(sent - got)
+        tick = msg["tick"]
+        # in step: in real time, the answer of this control period's tick (a process answering older ones
+        # stays late: waiting for it would not bring them sooner); in lockstep, any answer (waiting does)
+        proc = self._on_ack(msg, protocol.team_of(topic), arrival, not self.realtime or tick == self._tick)
+        opens = self._open.get(proc.id) if proc is not None else None
+        if not opens or not isinstance(tick, int):
+            return
+        entry = opens.pop(tick, None)
+        for older in [t for t in opens if t < tick]:
+            del opens[older]                  # it skipped them (it was behind): they were counted as missed
+        if entry is None:
+            return
+        opened, counted = entry
+        if proc.id in self._waiting and tick == self._tick:
+            self._waiting.discard(proc.id)
+            self._last_arrival = max(self._last_arrival, arrival)
+        else:
+            self.late += 1
+        self.latencies.append(arrival - opened)
+        sent, got = msg.get("sent"), msg.get("got")
+        if isinstance(sent, float) and 0.0 <= arrival - sent < 60.0:
+            self.transits.append(arrival - sent)
+            if isinstance(got, float) and opened <= got <= sent:
+                self.feeds.append(got - opened)
+                self.thinking.append(sent - got)
+        if not counted:
             proc.streak = 0
-        elif entry is not None and isinstance(msg["tick"], int) and msg["tick"] > entry[0]:
-            del self._open[proc.id]         # it skipped that tick (it was behind) and answers a newer one
 
     def _absorb(self, items, pending: list) -> None:
         """Protocol samples (acks, joins, liveliness) are handled at once; data waits to be sorted."""
@@ -167,20 +180,27 @@ class LockstepGate(Node):
         self._absorb(bus.take(0.0), pending)          # joins, late answers, requests since the last tick
         self._tick = step // self.control_steps
         phase = step % self.control_steps
-        active = [p for p in self._active() if p.phase == phase]
+        everyone = self._active()
+        active = [p for p in everyone if p.phase == phase]
         if self.realtime:       # a process whose last tick is still unanswered, a control period on, missed it
-            unanswered = {p.id for p in active if p.id in self._open}
+            unanswered = {p.id for p in active if self._count_missed(p.id)}
             if unanswered:
                 self.missed += len(unanswered)
                 self._on_missed(unanswered, now)
+                everyone = self._active()             # one that is now late is not waited for
+                active = [p for p in everyone if p.phase == phase]
         self._waiting = {p.id for p in active}
         self._await(active)
         opened = self._last_arrival = time.monotonic()
         for p in active:
-            self._open[p.id] = (self._tick, opened)
+            opens = self._open.setdefault(p.id, {})
+            opens[self._tick] = [opened, False]
+            while len(opens) > OPEN_KEPT:
+                del opens[min(opens)]
         self._tick_pubs[phase].put(protocol.dumps({"step": step, "tick": self._tick}))
         bus.flush_feeds(self._feeds[phase])           # each team's inputs of this tick, then the tick
-        limit = opened + (min(self.deadline, 0.8 * self.period) if self.realtime else self.deadline)
+        limit = opened + (min(self.deadline, 0.8 * self._until_next(phase, everyone)) if self.realtime
+                          else self.deadline)
         while self._waiting:
             left = limit - time.monotonic()
             if left <= 0:
@@ -194,6 +214,8 @@ class LockstepGate(Node):
             self._parsed.clear()      # (an answer handled later is parsed again)
         if self._waiting:
             if not self.realtime:
+                for pid in self._waiting:
+                    self._count_missed(pid)
                 self.missed += len(self._waiting)
                 self._on_missed(set(self._waiting), now)
             self._waiting.clear()
@@ -203,6 +225,21 @@ class LockstepGate(Node):
         bus.deliver(pending)
         if phase == 0:
             self.ticks += 1
+
+    def _count_missed(self, proc_id: str) -> bool:
+        """Mark the process's unanswered ticks as missed; True if one was not marked yet."""
+        fresh = False
+        for entry in self._open.get(proc_id, {}).values():
+            if not entry[1]:
+                entry[1] = fresh = True
+        return fresh
+
+    def _until_next(self, phase: int, procs) -> float:
+        """Seconds from this step to the next step at which a tick opens for somebody (real time: how long
+        the gate may wait here without holding up the next phase)."""
+        steps = self.control_steps
+        gap = min(((p.phase - phase) % steps or steps for p in procs), default=1)
+        return gap * self.period
 
     def stop(self) -> None:
         self._sub.close()

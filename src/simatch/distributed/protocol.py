@@ -5,7 +5,8 @@ StrategyInfo out). On top of them, a few protocol keys (relative to the run, lik
 payloads are small JSON objects so that a client in any language can speak them:
 
     lockstep/scene         query   -> the scene offer: scene text, overrides, seed, mode (no registration)
-    lockstep/join          query   -> register a process serving some robots: {"ok": true, "step"} or an error
+    lockstep/join          query   -> register a process serving some robots: {"ok": true, "step", "phase"} or an
+                                     error
     lockstep/tick/<phase>  server  -> {"step", "tick"}: every input of this control tick has been sent to the
                                      processes of that phase (`phase_of`); answer it
     <team>/lockstep/ack    client  -> {"proc", "tick", "sent", "got"}: this process has sent its commands for

@@ -55,7 +55,8 @@ class Registry:
         """The robots a server waits for: every robot of every team that has a strategy (not 'none')."""
         return {team: spec.robot_ids() for team, spec in self.scene.teams.items() if spec.strategy != "none"}
 
-    def join(self, proc: Proc) -> None:
+    def join(self, proc: Proc) -> list[Proc]:
+        """Register ``proc`` (JoinError if it may not serve its robots); returns the hung processes it replaces."""
         teams = self.scene.teams
         if proc.team not in teams:
             raise JoinError(f"this scene has no team {proc.team!r} (teams: {', '.join(teams)})")
@@ -69,12 +70,14 @@ class Registry:
             holder = self.procs.get(self.owner.get(f"{proc.team}/{rid}", ""))
             if holder is not None and holder.state is ProcState.ACTIVE:
                 raise JoinError(f"{proc.team}/{rid} is already served by {holder.label}")
+        replaced = []
         for rid in proc.robots:
             old = self.procs.get(self.owner.get(f"{proc.team}/{rid}", ""))
             if old is not None and old.state is ProcState.LATE:     # a hung process is replaced
-                self.leave(old.id)
+                replaced.append(self.leave(old.id))
             self.owner[f"{proc.team}/{rid}"] = proc.id
         self.procs[proc.id] = proc
+        return [p for p in replaced if p is not None]
 
     def leave(self, proc_id: str) -> Proc | None:
         proc = self.procs.get(proc_id)

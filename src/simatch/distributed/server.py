@@ -149,7 +149,8 @@ class Server:
                         kind="team" if req["kind"] == "team" else "robot",
                         strategy_pub=bool(req.get("strategy_pub", False)), joined_step=self.sim.simulator.step_index,
                         host=str(req.get("host", "")))
-            self.registry.join(proc)
+            for old in self.registry.join(proc):
+                self.gate.forget(old.id)
             proc.phase = protocol.phase_of(self.scene.spec, team, proc.robots, self.mode)
             for rid in proc.robots:          # its perception is taken when its tick opens
                 self.sim.set_perception_phase(f"{team}/{rid}", proc.phase)
@@ -178,13 +179,14 @@ class Server:
         self.strategy_pubs[team] = self.sim.clock.add(
             StrategyPub(team, spec.strategy_pub_period, spec.control.strategy_stale_after))
 
-    def _on_ack(self, msg: dict, team: str, arrival: float):
+    def _on_ack(self, msg: dict, team: str, arrival: float, in_step: bool):
         proc = self.registry.procs.get(str(msg["proc"]))
         if proc is None or proc.team != team or proc.state is ProcState.GONE:
             return None
         proc.answered += 1
-        if proc.state is ProcState.LATE:
+        if proc.state is ProcState.LATE and in_step:      # back (a stale answer is applied, no more)
             proc.state = ProcState.ACTIVE
+            proc.streak = 0
             self.emit("process_back", team=team, detail=f"{proc.label} answers again")
         return proc
 
@@ -300,7 +302,7 @@ class Server:
 
     def stats(self) -> dict:
         """How the distributed run went: processes, answers (``missed``: ticks not answered in time, see
-        `LockstepGate`; ``late``: answers that came after the gate stopped waiting, applied a step later),
+        `LockstepGate`; ``late``: answers that came after the gate stopped waiting, applied at its next tick),
         and how long the commands took (p50/p99 [ms] of every answer, the late ones too):
 
         * ``latency``: from the tick opening (perception and game command sent) to the answer arriving: the

@@ -107,7 +107,8 @@ class SimulatorNode(Node):
         if due is not None:
             pubs = self.pub_vision
             if any(pubs[i].active for i in due):
-                infos = perception.observe(perception.delayed(sim.snapshot()), now, k // cs)
+                infos = perception.observe(perception.delayed(sim.snapshot()), now, k // cs,
+                                           None if len(due) == len(pubs) else due)
                 for i in due:
                     if pubs[i].active:
                         pubs[i].put(infos[i])

@@ -92,8 +92,10 @@ class Perception:
         return self.history[0]
 
     # -----------------------------------------------------------------------------------------------------
-    def observe(self, snap: Snapshot, stamp: float, tick: int) -> list:
-        """One OmniVisionInfo per robot (in robot order)."""
+    def observe(self, snap: Snapshot, stamp: float, tick: int, only: list[int] | None = None) -> list:
+        """One OmniVisionInfo per robot (in robot order); with ``only``, messages for those robots alone (None
+        in the others' places: a real-time server takes each robot's perception at its own step). The noise
+        is drawn for every robot either way."""
         n = self.n
         spec, rng = self.spec, self.rng
         m = max(n - 1, 0)
@@ -125,26 +127,31 @@ class Perception:
         valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
         wheels = list(snap.wheels.astype(_F32))
         ids, nw, holder = self._ids, self._nw, snap.holder
+        team_of = self.team_of
+        wanted = range(n) if only is None else only
+        teams = self.members if only is None else {team_of[i] for i in only}
         team_infos = {}
-        for team, idx in self.members.items():
+        for team in teams:
+            idx = self.members[team]
             team_infos[team] = [_RobotInfo(ids[i], tx[i], ty[i], tyaw[i], tvx[i], tvy[i], tw[i], valid[i], stuck[i],
                                            holder == i, wheels[i][: nw[i]]) for i in idx]
         sx, sy, svx, svy, bang, bdist = balls.T.tolist()
         bz, bvz = msgs.f32s(snap.ball[2], snap.ball[5])
         if n > 1:
-            if keep is None:
-                rows = zip(*(list(a) for a in obs), self._orad_rows)     # each robot's row of every array
+            if only is None and keep is None:       # each robot's row of every array
+                obstacles = [_ObstaclesInfo(*row) for row in zip(*(list(a) for a in obs), self._orad_rows)]
             else:
-                rows = ((*(a[i][keep[i]] for a in obs), self._orad[i][keep[i]]) for i in range(n))
-            obstacles = [_ObstaclesInfo(*row) for row in rows]
+                obstacles = [None] * n
+                for i in wanted:
+                    k = slice(None) if keep is None else keep[i]
+                    obstacles[i] = _ObstaclesInfo(*(a[i][k] for a in obs), self._orad[i][k])
         else:
             obstacles = [_ObstaclesInfo(_EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY)] * n
         unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
-        team_of = self.team_of
-        out = []
-        for i in range(n):
+        out = [None] * n
+        for i in wanted:
             ball = (_BallInfo(1, sx[i], sy[i], bz, svx[i], svy[i], bvz, bang[i], bdist[i], True, True) if seen[i]
                     else unseen)
-            out.append(_OmniVisionInfo(stamp, tick, ids[i], ball, obstacles[i], team_infos[team_of[i]]))
+            out[i] = _OmniVisionInfo(stamp, tick, ids[i], ball, obstacles[i], team_infos[team_of[i]])
         return out
 
