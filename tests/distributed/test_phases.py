@@ -149,3 +149,34 @@ def test_a_real_time_process_that_falls_behind_for_good_stays_late_and_its_comma
     finally:
         srv.finish(linger=0.5)
         srv.close()
+
+
+@pytest.mark.slow
+def test_a_team_process_replaced_by_robot_processes_spreads_them_out(procs, server):
+    """The whole team plays at step 0; once its process dies, robot processes take the robots over, each
+    at its own step, with their perception taken there."""
+    team = procs.team("cyan")
+    assert server.wait_for_teams(timeout=60) == {}
+    server.sim.run(seconds=0.5)
+    simulator = server.sim.simulator
+    index = {r: simulator.index_of(f"cyan/{r}") for r in (1, 2, 3)}
+    assert {simulator.last_command_step[i] % 5 for i in index.values()} <= {0, 1}
+    team.send_signal(signal.SIGKILL)
+    team.wait(10)
+    for rid in (1, 2, 3):
+        procs.robot(f"cyan/{rid}")
+    for _ in range(300):                     # the dead process is noticed, the robots are taken over
+        server.sim.run(seconds=0.1)
+        joined = [p for p in server.registry.active() if p.kind == "robot"]
+        if len(joined) == 3:
+            break
+    assert sorted(p.phase for p in joined) == [0, 1, 3]
+    server.sim.run(seconds=1.0)
+    for rid, phase in ((1, 0), (2, 1), (3, 3)):
+        assert simulator.last_command_step[index[rid]] % 5 in (phase, phase + 1)
+    stamps: dict[int, int] = {}
+    for rid in (2, 3):
+        server.bus.subscribe(topics.robot_topic("cyan", rid, topics.OMNI_VISION), msgs.OmniVisionInfo,
+                             lambda msg, rid=rid: stamps.__setitem__(rid, round(msg.stamp / server.sim.dt)))
+    server.sim.run(seconds=0.1)
+    assert stamps[2] % 5 == 1 and stamps[3] % 5 == 3          # their perception is taken at their steps
