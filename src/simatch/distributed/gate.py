@@ -45,7 +45,7 @@ class LockstepGate(Node):
         ``on_ack(msg, team, arrival, in_step)`` returns the process that answered (or None; ``in_step``: a
         late process answering so is waited for again); ``on_missed(ids, now)``
         hears who did not answer in time; ``order(item)`` sorts received samples into the embedded order;
-        ``teams``: whose feeds the gate sends."""
+        ``teams``: whose feeds the gate declares and sends."""
         self.control_period = period
         self.period = period / phases
         self.phases = phases
@@ -90,12 +90,15 @@ class LockstepGate(Node):
             raise ValueError(f"a control period of {self.control_steps} steps has no {self.phases} phases")
         self.bus = ctx.bus
         self._sub = self.bus.subscribe_raw(protocol.ACKS, self._ack, wakes=self._last_answer)
-        #: per phase, the tick goes into each team's feed of that phase, and alone to processes that take
-        #: no feed
+        #: per phase, each team's feed of that phase (what its processes hear, one sample per tick), and the
+        #: tick, which goes into those feeds and alone to processes that take no feed
         every = self.control_steps // self.phases
-        self._tick_pubs = {phase: self.bus.raw_publisher(protocol.tick_topic(phase), always=False)
-                           for phase in range(0, self.control_steps, every)}
-        self._feeds = {phase: [protocol.feed_topic(team, phase) for team in self.teams] for phase in self._tick_pubs}
+        self._tick_pubs, self._feeds = {}, {}
+        for phase in range(0, self.control_steps, every):
+            self._tick_pubs[phase] = self.bus.raw_publisher(protocol.tick_topic(phase), always=False)
+            self._feeds[phase] = [self.bus.declare_feed(protocol.feed_topic(team, phase),
+                                                        protocol.feed_covers(team, phase)).topic
+                                  for team in self.teams]
 
     def forget(self, proc_id: str) -> None:
         """Stop waiting for a process (it left or died)."""

@@ -84,16 +84,15 @@ class Server:
             self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
             self._topic_order: dict[str, tuple] = {}      # a robot's topic -> its place (see `_order`)
             clock = self.sim.clock
-            self.phases = protocol.phases(spec, self.mode)
             self.gate = clock.add(LockstepGate(spec.control.period, deadline, realtime, self.registry.active,
                                                self._on_ack, self._on_missed, self._order, teams=list(teams),
-                                               phases=self.phases))
+                                               phases=protocol.phases(spec, self.mode)))
             self.world_service = clock.add(WorldService(self.sim, self.emit))
             self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
             self.strategy_pubs: dict[str, StrategyPub] = {}
-            for team in teams:          # one sample per process and tick each way (see protocol)
-                for phase in range(self.phases):
-                    self.bus.declare_feed(protocol.feed_topic(team, phase), protocol.feed_covers(team, phase))
+            # one sample per process and tick each way (see protocol): each team's bundles here, its feeds
+            # declared and sent by the gate
+            for team in teams:
                 self.bus.accept_bundles(protocol.bundle_topic(team))
             self.bus.serve(protocol.SCENE, self._on_scene)
             self.bus.serve(protocol.JOIN, self._on_join)
