@@ -15,7 +15,7 @@ import math
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from simatch.scene.commands import MatchMode, is_ours
+from simatch.msgs.game_commands import MatchMode, is_ours
 from simatch.strategy import Command, RobotStrategy, TeamStrategy
 from simatch.strategy.roles import Action, Role
 

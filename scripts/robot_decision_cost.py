@@ -19,7 +19,7 @@ import time
 
 from simatch import Simulation
 from simatch.bench.match import timed_decisions
-from simatch.scene.loader import load_scene
+from simatch.config.loader import load_scene
 from simatch.strategy.node import RobotNode
 
 WARM_UP = 5.0

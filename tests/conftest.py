@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import simatch
-from simatch.scene.loader import load_scene
+from simatch.config.loader import load_scene
 
 
 def empty_field(**overrides):

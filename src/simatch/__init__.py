@@ -6,12 +6,23 @@
     print(sim.result())
 
 Subsystems: `simatch.sim` (simulation), `simatch.strategy` (strategy), `simatch.scene` (scene); they talk
-through `simatch.bus` with the messages of `simatch.msgs`.
+through `simatch.bus` with the messages of `simatch.msgs` and read the scene file through `simatch.config`.
 """
 
 from __future__ import annotations
 
-__all__ = ["Simulation", "load_scene"]
+__all__ = ["Simulation", "load_scene", "version"]
+
+
+def version() -> str:
+    """The installed distribution's version ("unknown" when run from a tree that was never installed)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as _dist_version
+
+    try:
+        return _dist_version("simatch")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 def __getattr__(name: str):
@@ -21,7 +32,7 @@ def __getattr__(name: str):
 
         return Simulation
     if name == "load_scene":
-        from .scene.loader import load_scene
+        from .config.loader import load_scene
 
         return load_scene
     raise AttributeError(f"module 'simatch' has no attribute {name!r}")

@@ -23,9 +23,8 @@ from . import msgs
 from .bus import Bus, InProcessBus, LockstepClock, Node, Phase, topics
 from .scene.coach import Coach
 from .scene.judges import make_judge
-from .scene.loader import LoadedScene, load_scene
+from .config.loader import LoadedScene, check_models, load_scene
 from .sim.node import PhysicsNode, SimulatorNode
-from .sim.robots import check_models
 from .sim.simulator import CommandError, Simulator
 from .strategy.node import RobotNode
 from .strategy.team import build_team

@@ -13,7 +13,7 @@ import pytest
 
 from simatch.distributed.registry import ProcState
 from simatch.distributed.server import Server
-from simatch.scene.loader import load_scene
+from simatch.config.loader import load_scene
 
 from .cluster import CHASER, chaser_overrides
 

@@ -15,7 +15,7 @@ from simatch.bus import InProcessBus, LockstepClock, Node, topics
 from simatch.distributed import protocol
 from simatch.distributed.registry import ProcState
 from simatch.distributed.server import Server
-from simatch.scene.loader import load_scene
+from simatch.config.loader import load_scene
 from simatch.simulation import Simulation
 
 from .cluster import CHASER

@@ -12,7 +12,7 @@ from simatch import msgs
 from simatch.distributed import credentials, protocol
 from simatch.distributed.fairplay import FairPlay
 from simatch.distributed.registry import JoinError, Proc, ProcState, Registry
-from simatch.scene.loader import SceneError, load_scene
+from simatch.config.loader import SceneError, load_scene
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ import math
 import pytest
 
 import simatch
-from simatch.scene.loader import SceneError
+from simatch.config.loader import SceneError
 
 from .conftest import IDLE, target_positions
 
@@ -110,7 +110,7 @@ def test_the_start_is_scattered_from_the_seed(encirclement):
 
 
 def test_without_scatter_the_targets_start_at_their_start_poses(tmp_path):
-    from simatch.scene.loader import resolve
+    from simatch.config.loader import resolve
 
     _, text = resolve("encirclement_9v7")
     path = tmp_path / "fixed_start.toml"

@@ -136,7 +136,7 @@ def test_a_run_is_repeatable_bit_for_bit_and_seeds_differ(encirclement):
 
 def test_a_chaser_without_its_prison_is_refused_with_the_key_named():
     import simatch
-    from simatch.scene.loader import SceneError
+    from simatch.config.loader import SceneError
 
     with pytest.raises(SceneError, match=r"teams.cyan.strategy_params.prison: the world has no area named 'jail' "
                                          r"\(world.areas: prison\)"):
@@ -146,7 +146,7 @@ def test_a_chaser_without_its_prison_is_refused_with_the_key_named():
 
 
 def test_the_net_squeezes_when_nothing_gives_way():
-    from simatch.scene.loader import load_scene
+    from simatch.config.loader import load_scene
     from simatch.strategy.base import RobotContext
     from simatch.strategy.encirclement import Chaser, ChaserParams
 

@@ -49,7 +49,7 @@ from typing import Any
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode
+from simatch.msgs.game_commands import MatchMode
 from simatch.scene.referee.log import FOUL_TYPES
 
 SCENARIOS = Path(__file__).parent / "scenarios"

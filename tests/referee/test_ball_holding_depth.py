@@ -12,8 +12,8 @@ import pytest
 
 import simatch
 from simatch.scene.referee.params import RefereeParams
-from simatch.sim.robots.omni3 import Omni3
-from simatch.sim.robots.omni4 import Omni4
+from simatch.robots.omni3 import Omni3
+from simatch.robots.omni4 import Omni4
 
 BALL_RADIUS = 0.11
 LIMIT = RefereeParams().ball_holding_depth * 2 * BALL_RADIUS          # 0.0733 m

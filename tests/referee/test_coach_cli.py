@@ -12,7 +12,7 @@ import pytest
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode, parse
+from simatch.msgs.game_commands import MatchMode, parse
 
 
 def coach(*args, stdin: str, check: bool = True):

@@ -12,7 +12,7 @@ import pytest
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.loader import SceneError
+from simatch.config.loader import SceneError
 
 SHORT = {"match.half_duration": 6.0, "match.half_time": 1.0, "judge.stop_time": 0.5, "judge.kickoff_prepare_time": 3.0}
 

@@ -11,7 +11,7 @@ import pytest
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode
+from simatch.msgs.game_commands import MatchMode
 from simatch.scene.referee import OperatorError
 
 OVERRIDES = {"teams.cyan.strategy": "none", "teams.magenta.strategy": "none", "judge.kind": "msl_referee"}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode, for_team, mirror
+from simatch.msgs.game_commands import MatchMode, for_team, mirror
 
 
 def test_commands_are_mirrored_per_team():

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from simatch.sim.drive import OmniDrive, ramp_step
-from simatch.sim.robots.omni3 import Omni3
-from simatch.sim.robots.omni4 import Omni4
+from simatch.robots.drive import OmniDrive, ramp_step
+from simatch.robots.omni3 import Omni3
+from simatch.robots.omni4 import Omni4
 from tests.conftest import park_everyone_but
 
 

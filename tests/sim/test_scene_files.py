@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from simatch.scene.loader import SceneError, load_scene, parse_override, shipped_scenes
+from simatch.config.loader import SceneError, load_scene, parse_override, shipped_scenes
 
 
 def test_shipped_scenes_load_by_name():

@@ -6,7 +6,7 @@ from __future__ import annotations
 import simatch
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import mirror
+from simatch.msgs.game_commands import mirror
 
 BENCH_Y = 8.2          # beyond the 1 m margin: a benched robot is not "valid" (not on the field)
 

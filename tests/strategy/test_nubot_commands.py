@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from collections import Counter
 
-from simatch.scene.commands import MatchMode as M
-from simatch.scene.commands import TestMode as T
+from simatch.msgs.game_commands import MatchMode as M
+from simatch.msgs.game_commands import TestMode as T
 from simatch.strategy.roles import Role
 from tests.strategy.helpers import BallWatch, bench_all_but, command, run_until, scenario, start
 

@@ -9,7 +9,7 @@ import pytest
 
 from simatch import msgs
 from simatch.bus import topics
-from simatch.scene.commands import MatchMode as M
+from simatch.msgs.game_commands import MatchMode as M
 from tests.strategy.helpers import bench_all_but, command, run_until, scenario, start
 
 PREPARE = 5.0           # the referee's preparation time before START

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from simatch.scene.commands import MatchMode as M
+from simatch.msgs.game_commands import MatchMode as M
 from tests.strategy.helpers import BallWatch, command, run_until, scenario, start
 
 PREPARE = 5.0           # the referee's preparation time (kick-off: 10 s)

@@ -68,7 +68,7 @@ def test_load_kernels_loads_what_open_play_calls():
 def test_a_robot_alone_decides_as_in_its_team():
     """Robots that each compute their own team picture (one robot per process in a distributed run) play
     the very same match as a team sharing one picture per tick: the sharing is only a cache."""
-    from simatch.scene.loader import load_scene
+    from simatch.config.loader import load_scene
     lone = "simatch.strategy.nubot:NubotRobot"
     digests = []
     for overrides in ({}, {"teams.cyan.strategy": lone, "teams.magenta.strategy": lone}):

@@ -13,7 +13,7 @@ import pytest
 
 import simatch
 from simatch.plugins import PluginError
-from simatch.scene.loader import SceneError
+from simatch.config.loader import SceneError
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -4,7 +4,7 @@ by the run's control node inside real runs, and answered as the pages would be."
 from __future__ import annotations
 
 import simatch
-from simatch.scene.commands import MatchMode
+from simatch.msgs.game_commands import MatchMode
 from simatch.web.access import Grant
 from simatch.web.control import RunControl
 from simatch.web import protocol as P

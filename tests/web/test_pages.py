@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from simatch.scene.commands import MatchMode
+from simatch.msgs.game_commands import MatchMode
 
 from .conftest import drag_ball, run_until, shot, wait_frame
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from simatch.scene.commands import MatchMode
+from simatch.msgs.game_commands import MatchMode
 from simatch.web import protocol as P
 from simatch.web.access import Access, Grant
 from simatch.web.observer import Timeline

@@ -39,7 +39,7 @@ import time
 
 import numpy as np
 
-from ..scene.loader import load_scene
+from ..config.loader import load_scene
 
 SCENE = "msl_5v5"
 #: the round trip's load: one robot driving back to its start pose (the bus's figure, not a strategy's)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 
-from ..scene.loader import load_scene
+from ..config.loader import load_scene
 from ..simulation import Simulation
 from ..strategy.node import RobotNode
 from ..strategy.nubot.warm import load_kernels as load_nubot_kernels

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from ..scene.loader import load_scene
+from ..config.loader import load_scene
 from ..sim.simulator import Simulator
 
 CYCLE = 20.0

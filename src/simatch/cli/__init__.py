@@ -7,8 +7,12 @@ import importlib
 import logging
 import sys
 
+from .. import version
+from ..errors import UsageError
 from ..plugins import PluginError
-from ..scene.loader import SceneError
+from ..config.loader import SceneError
+
+__all__ = ["SUBCOMMANDS", "UsageError", "build_parser", "main"]
 
 #: subcommand modules, in the order ``simatch --help`` lists them
 SUBCOMMANDS = [
@@ -25,30 +29,17 @@ SUBCOMMANDS = [
 ]
 
 
-class UsageError(Exception):
-    """A command line that cannot be carried out; printed without a traceback."""
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="simatch",
         description="Simulation of highly dynamic confrontations between multi-robot systems "
                     "(RoboCup MSL soccer and beyond).")
-    parser.add_argument("--version", action="version", version=f"simatch {_version()}")
+    parser.add_argument("--version", action="version", version=f"simatch {version()}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
         importlib.import_module(name).add_parser(sub)
     return parser
-
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("simatch")
-    except PackageNotFoundError:
-        return "unknown"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -28,9 +28,9 @@ from typing import Callable, TextIO
 
 from .. import msgs
 from ..bus import topics
-from ..scene import commands
-from ..scene.loader import load_scene
-from ..scene.schema import JudgeSpec
+from ..msgs import game_commands as commands
+from ..config.loader import load_scene
+from ..config.schema import JudgeSpec
 from . import UsageError
 from .run import overrides_of, print_summary
 

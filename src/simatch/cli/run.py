@@ -14,7 +14,7 @@ import signal
 import sys
 from typing import Any, Callable
 
-from ..scene.loader import load_scene, parse_override
+from ..config.loader import load_scene, parse_override
 from . import UsageError
 
 #: run extensions: "module:Class" with add_arguments(parser) and attach(sim, args) -> context manager

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ..scene.loader import load_scene, parse_override, shipped_scenes
+from ..config.loader import load_scene, parse_override, shipped_scenes
 
 
 def add_parser(sub) -> None:

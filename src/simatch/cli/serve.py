@@ -17,7 +17,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..scene.loader import load_scene
+from ..config.loader import load_scene
 from . import UsageError
 from .run import add_run_options, overrides_of, print_summary
 

@@ -13,7 +13,7 @@ import signal
 import sys
 
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
-from ..scene.loader import load_scene
+from ..config.loader import load_scene
 from . import UsageError
 from .run import (Progress, add_run_options, extensions, match_status, overrides_of, print_summary,
                   run_duration)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
-from ..scene.loader import parse_override
+from ..config.loader import parse_override
 from . import UsageError
 from .server import add_network_options
 

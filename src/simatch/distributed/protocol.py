@@ -47,8 +47,8 @@ import uuid
 from typing import Any, Mapping, Sequence
 
 from ..bus import topics
-from ..scene.loader import LoadedScene, scene_from_text
-from ..scene.schema import Scene
+from ..config.loader import LoadedScene, scene_from_text
+from ..config.schema import Scene
 
 SCENE = "lockstep/scene"
 JOIN = "lockstep/join"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from ..scene.schema import Scene
+from ..config.schema import Scene
 
 
 class ProcState(enum.Enum):

@@ -27,7 +27,7 @@ from .. import msgs
 from ..bus import topics
 from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, calm_sending_threads,
                               open_session, zenoh_config)
-from ..scene.loader import LoadedScene
+from ..config.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
 from .fairplay import FairPlay

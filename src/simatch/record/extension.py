@@ -12,7 +12,7 @@ import contextlib
 import signal
 import sys
 
-from ..cli import UsageError
+from ..errors import UsageError
 
 
 class RecordExtension:

@@ -21,7 +21,7 @@ from typing import Callable
 
 from .. import msgs
 from ..bus import InProcessBus
-from ..scene.loader import LoadedScene
+from ..config.loader import LoadedScene
 from . import layout
 from .reader import Recording
 

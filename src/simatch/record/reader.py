@@ -27,7 +27,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 
 from .. import msgs
 from ..msgs.cdr import Codec
-from ..scene.loader import LoadedScene, load_scene
+from ..config.loader import LoadedScene, load_scene
 from . import foxglove_msgs as fg
 from . import layout
 

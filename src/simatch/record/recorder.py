@@ -32,10 +32,10 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Iterable
 
-from .. import msgs
+from .. import msgs, version
 from ..bus import topics
 from ..msgs.cdr import Codec
-from ..scene.loader import LoadedScene
+from ..config.loader import LoadedScene
 from . import foxglove_msgs as fg
 from . import layout
 from .messagelog import CLOCK_STEP, CLOCK_TICK, fill_poses, new_log
@@ -57,12 +57,6 @@ COMPRESSION_LEVEL = 3
 
 class RecordError(Exception):
     """A recording that cannot be started (bad path, existing file) or written."""
-
-
-def simatch_version() -> str:
-    from ..cli import _version
-
-    return _version()
 
 
 class _Channel:
@@ -91,7 +85,7 @@ class Recorder:
         self.dt_ns = layout.ns(dt)
         self.status = "recording"
         try:
-            self._writer = McapWriter(self.path, profile=layout.PROFILE, library=f"simatch {simatch_version()}",
+            self._writer = McapWriter(self.path, profile=layout.PROFILE, library=f"simatch {version()}",
                                       compression_level=compression_level)
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
@@ -106,7 +100,7 @@ class Recorder:
         self._chunk_end = self._log.now                # log time of the last message handed over
         self.first_step = first_step
         self._writer.metadata(layout.META_START, {
-            "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": simatch_version(),
+            "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": version(),
             "scene_name": scene.name, "scene_source": scene.source, "scene_text": scene.text,
             "overrides": json.dumps(scene.overrides), "seed": str(int(seed)), "run": str(getattr(bus, "run", "")),
             "dt": repr(float(dt)), "control_period": repr(float(scene.spec.control.period)),

@@ -25,11 +25,10 @@ from typing import Callable
 
 import numpy as np
 
-from .. import msgs
+from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
 from .reader import Recording, RecordingError
-from .recorder import simatch_version
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
 WORLD_CALLS = {"set_model_state", "set_link_state", "apply_wrench", "take_control", "release_control", "send_vel",
@@ -125,8 +124,8 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None) ->
         raise VerifyError(f"{rec.path}: the recording started at t={int(meta['first_step']) * float(meta['dt']):.3f} s, "
                           f"after the run began; a run can only be re-simulated from a recording of its start")
     problems = []
-    if meta.get("simatch_version") != simatch_version():
-        problems.append(f"recorded with simatch {meta.get('simatch_version')}, re-simulated with {simatch_version()}: "
+    if meta.get("simatch_version") != version():
+        problems.append(f"recorded with simatch {meta.get('simatch_version')}, re-simulated with {version()}: "
                         f"a different version may simulate differently")
     scene = rec.scene()
     external = [t for t, spec in scene.spec.teams.items() if spec.strategy == "external"]

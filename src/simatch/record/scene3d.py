@@ -27,7 +27,7 @@ import struct
 import numpy as np
 
 from ..msgs.cdr import Codec
-from ..scene.schema import Scene
+from ..config.schema import Scene
 from . import foxglove_msgs as fg
 from .messagelog import PoseSlot, fill_poses
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
-from .commands import SET_PIECES, MatchMode, parse
+from ..msgs.game_commands import SET_PIECES, MatchMode, parse
 
 
 class Coach(Node):

@@ -21,9 +21,9 @@ import mujoco
 import numpy as np
 
 from .. import msgs
-from ..scene.schema import Scene
+from ..config.schema import Scene
 from .ballhandling import BallHandling
-from .drive import OmniDrive
+from ..robots.drive import OmniDrive
 from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world

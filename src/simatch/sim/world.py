@@ -21,8 +21,8 @@ import mujoco
 import numpy as np
 
 from ..field import FieldGeometry
-from ..scene.schema import Scene
-from .robots import HULL_HEIGHT, RobotModel, model_class
+from ..config.schema import Scene
+from ..robots import HULL_HEIGHT, RobotModel, model_class
 
 FLOOR, HULL, BALL, MOUTH, STATIC = 1, 2, 4, 8, 16
 

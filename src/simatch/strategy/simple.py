@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from ..scene.commands import MatchMode, is_ours
+from ..msgs.game_commands import MatchMode, is_ours
 from .base import Command, RobotStrategy
 from .roles import Action, Role
 

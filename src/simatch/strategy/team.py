@@ -9,7 +9,7 @@ from typing import Any, Iterable
 
 from .. import frames
 from ..bus import Node, stable_seed
-from ..scene.loader import LoadedScene, SceneError, validate_params
+from ..config.loader import LoadedScene, SceneError, validate_params
 from . import NO_NODES, strategy_class
 from .base import RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from .node import RobotNode, StrategyPub

@@ -30,7 +30,7 @@ from typing import Any, Callable
 
 from .. import frames, msgs
 from ..bus import Node, Phase, topics
-from ..scene.commands import NEUTRAL, MatchMode, TestMode, for_team
+from ..msgs.game_commands import NEUTRAL, MatchMode, TestMode, for_team
 from . import protocol as P
 
 log = logging.getLogger(__name__)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from ..scene.commands import MatchMode
+from ..msgs.game_commands import MatchMode
 from .picture import Picture
 
 

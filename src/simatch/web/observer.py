@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Bus, topics
-from ..scene.commands import name as command_name
+from ..msgs.game_commands import name as command_name
 
 #: columns of a Timeline sample, per model
 COLUMNS = ("x", "y", "z", "yaw", "vx", "vy")

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from .. import frames
-from ..scene.commands import name as command_name
+from ..msgs.game_commands import name as command_name
 from ..strategy.roles import action_name, role_name
 from .observer import RunObserver
 

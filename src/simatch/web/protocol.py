@@ -17,7 +17,7 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator
 
-from ..scene.commands import MatchMode
+from ..msgs.game_commands import MatchMode
 
 MAX_MESSAGE_BYTES = 16384
 

@@ -41,7 +41,7 @@ def add_view_options(group, default_wait: float | None = None) -> None:
 
 def _started(make) -> Hosted:
     """A started view; a port that cannot be had (or a recording that cannot be shown) is a usage error."""
-    from ..cli import UsageError
+    from ..errors import UsageError
     from .recorded import RecordingError
 
     try:

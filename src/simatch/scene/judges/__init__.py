@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ...plugins import PluginError, load
-from ..loader import LoadedScene, SceneError, validate_params
+from ...config.loader import LoadedScene, SceneError, validate_params
 from .base import Judge, NoJudge, WorldControl
 
 SHIPPED = {

@@ -13,7 +13,7 @@ from typing import Any, ClassVar, Optional, Protocol
 from pydantic import BaseModel, ConfigDict
 
 from ...bus import Node, Phase
-from ..loader import LoadedScene
+from ...config.loader import LoadedScene
 
 
 class WorldControl(Protocol):

@@ -23,8 +23,8 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from ... import msgs
 from ...field import Area
 from ...bus import NodeContext, topics
-from ..commands import MatchMode
-from ..loader import SceneError
+from ...msgs.game_commands import MatchMode
+from ...config.loader import SceneError
 from .base import Judge
 
 #: GameState is re-published at least this often even when nothing changes [s]

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 from typing import Optional
 
-from ..commands import MatchMode
+from ...msgs.game_commands import MatchMode
 
 OPS = ("pause", "resume", "command", "place_ball", "send_off", "return", "card", "goal", "auto")
 

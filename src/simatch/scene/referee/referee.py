@@ -23,9 +23,9 @@ from typing import Optional
 
 from ... import msgs
 from ...bus import NodeContext, topics
-from ..commands import SET_PIECES, MatchMode, for_team, name as command_name
+from ...msgs.game_commands import SET_PIECES, MatchMode, for_team, name as command_name
 from ..judges.base import Judge
-from ..loader import SceneError
+from ...config.loader import SceneError
 from . import report
 from .contacts import RobotContacts
 from .discipline import Discipline

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 
 from ... import msgs
-from ..commands import for_team, name as command_name
+from ...msgs.game_commands import for_team, name as command_name
 from .state import Phase
 
 if TYPE_CHECKING:

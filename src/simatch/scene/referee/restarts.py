@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 from ...field import FieldGeometry
-from ..commands import RESTART_COMMANDS, MatchMode, for_team
+from ...msgs.game_commands import RESTART_COMMANDS, MatchMode, for_team
 from .params import RefereeParams
 
 KINDS = tuple(RESTART_COMMANDS)

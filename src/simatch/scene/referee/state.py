@@ -18,7 +18,7 @@ import enum
 from dataclasses import dataclass, field
 from typing import Optional
 
-from ..commands import MatchMode
+from ...msgs.game_commands import MatchMode
 from .restarts import Restart
 
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 from ... import msgs
 from ...bus import topics
-from ..commands import MatchMode, is_ours, parse, restart_kind
+from ...msgs.game_commands import MatchMode, is_ours, parse, restart_kind
 from .operator import OperatorError, OperatorRequest, check, from_message
 from .restarts import Restart
 from .state import Phase, TransitionError

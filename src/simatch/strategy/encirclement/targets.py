@@ -20,7 +20,7 @@ import math
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ...scene.commands import MatchMode
+from ...msgs.game_commands import MatchMode
 from ..base import Command, RobotContext, RobotStrategy
 from .game import Captures
 from .net import Arena

@@ -12,7 +12,7 @@ from __future__ import annotations
 import enum
 import math
 
-from ...scene.commands import MatchMode, is_ours
+from ...msgs.game_commands import MatchMode, is_ours
 from ..roles import members
 from .observation import Observation
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-from ...scene.commands import is_ours
+from ...msgs.game_commands import is_ours
 from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel

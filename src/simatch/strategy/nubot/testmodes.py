@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from ...scene.commands import TestMode
+from ...msgs.game_commands import TestMode
 from ..base import Command
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer

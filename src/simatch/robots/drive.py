@@ -22,9 +22,8 @@ with zero rows, so one (N, W) array serves every model.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
-
-from .kernels import plan_drive
 
 _TINY = 1e-300
 
@@ -38,6 +37,86 @@ def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np
     bound = np.where(U * dU >= 0.0, up, down)
     frac = min(1.0, float(np.min(bound / np.maximum(adU, _TINY))))
     return U + frac * dU
+
+
+@numba.njit(cache=True, nogil=True)
+def plan_drive(M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, bias, kv,
+               ramping, dt):
+    """Plan the wheel ramps of the robots marked in ``due`` for the next ``window`` physics steps.
+
+    M (N, W, 3) rim-speed matrices, P (N, 3, W) their pseudo-inverses, cmd (N, 3) body-frame commands,
+    dirty (N,) commands not yet turned into U_target (N, W) rim-speed targets; up/down (N,) per-step
+    bounds of speeding up / slowing down; act (N, 3) the servos' current set points.
+    Writes, for each due robot: actrange (N, 3, 2) the set point's bounds (it stops at the target),
+    ctrl (N, 3) its rate of change [per s], bias (N, 3) the exact-arc correction force, ramping (N,)."""
+    n, W = U_target.shape
+    inv_dt = 1.0 / dt
+    for i in range(n):
+        if not due[i]:
+            continue
+        if dirty[i]:
+            peak = 0.0
+            for w in range(W):
+                u = M[i, w, 0] * cmd[i, 0] + M[i, w, 1] * cmd[i, 1] + M[i, w, 2] * cmd[i, 2]
+                U_target[i, w] = u
+                if abs(u) > peak:
+                    peak = abs(u)
+            if peak > max_speed[i]:
+                scale = max_speed[i] / peak
+                for w in range(W):
+                    U_target[i, w] *= scale
+            dirty[i] = False
+        # largest common fraction of the remaining change that respects every wheel's bound
+        c = np.inf
+        for w in range(W):
+            u = M[i, w, 0] * act[i, 0] + M[i, w, 1] * act[i, 1] + M[i, w, 2] * act[i, 2]
+            d = U_target[i, w] - u
+            ad = abs(d)
+            if ad > 0.0:
+                b = down[i] if u * d < 0.0 else up[i]
+                if b / ad < c:
+                    c = b / ad
+        # a slowing wheel that would pass through zero inside the window (its target lies beyond zero)
+        # speeds up afterwards: then the window keeps its speeding-up bound throughout
+        c2 = np.inf
+        crossing = False
+        for w in range(W):
+            u = M[i, w, 0] * act[i, 0] + M[i, w, 1] * act[i, 1] + M[i, w, 2] * act[i, 2]
+            d = U_target[i, w] - u
+            ad = abs(d)
+            if ad > 0.0:
+                slowing = u * d < 0.0
+                if slowing and U_target[i, w] * u < 0.0 and abs(u) < window * c * ad:
+                    crossing = True
+                    b = up[i]
+                else:
+                    b = down[i] if slowing else up[i]
+                if b / ad < c2:
+                    c2 = b / ad
+        if crossing:
+            c = c2
+        if c > 1.0:
+            c = 1.0
+        ramping[i] = c * window < 1.0
+        vm = np.empty(3)
+        for k in range(3):
+            vt = 0.0
+            for w in range(W):
+                vt += P[i, k, w] * U_target[i, w]
+            v0 = act[i, k]
+            rate = (vt - v0) * c
+            lo = min(v0, vt)
+            hi = max(v0, vt)
+            actrange[i, k, 0] = lo
+            actrange[i, k, 1] = hi
+            ctrl[i, k] = rate * inv_dt
+            mid = v0 + 0.5 * (window + 1) * rate
+            vm[k] = min(max(mid, lo), hi)
+        # exact arcs: turn the set point by half a step's rotation (first order), as a force offset
+        theta = vm[2] * 0.5 * dt
+        bias[i, 0] = -kv[i, 0] * theta * vm[1]
+        bias[i, 1] = kv[i, 1] * theta * vm[0]
+        bias[i, 2] = 0.0
 
 
 class OmniDrive:
@@ -87,7 +166,7 @@ class OmniDrive:
     def plan(self, due: np.ndarray, act: np.ndarray, window: int, actrange: np.ndarray, ctrl: np.ndarray,
              bias: np.ndarray, kv: np.ndarray) -> None:
         """Plan the next ``window`` steps of the robots marked in ``due`` whose servo set points are ``act``
-        (N, 3); writes the set points' bounds, rates and bias (see `kernels.plan_drive`)."""
+        (N, 3); writes the set points' bounds, rates and bias (see `plan_drive`)."""
         plan_drive(self.M, self.Mpinv, self.cmd, self.dirty, due, self.U_target, self.up, self.down,
                    self.max_speed, act, window, actrange, ctrl, bias, kv, self.ramping, self.dt)
         self.any_dirty = bool(self.dirty.any())

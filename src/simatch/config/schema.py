@@ -1,0 +1,236 @@
+"""What a scene file may contain: every section, key, type, range and default.
+
+A scene is one TOML file. Everything the paper lists as modifiable is here, so that a new world, team
+size, robot model, strategy, judge or realism setting needs no code change. Plug-ins (robot models,
+strategies, judges) check their own parameters with their own models (see ``simatch.scene.plugins``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from ..field import Area, FieldGeometry
+
+
+class Strict(BaseModel):
+    """Unknown keys are mistakes, not extensions."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+Pose = tuple[float, float, float]
+
+
+class PhysicsSpec(Strict):
+    timestep: float = Field(0.005, gt=0.0, le=0.02, description="physics step [s] (paper: 0.005, 200 Hz)")
+    gravity: float = Field(9.8, ge=0.0, le=100.0, description="[m/s^2]")
+    solver_iterations: int = Field(50, ge=1, le=1000)
+    solver_tolerance: float = Field(1e-6, gt=0.0, le=1e-2,
+                                    description="constraint solver tolerance (MuJoCo's default is 1e-8; 1e-6 "
+                                                "gives the same physics within the chaos of a scrum, faster)")
+
+
+class AreaSpec(Strict):
+    name: str = Field(min_length=1)
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if not (self.x0 < self.x1 and self.y0 < self.y1):
+            raise ValueError("expected x0 < x1 and y0 < y1")
+        return self
+
+
+class WorldSpec(Strict):
+    length: float = Field(22.0, gt=1.0, le=200.0, description="between the goal lines [m]")
+    width: float = Field(14.0, gt=1.0, le=200.0, description="between the side lines [m]")
+    margin: float = Field(1.5, ge=0.0, le=20.0, description="floor beyond the lines [m]")
+    line_width: float = Field(0.125, gt=0.0, le=1.0)
+    markings: Literal["msl", "none"] = "msl"
+    center_circle_radius: float = Field(2.0, ge=0.0)
+    goal_area_depth: float = Field(0.75, ge=0.0)
+    goal_area_width: float = Field(3.9, ge=0.0)
+    penalty_area_depth: float = Field(2.25, ge=0.0)
+    penalty_area_width: float = Field(6.9, ge=0.0)
+    penalty_spot_distance: float = Field(3.0, ge=0.0)
+    corner_arc_radius: float = Field(0.75, ge=0.0)
+    goals: bool = True
+    goal_width: float = Field(2.4, gt=0.0, le=20.0, description="inner mouth between the posts [m]")
+    goal_height: float = Field(1.0, gt=0.0, le=5.0, description="lower edge of the crossbar [m]")
+    goal_depth: float = Field(0.6, gt=0.0, le=5.0)
+    goal_post_size: float = Field(0.125, gt=0.0, le=1.0)
+    walls: bool = True
+    wall_height: float = Field(0.5, gt=0.0, le=5.0)
+    areas: list[AreaSpec] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _fits(self):
+        if self.goals and self.goal_width >= self.width:
+            raise ValueError("goal_width must be smaller than the field width")
+        if self.penalty_area_depth > self.length / 2 or self.penalty_area_width > self.width:
+            raise ValueError("the penalty area must fit in a half of the field")
+        return self
+
+    def geometry(self) -> FieldGeometry:
+        data = self.model_dump()
+        data["areas"] = tuple(Area(**a) for a in data["areas"])
+        return FieldGeometry(**data)
+
+
+class BallSpec(Strict):
+    radius: float = Field(0.11, gt=0.01, le=1.0, description="[m]")
+    mass: float = Field(0.43, gt=0.01, le=10.0, description="[kg]")
+    rolling_deceleration: float = Field(0.5, ge=0.0, le=20.0,
+                                        description="deceleration of a freely rolling ball [m/s^2]")
+    restitution: float = Field(0.6, ge=0.0, le=0.95, description="bounce on the floor: rebound/impact speed")
+    friction: float = Field(0.6, ge=0.0, le=2.0, description="sliding friction against floor and robots")
+    position: tuple[float, float] = (0.0, 0.0)
+
+
+class TeamSpec(Strict):
+    color: Optional[str] = Field(None, description="display colour; defaults to the team's name")
+    attacks: Optional[Literal["+x", "-x"]] = Field(
+        None, description="direction of this team's team frame +x; default +x, except magenta -x")
+    model: str = Field("omni4", min_length=1, description="robot model: a shipped name or package.module:Class")
+    model_params: dict[str, Any] = Field(default_factory=dict)
+    strategy: str = Field("none", min_length=1,
+                          description="a shipped strategy name, package.module:Class, or 'external'")
+    strategy_params: dict[str, Any] = Field(default_factory=dict)
+    goalkeeper: Optional[int] = Field(1, ge=1, description="id of the goalkeeper, if any")
+    ids: Optional[list[int]] = Field(None, description="robot ids; default 1..n in the order of start")
+    start: list[Pose] = Field(min_length=1, max_length=32,
+                              description="one start pose [x, y, yaw] per robot, world frame [m, rad]")
+
+    @model_validator(mode="after")
+    def _ids(self):
+        if self.ids is not None:
+            if len(self.ids) != len(self.start):
+                raise ValueError(f"ids has {len(self.ids)} entries but start has {len(self.start)}")
+            if len(set(self.ids)) != len(self.ids) or min(self.ids) < 1:
+                raise ValueError("ids must be distinct positive integers")
+        return self
+
+    def robot_ids(self) -> list[int]:
+        return list(self.ids) if self.ids is not None else list(range(1, len(self.start) + 1))
+
+
+class ControlSpec(Strict):
+    period: float = Field(0.025, gt=0.0, le=1.0, description="robot control period [s]")
+    command_timeout: float = Field(0.1, gt=0.0, le=10.0,
+                                   description="a robot with no fresh command for this long is stopped [s]")
+    strategy_pub_period: Optional[float] = Field(None, gt=0.0, le=1.0,
+                                                 description="StrategyPub period [s]; default: the control period")
+    strategy_stale_after: float = Field(0.1, gt=0.0, le=10.0,
+                                        description="StrategyPub drops entries older than this [s]")
+
+
+class DribblerSpec(Strict):
+    distance: float = Field(0.40, gt=0.0, le=2.0, description="max robot-centre to ball-centre distance [m]")
+    angle: float = Field(10.0, gt=0.0, le=90.0, description="max bearing of the ball off the kicker axis [deg]")
+    grip_force: float = Field(15.0, gt=0.0, le=1000.0,
+                              description="largest force the dribbler can exert on the ball before losing it [N]")
+    pull_speed: float = Field(1.0, gt=0.0, le=10.0, description="speed at which the rollers draw the ball in [m/s]")
+    catch_speed: float = Field(3.5, gt=0.0, le=30.0,
+                               description="fastest ball (relative to the mouth) the rollers can take [m/s]")
+    settle_time: float = Field(0.1, ge=0.0, le=2.0,
+                               description="after taking the ball, time before the grip limit applies [s]")
+
+
+class KickerSpec(Strict):
+    max_speed: float = Field(10.0, gt=0.0, le=30.0, description="ground kick speed limit [m/s]")
+    max_lob_speed: float = Field(10.0, gt=0.0, le=30.0, description="lob launch speed limit [m/s]")
+    lob_angle: float = Field(37.0, gt=0.0, lt=90.0, description="lob launch angle above the floor [deg]")
+    recharge: float = Field(0.5, ge=0.0, le=10.0, description="time before the kicker can fire again [s]")
+
+
+class PerceptionSpec(Strict):
+    position_noise: float = Field(0.0, ge=0.0, le=5.0, description="std of Gaussian position noise [m]")
+    velocity_noise: float = Field(0.0, ge=0.0, le=10.0, description="std of Gaussian velocity noise [m/s]")
+    heading_noise: float = Field(0.0, ge=0.0, le=3.2, description="std of Gaussian heading noise [rad]")
+    ball_dropout: float = Field(0.0, ge=0.0, le=1.0, description="probability that the ball is not seen")
+    obstacle_dropout: float = Field(0.0, ge=0.0, le=1.0, description="probability that an obstacle is missed")
+    latency: float = Field(0.0, ge=0.0, le=2.0, description="delay of every observation [s]")
+
+
+class JudgeSpec(BaseModel):
+    """``kind`` picks the judge; its other keys are the judge's own settings, checked by the judge."""
+
+    model_config = ConfigDict(extra="allow")
+    kind: str = Field("none", min_length=1)
+
+
+class MatchSpec(Strict):
+    halves: int = Field(2, ge=1, le=4)
+    half_duration: float = Field(900.0, gt=0.0, le=86400.0, description="[s] (MSL: 15 min)")
+    half_time: float = Field(10.0, ge=0.0, le=3600.0, description="break between halves [s]")
+    kickoff: str = Field("cyan", description="team that kicks off the first half")
+    penalty_shootout: bool = Field(False, description="a shoot-out decides a draw")
+
+
+class Scene(Strict):
+    name: str = Field(min_length=1)
+    description: str = ""
+    duration: Optional[float] = Field(None, gt=0.0, description="default run length [s] if the judge sets none")
+    physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
+    world: WorldSpec = Field(default_factory=WorldSpec)
+    ball: BallSpec = Field(default_factory=BallSpec)
+    teams: dict[str, TeamSpec] = Field(min_length=1)
+    control: ControlSpec = Field(default_factory=ControlSpec)
+    dribbler: DribblerSpec = Field(default_factory=DribblerSpec)
+    kicker: KickerSpec = Field(default_factory=KickerSpec)
+    perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
+    judge: JudgeSpec = Field(default_factory=JudgeSpec)
+    match: MatchSpec = Field(default_factory=MatchSpec)
+
+    @field_validator("teams")
+    @classmethod
+    def _team_names(cls, teams: dict[str, TeamSpec]):
+        for name in teams:
+            if not name.isidentifier() or name != name.lower():
+                raise ValueError(f"team name {name!r} must be a lower-case identifier (e.g. cyan)")
+        return teams
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        dt = self.physics.timestep
+        for what, value in (("control.period", self.control.period),
+                            ("control.strategy_pub_period", self.control.strategy_pub_period)):
+            if value is not None:
+                n = round(value / dt)
+                if n < 1 or abs(n * dt - value) > 1e-9:
+                    raise ValueError(f"{what} ({value} s) must be a whole number of physics steps "
+                                     f"({dt} s)")
+        if self.control.strategy_pub_period is not None:
+            ratio = self.control.strategy_pub_period / self.control.period
+            if abs(ratio - round(ratio)) > 1e-9:
+                raise ValueError("control.strategy_pub_period must be a multiple of control.period")
+        if self.match.kickoff not in self.teams:
+            raise ValueError(f"match.kickoff names team {self.match.kickoff!r}, which the scene does not have")
+        return self
+
+    # --- derived --------------------------------------------------------------------------------------
+    def team_sign(self, team: str) -> int:
+        """+1 if the team's frame is the world frame, -1 if it is the world turned by pi (magenta)."""
+        spec = self.teams[team]
+        attacks = spec.attacks or ("-x" if team == "magenta" else "+x")
+        return 1 if attacks == "+x" else -1
+
+    def team_color(self, team: str) -> str:
+        return self.teams[team].color or team
+
+    def robot_names(self) -> list[str]:
+        return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.robot_ids()]
+
+    @property
+    def strategy_pub_period(self) -> float:
+        return self.control.strategy_pub_period or self.control.period
+
+    @property
+    def lob_angle_rad(self) -> float:
+        return math.radians(self.kicker.lob_angle)
