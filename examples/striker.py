@@ -38,8 +38,13 @@ class Keeper(RobotStrategy):
         y = max(-1.0, min(1.0, world.ball.y))
         face = math.atan2(world.ball.y - world.me.y, world.ball.x - world.me.x)
         # a target pose: the robot's low-level controller turns it into a velocity
-        return Command(target=(goal_x, y), target_ori=face, max_vel=self.ctx.params.speed,
-                       role=Role.GOALIE, action=Action.POSITIONED)
+        return Command(
+            target=(goal_x, y),
+            target_ori=face,
+            max_vel=self.ctx.params.speed,
+            role=Role.GOALIE,
+            action=Action.POSITIONED,
+        )
 
 
 class Striker(RobotStrategy):
@@ -50,8 +55,8 @@ class Striker(RobotStrategy):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.last_mode = MatchMode.STOPROBOT
-        self.wait_from = None              # where the ball was when an opponents' restart began
-        self.took_at = None                # where this robot took the ball (the 3 m dribbling rule)
+        self.wait_from = None  # where the ball was when an opponents' restart began
+        self.took_at = None  # where this robot took the ball (the 3 m dribbling rule)
 
     def decide(self, world) -> Command:
         p, me, ball = self.ctx.params, world.me, world.ball
@@ -64,7 +69,7 @@ class Striker(RobotStrategy):
         if mode == MatchMode.STARTROBOT and 1 <= last <= 12 and not is_ours(last):
             self.wait_from = (ball.x, ball.y)
         if self.wait_from is not None and math.hypot(ball.x - self.wait_from[0], ball.y - self.wait_from[1]) > 0.5:
-            self.wait_from = None          # the ball is in play
+            self.wait_from = None  # the ball is in play
         if 1 <= mode <= 13 or self.wait_from is not None or not self.nearest(world):
             return self.wait(world, mode if 1 <= mode <= 13 else world.match_type)
         goal = (self.ctx.field.half_length, 0.0)
@@ -74,8 +79,14 @@ class Striker(RobotStrategy):
             self.took_at = None
         if not me.holding_ball:
             face = math.atan2(ball.y - me.y, ball.x - me.x)
-            return Command(target=(ball.x, ball.y), target_ori=face, max_vel=p.speed, dribble=True,
-                           role=Role.ACTIVE, action=Action.CATCH_BALL)
+            return Command(
+                target=(ball.x, ball.y),
+                target_ori=face,
+                max_vel=p.speed,
+                dribble=True,
+                role=Role.ACTIVE,
+                action=Action.CATCH_BALL,
+            )
         face = math.atan2(goal[1] - me.y, goal[0] - me.x)
         close = math.hypot(goal[0] - me.x, goal[1] - me.y) < p.shoot_from
         aimed = abs(math.remainder(face - me.yaw, 2 * math.pi)) < 0.1
@@ -86,8 +97,15 @@ class Striker(RobotStrategy):
             return Command(target_ori=face, kick_speed=8.0, role=Role.ACTIVE, action=Action.AT_SHOOT_SITUATION)
         # carry the ball a short way (the rules allow 3 m from where it was taken), turning to the goal
         step = (me.x + 0.8 * math.cos(face), me.y + 0.8 * math.sin(face))
-        return Command(target=step if not close else None, target_ori=face, max_vel=1.5, max_w=3.0,
-                       dribble=True, role=Role.ACTIVE, action=Action.MOVE_WITH_BALL)
+        return Command(
+            target=step if not close else None,
+            target_ori=face,
+            max_vel=1.5,
+            max_w=3.0,
+            dribble=True,
+            role=Role.ACTIVE,
+            action=Action.MOVE_WITH_BALL,
+        )
 
     def wait(self, world, set_piece: int) -> Command:
         """Stand on the start spot, pushed away from the ball as far as the set piece requires."""
@@ -98,15 +116,15 @@ class Striker(RobotStrategy):
         if d < keep and not (is_ours(set_piece) and self.nearest(world)):
             x, y = ball.x + (x - ball.x) / max(d, 1e-6) * keep, ball.y + (y - ball.y) / max(d, 1e-6) * keep
         face = math.atan2(ball.y - world.me.y, ball.x - world.me.x)
-        return Command(target=(x, y), target_ori=face, max_vel=self.ctx.params.speed, role=Role.PASSIVE,
-                       action=Action.POSITIONED)
+        return Command(
+            target=(x, y), target_ori=face, max_vel=self.ctx.params.speed, role=Role.PASSIVE, action=Action.POSITIONED
+        )
 
     def nearest(self, world) -> bool:
         """Whether this robot is the field robot nearest to the ball (team-mates from perception)."""
         ball = world.ball
         mine = math.hypot(ball.x - world.me.x, ball.y - world.me.y)
-        return all(r.id == world.goalkeeper or math.hypot(ball.x - r.x, ball.y - r.y) >= mine
-                   for r in world.teammates)
+        return all(r.id == world.goalkeeper or math.hypot(ball.x - r.x, ball.y - r.y) >= mine for r in world.teammates)
 
 
 class StrikerTeam(TeamStrategy):

@@ -43,27 +43,39 @@ def run_one(series: str, seed: int, extra: list[str]) -> dict:
         raise SystemExit(f"failed: {shlex.join(cmd)}\n{proc.stderr}")
     out = json.loads(proc.stdout)
     r = out["result"]
-    return {"series": series, "seed": seed, "targets": r["targets"], "captured": r["captured"],
-            "capture_time_s": r["capture_time_s"], "sim_seconds": out["sim_seconds"],
-            "wall_seconds": out["wall_seconds"], "rtf": out["rtf"], "top_speed_m_s": r.get("top_speed_m_s", {}),
-            "chasers": r.get("chasers", "cyan"), "target_team": r.get("target_team", "magenta"),
-            "state_digest": out["state_digest"]}
+    return {
+        "series": series,
+        "seed": seed,
+        "targets": r["targets"],
+        "captured": r["captured"],
+        "capture_time_s": r["capture_time_s"],
+        "sim_seconds": out["sim_seconds"],
+        "wall_seconds": out["wall_seconds"],
+        "rtf": out["rtf"],
+        "top_speed_m_s": r.get("top_speed_m_s", {}),
+        "chasers": r.get("chasers", "cyan"),
+        "target_team": r.get("target_team", "magenta"),
+        "state_digest": out["state_digest"],
+    }
 
 
 def all_in_time(row: dict) -> bool:
-    return row["captured"] == row["targets"] and row["capture_time_s"] is not None \
-        and row["capture_time_s"] <= LIMIT_S
+    return row["captured"] == row["targets"] and row["capture_time_s"] is not None and row["capture_time_s"] <= LIMIT_S
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| series | seed | captured | last capture [s] | top speed targets / chasers [m/s] | sim s | rtf |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| series | seed | captured | last capture [s] | top speed targets / chasers [m/s] | sim s | rtf |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for row in rows:
         speeds = row["top_speed_m_s"]
         top = f"{speeds.get(row['target_team'], 0.0):.2f} / {speeds.get(row['chasers'], 0.0):.2f}"
         t = row["capture_time_s"]
-        lines.append(f"| {row['series']} | {row['seed']} | {row['captured']}/{row['targets']} | "
-                     f"{'-' if t is None else f'{t:.2f}'} | {top} | {row['sim_seconds']:.1f} | {row['rtf']:.0f} |")
+        lines.append(
+            f"| {row['series']} | {row['seed']} | {row['captured']}/{row['targets']} | "
+            f"{'-' if t is None else f'{t:.2f}'} | {top} | {row['sim_seconds']:.1f} | {row['rtf']:.0f} |"
+        )
     return "\n".join(lines)
 
 
@@ -72,8 +84,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 (default 10)")
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (default 1: the rtf column stays honest)")
     ap.add_argument("--only", choices=sorted(SERIES), help="run one series only")
-    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="an extra scene override for every run (e.g. perception.position_noise=0.05)")
+    ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="an extra scene override for every run (e.g. perception.position_noise=0.05)",
+    )
     ap.add_argument("--json", metavar="FILE", help="also write every run's figures to FILE")
     args = ap.parse_args(argv)
     extra = [a for o in args.overrides for a in ("--set", o)]
@@ -87,20 +105,20 @@ def main(argv: list[str] | None = None) -> int:
     herding = [r for r in rows if r["series"] == "herding"]
     if herding:
         wins = [r for r in herding if all_in_time(r)]
-        need = -(-9 * len(herding) // 10)            # 9 of 10, rounded up
+        need = -(-9 * len(herding) // 10)  # 9 of 10, rounded up
         times = [r["capture_time_s"] for r in wins]
-        summary = (f"herding: all targets captured within {LIMIT_S:g} s in {len(wins)} of {len(herding)} seeds "
-                   f"(required: {need})")
+        summary = (
+            f"herding: all targets captured within {LIMIT_S:g} s in {len(wins)} of {len(herding)} seeds "
+            f"(required: {need})"
+        )
         if times:
-            summary += (f"; last capture median {statistics.median(times):.1f} s, "
-                        f"worst {max(times):.1f} s")
+            summary += f"; last capture median {statistics.median(times):.1f} s, worst {max(times):.1f} s"
         print(summary)
         ok &= len(wins) >= need
     still = [r for r in rows if r["series"] == "still"]
     if still:
         caught = sum(r["captured"] for r in still)
-        print(f"still: {caught} targets captured over {len(still)} seeds with the chasers standing still "
-              f"(required: 0)")
+        print(f"still: {caught} targets captured over {len(still)} seeds with the chasers standing still (required: 0)")
         ok &= caught == 0
     rtfs = [r["rtf"] for r in rows if r["rtf"]]
     if rtfs:

@@ -31,16 +31,29 @@ from concurrent.futures import ThreadPoolExecutor
 from simatch.scene.referee.log import FOUL_TYPES
 
 RETAKES_FOR_A_LOOP = 3
-FOUL_LOOP = 5               # the same robot fouled for the same rule this many times in a row is stuck
-FOUL_LOOP_GAP = 15.0        # ... each within this many seconds of the one before
+FOUL_LOOP = 5  # the same robot fouled for the same rule this many times in a row is stuck
+FOUL_LOOP_GAP = 15.0  # ... each within this many seconds of the one before
 #: event types left out of the --out file (the rest, every foul, goal, ball out and restart, is kept)
-QUIET = frozenset({"stage"})      # the same restart taken again this many times in a row is a stuck loop
+QUIET = frozenset({"stage"})  # the same restart taken again this many times in a row is a stuck loop
 
 
 def match_command(simatch: list[str], cyan: str, magenta: str, seed: int, half: float) -> list[str]:
-    return simatch + ["run", "msl_5v5", "--json", "--quiet", "--seed", str(seed),
-                      "--set", f"teams.cyan.strategy={cyan}", "--set", f"teams.magenta.strategy={magenta}",
-                      "--set", "match.halves=2", "--set", f"match.half_duration={half}"]
+    return simatch + [
+        "run",
+        "msl_5v5",
+        "--json",
+        "--quiet",
+        "--seed",
+        str(seed),
+        "--set",
+        f"teams.cyan.strategy={cyan}",
+        "--set",
+        f"teams.magenta.strategy={magenta}",
+        "--set",
+        "match.halves=2",
+        "--set",
+        f"match.half_duration={half}",
+    ]
 
 
 def play(simatch: list[str], cyan: str, magenta: str, seed: int, half: float) -> dict:
@@ -75,8 +88,9 @@ def longest_retake_run(events: list[dict]) -> int:
     best = run = 0
     last = None
     for ev in events:
-        if ev["type"] in ("set_piece_distance", "kickoff_half", "dropped_ball_distance") and \
-                "taken again" in ev.get("detail", ""):
+        if ev["type"] in ("set_piece_distance", "kickoff_half", "dropped_ball_distance") and "taken again" in ev.get(
+            "detail", ""
+        ):
             key = ev.get("detail", "").split(":")[-1]
             run = run + 1 if key == last else 1
             last = key
@@ -120,8 +134,10 @@ def _fouls_by_type(events: list[dict]) -> dict:
 
 def check_fouls(row: dict) -> None:
     """The table's fouls per type must add up to the referee's own count per team."""
-    for colour, total in ((row["nubot_colour"], row["fouls_nubot"]),
-                          ("magenta" if row["nubot_colour"] == "cyan" else "cyan", row["fouls_other"])):
+    for colour, total in (
+        (row["nubot_colour"], row["fouls_nubot"]),
+        ("magenta" if row["nubot_colour"] == "cyan" else "cyan", row["fouls_other"]),
+    ):
         mine = sum(n for k, n in row["fouls_by_type"].items() if k.startswith(colour + ":"))
         if mine != total:
             raise RuntimeError(f"seed {row['seed']}: {mine} fouls of {colour} by type, the referee counted {total}")
@@ -129,15 +145,19 @@ def check_fouls(row: dict) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--pairing", choices=["simple", "nubot", "both"], default="both",
-                    help="nubot against simple, against itself, or both (default)")
-    ap.add_argument("--matches", type=int, default=None,
-                    help="matches per pairing (default: 20 against simple, 10 against nubot)")
+    ap.add_argument(
+        "--pairing",
+        choices=["simple", "nubot", "both"],
+        default="both",
+        help="nubot against simple, against itself, or both (default)",
+    )
+    ap.add_argument(
+        "--matches", type=int, default=None, help="matches per pairing (default: 20 against simple, 10 against nubot)"
+    )
     ap.add_argument("--half", type=float, default=300.0, help="length of each of the two halves [s]")
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=1, help="matches run at once (one process each)")
-    ap.add_argument("--simatch", default=None,
-                    help="the simatch command (default: this Python with -m simatch)")
+    ap.add_argument("--simatch", default=None, help="the simatch command (default: this Python with -m simatch)")
     ap.add_argument("--out", default=None, help="write every match's summary and result here (JSON)")
     args = ap.parse_args(argv)
     simatch = shlex.split(args.simatch) if args.simatch else [sys.executable, "-m", "simatch"]
@@ -153,8 +173,7 @@ def main(argv: list[str] | None = None) -> int:
             cyan = "nubot" if nubot_team == "cyan" else pairing
             magenta = pairing if nubot_team == "cyan" else "nubot"
             jobs.append((seed, nubot_team, cyan, magenta))
-        print(f"\n## nubot against {pairing}: {n} matches of 2 x {args.half:g} s "
-              f"({args.jobs} at once)", flush=True)
+        print(f"\n## nubot against {pairing}: {n} matches of 2 x {args.half:g} s ({args.jobs} at once)", flush=True)
         with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
             outs = list(pool.map(lambda j: play(simatch, j[2], j[3], j[0], args.half), jobs))
         rows = [summarise(out, j[1], 2 * args.half) for out, j in zip(outs, jobs)]
@@ -165,8 +184,12 @@ def main(argv: list[str] | None = None) -> int:
         for line in verdict["lines"]:
             print(line)
         status |= 0 if verdict["ok"] else 1
-        report[pairing] = {"matches": rows, "verdict": verdict, "results": [o["result"] for o in outs],
-                            "events": [[e for e in o["events"] if e["type"] not in QUIET] for o in outs]}
+        report[pairing] = {
+            "matches": rows,
+            "verdict": verdict,
+            "results": [o["result"] for o in outs],
+            "events": [[e for e in o["events"] if e["type"] not in QUIET] for o in outs],
+        }
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
             json.dump(report, f, indent=1)
@@ -174,13 +197,17 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def print_table(rows: list[dict]) -> None:
-    print("\n| seed | nubot plays | score (nubot-other) | fouls nubot | fouls other | no progress | retake loop "
-          "| foul loop | ended | rtf |")
+    print(
+        "\n| seed | nubot plays | score (nubot-other) | fouls nubot | fouls other | no progress | retake loop "
+        "| foul loop | ended | rtf |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['seed']} | {r['nubot_colour']} | {r['goals_for']}-{r['goals_against']} | {r['fouls_nubot']} | "
-              f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {r['foul_loop']} | {'yes' if r['ended'] else 'NO'} | "
-              f"{r['rtf']} |")
+        print(
+            f"| {r['seed']} | {r['nubot_colour']} | {r['goals_for']}-{r['goals_against']} | {r['fouls_nubot']} | "
+            f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {r['foul_loop']} | {'yes' if r['ended'] else 'NO'} | "
+            f"{r['rtf']} |"
+        )
 
 
 def judge(pairing: str, rows: list[dict]) -> dict:
@@ -192,20 +219,27 @@ def judge(pairing: str, rows: list[dict]) -> dict:
     if pairing == "simple":
         need_wins = round(18 * n / 20)
         ok = wins >= need_wins and goals / n >= 3.0
-        lines.append(f"\nwins {wins}/{n} (target >= {need_wins}), goals per match {goals / n:.2f} (target >= 3), "
-                     f"nubot fouls per match {sum(fouls) / n:.2f}: {'PASS' if ok else 'FAIL'}")
+        lines.append(
+            f"\nwins {wins}/{n} (target >= {need_wins}), goals per match {goals / n:.2f} (target >= 3), "
+            f"nubot fouls per match {sum(fouls) / n:.2f}: {'PASS' if ok else 'FAIL'}"
+        )
     else:
         scored = sum(r["goals_for"] + r["goals_against"] > 0 for r in rows)
         fouls_both = fouls + [r["fouls_other"] for r in rows]
         worst = max(fouls_both) if fouls_both else 0
-        frozen = [r["seed"] for r in rows if not r["ended"] or r["retake_loop"] >= RETAKES_FOR_A_LOOP
-                  or r["foul_loop"] >= FOUL_LOOP]
+        frozen = [
+            r["seed"]
+            for r in rows
+            if not r["ended"] or r["retake_loop"] >= RETAKES_FOR_A_LOOP or r["foul_loop"] >= FOUL_LOOP
+        ]
         ok = scored > n / 2 and worst <= 3 and not frozen
-        lines.append(f"\nmatches with a goal {scored}/{n} (target: most), goals per match "
-                     f"{sum(r['goals_for'] + r['goals_against'] for r in rows) / n:.2f}, fouls per team per match: "
-                     f"mean {sum(fouls_both) / len(fouls_both):.2f}, max {worst} (target <= 3), no-progress "
-                     f"dropped balls per match {sum(r['no_progress'] for r in rows) / n:.2f}, frozen matches "
-                     f"{frozen or 'none'}: {'PASS' if ok else 'FAIL'}")
+        lines.append(
+            f"\nmatches with a goal {scored}/{n} (target: most), goals per match "
+            f"{sum(r['goals_for'] + r['goals_against'] for r in rows) / n:.2f}, fouls per team per match: "
+            f"mean {sum(fouls_both) / len(fouls_both):.2f}, max {worst} (target <= 3), no-progress "
+            f"dropped balls per match {sum(r['no_progress'] for r in rows) / n:.2f}, frozen matches "
+            f"{frozen or 'none'}: {'PASS' if ok else 'FAIL'}"
+        )
     return {"ok": ok, "lines": lines, "wins": wins, "goals_per_match": goals / n}
 
 

@@ -59,8 +59,10 @@ def main() -> None:
         print(json.dumps({"runs": rows, "same_digest": same}))
         return
     for r in rows:
-        print(f"{r['mode']:5s} decide {r['decide_us_per_robot_tick']:6.1f} us per robot tick, "
-              f"{r['team_pictures_per_robot_per_s']:5.1f} team pictures per robot per s")
+        print(
+            f"{r['mode']:5s} decide {r['decide_us_per_robot_tick']:6.1f} us per robot tick, "
+            f"{r['team_pictures_per_robot_per_s']:5.1f} team pictures per robot per s"
+        )
     print("same state_digest" if same else "DIFFERENT state_digest: sharing the team picture changed the match")
 
 

@@ -30,24 +30,24 @@ class Area:
 
 @dataclass(frozen=True)
 class FieldGeometry:
-    length: float = 22.0                  # between the goal lines
-    width: float = 14.0                   # between the side lines
-    margin: float = 1.5                   # floor beyond the lines
+    length: float = 22.0  # between the goal lines
+    width: float = 14.0  # between the side lines
+    margin: float = 1.5  # floor beyond the lines
     line_width: float = 0.125
-    markings: str = "msl"                 # "msl" (soccer lines) or "none"
+    markings: str = "msl"  # "msl" (soccer lines) or "none"
     center_circle_radius: float = 2.0
     goal_area_depth: float = 0.75
     goal_area_width: float = 3.9
     penalty_area_depth: float = 2.25
     penalty_area_width: float = 6.9
-    penalty_spot_distance: float = 3.0    # from the goal line
+    penalty_spot_distance: float = 3.0  # from the goal line
     corner_arc_radius: float = 0.75
     goals: bool = True
-    goal_width: float = 2.4               # inner mouth, between the posts
-    goal_height: float = 1.0              # lower edge of the crossbar
+    goal_width: float = 2.4  # inner mouth, between the posts
+    goal_height: float = 1.0  # lower edge of the crossbar
     goal_depth: float = 0.6
     goal_post_size: float = 0.125
-    walls: bool = True                    # boards at the outer edge of the margin
+    walls: bool = True  # boards at the outer edge of the margin
     wall_height: float = 0.5
     areas: tuple[Area, ...] = field(default_factory=tuple)
 
@@ -71,12 +71,18 @@ class FieldGeometry:
         return abs(x) <= self.half_length + margin and abs(y) <= self.half_width + margin
 
     def in_penalty_area(self, x: float, y: float, side: int) -> bool:
-        return (side * x >= self.half_length - self.penalty_area_depth and side * x <= self.half_length
-                and abs(y) <= 0.5 * self.penalty_area_width)
+        return (
+            side * x >= self.half_length - self.penalty_area_depth
+            and side * x <= self.half_length
+            and abs(y) <= 0.5 * self.penalty_area_width
+        )
 
     def in_goal_area(self, x: float, y: float, side: int) -> bool:
-        return (side * x >= self.half_length - self.goal_area_depth and side * x <= self.half_length
-                and abs(y) <= 0.5 * self.goal_area_width)
+        return (
+            side * x >= self.half_length - self.goal_area_depth
+            and side * x <= self.half_length
+            and abs(y) <= 0.5 * self.goal_area_width
+        )
 
     def goal_center(self, side: int) -> tuple[float, float]:
         return (side * self.half_length, 0.0)
@@ -93,17 +99,32 @@ class FieldGeometry:
         out: list[dict] = [
             {"kind": "polyline", "points": [(-L, -W), (L, -W), (L, W), (-L, W), (-L, -W)]},
             {"kind": "polyline", "points": [(0.0, -W), (0.0, W)]},
-            {"kind": "arc", "center": (0.0, 0.0), "radius": self.center_circle_radius,
-             "start": 0.0, "end": 2 * math.pi},
+            {
+                "kind": "arc",
+                "center": (0.0, 0.0),
+                "radius": self.center_circle_radius,
+                "start": 0.0,
+                "end": 2 * math.pi,
+            },
             {"kind": "dot", "center": (0.0, 0.0), "radius": 0.1},
         ]
         for side in (-1, 1):
-            for depth, width in ((self.penalty_area_depth, self.penalty_area_width),
-                                 (self.goal_area_depth, self.goal_area_width)):
+            for depth, width in (
+                (self.penalty_area_depth, self.penalty_area_width),
+                (self.goal_area_depth, self.goal_area_width),
+            ):
                 x_in = side * (L - depth)
-                out.append({"kind": "polyline",
-                            "points": [(side * L, -width / 2), (x_in, -width / 2), (x_in, width / 2),
-                                       (side * L, width / 2)]})
+                out.append(
+                    {
+                        "kind": "polyline",
+                        "points": [
+                            (side * L, -width / 2),
+                            (x_in, -width / 2),
+                            (x_in, width / 2),
+                            (side * L, width / 2),
+                        ],
+                    }
+                )
             out.append({"kind": "dot", "center": self.penalty_spot(side), "radius": 0.1})
         r = self.corner_arc_radius
         for cx, cy, a0 in ((-L, -W, 0.0), (L, -W, 0.5 * math.pi), (L, W, math.pi), (-L, W, 1.5 * math.pi)):
@@ -113,9 +134,16 @@ class FieldGeometry:
     def describe(self) -> dict:
         """Everything a viewer needs to draw the field, as plain JSON-able data."""
         return {
-            "length": self.length, "width": self.width, "margin": self.margin, "line_width": self.line_width,
-            "goals": self.goals, "goal_width": self.goal_width, "goal_depth": self.goal_depth,
-            "goal_height": self.goal_height, "goal_post_size": self.goal_post_size,
-            "walls": self.walls, "lines": self.lines(),
+            "length": self.length,
+            "width": self.width,
+            "margin": self.margin,
+            "line_width": self.line_width,
+            "goals": self.goals,
+            "goal_width": self.goal_width,
+            "goal_depth": self.goal_depth,
+            "goal_height": self.goal_height,
+            "goal_post_size": self.goal_post_size,
+            "walls": self.walls,
+            "lines": self.lines(),
             "areas": [{"name": a.name, "x0": a.x0, "y0": a.y0, "x1": a.x1, "y1": a.y1} for a in self.areas],
         }

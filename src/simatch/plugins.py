@@ -19,15 +19,17 @@ def load(spec: str, shipped: Mapping[str, str], what: str) -> Any:
     target = shipped.get(spec, spec)
     module_name, sep, attr = target.partition(":")
     if not sep or not module_name or not attr:
-        raise PluginError(f"unknown {what} {spec!r}: expected one of {', '.join(sorted(shipped))} "
-                          f"or 'package.module:Class'")
+        raise PluginError(
+            f"unknown {what} {spec!r}: expected one of {', '.join(sorted(shipped))} or 'package.module:Class'"
+        )
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
         raise PluginError(f"{what} {spec!r}: cannot import module {module_name!r} ({exc})") from None
-    except Exception as exc:   # a user module that fails while importing
-        raise PluginError(f"{what} {spec!r}: module {module_name!r} fails to import: "
-                          f"{type(exc).__name__}: {exc}") from None
+    except Exception as exc:  # a user module that fails while importing
+        raise PluginError(
+            f"{what} {spec!r}: module {module_name!r} fails to import: {type(exc).__name__}: {exc}"
+        ) from None
     obj = module
     for part in attr.split("."):
         try:

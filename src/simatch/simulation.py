@@ -29,6 +29,7 @@ from .sim.simulator import CommandError, Simulator
 from .strategy.node import RobotNode
 from .strategy.team import build_team
 
+
 def event_dict(ev) -> dict:
     """A GameEvent as the JSON object of ``simatch run --json``."""
     out: dict[str, Any] = {"t": round(float(ev.stamp), 6), "type": ev.type}
@@ -49,7 +50,7 @@ def _plain(value: Any) -> Any:
     """JSON for numpy scalars and arrays handed to the API (exact: float32 widens to float64 exactly)."""
     if hasattr(value, "tolist"):
         return value.tolist()
-    return repr(value)        # never fails the caller; the simulator refuses such values anyway
+    return repr(value)  # never fails the caller; the simulator refuses such values anyway
 
 
 class ManualDriver(Node):
@@ -69,14 +70,20 @@ class ManualDriver(Node):
     def start(self, ctx) -> None:
         super().start(ctx)
         self.pub_vel = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
-        self.pub_action = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD),
-                                            msgs.ActionCmd)
+        self.pub_action = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
 
     def send_now(self, now: float) -> None:
         vx, vy, w = self.vel
         self.pub_vel.put(msgs.VelCmd(stamp=now, tick=0, vx=vx, vy=vy, w=w))
-        self.pub_action.put(msgs.new(msgs.ActionCmd, stamp=now, dribble=self.dribble, kick_speed=self.kick,
-                                     kick_type=msgs.ActionCmd.KICK_LOB if self.lob else msgs.ActionCmd.KICK_GROUND))
+        self.pub_action.put(
+            msgs.new(
+                msgs.ActionCmd,
+                stamp=now,
+                dribble=self.dribble,
+                kick_speed=self.kick,
+                kick_type=msgs.ActionCmd.KICK_LOB if self.lob else msgs.ActionCmd.KICK_GROUND,
+            )
+        )
         self.kick = 0.0
 
     def tick(self, now: float) -> None:
@@ -86,9 +93,15 @@ class ManualDriver(Node):
 class Simulation:
     """One run of a scene. ``scene`` is a shipped scene name, a path to a TOML file, or a LoadedScene."""
 
-    def __init__(self, scene: str | LoadedScene = "msl_5v5", seed: int = 0,
-                 overrides: Mapping[str, Any] | None = None, bus: Bus | None = None,
-                 run_name: str = "embedded", teams: str = "embedded"):
+    def __init__(
+        self,
+        scene: str | LoadedScene = "msl_5v5",
+        seed: int = 0,
+        overrides: Mapping[str, Any] | None = None,
+        bus: Bus | None = None,
+        run_name: str = "embedded",
+        teams: str = "embedded",
+    ):
         self.scene = scene if isinstance(scene, LoadedScene) else load_scene(scene, overrides)
         spec = self.scene.spec
         self.seed = int(seed)
@@ -99,9 +112,9 @@ class Simulation:
         self._closed = False
         self._sub_events = self.bus.subscribe(topics.EVENTS, msgs.GameEvent, self._on_event)
         self._pub_operator = self.bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
-        self._stepping = False             # inside a physics step (nodes at work) rather than between steps
-        self._running = False              # inside `run`
-        self._stop: BaseException | None = None   # raised by `run` at its next step boundary (`stop_soon`)
+        self._stepping = False  # inside a physics step (nodes at work) rather than between steps
+        self._running = False  # inside `run`
+        self._stop: BaseException | None = None  # raised by `run` at its next step boundary (`stop_soon`)
         check_models(self.scene)
         self.simulator = Simulator(spec, self.seed)
         self._sensor = self.clock.add(SimulatorNode(self.simulator))
@@ -133,17 +146,23 @@ class Simulation:
         if ev.type == "coach_command" and ev.team in self.coaches:
             # a run has coaches only where no judge gives commands: their commands come from outside
             coach = self.coaches[ev.team]
-            self._operator("coach", ev.team, cmd=int(ev.value), max_vel=coach.max_vel, max_w=coach.max_w,
-                           **coach.extra)
+            self._operator("coach", ev.team, cmd=int(ev.value), max_vel=coach.max_vel, max_w=coach.max_w, **coach.extra)
 
     # --- operator commands ------------------------------------------------------------------------------------
     def _operator(self, call: str, target: str, **args: Any) -> None:
         """Publish an intervention from outside the run's nodes on the ``operator`` topic (when anybody, e.g.
         a recorder, listens), so that the run can be re-simulated from its recording."""
         if self._pub_operator.active:
-            self._pub_operator.put(msgs.OperatorCommand(
-                stamp=self.time, step=self.simulator.step_index, during_step=self._stepping, call=call,
-                target=target, args=json.dumps(args, default=_plain)))
+            self._pub_operator.put(
+                msgs.OperatorCommand(
+                    stamp=self.time,
+                    step=self.simulator.step_index,
+                    during_step=self._stepping,
+                    call=call,
+                    target=target,
+                    args=json.dumps(args, default=_plain),
+                )
+            )
 
     @property
     def events(self) -> list[dict]:
@@ -181,8 +200,13 @@ class Simulation:
             self._stepping = False
         self._wall += _time.perf_counter() - t0
 
-    def run(self, seconds: float | None = None, until_done: bool = True,
-            progress: Callable[[float], None] | None = None, realtime: bool = False) -> None:
+    def run(
+        self,
+        seconds: float | None = None,
+        until_done: bool = True,
+        progress: Callable[[float], None] | None = None,
+        realtime: bool = False,
+    ) -> None:
         """Advance by ``seconds`` of simulated time (default: the run's duration), stopping early when the
         judge ends the run. ``progress(sim_time)`` is called about ten times a simulated second;
         ``realtime`` paces the run at wall-clock speed (as does ``pace``, which may change during the run)."""
@@ -194,7 +218,7 @@ class Simulation:
         steps = int(round(seconds / self.dt))
         chunk = max(1, int(round(0.1 / self.dt)))
         t0 = _time.perf_counter()
-        anchor: tuple[float, float, float] | None = None      # (wall, sim, pace) when pacing began
+        anchor: tuple[float, float, float] | None = None  # (wall, sim, pace) when pacing began
         done = 0
         self._running = True
         try:
@@ -298,7 +322,7 @@ class Simulation:
         if name in self._manual:
             return
         team, rid = topics.split_robot_name(name)
-        self.simulator.index_of(name)   # raises for an unknown robot
+        self.simulator.index_of(name)  # raises for an unknown robot
         node = self.robot_nodes.get(name)
         if node is not None:
             node.detached = True

@@ -60,7 +60,7 @@ def test_messages_round_trip_through_cdr_bit_for_bit():
     m = msgs.new(msgs.VelCmd, stamp=1.0 / 3.0, tick=7, vx=vx, vy=vy, w=w)
     back = msgs.decode(msgs.VelCmd, msgs.encode(m))
     assert (back.stamp, back.tick, back.vx, back.vy, back.w) == (m.stamp, m.tick, m.vx, m.vy, m.w)
-    assert back.vx != 0.1 and back.vx == pytest.approx(0.1, rel=1e-7) and back.w != 0.0     # (a float32 subnormal)
+    assert back.vx != 0.1 and back.vx == pytest.approx(0.1, rel=1e-7) and back.w != 0.0  # (a float32 subnormal)
     states = msgs.new(msgs.ModelStates, stamp=1.0 / 3.0, pose=np.array([1.0 / 3.0]))
     back = msgs.decode(msgs.ModelStates, msgs.encode(states))
     assert back.stamp == 1.0 / 3.0 and back.pose[0] == np.float32(1.0 / 3.0)

@@ -23,7 +23,7 @@ def test_locomotion_test_meets_the_issue_bounds():
     out = json.loads(run("run", "omni_circle", "--json").stdout)
     assert set(out) == {"scene", "seed", "sim_seconds", "wall_seconds", "rtf", "state_digest", "result", "events"}
     r = out["result"]
-    assert r["samples"] == 5112                     # 25.56 s sampled every physics step
+    assert r["samples"] == 5112  # 25.56 s sampled every physics step
     assert r["position_error_cm"] <= 0.5
     assert abs(r["orientation_error_rad"] - r["orientation_error_expected_rad"]) <= 0.01
     # a robot speeding up from rest at 2.5 m/s^2 lags w t by a constant (here ~0.72 rad)
@@ -41,19 +41,33 @@ def test_run_json_is_one_object_and_repeatable():
 
 
 def test_overrides_on_the_command_line():
-    out = json.loads(run("run", "omni_circle", "--set", "judge.duration=2.0", "--set",
-                         "teams.cyan.strategy_params.w=1.0", "--set", "judge.w=1.0", "--json").stdout)
+    out = json.loads(
+        run(
+            "run",
+            "omni_circle",
+            "--set",
+            "judge.duration=2.0",
+            "--set",
+            "teams.cyan.strategy_params.w=1.0",
+            "--set",
+            "judge.w=1.0",
+            "--json",
+        ).stdout
+    )
     assert out["result"]["samples"] == 400 and out["result"]["command"]["w"] == 1.0
 
 
-@pytest.mark.parametrize("args, message", [
-    (["run", "nosuchscene"], "no scene named 'nosuchscene'"),
-    (["run", "msl_5v5", "--set", "ball.mass=-2"], "ball.mass: expected greater than 0"),
-    (["run", "msl_5v5", "--set", "ball.mas=2"], "ball.mas: unknown key"),
-    (["run", "msl_5v5", "--duration", "-1"], "--duration must be positive"),
-    (["bench", "--only", "physics", "--seconds", "-1"], "--seconds must be positive"),
-    (["bench", "--only", "physics", "--seconds", "nan"], "--seconds must be positive"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["run", "nosuchscene"], "no scene named 'nosuchscene'"),
+        (["run", "msl_5v5", "--set", "ball.mass=-2"], "ball.mass: expected greater than 0"),
+        (["run", "msl_5v5", "--set", "ball.mas=2"], "ball.mas: unknown key"),
+        (["run", "msl_5v5", "--duration", "-1"], "--duration must be positive"),
+        (["bench", "--only", "physics", "--seconds", "-1"], "--seconds must be positive"),
+        (["bench", "--only", "physics", "--seconds", "nan"], "--seconds must be positive"),
+    ],
+)
 def test_mistakes_exit_2_with_a_clear_message(args, message):
     proc = run(*args, check=False)
     assert proc.returncode == 2, proc.stderr
@@ -88,7 +102,7 @@ def test_bench_runs_each_benchmark_in_its_own_process_and_prints_one_object():
     out = json.loads(proc.stdout)
     assert proc.stdout.count("\n") == 1
     assert out["referee_sim_seconds"] == 1.0 and out["distributed_rtt_samples"] == 40
-    for name in ("referee", "distributed_rtt"):          # what the host took meanwhile, beside each figure
+    for name in ("referee", "distributed_rtt"):  # what the host took meanwhile, beside each figure
         assert 0.0 <= out[f"{name}_host_steal_pct"] <= 100.0
     bad = run("bench", "--only", "nosuchbench", check=False)
     assert bad.returncode == 2 and "unknown benchmark(s) nosuchbench" in bad.stderr
@@ -98,7 +112,7 @@ def test_the_hosts_steal_is_read_from_proc_stat():
     from simatch.bench import host
 
     now = host.cpu_times()
-    assert now is not None and 0 <= now[0] <= now[1]           # this machine is Linux
+    assert now is not None and 0 <= now[0] <= now[1]  # this machine is Linux
     assert host.steal_pct((10, 1000), (35, 1100)) == 25.0
     assert host.steal_pct((10, 1000), (10, 1000)) is None and host.steal_pct(None, now) is None
 
@@ -111,5 +125,7 @@ def test_a_benchmark_that_fails_alone_is_reported_with_what_it_said(monkeypatch)
         return subprocess.CompletedProcess(cmd, 1, stdout="", stderr="Traceback ...\nRuntimeError: no cores")
 
     monkeypatch.setattr(bench.subprocess, "run", failing)
-    with pytest.raises(UsageError, match="benchmark physics failed \\(exit 1\\):\nTraceback ...\nRuntimeError: no cores"):
+    with pytest.raises(
+        UsageError, match="benchmark physics failed \\(exit 1\\):\nTraceback ...\nRuntimeError: no cores"
+    ):
         bench.run_alone("physics", 1.0)

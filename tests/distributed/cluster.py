@@ -50,17 +50,28 @@ class Processes:
         out = open(self.tmp / f"{name}-{len(self.procs)}.out", "w+")
         err = open(self.tmp / f"{name}-{len(self.procs)}.err", "w+")
         p = subprocess.Popen([*program, *args], stdout=out, stderr=err, cwd=ROOT, env=self.env)
-        p.out, p.err, p.name = out, err, name     # type: ignore[attr-defined]
+        p.out, p.err, p.name = out, err, name  # type: ignore[attr-defined]
         self.procs.append(p)
         return p
 
     def server(self, scene: str, *args: str) -> subprocess.Popen:
-        return self.start("server", scene, "--listen", self.endpoint, "--run", self.run, "--credentials",
-                          str(self.creds), "--quiet", "--json", *args, name="server")
+        return self.start(
+            "server",
+            scene,
+            "--listen",
+            self.endpoint,
+            "--run",
+            self.run,
+            "--credentials",
+            str(self.creds),
+            "--quiet",
+            "--json",
+            *args,
+            name="server",
+        )
 
     def client_args(self, team: str) -> list[str]:
-        return ["--connect", self.endpoint, "--run", self.run, "--key", str(self.creds / f"{team}.key"),
-                "--wait", "60"]
+        return ["--connect", self.endpoint, "--run", self.run, "--key", str(self.creds / f"{team}.key"), "--wait", "60"]
 
     def team(self, team: str, *args: str) -> subprocess.Popen:
         return self.start("team", team, *self.client_args(team), *args, name=f"team-{team}")
@@ -72,8 +83,12 @@ class Processes:
     def plain(self, who: str) -> subprocess.Popen:
         """A team (TEAM) or robot (TEAM/ID) process that declines bundles: topic by topic (plain_client)."""
         team = who.split("/")[0]
-        return self.start(who, *self.client_args(team)[:-2], program=[sys.executable, "-m", PLAIN],
-                          name=f"plain-{who.replace('/', '-')}")
+        return self.start(
+            who,
+            *self.client_args(team)[:-2],
+            program=[sys.executable, "-m", PLAIN],
+            name=f"plain-{who.replace('/', '-')}",
+        )
 
     @staticmethod
     def wait(p: subprocess.Popen, timeout: float = 120.0) -> int:

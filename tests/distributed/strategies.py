@@ -31,12 +31,23 @@ class Chaser(RobotStrategy):
                 turn = math.remainder(aim - me.yaw, 2 * math.pi)
                 kick = 6.0 if abs(turn) < 0.15 else 0.0
                 return Command(target_ori=aim, dribble=True, kick_speed=kick, max_w=4.0, user=(mine,), role=1)
-            return Command(target=(ball.x, ball.y), target_ori=math.atan2(ball.y - me.y, ball.x - me.x),
-                           dribble=True, max_vel=3.0, user=(mine,), role=1)
+            return Command(
+                target=(ball.x, ball.y),
+                target_ori=math.atan2(ball.y - me.y, ball.x - me.x),
+                dribble=True,
+                max_vel=3.0,
+                user=(mine,),
+                role=1,
+            )
         r = 0.5 if self.ctx.is_goalkeeper else 1.5
         phase = 0.7 * t + self.ctx.id
-        return Command(target=(x0 + r * math.cos(phase), y0 + r * math.sin(phase)), target_ori=phase,
-                       max_vel=2.0, user=(mine,), role=2)
+        return Command(
+            target=(x0 + r * math.cos(phase), y0 + r * math.sin(phase)),
+            target_ori=phase,
+            max_vel=2.0,
+            user=(mine,),
+            role=2,
+        )
 
 
 class SlowChaser(Chaser):

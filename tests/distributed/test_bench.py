@@ -11,9 +11,9 @@ def test_the_round_trip_benchmark_reports_the_whole_and_its_parts():
     from simatch.bench.distributed import rtt
 
     out = rtt(seconds=2.0)
-    assert out["distributed_rtt_samples"] == 80                      # every tick of 2 s answered
+    assert out["distributed_rtt_samples"] == 80  # every tick of 2 s answered
     for name in ("", "_feed", "_processing", "_transit"):
         p50, p99 = out[f"distributed_rtt{name}_p50_ms"], out[f"distributed_rtt{name}_p99_ms"]
         assert 0.0 < p50 <= p99 < 1000.0, name
     parts = sum(out[f"distributed_rtt_{n}_p50_ms"] for n in ("feed", "processing", "transit"))
-    assert parts < 3 * out["distributed_rtt_p50_ms"]                 # parts of the same round trips
+    assert parts < 3 * out["distributed_rtt_p50_ms"]  # parts of the same round trips

@@ -13,15 +13,30 @@ from .cluster import ROOT, SIMATCH, chaser_overrides
 
 SCENE = "msl_5v5"
 DURATION = "2"
-SETTINGS = [*chaser_overrides("cyan", "magenta"), "--set", "perception.position_noise=0.05",
-            "--set", "perception.ball_dropout=0.1", "--seed", "3", "--duration", DURATION]
+SETTINGS = [
+    *chaser_overrides("cyan", "magenta"),
+    "--set",
+    "perception.position_noise=0.05",
+    "--set",
+    "perception.ball_dropout=0.1",
+    "--seed",
+    "3",
+    "--duration",
+    DURATION,
+]
 #: events only a distributed run has (who joined, who left)
 PROCESS_EVENTS = {"process_joined", "process_left", "process_lost"}
 
 
 def embedded(procs) -> dict:
-    out = subprocess.run([*SIMATCH, "run", SCENE, *SETTINGS, "--json", "--quiet"], capture_output=True, text=True,
-                         cwd=ROOT, env=procs.env, timeout=300)
+    out = subprocess.run(
+        [*SIMATCH, "run", SCENE, *SETTINGS, "--json", "--quiet"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env=procs.env,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout)
 
@@ -32,7 +47,7 @@ def game_events(result: dict) -> list:
 
 @pytest.mark.slow
 def test_one_process_per_team_equals_embedded(procs):
-    server = procs.server(SCENE, *SETTINGS, "--deadline", "120")     # never give up on a slow process here
+    server = procs.server(SCENE, *SETTINGS, "--deadline", "120")  # never give up on a slow process here
     teams = [procs.team("cyan"), procs.team("magenta")]
     dist = procs.result(server)
     for t in teams:
@@ -44,7 +59,7 @@ def test_one_process_per_team_equals_embedded(procs):
     assert game_events(dist) == game_events(emb)
     joined = [e for e in dist["events"] if e["type"] == "process_joined"]
     assert sorted(e["team"] for e in joined) == ["cyan", "magenta"]
-    assert set(dist) == set(emb)            # the same JSON object as `simatch run`
+    assert set(dist) == set(emb)  # the same JSON object as `simatch run`
 
 
 @pytest.mark.slow
@@ -77,14 +92,22 @@ def test_a_server_takes_the_options_of_run_such_as_recording(procs):
     from simatch.record import Recording
 
     mcap = procs.tmp / "match.mcap"
-    server = procs.server(SCENE, *chaser_overrides("cyan"), "--set", "teams.magenta.strategy=none", "--duration", "1",
-                          "--record", str(mcap))
+    server = procs.server(
+        SCENE,
+        *chaser_overrides("cyan"),
+        "--set",
+        "teams.magenta.strategy=none",
+        "--duration",
+        "1",
+        "--record",
+        str(mcap),
+    )
     team = procs.team("cyan")
     out = procs.result(server)
     assert procs.wait(team) == 0
     rec = Recording(mcap)
     topics = rec.topics()
-    assert "cyan/2/VelCmd" in topics and "cyan/2/OmniVisionInfo" in topics    # what the team sent, recorded
-    assert not any("lockstep" in t for t in topics)                             # the protocol is not data
-    assert sum(1 for _ in rec.raw(topics=["cyan/2/VelCmd"])) == 40              # every tick of 1 s
+    assert "cyan/2/VelCmd" in topics and "cyan/2/OmniVisionInfo" in topics  # what the team sent, recorded
+    assert not any("lockstep" in t for t in topics)  # the protocol is not data
+    assert sum(1 for _ in rec.raw(topics=["cyan/2/VelCmd"])) == 40  # every tick of 1 s
     assert out["sim_seconds"] == 1.0

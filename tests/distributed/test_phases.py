@@ -21,8 +21,12 @@ from simatch.simulation import Simulation
 from .cluster import CHASER
 
 #: cyan: three chasing robots (ids 1, 2, 3: phases 0, 1, 3 of 5 in real time); magenta: nobody to wait for
-THREE = {"teams.cyan.strategy": CHASER, "teams.cyan.ids": [1, 2, 3],
-         "teams.cyan.start": [[-6.0, 0.0, 0.0], [-2.0, 1.0, 0.0], [-2.0, -1.0, 0.0]], "teams.magenta.strategy": "none"}
+THREE = {
+    "teams.cyan.strategy": CHASER,
+    "teams.cyan.ids": [1, 2, 3],
+    "teams.cyan.start": [[-6.0, 0.0, 0.0], [-2.0, 1.0, 0.0], [-2.0, -1.0, 0.0]],
+    "teams.magenta.strategy": "none",
+}
 
 
 def test_the_phase_rule_spreads_a_teams_robot_processes_and_treats_both_teams_alike():
@@ -32,15 +36,15 @@ def test_the_phase_rule_spreads_a_teams_robot_processes_and_treats_both_teams_al
         ids = spec.teams[team].robot_ids()
         assert [protocol.phase_of(spec, team, [r], protocol.LOCKSTEP) for r in ids] == [0] * 5
         assert [protocol.phase_of(spec, team, [r], protocol.REALTIME) for r in ids] == [0, 1, 2, 3, 4]
-        assert protocol.phase_of(spec, team, ids, protocol.REALTIME) == 0          # a whole-team process
-        assert protocol.phase_of(spec, team, ids[2:], protocol.REALTIME) == 2      # its first robot's
+        assert protocol.phase_of(spec, team, ids, protocol.REALTIME) == 0  # a whole-team process
+        assert protocol.phase_of(spec, team, ids[2:], protocol.REALTIME) == 2  # its first robot's
     herd = load_scene("encirclement_9v7").spec
     for team in herd.teams:
         ids = herd.teams[team].robot_ids()
         steps = protocol.phases(herd, protocol.REALTIME)
         got = [protocol.phase_of(herd, team, [r], protocol.REALTIME) for r in ids]
         assert got == sorted(got) and got[0] == 0 and max(got) < steps
-        assert len(set(got)) == min(len(ids), steps)                             # every step used that can be
+        assert len(set(got)) == min(len(ids), steps)  # every step used that can be
 
 
 class Counter(Node):
@@ -67,8 +71,11 @@ def test_a_robots_perception_is_taken_at_its_phase():
         stamps: dict[str, list[float]] = {"cyan/2": [], "magenta/3": []}
         for name, got in stamps.items():
             team, rid = name.split("/")
-            sim.bus.subscribe(topics.robot_topic(team, rid, topics.OMNI_VISION), msgs.OmniVisionInfo,
-                              lambda msg, got=got: got.append(round(msg.stamp / sim.dt)))
+            sim.bus.subscribe(
+                topics.robot_topic(team, rid, topics.OMNI_VISION),
+                msgs.OmniVisionInfo,
+                lambda msg, got=got: got.append(round(msg.stamp / sim.dt)),
+            )
         sim.set_perception_phase("magenta/3", 3)
         sim.step(12)
         assert stamps == {"cyan/2": [0, 5, 10], "magenta/3": [3, 8]}
@@ -80,8 +87,16 @@ def test_a_robots_perception_is_taken_at_its_phase():
 
 @pytest.fixture
 def server(procs):
-    srv = Server(load_scene("msl_5v5", THREE), seed=1, listen=[procs.endpoint], run=procs.run, realtime=True,
-                 team_timeout=60, credentials_dir=procs.creds, say=lambda text: None)
+    srv = Server(
+        load_scene("msl_5v5", THREE),
+        seed=1,
+        listen=[procs.endpoint],
+        run=procs.run,
+        realtime=True,
+        team_timeout=60,
+        credentials_dir=procs.creds,
+        say=lambda text: None,
+    )
     try:
         yield srv
     finally:
@@ -91,7 +106,7 @@ def server(procs):
 
 @pytest.mark.slow
 def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
-    robots = {2: procs.robot("cyan/2"), 3: procs.plain("cyan/3")}     # cyan/3 topic by topic
+    robots = {2: procs.robot("cyan/2"), 3: procs.plain("cyan/3")}  # cyan/3 topic by topic
     procs.robot("cyan/1")
     assert server.wait_for_teams(timeout=60) == {}
     assert sorted(p.phase for p in server.registry.procs.values()) == [0, 1, 3]
@@ -100,7 +115,7 @@ def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
     server.sim.run(seconds=1.0)
     st = server.stats()
     assert st["ticks"] == 40
-    assert st["answers"] >= 3 * 40 - 6 and st["missed"] <= 3           # (a loaded machine may miss a few)
+    assert st["answers"] >= 3 * 40 - 6 and st["missed"] <= 3  # (a loaded machine may miss a few)
     assert 0.0 < st["latency_p50_ms"] <= st["latency_p99_ms"]
     # each step waits for that step's process only: one completion per answer in time
     assert len(server.gate.completions) == st["answers"] - st["late"]
@@ -109,7 +124,7 @@ def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
     assert all(math.dist((states[f"cyan/{r}"].x, states[f"cyan/{r}"].y), xy) > 0.3 for r, xy in start.items())
     simulator = server.sim.simulator
     applied = [simulator.last_command_step[simulator.index_of(f"cyan/{r}")] % 5 for r in (1, 2, 3)]
-    for got, phase in zip(applied, (0, 1, 3)):    # each robot's commands came at its step (or, late, the next)
+    for got, phase in zip(applied, (0, 1, 3)):  # each robot's commands came at its step (or, late, the next)
         assert got in (phase, phase + 1)
     assert "step 3 of each control period" in procs.stderr(robots[3])
 
@@ -125,7 +140,7 @@ def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
         os.kill(robots[2].pid, signal.SIGCONT)
     server.sim.run(seconds=0.5)
     kinds = [e["type"] for e in server.sim.events if e["type"] in ("process_late", "process_back")]
-    assert kinds == ["process_late", "process_back"]          # back, once, and in step from then on
+    assert kinds == ["process_late", "process_back"]  # back, once, and in step from then on
     assert hung.state is ProcState.ACTIVE and hung.streak == 0
 
 
@@ -133,10 +148,22 @@ def test_real_time_robot_processes_answer_at_their_own_steps(procs, server):
 def test_a_real_time_process_that_falls_behind_for_good_stays_late_and_its_commands_still_apply(procs):
     """A robot whose every decision takes longer than a control period answers each tick after the next
     one opened: it is late once (not flapping between late and back), and its commands still move it."""
-    spec = {**THREE, "teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]],
-            "teams.cyan.strategy": "tests.distributed.strategies:SlowChaser"}
-    srv = Server(load_scene("msl_5v5", spec), seed=1, listen=[procs.endpoint], run=procs.run, realtime=True,
-                 team_timeout=60, credentials_dir=procs.creds, say=lambda text: None)
+    spec = {
+        **THREE,
+        "teams.cyan.ids": [2],
+        "teams.cyan.start": [[-2.0, 1.0, 0.0]],
+        "teams.cyan.strategy": "tests.distributed.strategies:SlowChaser",
+    }
+    srv = Server(
+        load_scene("msl_5v5", spec),
+        seed=1,
+        listen=[procs.endpoint],
+        run=procs.run,
+        realtime=True,
+        team_timeout=60,
+        credentials_dir=procs.creds,
+        say=lambda text: None,
+    )
     try:
         procs.robot("cyan/2")
         assert srv.wait_for_teams(timeout=60) == {}
@@ -145,7 +172,7 @@ def test_a_real_time_process_that_falls_behind_for_good_stays_late_and_its_comma
         assert kinds == ["process_late"]
         assert srv.stats()["missed"] >= 4
         state = srv.sim.model_states()["cyan/2"]
-        assert math.dist((state.x, state.y), (-2.0, 1.0)) > 0.3         # its (late) commands were applied
+        assert math.dist((state.x, state.y), (-2.0, 1.0)) > 0.3  # its (late) commands were applied
     finally:
         srv.finish(linger=0.5)
         srv.close()
@@ -165,7 +192,7 @@ def test_a_team_process_replaced_by_robot_processes_spreads_them_out(procs, serv
     team.wait(10)
     for rid in (1, 2, 3):
         procs.robot(f"cyan/{rid}")
-    for _ in range(300):                     # the dead process is noticed, the robots are taken over
+    for _ in range(300):  # the dead process is noticed, the robots are taken over
         server.sim.run(seconds=0.1)
         joined = [p for p in server.registry.active() if p.kind == "robot"]
         if len(joined) == 3:
@@ -176,7 +203,10 @@ def test_a_team_process_replaced_by_robot_processes_spreads_them_out(procs, serv
         assert simulator.last_command_step[index[rid]] % 5 in (phase, phase + 1)
     stamps: dict[int, int] = {}
     for rid in (2, 3):
-        server.bus.subscribe(topics.robot_topic("cyan", rid, topics.OMNI_VISION), msgs.OmniVisionInfo,
-                             lambda msg, rid=rid: stamps.__setitem__(rid, round(msg.stamp / server.sim.dt)))
+        server.bus.subscribe(
+            topics.robot_topic("cyan", rid, topics.OMNI_VISION),
+            msgs.OmniVisionInfo,
+            lambda msg, rid=rid: stamps.__setitem__(rid, round(msg.stamp / server.sim.dt)),
+        )
     server.sim.run(seconds=0.1)
-    assert stamps[2] % 5 == 1 and stamps[3] % 5 == 3          # their perception is taken at their steps
+    assert stamps[2] % 5 == 1 and stamps[3] % 5 == 3  # their perception is taken at their steps

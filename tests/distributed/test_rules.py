@@ -25,7 +25,7 @@ def test_credentials_are_private_stable_and_checked(tmp_path, creds):
     assert stat.S_IMODE(os.stat(folder / "cyan.key").st_mode) == 0o600
     assert stat.S_IMODE(os.stat(folder).st_mode) == 0o700
     again = credentials.ensure(folder, ["cyan", "magenta", "admin"])
-    assert again == creds                                      # kept across server runs
+    assert again == creds  # kept across server runs
     (folder / "broken.key").write_text("cyan-no-secret\n")
     with pytest.raises(credentials.CredentialError, match="expected 'name:hexsecret'"):
         credentials.read(folder / "broken.key")
@@ -41,11 +41,11 @@ def test_signatures_prove_the_sender_for_this_run_topic_and_payload(creds):
     data = msgs.encode(msgs.new(msgs.VelCmd, vx=1.0))
     att = sign("cyan/2/VelCmd", data)
     assert verify.signer_of("cyan/2/VelCmd", data, att) == "cyan"
-    assert verify.signer_of("cyan/3/VelCmd", data, att) is None                 # another topic
-    assert verify.signer_of("cyan/2/VelCmd", data + b"x", att) is None          # another payload
-    assert credentials.Verifier("m2", creds).signer_of("cyan/2/VelCmd", data, att) is None   # another run
+    assert verify.signer_of("cyan/3/VelCmd", data, att) is None  # another topic
+    assert verify.signer_of("cyan/2/VelCmd", data + b"x", att) is None  # another payload
+    assert credentials.Verifier("m2", creds).signer_of("cyan/2/VelCmd", data, att) is None  # another run
     assert verify.signer_of("cyan/2/VelCmd", data, None) is None
-    forged = att[:5] + b"magenta"[: att[4]] + att[5 + att[4]:]
+    forged = att[:5] + b"magenta"[: att[4]] + att[5 + att[4] :]
     assert verify.signer_of("cyan/2/VelCmd", data, forged) is None
     stranger = credentials.Credential("cyan", "ab" * 32).signer("m1")
     assert verify.signer_of("cyan/2/VelCmd", data, stranger("cyan/2/VelCmd", data)) is None
@@ -57,8 +57,7 @@ def test_what_a_team_may_send(creds):
     def check(who, topic, payload=b"\x00\x01\x00\x00"):
         return fp.check(topic, payload, creds[who].signer("m1")(topic, payload))
 
-    for topic in ("cyan/2/VelCmd", "cyan/2/ActionCmd", "cyan/2/StrategyInfo", "cyan/TeamStrategy",
-                  "cyan/lockstep/ack"):
+    for topic in ("cyan/2/VelCmd", "cyan/2/ActionCmd", "cyan/2/StrategyInfo", "cyan/TeamStrategy", "cyan/lockstep/ack"):
         assert check("cyan", topic) is None, topic
     refusal = check("cyan", "magenta/2/VelCmd")
     assert refusal.who == "cyan" and "may not command magenta/2" in refusal
@@ -74,12 +73,17 @@ def test_what_a_team_may_send(creds):
     assert "may log only its own strategy_error events" in check("cyan", "events", fake)
     assert "unsigned" in fp.check("cyan/2/VelCmd", b"x", None) and fp.check("cyan/2/VelCmd", b"x", None).who == ""
     # the verdicts are remembered per (sender, topic): asked again, the same answers (events stay per payload)
-    assert "may not command magenta/2" in check("cyan", "magenta/2/VelCmd") and check("magenta", "magenta/2/VelCmd") is None
+    assert (
+        "may not command magenta/2" in check("cyan", "magenta/2/VelCmd")
+        and check("magenta", "magenta/2/VelCmd") is None
+    )
     assert check("cyan", "cyan/2/VelCmd") is None and check("cyan", "events", own) is None
     assert "may log only" in check("cyan", "events", fake)
     att = creds["cyan"].signer("m1")("cyan/lockstep/bundle", b"SMB1")
-    assert fp.check_entry(att, "cyan/2/VelCmd", b"") is None and "may not command" in fp.check_entry(att, "magenta/1/VelCmd", b"")
-    for k in range(10_000):                            # a sender inventing topics cannot grow the memory
+    assert fp.check_entry(att, "cyan/2/VelCmd", b"") is None and "may not command" in fp.check_entry(
+        att, "magenta/1/VelCmd", b""
+    )
+    for k in range(10_000):  # a sender inventing topics cannot grow the memory
         fp.check_entry(att, f"cyan/x{k}", b"")
     assert len(fp._verdicts) <= 4096 and "has no robot 7" in fp.check_entry(att, "cyan/7/VelCmd", b"")
 
@@ -106,7 +110,7 @@ def test_who_serves_which_robot():
         reg.join(Proc("c", "magenta", [9], "robot", False, 0))
     with pytest.raises(JoinError, match="no team 'blue'"):
         reg.join(Proc("d", "blue", [1], "robot", False, 0))
-    reg.procs["a"].state = ProcState.LATE                 # a hung process is replaced by a restarted one
+    reg.procs["a"].state = ProcState.LATE  # a hung process is replaced by a restarted one
     reg.join(Proc("e", "cyan", [2], "robot", False, 0))
     assert reg.procs["a"].state is ProcState.GONE and reg.owner["cyan/2"] == "e"
     assert reg.missing() == {"cyan": [1, 3, 4, 5], "magenta": [1, 2, 3, 4, 5]}
@@ -117,8 +121,7 @@ def test_who_serves_which_robot():
 def test_a_team_process_rebuilds_the_servers_scene_with_its_own_strategy():
     scene = load_scene("msl_5v5", {"ball.mass": 0.5, "teams.cyan.strategy": "external"})
     offer = protocol.loads(protocol.dumps(protocol.scene_offer(scene, 7, "m1", protocol.LOCKSTEP)), "scene")
-    mine = protocol.scene_from_offer(offer, {"teams.cyan.strategy": "constant",
-                                             "teams.cyan.strategy_params.vx": 1.0})
+    mine = protocol.scene_from_offer(offer, {"teams.cyan.strategy": "constant", "teams.cyan.strategy_params.vx": 1.0})
     assert mine.spec.ball.mass == 0.5 and mine.spec.teams["cyan"].strategy == "constant"
     assert mine.spec.teams["cyan"].strategy_params == {"vx": 1.0} and offer["seed"] == 7
     with pytest.raises(SceneError, match="unknown key"):

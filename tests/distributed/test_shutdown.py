@@ -32,7 +32,7 @@ def test_stopping_the_server_ends_every_process(procs, sig):
     time.sleep(1.0)
     t0 = time.monotonic()
     server.send_signal(sig)
-    out = procs.result(server, codes=(130,))                    # the partial run is still reported
+    out = procs.result(server, codes=(130,))  # the partial run is still reported
     for team in teams:
         assert procs.wait(team, timeout=30) == 0
         assert "the server ended the run (interrupted)" in procs.stderr(team)
@@ -47,7 +47,7 @@ def test_stopping_a_team_process_ends_it_and_the_match_goes_on(procs, sig):
     server = procs.server("msl_5v5", *chaser_overrides("cyan", "magenta"), "--realtime", "--duration", "4")
     teams = [procs.team("cyan"), procs.team("magenta")]
     procs.wait_for_line(server, "(cyan/1,2,3,4,5) joined")
-    procs.wait_for_line(server, "(magenta/1,2,3,4,5) joined")        # the match is on
+    procs.wait_for_line(server, "(magenta/1,2,3,4,5) joined")  # the match is on
     time.sleep(1.0)
     teams[0].send_signal(sig)
     assert procs.wait(teams[0], timeout=30) == 130

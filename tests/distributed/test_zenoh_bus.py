@@ -38,10 +38,15 @@ def pair():
 def low_latency_pair():
     """(server bus, client bus) on Zenoh's low-latency transport, with its sample cap."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit",
-                      max_sample=MAX_SAMPLE)
-    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint], low_latency=True), wait=10), "unit",
-                      eager=True, max_sample=MAX_SAMPLE)
+    server = ZenohBus(
+        open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit", max_sample=MAX_SAMPLE
+    )
+    client = ZenohBus(
+        open_session(zenoh_config("client", connect=[endpoint], low_latency=True), wait=10),
+        "unit",
+        eager=True,
+        max_sample=MAX_SAMPLE,
+    )
     try:
         yield server, client
     finally:
@@ -72,13 +77,15 @@ def test_remote_delivery_is_in_order_in_the_owners_thread_and_local_delivery_is_
     for k in range(5):
         vel.put(msgs.new(msgs.VelCmd, tick=k, vx=0.5))
         coach.put(msgs.new(msgs.CoachInfo, match_mode=k))
-    assert local == [0, 1, 2, 3, 4]               # at once, in this thread
+    assert local == [0, 1, 2, 3, 4]  # at once, in this thread
     time.sleep(0.2)
-    assert got == []                              # nothing runs in Zenoh's threads: the owner pumps
+    assert got == []  # nothing runs in Zenoh's threads: the owner pumps
     pump_until(client, lambda: len(got) == 10)
     assert got == [x for k in range(5) for x in (("vel", k), ("coach", k))]
-    assert seen_all[:2] == [("cyan/2/VelCmd", "simatch_msgs/msg/VelCmd"),
-                            ("cyan/receive_from_coach", "simatch_msgs/msg/CoachInfo")]
+    assert seen_all[:2] == [
+        ("cyan/2/VelCmd", "simatch_msgs/msg/VelCmd"),
+        ("cyan/receive_from_coach", "simatch_msgs/msg/CoachInfo"),
+    ]
     assert client.stats.delivered == 20 and client.stats.malformed == 0
 
 
@@ -94,10 +101,10 @@ def test_bad_samples_are_dropped_and_counted_never_raised(pair):
     client.subscribe_all("other/**", lambda topic, m: got.append(m))
     time.sleep(0.3)
     key = server.key
-    server.session.put(key("cyan/2/OmniVisionInfo"), b"\x00\x01\x00\x00garbage")          # does not decode
-    server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(msgs.new(msgs.VelCmd)))   # another type
-    server.session.put(key("cyan/3/OmniVisionInfo"), msgs.encode(msgs.new(msgs.OmniVisionInfo)))   # node fails
-    server.session.put(key("other/x"), b"no type")                      # not a message: left out, not counted
+    server.session.put(key("cyan/2/OmniVisionInfo"), b"\x00\x01\x00\x00garbage")  # does not decode
+    server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(msgs.new(msgs.VelCmd)))  # another type
+    server.session.put(key("cyan/3/OmniVisionInfo"), msgs.encode(msgs.new(msgs.OmniVisionInfo)))  # node fails
+    server.session.put(key("other/x"), b"no type")  # not a message: left out, not counted
     server.session.put(key("other/y"), b"\x00\x01\x00\x00", encoding=zenoh.Encoding("application/cdr;nope"))
     good = msgs.new(msgs.OmniVisionInfo, tick=7)
     server.session.put(key("cyan/2/OmniVisionInfo"), msgs.encode(good))
@@ -129,14 +136,17 @@ def test_the_same_node_code_runs_on_both_transports(pair):
         clock = LockstepClock(bus, 0.005, seed=0)
         clock.add(StrategyPub("cyan", 0.025, 0.1))
         out = []
-        bus.subscribe("cyan/TeamStrategy", msgs.TeamStrategy, lambda m: out.append(
-            [(s.agent_id, s.stamp, s.target_x) for s in m.strategies]))
+        bus.subscribe(
+            "cyan/TeamStrategy",
+            msgs.TeamStrategy,
+            lambda m: out.append([(s.agent_id, s.stamp, s.target_x) for s in m.strategies]),
+        )
         pubs = [feed_bus.publisher(f"cyan/{rid}/StrategyInfo", msgs.StrategyInfo) for rid in (1, 2)]
         time.sleep(0.3)
         for step in range(0, 60, 5):
             sent = 0
             for rid, pub in zip((1, 2), pubs):
-                if step < 30 or rid == 1:                     # robot 2 goes silent: it must drop out
+                if step < 30 or rid == 1:  # robot 2 goes silent: it must drop out
                     pub.put(msgs.new(msgs.StrategyInfo, agent_id=rid, stamp=step * 0.005, target_x=rid + step * 0.1))
                     sent += 1
             if bus is not feed_bus:
@@ -158,8 +168,8 @@ def test_safe_defaults():
 
     assert get("scouting/multicast/enabled") is False and get("scouting/gossip/enabled") is False
     assert get("listen/endpoints") == [] and get("connect/endpoints") == ["tcp/127.0.0.1:1"]
-    assert get("transport/shared_memory/enabled") is False          # killed processes would leave /dev/shm files
-    assert get("transport/unicast/lowlatency") is False               # the ordinary transport unless asked
+    assert get("transport/shared_memory/enabled") is False  # killed processes would leave /dev/shm files
+    assert get("transport/unicast/lowlatency") is False  # the ordinary transport unless asked
     low = zenoh_config("client", connect=["tcp/127.0.0.1:1"], low_latency=True)
     assert json.loads(low.get_json("transport/unicast/lowlatency")) is True
     assert json.loads(low.get_json("transport/unicast/qos/enabled")) is False
@@ -195,7 +205,7 @@ def test_a_batch_leaves_as_one_bundle_and_its_entries_arrive_as_if_alone(pair):
     client.put_raw("cyan/lockstep/ack", b"done")
     before = client.stats.published
     assert client.send_batch("cyan/lockstep/bundle") == 4
-    assert client.stats.published == before        # counted when gathered, sent as one sample
+    assert client.stats.published == before  # counted when gathered, sent as one sample
     pump_until(server, lambda: len(got) == 4)
     assert got == [("vel", 0), ("vel", 1), ("vel", 2), ("ack", b"done")]
     assert server.stats.delivered == 3 and server.stats.malformed == 0
@@ -224,7 +234,7 @@ def test_zenohs_sending_threads_are_made_batch_and_nothing_else(pair):
     vel = client.publisher("cyan/1/VelCmd", msgs.VelCmd)
     pump_until(client, lambda: vel.matching)
     vel.put(msgs.new(msgs.VelCmd, vx=1.0))
-    pump_until(server, lambda: got)          # samples still leave
+    pump_until(server, lambda: got)  # samples still leave
 
 
 def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives_twice(pair):
@@ -237,13 +247,13 @@ def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives
     client.subscribe("cyan/1/OmniVisionInfo", msgs.OmniVisionInfo, lambda m: got.append(("vision", m.tick)))
     client.subscribe_raw("lockstep/tick", lambda topic, payload, att, t: got.append(("tick", payload)))
     pump_until(server, lambda: feed.matching)
-    assert not vision.matching and vision.active     # nobody subscribes alone: the feed carries it
+    assert not vision.matching and vision.active  # nobody subscribes alone: the feed carries it
     assert not other.active
     for k in range(2):
         vision.put(msgs.new(msgs.OmniVisionInfo, tick=k))
     server.put_raw("lockstep/tick", b"t1")
     time.sleep(0.2)
-    assert client.pump(0.0) == 0                     # nothing left before the flush
+    assert client.pump(0.0) == 0  # nothing left before the flush
     server.flush_feeds()
     pump_until(client, lambda: len(got) == 3)
     time.sleep(0.2)
@@ -251,7 +261,7 @@ def test_a_feed_carries_what_its_topics_publish_once_flushed_and_nothing_arrives
     assert got == [("vision", 0), ("vision", 1), ("tick", b"t1")]
     assert feed.entries == []
     vision.put(msgs.new(msgs.OmniVisionInfo, tick=2))
-    server.flush_feeds(only=["lockstep/feed/magenta"])      # another feed's turn: this one keeps gathering
+    server.flush_feeds(only=["lockstep/feed/magenta"])  # another feed's turn: this one keeps gathering
     assert len(feed.entries) == 1
     server.flush_feeds(only=["lockstep/feed/cyan"])
     pump_until(client, lambda: len(got) == 4)
@@ -265,15 +275,15 @@ def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arriv
     server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: got.append(len(payload)))
     server.subscribe_raw("cyan/big", lambda topic, payload, att, t: got.append(("big", len(payload))))
     server.accept_bundles("cyan/lockstep/bundle", verify=False)
-    client.put_raw("cyan/big", bytes(MAX_SAMPLE + 1))                 # refused here, counted
+    client.put_raw("cyan/big", bytes(MAX_SAMPLE + 1))  # refused here, counted
     assert client.oversize == {"cyan/big": 1}
     client.begin_batch()
-    sizes = [MAX_SAMPLE // 3] * 7 + [MAX_SAMPLE * 2, 10]               # ~2.3 samples' worth, one too large
+    sizes = [MAX_SAMPLE // 3] * 7 + [MAX_SAMPLE * 2, 10]  # ~2.3 samples' worth, one too large
     for n in sizes:
         client.put_raw("cyan/lockstep/ack", bytes(n))
     client.send_batch("cyan/lockstep/bundle")
     assert client.oversize == {"cyan/big": 1, "cyan/lockstep/ack": 1}
-    client.put_raw("cyan/big", b"after")                              # the link still works
+    client.put_raw("cyan/big", b"after")  # the link still works
     pump_until(server, lambda: len(got) == 9)
     assert got == [n for n in sizes if n <= MAX_SAMPLE] + [("big", 5)]
     assert server.stats.malformed == 0
@@ -282,10 +292,12 @@ def test_samples_over_the_cap_are_not_sent_and_bundles_over_it_are_cut_and_arriv
 def test_a_client_without_the_low_latency_transport_still_plays_with_one_that_has_it():
     """A client in another language (or an older tool) keeps Zenoh's ordinary transport: same samples."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    server = ZenohBus(open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit",
-                      max_sample=MAX_SAMPLE)
-    client = ZenohBus(open_session(zenoh_config("client", connect=[endpoint], low_latency=False), wait=10), "unit",
-                      eager=True)
+    server = ZenohBus(
+        open_session(zenoh_config("router", listen=[endpoint], low_latency=True)), "unit", max_sample=MAX_SAMPLE
+    )
+    client = ZenohBus(
+        open_session(zenoh_config("client", connect=[endpoint], low_latency=False), wait=10), "unit", eager=True
+    )
     try:
         got = []
         server.subscribe("cyan/2/VelCmd", msgs.VelCmd, lambda m: got.append(m.tick))
@@ -308,13 +320,16 @@ def test_an_owner_is_woken_only_when_a_sample_says_so(pair):
     server: only the last answer of a tick); the others wait in the queue, in order."""
     server, client = pair
     seen = []
-    server.subscribe_raw("cyan/lockstep/ack", lambda topic, payload, att, t: seen.append(payload),
-                         wakes=lambda topic, payload: payload == b"last")
+    server.subscribe_raw(
+        "cyan/lockstep/ack",
+        lambda topic, payload, att, t: seen.append(payload),
+        wakes=lambda topic, payload: payload == b"last",
+    )
     pub = client.raw_publisher("cyan/lockstep/ack")
     pump_until(client, lambda: pub.matching)
     pub.put(b"first")
     pub.put(b"second")
-    assert server.wait(0.5) is False                 # queued, but nobody woken
+    assert server.wait(0.5) is False  # queued, but nobody woken
     pub.put(b"last")
     assert server.wait(5.0) is True
     time.sleep(0.05)

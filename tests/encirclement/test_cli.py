@@ -27,7 +27,7 @@ def test_run_json_reports_targets_captures_and_their_events():
     assert isinstance(r["targets"], int) and isinstance(r["captured"], int)
     assert r["targets"] == r["captured"] == 7
     assert isinstance(r["capture_time_s"], float) and r["capture_time_s"] <= 300.0
-    assert out["sim_seconds"] <= r["capture_time_s"] + 0.05          # the run ends with the last capture
+    assert out["sim_seconds"] <= r["capture_time_s"] + 0.05  # the run ends with the last capture
     caps = [e for e in out["events"] if e["type"] == "capture"]
     assert len(caps) == 7 and {e["robot"] for e in caps} == set(range(1, 8))
     for e in caps:
@@ -54,7 +54,7 @@ def test_the_evaluation_script_measures_both_series():
 def test_the_benchmark_reports_the_scene_speed():
     from simatch.bench.encirclement import run as bench
 
-    out = bench(1.0)                                  # one whole run (and the warm-up)
+    out = bench(1.0)  # one whole run (and the warm-up)
     assert out["encirclement_runs"] == 1 and out["encirclement_all_captured"] == 1
     assert out["encirclement_rtf"] > 0
     # the run stops one physics step after the judge saw the last capture

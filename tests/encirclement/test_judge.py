@@ -38,13 +38,13 @@ def test_a_target_in_the_prison_is_captured_and_frozen(encirclement):
     sim.run(2.0)
     x, y = target_positions(sim)["magenta/3"]
     assert (x, y) == pytest.approx((6.5, 0.5), abs=0.02)
-    assert sim.model_states()["cyan/5"].x < 6.5 - 0.45        # the chaser stopped against it
+    assert sim.model_states()["cyan/5"].x < 6.5 - 0.45  # the chaser stopped against it
 
 
 def test_the_centre_decides_a_target_astride_the_line_is_free(encirclement):
     sim = encirclement(idle=True)
-    sim.set_model_state("magenta/1", x=4.9, y=0.0)          # its body overlaps the prison, its centre does not
-    sim.set_model_state("magenta/2", x=5.1, y=2.15)         # beside the prison's corner
+    sim.set_model_state("magenta/1", x=4.9, y=0.0)  # its body overlaps the prison, its centre does not
+    sim.set_model_state("magenta/2", x=5.1, y=2.15)  # beside the prison's corner
     sim.run(0.5)
     assert captures(sim) == []
 
@@ -58,7 +58,7 @@ def test_all_captured_ends_the_run_at_the_last_capture(encirclement):
         sim.run(0.5)
         assert sim.done == (k == len(spots) - 1)
     last = sim.time - sim.dt
-    sim.run(5.0)                                             # the run is over: nothing more happens
+    sim.run(5.0)  # the run is over: nothing more happens
     r = sim.result()["result"]
     assert r["captured"] == 7 and r["end"] == "all_captured"
     assert r["capture_time_s"] == pytest.approx(max(c["t"] for c in r["captures"]))
@@ -81,7 +81,7 @@ def test_the_judge_starts_both_teams_and_tells_them_every_capture(encirclement):
     sim.run(0.1)
     chaser = sim.robot_nodes["cyan/1"].world
     target = sim.robot_nodes["magenta/2"].world
-    assert chaser.match_mode == target.match_mode == 15                 # STARTROBOT
+    assert chaser.match_mode == target.match_mode == 15  # STARTROBOT
     sim.set_model_state("magenta/4", x=7.0, y=-1.0)
     sim.run(0.2)
     for world in (chaser, target):
@@ -104,8 +104,8 @@ def test_the_start_is_scattered_from_the_seed(encirclement):
     spots = list(pa.values())
     for i, (x, y) in enumerate(spots):
         assert x0 <= x <= x1 and y0 <= y <= y1
-        assert not (5.0 - spacing <= x and -2.0 - spacing <= y <= 2.0 + spacing)     # away from the prison
-        others = spots[:i] + spots[i + 1:] + chasers
+        assert not (5.0 - spacing <= x and -2.0 - spacing <= y <= 2.0 + spacing)  # away from the prison
+        others = spots[:i] + spots[i + 1 :] + chasers
         assert min(math.hypot(x - ox, y - oy) for ox, oy in others) >= spacing - 1e-9
 
 
@@ -121,16 +121,19 @@ def test_without_scatter_the_targets_start_at_their_start_poses(tmp_path):
         assert max(math.dist(a, b) for a, b in zip(placed, starts)) < 1e-9
 
 
-@pytest.mark.parametrize("key, value, expected", [
-    ("judge.prison", "jail", "judge.prison: the world has no area named 'jail' (world.areas: prison)"),
-    ("judge.chasers", "blue", "judge.chasers: the scene has no team 'blue' (teams: cyan, magenta)"),
-    ("judge.targets", "cyan", "chasers and targets must be different teams"),
-    ("judge.scatter", [-9.0, -5.0, 0.0, 5.0], "judge.scatter: [-9.0, -5.0, 0.0, 5.0] is not inside the arena"),
-    ("judge.scatter", [1.0, -5.0, 0.0, 5.0], "expected x0 < x1 and y0 < y1"),
-    ("judge.time_limit", -1.0, "judge.time_limit: expected greater than 0"),
-    ("judge.capture", 1, "judge.capture: unknown key"),
-    ("judge.scatter_spacing", 5.0, "judge.scatter: no room for 7 targets 5 m apart"),
-])
+@pytest.mark.parametrize(
+    "key, value, expected",
+    [
+        ("judge.prison", "jail", "judge.prison: the world has no area named 'jail' (world.areas: prison)"),
+        ("judge.chasers", "blue", "judge.chasers: the scene has no team 'blue' (teams: cyan, magenta)"),
+        ("judge.targets", "cyan", "chasers and targets must be different teams"),
+        ("judge.scatter", [-9.0, -5.0, 0.0, 5.0], "judge.scatter: [-9.0, -5.0, 0.0, 5.0] is not inside the arena"),
+        ("judge.scatter", [1.0, -5.0, 0.0, 5.0], "expected x0 < x1 and y0 < y1"),
+        ("judge.time_limit", -1.0, "judge.time_limit: expected greater than 0"),
+        ("judge.capture", 1, "judge.capture: unknown key"),
+        ("judge.scatter_spacing", 5.0, "judge.scatter: no room for 7 targets 5 m apart"),
+    ],
+)
 def test_mistakes_are_refused_with_file_and_key(key, value, expected):
     with pytest.raises(SceneError) as err:
         simatch.Simulation("encirclement_9v7", overrides={key: value})

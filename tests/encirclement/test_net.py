@@ -11,8 +11,8 @@ import pytest
 from simatch.field import Area
 from simatch.strategy.encirclement.net import Arena, LevelSet, make_net, prison_distance
 
-PRISON = Area("prison", 5.0, -2.0, 8.0, 2.0)          # against the +x wall of encirclement_9v7
-ARENA = Arena(7.7, 5.7)                                # 16 x 12 m walls minus a 0.3 m clearance
+PRISON = Area("prison", 5.0, -2.0, 8.0, 2.0)  # against the +x wall of encirclement_9v7
+ARENA = Arena(7.7, 5.7)  # 16 x 12 m walls minus a 0.3 m clearance
 
 
 @pytest.mark.parametrize("r", [0.2, 1.0, 3.0, 7.5])
@@ -22,7 +22,7 @@ def test_every_point_of_the_level_set_is_r_from_the_prison(r):
     for s in np.linspace(0.0, curve.perimeter, 97)[:-1]:
         x, y = curve.point(float(s))
         assert prison_distance(PRISON, x, y) == pytest.approx(r, abs=1e-9)
-        back = curve.param(x, y)                               # the inverse: where along the curve
+        back = curve.param(x, y)  # the inverse: where along the curve
         assert min(abs(back - s), curve.perimeter - abs(back - s)) == pytest.approx(0.0, abs=1e-9)
 
 
@@ -54,12 +54,12 @@ def test_a_u_net_rests_on_the_walls_and_stays_in_the_arena(r):
 
 
 def test_a_far_net_is_shared_between_the_stretches_the_walls_cut_it_into():
-    net = make_net(PRISON, ARENA, 13.0, 9)              # only the far corners are that far from the prison
+    net = make_net(PRISON, ARENA, 13.0, 9)  # only the far corners are that far from the prison
     spans = net.curve.inside(ARENA)
     assert len(spans) == 2
     st = net.stations
     assert (st[:, 0] < -7.0).all()
-    assert (st[:, 1] > 0).sum() >= 4 and (st[:, 1] < 0).sum() >= 4    # both corners are fenced
+    assert (st[:, 1] > 0).sum() >= 4 and (st[:, 1] < 0).sum() >= 4  # both corners are fenced
 
 
 def test_no_net_beyond_the_farthest_point_of_the_arena():
@@ -81,9 +81,9 @@ def test_chasers_take_the_stations_in_their_order_along_the_net():
     rng = np.random.default_rng(3)
     chasers = np.column_stack((rng.uniform(-7.5, 0.0, 5), rng.uniform(-5.5, 5.5, 5)))
     station = net.assign(chasers)
-    assert sorted(station.tolist()) == list(range(5))          # one chaser per station
+    assert sorted(station.tolist()) == list(range(5))  # one chaser per station
     order = net.order(chasers)
-    assert station[order].tolist() == list(range(5))           # in order: nobody crosses
+    assert station[order].tolist() == list(range(5))  # in order: nobody crosses
     # the remembered variant answers the same
     key = tuple(map(tuple, chasers.tolist()))
     for i in range(5):

@@ -15,12 +15,35 @@ from simatch import msgs
 from simatch.msgs.cdr import ACCELERATED, C_DECODER, Codec
 from simatch.record import foxglove_msgs as fg
 
-_INTS = {"int8": (-128, 127), "uint8": (0, 255), "byte": (0, 255), "char": (0, 255), "octet": (0, 255),
-         "int16": (-2**15, 2**15 - 1), "uint16": (0, 2**16 - 1), "int32": (-2**31, 2**31 - 1),
-         "uint32": (0, 2**32 - 1), "int64": (-2**63, 2**63 - 1), "uint64": (0, 2**64 - 1)}
-_DTYPES = {"float64": np.float64, "float32": np.float32, "int32": np.int32, "uint32": np.uint32, "uint8": np.uint8,
-           "int8": np.int8, "uint64": np.uint64, "int64": np.int64, "bool": np.bool_, "int16": np.int16,
-           "uint16": np.uint16, "byte": np.uint8, "char": np.uint8, "octet": np.uint8}
+_INTS = {
+    "int8": (-128, 127),
+    "uint8": (0, 255),
+    "byte": (0, 255),
+    "char": (0, 255),
+    "octet": (0, 255),
+    "int16": (-(2**15), 2**15 - 1),
+    "uint16": (0, 2**16 - 1),
+    "int32": (-(2**31), 2**31 - 1),
+    "uint32": (0, 2**32 - 1),
+    "int64": (-(2**63), 2**63 - 1),
+    "uint64": (0, 2**64 - 1),
+}
+_DTYPES = {
+    "float64": np.float64,
+    "float32": np.float32,
+    "int32": np.int32,
+    "uint32": np.uint32,
+    "uint8": np.uint8,
+    "int8": np.int8,
+    "uint64": np.uint64,
+    "int64": np.int64,
+    "bool": np.bool_,
+    "int16": np.int16,
+    "uint16": np.uint16,
+    "byte": np.uint8,
+    "char": np.uint8,
+    "octet": np.uint8,
+}
 
 
 def _scalar(base: str, rng):
@@ -33,8 +56,8 @@ def _scalar(base: str, rng):
         return float(np.float32(v)) if base == "float32" else v
     lo, hi = _INTS[base]
     if rng.integers(0, 2):
-        return [lo, hi, 0, 1][int(rng.integers(0, 4))]                  # the extremes of the type
-    return int(rng.integers(max(lo, -2**62), min(hi, 2**62), endpoint=True))
+        return [lo, hi, 0, 1][int(rng.integers(0, 4))]  # the extremes of the type
+    return int(rng.integers(max(lo, -(2**62)), min(hi, 2**62), endpoint=True))
 
 
 def _value(store, desc, rng, depth: int):
@@ -61,7 +84,8 @@ def _rosbags(store, msg) -> bytes:
 
 
 STORES = [(msgs.typestore, name) for name in msgs.names()] + [
-    (fg.typestore, name) for name in sorted(fg.typestore.fielddefs) if name.startswith(fg.PACKAGE)]
+    (fg.typestore, name) for name in sorted(fg.typestore.fielddefs) if name.startswith(fg.PACKAGE)
+]
 
 
 def test_the_c_encoder_is_built():
@@ -88,7 +112,7 @@ def test_the_c_decoder_reads_what_the_python_decoder_reads(store, name):
         i = int(rng.integers(4, len(junk))) if len(junk) > 4 else 0
         junk[i] = int(rng.integers(0, 256))
         _same_verdict(c, py, name, bytes(junk))
-    _same_verdict(c, py, name, data + bytes(8))          # bytes too many
+    _same_verdict(c, py, name, data + bytes(8))  # bytes too many
 
 
 def _same_arrays(a, b) -> None:
@@ -127,21 +151,44 @@ def test_same_bytes_as_rosbags_both_ways(store, name):
             assert codec.appender(name)(m, out) == len(data) and out == b"x" + data
         back = codecs[0].decode(name, data)
         assert type(back) is type(m)
-        assert _rosbags(store, back) == data                    # every field, bit for bit
+        assert _rosbags(store, back) == data  # every field, bit for bit
         codecs[2].forget()
 
 
 def test_values_the_c_encoder_leaves_to_python_are_encoded_as_rosbags_does():
     """Lists instead of arrays, arrays of another dtype or strided, numpy scalars, enums: the same bytes."""
     codec = Codec(msgs.typestore)
-    odd = [(msgs.new(msgs.ModelStates, stamp=np.float32(0.5), step=np.uint64(7), name=("a", "b"),
-                     pose=[1, 2.5, 3], twist=np.arange(12.0)[::2]),
-            msgs.new(msgs.ModelStates, stamp=0.5, step=7, name=["a", "b"], pose=np.array([1, 2.5, 3], dtype=np.float32),
-                     twist=np.arange(0.0, 12.0, 2.0, dtype=np.float32))),     # float64 into float32[]
-           (msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
-            msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0))),
-           (msgs.new(msgs.OmniVisionInfo, robots=(msgs.new(msgs.RobotInfo, wheel_speeds=[0.5, 1]),)),
-            msgs.new(msgs.OmniVisionInfo, robots=[msgs.new(msgs.RobotInfo, wheel_speeds=np.array([0.5, 1.0], dtype=np.float32))]))]
+    odd = [
+        (
+            msgs.new(
+                msgs.ModelStates,
+                stamp=np.float32(0.5),
+                step=np.uint64(7),
+                name=("a", "b"),
+                pose=[1, 2.5, 3],
+                twist=np.arange(12.0)[::2],
+            ),
+            msgs.new(
+                msgs.ModelStates,
+                stamp=0.5,
+                step=7,
+                name=["a", "b"],
+                pose=np.array([1, 2.5, 3], dtype=np.float32),
+                twist=np.arange(0.0, 12.0, 2.0, dtype=np.float32),
+            ),
+        ),  # float64 into float32[]
+        (
+            msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
+            msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0)),
+        ),
+        (
+            msgs.new(msgs.OmniVisionInfo, robots=(msgs.new(msgs.RobotInfo, wheel_speeds=[0.5, 1]),)),
+            msgs.new(
+                msgs.OmniVisionInfo,
+                robots=[msgs.new(msgs.RobotInfo, wheel_speeds=np.array([0.5, 1.0], dtype=np.float32))],
+            ),
+        ),
+    ]
     for m, same in odd:
         assert codec.encode(m) == _rosbags(msgs.typestore, same)
     for bad in (msgs.new(msgs.VelCmd, vx="fast"), msgs.new(msgs.Clock, step=-1), msgs.new(msgs.GameEvent, type=3)):
@@ -157,10 +204,10 @@ def test_msgs_encode_and_decode_keep_their_contract():
         m = random_message(msgs.typestore, name, rng)
         data = msgs.encode(m)
         assert data == _rosbags(msgs.typestore, m)
-        back = msgs.decode(name.rsplit("/", 1)[1], memoryview(data))           # short names, any buffer
+        back = msgs.decode(name.rsplit("/", 1)[1], memoryview(data))  # short names, any buffer
         assert _rosbags(msgs.typestore, back) == data
     states = msgs.decode(msgs.ModelStates, msgs.encode(msgs.new(msgs.ModelStates, pose=np.arange(7.0))))
-    assert list(states.pose) == list(range(7)) and not states.pose.flags.writeable      # a view, as rosbags'
+    assert list(states.pose) == list(range(7)) and not states.pose.flags.writeable  # a view, as rosbags'
     with pytest.raises(msgs.MessageError):
         msgs.encode(msgs.VelCmd(stamp=0.0, tick=0, vx="fast", vy=0.0, w=0.0))
     with pytest.raises(msgs.MessageError, match="unknown"):
@@ -185,18 +232,20 @@ def test_memo_encodes_what_it_meets_again_once_and_right(accelerate):
         a = msgs.new(msgs.OmniVisionInfo, robot_id=rid, robots=robots)
         assert codec.encode(a) == _rosbags(msgs.typestore, a)
     assert len(codec._seqs if not accelerate else codec._memo[0]) == 1
-    infos = [msgs.new(msgs.StrategyInfo, agent_id=i, user=np.arange(float(i)), target_num=np.arange(i, dtype=np.int32))
-             for i in range(1, 6)]
+    infos = [
+        msgs.new(msgs.StrategyInfo, agent_id=i, user=np.arange(float(i)), target_num=np.arange(i, dtype=np.int32))
+        for i in range(1, 6)
+    ]
     for info in infos:
         assert codec.encode(info) == _rosbags(msgs.typestore, info)
-    codec.forget()                                 # a control tick later: still known
-    for stamp in (0.5, 1.0):                      # the second TeamStrategy reuses the same objects again
+    codec.forget()  # a control tick later: still known
+    for stamp in (0.5, 1.0):  # the second TeamStrategy reuses the same objects again
         team = msgs.new(msgs.TeamStrategy, stamp=stamp, tick=3, strategies=list(reversed(infos)))
         assert codec.encode(team) == _rosbags(msgs.typestore, team)
     codec.forget()
     codec.forget()
     assert not codec._seqs and not any(codec._memo)
-    for k, info in enumerate(infos):               # forgotten: encoded again, right
+    for k, info in enumerate(infos):  # forgotten: encoded again, right
         info.agent_id = 10 + k
     team = msgs.new(msgs.TeamStrategy, stamp=2.0, tick=4, strategies=infos)
     assert codec.encode(team) == _rosbags(msgs.typestore, team)
@@ -210,8 +259,9 @@ def test_fixed_size_arrays_must_have_their_size(accelerate):
     pose = fg.typestore.types["geometry_msgs/msg/PoseWithCovariance"]
     point = fg.typestore.types["geometry_msgs/msg/Point"]
     quat = fg.typestore.types["geometry_msgs/msg/Quaternion"]
-    p = fg.typestore.types["geometry_msgs/msg/Pose"](position=point(x=1.0, y=2.0, z=3.0),
-                                                    orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0))
+    p = fg.typestore.types["geometry_msgs/msg/Pose"](
+        position=point(x=1.0, y=2.0, z=3.0), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0)
+    )
     good = pose(pose=p, covariance=np.arange(36.0))
     assert codec.encode(good) == _rosbags(fg.typestore, good)
     with pytest.raises(msgs.MessageError, match="expected 36"):
@@ -220,16 +270,20 @@ def test_fixed_size_arrays_must_have_their_size(accelerate):
 
 def test_malformed_payloads_raise_message_error_only():
     rng = np.random.default_rng(1)
-    for name in ("simatch_msgs/msg/OmniVisionInfo", "simatch_msgs/msg/GameState", "simatch_msgs/msg/TeamStrategy",
-                 "simatch_msgs/msg/ModelStates"):
+    for name in (
+        "simatch_msgs/msg/OmniVisionInfo",
+        "simatch_msgs/msg/GameState",
+        "simatch_msgs/msg/TeamStrategy",
+        "simatch_msgs/msg/ModelStates",
+    ):
         sample = random_message(msgs.typestore, name, rng)
         while name.endswith("ModelStates") and not len(sample.name):
             sample = random_message(msgs.typestore, name, rng)
         data = msgs.encode(sample)
-        for cut in range(0, len(data) - 3):              # cut short anywhere: refused (the last 3 may be padding)
+        for cut in range(0, len(data) - 3):  # cut short anywhere: refused (the last 3 may be padding)
             assert not _decodes(name, data[:cut]), cut
         junk = bytearray(data)
-        for _ in range(400):                             # flipped bytes: a message or a MessageError
+        for _ in range(400):  # flipped bytes: a message or a MessageError
             i = int(rng.integers(4, len(junk)))
             junk[i] = int(rng.integers(0, 256))
             _decodes(name, bytes(junk))
@@ -257,16 +311,23 @@ def test_messages_are_slotted_and_other_objects_with_their_fields_encode_the_sam
     message whose class changed after the encoder learnt it."""
     import types
 
-    m = msgs.new(msgs.ModelStates, stamp=0.5, step=3, name=["ball", "cyan/1"], pose=np.arange(14, dtype=np.float32),
-                 twist=np.ones(12, dtype=np.float32))
+    m = msgs.new(
+        msgs.ModelStates,
+        stamp=0.5,
+        step=3,
+        name=["ball", "cyan/1"],
+        pose=np.arange(14, dtype=np.float32),
+        twist=np.ones(12, dtype=np.float32),
+    )
     assert not hasattr(m, "__dict__") and msgs.ModelStates.__slots__ == msgs.fields(msgs.ModelStates)
     with pytest.raises(AttributeError):
         m.names = ["a misspelt field"]
     want = _rosbags(msgs.typestore, m)
     codec = Codec(msgs.typestore)
     assert codec.encode(m) == want
-    plain = types.SimpleNamespace(**{f: getattr(m, f) for f in msgs.fields(msgs.ModelStates)},
-                                  __msgtype__=m.__msgtype__)
+    plain = types.SimpleNamespace(
+        **{f: getattr(m, f) for f in msgs.fields(msgs.ModelStates)}, __msgtype__=m.__msgtype__
+    )
     assert codec.encode(plain, m.__msgtype__) == want and codec.encode(m) == want
 
     class Later(msgs.ModelStates):
@@ -274,8 +335,10 @@ def test_messages_are_slotted_and_other_objects_with_their_fields_encode_the_sam
 
     later = Later(0.5, 3, ["ball", "cyan/1"], np.arange(14, dtype=np.float32), np.ones(12, dtype=np.float32))
     assert codec.encode(later) == want
-    Later.stamp = property(lambda self: 2.0)                   # the class changes: read by name from now on
-    assert codec.encode(later) == _rosbags(msgs.typestore, msgs.new(
-        msgs.ModelStates, stamp=2.0, step=3, name=["ball", "cyan/1"], pose=m.pose, twist=m.twist))
+    Later.stamp = property(lambda self: 2.0)  # the class changes: read by name from now on
+    assert codec.encode(later) == _rosbags(
+        msgs.typestore,
+        msgs.new(msgs.ModelStates, stamp=2.0, step=3, name=["ball", "cyan/1"], pose=m.pose, twist=m.twist),
+    )
     del Later.stamp
     assert codec.encode(later) == want

@@ -21,5 +21,13 @@ class ManualBallJudge(Judge):
     def drop_ball(self, x: float, y: float) -> None:
         """The operator drops the ball at (x, y)."""
         self.world.set_model_state("ball", x=x, y=y, z=0.11, vx=0.0, vy=0.0, vz=0.0)
-        self.pub_operator.put(msgs.new(msgs.OperatorCommand, stamp=self.ctx.now(), step=self.ctx.step(),
-                                       during_step=False, call="judge.drop_ball", args=json.dumps({"x": x, "y": y})))
+        self.pub_operator.put(
+            msgs.new(
+                msgs.OperatorCommand,
+                stamp=self.ctx.now(),
+                step=self.ctx.step(),
+                during_step=False,
+                call="judge.drop_ball",
+                args=json.dumps({"x": x, "y": y}),
+            )
+        )

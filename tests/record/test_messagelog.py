@@ -35,7 +35,7 @@ def _records(data: bytes) -> list[tuple[int, int, bytes]]:
     while pos < len(data):
         opcode, length, cid, seq, t, pub = MESSAGE_HEADER.unpack_from(data, pos)
         assert opcode == 0x05 and seq == 0 and pub == t
-        out.append((cid, t, bytes(data[pos + MESSAGE_HEADER.size:pos + 9 + length])))
+        out.append((cid, t, bytes(data[pos + MESSAGE_HEADER.size : pos + 9 + length])))
         pos += 9 + length
     return out
 
@@ -52,20 +52,26 @@ def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback(kind):
     log.add("model_states", 4, "simatch_msgs/msg/ModelStates")
     log.now = 7_000_000
     vel = msgs.new(msgs.VelCmd, stamp=0.007, tick=1, vx=1.5, w=-0.25)
-    states = msgs.new(msgs.ModelStates, stamp=0.007, step=1, name=["ball"], pose=np.arange(7.0, dtype=np.float32),
-                      twist=np.ones(6, dtype=np.float32))
+    states = msgs.new(
+        msgs.ModelStates,
+        stamp=0.007,
+        step=1,
+        name=["ball"],
+        pose=np.arange(7.0, dtype=np.float32),
+        twist=np.ones(6, dtype=np.float32),
+    )
     log("cyan/1/VelCmd", vel)
     log("model_states", states)
-    log("cyan/1/Unknown", vel)                                     # not added: the fallback's
+    log("cyan/1/Unknown", vel)  # not added: the fallback's
     listed = msgs.new(msgs.ModelStates, name=["ball"], pose=[1.0, 2.0], twist=np.zeros(0))
-    log("model_states", listed)                                    # a list: converted or left to the fallback
+    log("model_states", listed)  # a list: converted or left to the fallback
     bad = msgs.new(msgs.VelCmd, vx="fast")
-    log("cyan/1/VelCmd", bad)                                      # does not encode: the fallback's
+    log("cyan/1/VelCmd", bad)  # does not encode: the fallback's
     data, counts, first, last = log.take()
     records = _records(data)
     assert records[:2] == [(3, 7_000_000, msgs.encode(vel)), (4, 7_000_000, msgs.encode(states))]
     assert ("cyan/1/Unknown", vel) in refused and ("cyan/1/VelCmd", bad) in refused
-    if ("model_states", listed) not in refused:                   # the Python log converts lists itself
+    if ("model_states", listed) not in refused:  # the Python log converts lists itself
         assert records[2] == (4, 7_000_000, msgs.encode(listed))
     assert counts == {3: 1, 4: len(records) - 1} and first == last == 7_000_000
     assert log.size == 0 and log.take() == (b"", {}, -1, -1)
@@ -82,14 +88,22 @@ def test_clock_messages_set_the_time_and_end_chunks(kind):
     for step in range(0, 230):
         if step % 5 == 0:
             log("clock", msgs.new(msgs.Clock, stamp=step * 0.005, step=step, tick=step // 5))
-        log("model_states", msgs.new(msgs.ModelStates, step=np.uint64(step), name=[], pose=np.zeros(0, dtype=np.float32),
-                                      twist=np.zeros(0, dtype=np.float32)))
+        log(
+            "model_states",
+            msgs.new(
+                msgs.ModelStates,
+                step=np.uint64(step),
+                name=[],
+                pose=np.zeros(0, dtype=np.float32),
+                twist=np.zeros(0, dtype=np.float32),
+            ),
+        )
         log("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=step))
     assert log.now == 229 * 5_000_000
     assert [(first, last) for _, _, first, last in chunks] == [(0, 495_000_000), (500_000_000, 995_000_000)]
     assert chunks[0][1] == {1: 20, 2: 100, 3: 100}
     times = [t for _, t, _ in _records(chunks[1][0])]
-    assert times == sorted(times) and times[0] == 500_000_000            # the step's clock opens the chunk
+    assert times == sorted(times) and times[0] == 500_000_000  # the step's clock opens the chunk
     data, counts, first, last = log.take()
     assert (first, last) == (1_000_000_000, 1_145_000_000) and counts == {1: 6, 2: 30, 3: 30}
 
@@ -109,6 +123,7 @@ def test_encoded_messages_and_raw_records(kind):
 
 def test_c_and_python_recordings_hold_the_same_bytes(tmp_path):
     """A whole run with operator commands, noisy perception, coaches and the 3D scene, recorded twice."""
+
     def record(path, accelerate):
         with simatch.Simulation("msl_5v5", seed=4, overrides=NOISY) as sim:
             with Recorder.for_run(sim, path, command_line=["pytest"], accelerate=accelerate):
@@ -134,26 +149,56 @@ def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, ac
     path = tmp_path / "odd.mcap"
     own = copy.deepcopy(np.dtype("<f8"))
     pose = np.arange(14.0)
-    pairs = [(msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=("a", "b"), pose=pose.tolist(), twist=np.arange(24.0)[::2]),
-              msgs.new(msgs.ModelStates, stamp=0.0, step=0, name=["a", "b"], pose=pose.astype(np.float32),
-                       twist=np.arange(0.0, 24.0, 2.0, dtype=np.float32))),
-             (msgs.new(msgs.ModelStates, stamp=np.float32(0.5), step=np.uint64(1), name=["a"],
-                       pose=np.arange(7.0).astype(own), twist=np.ones(6, dtype=">f8")),
-              msgs.new(msgs.ModelStates, stamp=0.5, step=1, name=["a"], pose=np.arange(7.0, dtype=np.float32),
-                       twist=np.ones(6, dtype=np.float32))),
-             (msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
-              msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0)))]
+    pairs = [
+        (
+            msgs.new(
+                msgs.ModelStates, stamp=0.0, step=0, name=("a", "b"), pose=pose.tolist(), twist=np.arange(24.0)[::2]
+            ),
+            msgs.new(
+                msgs.ModelStates,
+                stamp=0.0,
+                step=0,
+                name=["a", "b"],
+                pose=pose.astype(np.float32),
+                twist=np.arange(0.0, 24.0, 2.0, dtype=np.float32),
+            ),
+        ),
+        (
+            msgs.new(
+                msgs.ModelStates,
+                stamp=np.float32(0.5),
+                step=np.uint64(1),
+                name=["a"],
+                pose=np.arange(7.0).astype(own),
+                twist=np.ones(6, dtype=">f8"),
+            ),
+            msgs.new(
+                msgs.ModelStates,
+                stamp=0.5,
+                step=1,
+                name=["a"],
+                pose=np.arange(7.0, dtype=np.float32),
+                twist=np.ones(6, dtype=np.float32),
+            ),
+        ),
+        (
+            msgs.new(msgs.StrategyInfo, role=np.int64(3), target_num=[1, 2], user=np.arange(3, dtype=np.float32)),
+            msgs.new(msgs.StrategyInfo, role=3, target_num=np.array([1, 2], dtype=np.int32), user=np.arange(3.0)),
+        ),
+    ]
     assert pairs[1][0].pose.dtype is own
     with Recorder(bus, path, scene=scene, seed=0, dt=0.005, accelerate=accelerate):
-        states, info = bus.publisher("model_states", msgs.ModelStates), bus.publisher("cyan/1/StrategyInfo",
-                                                                                     msgs.StrategyInfo)
+        states, info = (
+            bus.publisher("model_states", msgs.ModelStates),
+            bus.publisher("cyan/1/StrategyInfo", msgs.StrategyInfo),
+        )
         for m, _ in pairs:
             (info if m.__msgtype__.endswith("StrategyInfo") else states).put(m)
     got = [bytes(d) for topic, _, d in Recording(path).raw() if not topic.startswith("scene/")]
     assert got == [bytes(msgs.typestore.serialize_cdr(m, m.__msgtype__)) for _, m in pairs]
 
 
-PURE_PYTHON = textwrap.dedent('''
+PURE_PYTHON = textwrap.dedent("""
     import sys
     from simatch.msgs import cdr
     assert not cdr.ACCELERATED and cdr.Log is None          # as on a machine without a C compiler
@@ -168,14 +213,15 @@ PURE_PYTHON = textwrap.dedent('''
             sim.run(seconds=1.2)
     assert verify(sys.argv[1]).identical
     print(sim.state_digest())
-''')
+""")
 
 
 def test_a_machine_without_the_c_extension_records_the_same_run(tmp_path):
     path = tmp_path / "pure.mcap"
     env = dict(os.environ, **{cdr.PURE_PYTHON_ENV: "1"})
-    proc = subprocess.run([sys.executable, "-c", PURE_PYTHON, str(path)], capture_output=True, text=True,
-                          timeout=300, env=env)
+    proc = subprocess.run(
+        [sys.executable, "-c", PURE_PYTHON, str(path)], capture_output=True, text=True, timeout=300, env=env
+    )
     assert proc.returncode == 0, proc.stderr
     with simatch.Simulation("msl_5v5", seed=5, overrides={"judge.kind": "none"}) as sim:
         with Recorder.for_run(sim, tmp_path / "c.mcap"):
@@ -232,16 +278,31 @@ def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(ki
     for step in range(56):
         names = three if step < 25 else two
         yaw = rng.uniform(-3.2, 3.2, len(names))
-        pose = np.column_stack([rng.uniform(-9, 9, (len(names), 3)), np.cos(yaw / 2), np.zeros((len(names), 2)),
-                                np.sin(yaw / 2)]).astype(np.float32).ravel()
+        pose = (
+            np.column_stack(
+                [rng.uniform(-9, 9, (len(names), 3)), np.cos(yaw / 2), np.zeros((len(names), 2)), np.sin(yaw / 2)]
+            )
+            .astype(np.float32)
+            .ravel()
+        )
         if step == 40:
-            pose = pose.astype(np.float64).tolist()                    # a list: the fallback's
+            pose = pose.astype(np.float64).tolist()  # a list: the fallback's
         if step == 50:
-            pose = pose[:7]                                            # one row for two models: refused
-        log("model_states", msgs.new(msgs.ModelStates, step=step, name=list(names), pose=pose,
-                                      twist=np.zeros(6 * len(names), dtype=np.float32)))
+            pose = pose[:7]  # one row for two models: refused
+        log(
+            "model_states",
+            msgs.new(
+                msgs.ModelStates,
+                step=step,
+                name=list(names),
+                pose=pose,
+                twist=np.zeros(6 * len(names), dtype=np.float32),
+            ),
+        )
         if step % 10 == 0 and step != 50:
-            expected.append((step * 5_000_000, builder.game_update(names, np.asarray(pose, dtype=float).reshape(-1, 7))))
+            expected.append(
+                (step * 5_000_000, builder.game_update(names, np.asarray(pose, dtype=float).reshape(-1, 7)))
+            )
     scene = [(t, data) for cid, t, data in _records(log.take()[0]) if cid == 7]
     assert scene == expected
     assert handed == [0, 30, 40, 50] and refused == [50]
@@ -251,7 +312,7 @@ def test_the_pose_template_refuses_slots_outside_it():
     for kind in KINDS:
         log = _log(kind, lambda topic, msg: None)
         with pytest.raises(ValueError):
-            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 1024.0, 4096.0)    # poses() first
+            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 1024.0, 4096.0)  # poses() first
         log.poses("model_states", 7, 10, lambda msg: None)
         for slots in ([(10, 0, 0.0, False)], [(2, 0, 0.0, False)], [(4, -1, 0.0, False)]):
             with pytest.raises(ValueError):

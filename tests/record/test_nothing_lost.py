@@ -19,7 +19,7 @@ from simatch.record import Recorder, RecordError, Recording, RecordingError, ver
 
 SIMATCH = [sys.executable, "-m", "simatch"]
 
-KILLED_CHILD = textwrap.dedent('''
+KILLED_CHILD = textwrap.dedent("""
     import sys, time
     import simatch
     from simatch.record import Recorder
@@ -31,7 +31,7 @@ KILLED_CHILD = textwrap.dedent('''
     sim.run(seconds=3.5)
     print("at", sim.time, flush=True)
     time.sleep(120)
-''')
+""")
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -48,7 +48,7 @@ def _writers_of(path) -> list[int]:
             try:
                 if any(os.readlink(fd.path) == str(path) for fd in os.scandir(f"/proc/{entry.name}/fd")):
                     found.append(int(entry.name))
-            except OSError:                      # gone meanwhile, or not ours to look at
+            except OSError:  # gone meanwhile, or not ours to look at
                 pass
     return found
 
@@ -77,9 +77,9 @@ def test_sigkill_leaves_every_chunk_but_the_one_being_filled(tmp_path):
     rec = Recording(path)
     assert not rec.finalised and any("not finalised" in p for p in rec.problems)
     steps = [m.step for _, _, m in rec.messages(topics={"model_states"})]
-    assert steps == list(range(len(steps)))                    # intact from the start, no gap
+    assert steps == list(range(len(steps)))  # intact from the start, no gap
     assert steps[-1] * 0.005 >= killed_at - 0.5 - 0.005 - 1e-9  # all but the chunk being filled
-    verdict = verify(path)                                      # what is there re-simulates bit for bit
+    verdict = verify(path)  # what is there re-simulates bit for bit
     assert verdict.identical and not verdict.complete and verdict.compared == len(steps)
 
 
@@ -93,7 +93,7 @@ def test_a_killed_writer_process_does_not_stop_the_run(tmp_path):
             coach.start_play()
         sim.run(seconds=1.6)
         deadline = time.monotonic() + 30
-        while Recording(path).duration < 1.4:                  # the chunks handed over are on disk
+        while Recording(path).duration < 1.4:  # the chunks handed over are on disk
             assert time.monotonic() < deadline
             time.sleep(0.05)
         writers = _writers_of(path)
@@ -109,23 +109,40 @@ def test_a_killed_writer_process_does_not_stop_the_run(tmp_path):
 
 
 def _run_until_recording(path, *extra):
-    proc = subprocess.Popen(SIMATCH + ["run", "msl_5v5", "--duration", "120", "--realtime", "--quiet", "--seed", "3",
-                                       "--record", str(path), *extra],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        SIMATCH
+        + [
+            "run",
+            "msl_5v5",
+            "--duration",
+            "120",
+            "--realtime",
+            "--quiet",
+            "--seed",
+            "3",
+            "--record",
+            str(path),
+            *extra,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and proc.poll() is None:
         try:
-            if path.exists() and Recording(path).end_ns >= 1_995_000_000:     # two simulated seconds on disk
+            if path.exists() and Recording(path).end_ns >= 1_995_000_000:  # two simulated seconds on disk
                 return proc
-        except RecordingError:       # caught between the file's creation and its header: not an MCAP file yet
+        except RecordingError:  # caught between the file's creation and its header: not an MCAP file yet
             pass
         time.sleep(0.2)
     _stop(proc)
     raise AssertionError(f"the run did not start recording: {proc.stderr.read()}")
 
 
-@pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
-                                                (signal.SIGTERM, 128 + signal.SIGTERM, "terminated")])
+@pytest.mark.parametrize(
+    "sig, code, status", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 128 + signal.SIGTERM, "terminated")]
+)
 def test_ctrl_c_and_sigterm_finalise_the_file(tmp_path, sig, code, status):
     path = tmp_path / "stopped.mcap"
     proc = _run_until_recording(path)
@@ -135,7 +152,7 @@ def test_ctrl_c_and_sigterm_finalise_the_file(tmp_path, sig, code, status):
     finally:
         _stop(proc)
     assert proc.returncode == code, proc.stderr.read()
-    assert not _writers_of(path)                               # the writer process ended before the run
+    assert not _writers_of(path)  # the writer process ended before the run
     rec = Recording(path)
     assert rec.finalised and not rec.problems
     assert rec.end["status"] == status and rec.duration >= 1.9
@@ -164,7 +181,7 @@ def test_a_damaged_chunk_is_skipped_and_named(recording, tmp_path):
     path, _ = recording
     bad = tmp_path / "bad.mcap"
     shutil.copy(path, bad)
-    chunk = next(c for c in Recording(path).chunks if c.start < 250_000_000 < c.end)    # the first chunk
+    chunk = next(c for c in Recording(path).chunks if c.start < 250_000_000 < c.end)  # the first chunk
     with open(bad, "r+b") as f:
         f.seek(chunk.offset + 2000)
         f.write(bytes(64))
@@ -189,8 +206,8 @@ def test_any_damaged_byte_of_a_chunk_is_caught(recording, tmp_path):
     path, _ = recording
     data = path.read_bytes()
     chunk = Recording(path).chunks[1]
-    end = chunk.offset + 9 + int.from_bytes(data[chunk.offset + 1:chunk.offset + 9], "little")
-    body = chunk.offset + 9 + 8 * 3 + 4 + 4 + 4 + 8          # after times, sizes, CRC, compression, length
+    end = chunk.offset + 9 + int.from_bytes(data[chunk.offset + 1 : chunk.offset + 9], "little")
+    body = chunk.offset + 9 + 8 * 3 + 4 + 4 + 4 + 8  # after times, sizes, CRC, compression, length
     bad = tmp_path / "flipped.mcap"
     for at in range(body, end, (end - body) // 7):
         damaged = bytearray(data)

@@ -27,19 +27,28 @@ def test_every_topic_of_the_run_is_recorded(recording):
     assert rec.finalised and not rec.problems
     types = rec.topics()
     for robot in ROBOTS:
-        for leaf, typ in (("OmniVisionInfo", "OmniVisionInfo"), ("VelCmd", "VelCmd"), ("ActionCmd", "ActionCmd"),
-                          ("StrategyInfo", "StrategyInfo")):
+        for leaf, typ in (
+            ("OmniVisionInfo", "OmniVisionInfo"),
+            ("VelCmd", "VelCmd"),
+            ("ActionCmd", "ActionCmd"),
+            ("StrategyInfo", "StrategyInfo"),
+        ):
             assert types[f"{robot}/{leaf}"] == f"simatch_msgs/msg/{typ}"
     for team in ("cyan", "magenta"):
         assert types[f"{team}/TeamStrategy"] == "simatch_msgs/msg/TeamStrategy"
         assert types[f"{team}/receive_from_coach"] == "simatch_msgs/msg/CoachInfo"
-    for topic, typ in (("clock", "Clock"), ("model_states", "ModelStates"), ("events", "GameEvent"),
-                       ("operator", "OperatorCommand"), ("ball_contacts", "BallContacts")):
+    for topic, typ in (
+        ("clock", "Clock"),
+        ("model_states", "ModelStates"),
+        ("events", "GameEvent"),
+        ("operator", "OperatorCommand"),
+        ("ball_contacts", "BallContacts"),
+    ):
         assert types[topic] == f"simatch_msgs/msg/{typ}"
     assert types["scene/field"] == types["scene/game"] == "foxglove_msgs/msg/SceneUpdate"
     counts = json.loads(rec.end["messages"])
-    assert counts["model_states"] == 400                  # 2 s at the physics rate, every step
-    assert counts["cyan/3/OmniVisionInfo"] == 80          # every control period (0.025 s)
+    assert counts["model_states"] == 400  # 2 s at the physics rate, every step
+    assert counts["cyan/3/OmniVisionInfo"] == 80  # every control period (0.025 s)
     steps = [m.step for _, _, m in rec.messages(topics={"model_states"})]
     assert steps == list(range(400))
 
@@ -59,20 +68,29 @@ def test_metadata_reproduces_the_run(recording):
 def test_operator_commands_are_recorded_in_order(recording):
     path, _ = recording
     ops = [(m.step, m.call, m.target) for _, _, m in Recording(path).messages(topics={"operator"})]
-    assert ops == [(0, "coach", "cyan"), (0, "coach", "magenta"), (0, "set_model_state", "ball"),
-                   (0, "set_model_state", "magenta/3"), (120, "take_control", "cyan/2"), (120, "send_vel", "cyan/2"),
-                   (120, "apply_wrench", "ball"), (240, "send_action", "cyan/2"), (240, "coach", "magenta"),
-                   (320, "release_control", "cyan/2"), (320, "coach", "magenta")]
+    assert ops == [
+        (0, "coach", "cyan"),
+        (0, "coach", "magenta"),
+        (0, "set_model_state", "ball"),
+        (0, "set_model_state", "magenta/3"),
+        (120, "take_control", "cyan/2"),
+        (120, "send_vel", "cyan/2"),
+        (120, "apply_wrench", "ball"),
+        (240, "send_action", "cyan/2"),
+        (240, "coach", "magenta"),
+        (320, "release_control", "cyan/2"),
+        (320, "coach", "magenta"),
+    ]
 
 
 def test_the_3d_scene_shows_field_robots_and_ball(recording):
     path, _ = recording
     rec = Recording(path)
-    (_, t0, field), = list(rec.messages(topics={"scene/field"}))
+    ((_, t0, field),) = list(rec.messages(topics={"scene/field"}))
     entity = field.entities[0]
     assert t0 == 0 and entity.id == "field" and len(entity.lines) >= 10 and len(entity.cubes) >= 7
     games = list(rec.messages(topics={"scene/game"}))
-    assert len(games) == 40                                  # 20 per simulated second
+    assert len(games) == 40  # 20 per simulated second
     states = {m.step: m for _, _, m in rec.messages(topics={"model_states"})}
     _, t, last = games[-1]
     state = states[t // 5_000_000]
@@ -81,7 +99,7 @@ def test_the_3d_scene_shows_field_robots_and_ball(recording):
     assert ids == list(state.name)
     for k, e in enumerate(last.entities):
         p = (e.spheres or e.cylinders)[0].pose.position
-        assert (p.x, p.y) == (round(pose[k, 0] * 1024) / 1024, round(pose[k, 1] * 1024) / 1024)   # to a mm grid
+        assert (p.x, p.y) == (round(pose[k, 0] * 1024) / 1024, round(pose[k, 1] * 1024) / 1024)  # to a mm grid
         assert abs(p.x - pose[k, 0]) <= 0.5 / 1024 and abs(p.y - pose[k, 1]) <= 0.5 / 1024
     cyan = last.entities[ids.index("cyan/2")]
     assert cyan.texts[0].text == "2" and cyan.cylinders[0].color.b > 0.5 and cyan.cylinders[0].color.r < 0.2
@@ -116,10 +134,10 @@ def test_a_writer_process_that_cannot_start_is_a_clear_error(tmp_path, monkeypat
     with simatch.Simulation("omni_circle") as sim:
         with pytest.raises(RecordError, match="cannot start the writer process"):
             Recorder.for_run(sim, path)
-    assert not path.exists()                       # nothing left behind to refuse the next attempt
+    assert not path.exists()  # nothing left behind to refuse the next attempt
 
 
-FOREIGN_READER = textwrap.dedent('''
+FOREIGN_READER = textwrap.dedent("""
     import json, sys
     from pathlib import Path
     assert "simatch" not in sys.modules
@@ -155,13 +173,14 @@ FOREIGN_READER = textwrap.dedent('''
                 scene = [schema.name, len(decoded.entities), decoded.entities[0].id]
         out["mcap_model_states"], out["mcap_scene"] = n, scene
     print(json.dumps(out))
-''')
+""")
 
 
 def test_readable_without_simatch_by_rosbags_and_mcap(recording):
     path, _ = recording
-    proc = subprocess.run([sys.executable, "-c", FOREIGN_READER, str(path)], capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-c", FOREIGN_READER, str(path)], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     topics = dict(out["rosbags_topics"])
@@ -188,7 +207,7 @@ def test_what_a_producer_sends_never_stops_the_recording(tmp_path):
             bad = sim.bus.publisher("cyan/1/Weird", msgs.VelCmd)
             alien = sim.bus.publisher("cyan/1/Alien", "not/a/Type")
             sim.run(seconds=0.1)
-            bad.put(msgs.VelCmd(stamp=0.1, tick=0, vx="fast", vy=0.0, w=0.0))   # does not encode
+            bad.put(msgs.VelCmd(stamp=0.1, tick=0, vx="fast", vy=0.0, w=0.0))  # does not encode
             alien.put(object())
             bad.put(msgs.VelCmd(stamp=0.1, tick=0, vx=1.0, vy=0.0, w=0.0))
             sim.run(seconds=0.1)

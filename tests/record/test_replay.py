@@ -35,7 +35,7 @@ def test_from_a_time_with_the_latest_state_of_every_topic_first(recording):
         first.setdefault(topic, msg)
     # the coach command in force at 1 s reaches a late viewer even though it was given at 0 s
     assert first["cyan/receive_from_coach"].match_mode == 15
-    assert first["operator"].call == "apply_wrench"             # the latest operator command before 1 s
+    assert first["operator"].call == "apply_wrench"  # the latest operator command before 1 s
     assert set(first) == {t for t in topics if not t.startswith("scene/")}
     states = [m for t, m in seen if t == "model_states"]
     assert states[0].step == 199 and states[1].step == 200 and states[-1].step == 399

@@ -21,8 +21,9 @@ SIMATCH = [sys.executable, "-m", "simatch"]
 
 def test_a_recorded_run_reproduces_bit_for_bit(recording):
     path, _ = recording
-    proc = subprocess.run(SIMATCH + ["replay", str(path), "--verify", "--json"], capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run(
+        SIMATCH + ["replay", str(path), "--verify", "--json"], capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["identical"] and out["complete"] and out["compared"] == 400
@@ -32,6 +33,7 @@ def test_a_recorded_run_reproduces_bit_for_bit(recording):
 def _verify_a_run_changed_behind_the_recorder(path, change):
     """Record 1 s in which ``change(sim)`` moves magenta/2 at 0.5 s below the Python API (not recorded), then
     verify it. Robots hold their start poses (msl_5v5's default teams play: they would move away)."""
+
     def sneaky(sim):
         for coach in sim.coaches.values():
             coach.start_play()
@@ -39,8 +41,11 @@ def _verify_a_run_changed_behind_the_recorder(path, change):
         change(sim)
         sim.run(seconds=0.5)
 
-    record_run(path, overrides={**NOISY, "teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"},
-               script=sneaky)
+    record_run(
+        path,
+        overrides={**NOISY, "teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"},
+        script=sneaky,
+    )
     verdict = verify(path)
     assert not verdict.identical
     return verdict.first_difference
@@ -49,22 +54,27 @@ def _verify_a_run_changed_behind_the_recorder(path, change):
 def test_the_first_difference_is_named(tmp_path):
     path = tmp_path / "sneaky.mcap"
     diff = _verify_a_run_changed_behind_the_recorder(
-        path, lambda sim: sim.simulator.set_model_state("magenta/2", x=3.0, y=-2.5))
+        path, lambda sim: sim.simulator.set_model_state("magenta/2", x=3.0, y=-2.5)
+    )
     assert (diff.step, diff.model, diff.field) == (100, "magenta/2", "x")
-    assert diff.recorded == 3.0 and diff.simulated == pytest.approx(2.0, abs=0.05)    # near its start pose
+    assert diff.recorded == 3.0 and diff.simulated == pytest.approx(2.0, abs=0.05)  # near its start pose
     proc = subprocess.run(SIMATCH + ["replay", str(path), "--verify"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 1
-    assert re.search(r"first difference at t=0\.500 s \(physics step 100\): magenta/2 x recorded 3\.0, "
-                     r"re-simulated (\d+\.\d+)", proc.stdout), proc.stdout
+    assert re.search(
+        r"first difference at t=0\.500 s \(physics step 100\): magenta/2 x recorded 3\.0, "
+        r"re-simulated (\d+\.\d+)",
+        proc.stdout,
+    ), proc.stdout
     shown = float(re.search(r"re-simulated (\d+\.\d+)", proc.stdout).group(1))
     assert shown == diff.simulated
 
 
 def test_a_difference_below_float32_is_caught_by_the_fingerprint(tmp_path):
     """Recorded states are float32; the fingerprint of the exact float64 ones keeps the check bit for bit."""
+
     def nudge(sim):
         x = sim.model_states()["magenta/2"].x
-        sim.simulator.set_model_state("magenta/2", x=x + 1e-9)      # far below float32 (2.4e-7 at 2 m)
+        sim.simulator.set_model_state("magenta/2", x=x + 1e-9)  # far below float32 (2.4e-7 at 2 m)
 
     diff = _verify_a_run_changed_behind_the_recorder(tmp_path / "nudge.mcap", nudge)
     assert (diff.step, diff.model, diff.field) == (100, "(every model)", "fingerprint of the exact states")

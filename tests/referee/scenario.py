@@ -78,9 +78,11 @@ class Outcome:
         return [e for e in self.events if e["type"] in types]
 
     def describe(self) -> str:
-        lines = [f"  {e['t']:8.3f} {e['type']:22s} {e.get('team', ''):8s} {e.get('robot', '')!s:3s} "
-                 f"{e.get('value', '')!s:>8.8s} / {e.get('limit', '')!s:8.8s} {e.get('detail', '')}"
-                 for e in self.events]
+        lines = [
+            f"  {e['t']:8.3f} {e['type']:22s} {e.get('team', ''):8s} {e.get('robot', '')!s:3s} "
+            f"{e.get('value', '')!s:>8.8s} / {e.get('limit', '')!s:8.8s} {e.get('detail', '')}"
+            for e in self.events
+        ]
         heard = {t: [(round(s, 3), MatchMode(c).name) for s, c in h] for t, h in self.heard.items()}
         return "\n".join(["events (t after setup):", *lines, f"heard: {heard}", f"game: {self.game}"])
 
@@ -123,11 +125,13 @@ class Scenario:
         setup = d.get("setup", {})
         heard: dict[str, list[tuple[float, int]]] = {"cyan": [], "magenta": []}
         for team, log in heard.items():
+
             def on_coach(msg, log=log):
                 if not log or log[-1][1] != msg.match_mode:
                     log.append((sim.time, int(msg.match_mode)))
+
             sim.bus.subscribe(topics.team_topic(team, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, on_coach)
-        sim.step()                                       # the referee begins: STOP
+        sim.step()  # the referee begins: STOP
         placed = {k: v for k, v in setup.get("robots", {}).items()}
         for name in ROBOTS:
             x, y, yaw = placed.get(name, parked(name))
@@ -143,8 +147,9 @@ class Scenario:
         if start == "play":
             referee.command("STARTROBOT")
         elif isinstance(start, dict):
-            referee.command(start["command"], team=start.get("team", ""),
-                            spot=tuple(start["spot"]) if "spot" in start else None)
+            referee.command(
+                start["command"], team=start.get("team", ""), spot=tuple(start["spot"]) if "spot" in start else None
+            )
         elif start != "match":
             raise ValueError(f"{self.path}: setup.start must be 'play', 'match' or a table, not {start!r}")
         t0 = sim.time
@@ -175,8 +180,9 @@ class Scenario:
             if "vel" in item:
                 sim.send_vel(name, *item["vel"])
             if any(k in item for k in ("dribble", "kick", "lob")):
-                sim.send_action(name, dribble=item.get("dribble", False), kick=item.get("kick", 0.0),
-                                lob=item.get("lob", False))
+                sim.send_action(
+                    name, dribble=item.get("dribble", False), kick=item.get("kick", 0.0), lob=item.get("lob", False)
+                )
             if "place" in item:
                 x, y, yaw = item["place"]
                 sim.set_model_state(name, x=x, y=y, yaw=yaw)
@@ -231,8 +237,12 @@ class Scenario:
                 problems.append(f"a foul without its team and robot: {e}")
         for where in d.get("at_end", []):
             x, y = out.positions[where["model"]]
-            for key, value, ok in (("x_min", x, lambda v, b: v >= b), ("x_max", x, lambda v, b: v <= b),
-                                   ("y_min", y, lambda v, b: v >= b), ("y_max", y, lambda v, b: v <= b)):
+            for key, value, ok in (
+                ("x_min", x, lambda v, b: v >= b),
+                ("x_max", x, lambda v, b: v <= b),
+                ("y_min", y, lambda v, b: v >= b),
+                ("y_max", y, lambda v, b: v <= b),
+            ):
                 if key in where and not ok(value, where[key]):
                     problems.append(f"{where['model']} ends at ({x:.2f}, {y:.2f}), not {key} {where[key]}")
         final = d.get("final", {})

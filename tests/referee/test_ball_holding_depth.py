@@ -16,7 +16,7 @@ from simatch.robots.omni3 import Omni3
 from simatch.robots.omni4 import Omni4
 
 BALL_RADIUS = 0.11
-LIMIT = RefereeParams().ball_holding_depth * 2 * BALL_RADIUS          # 0.0733 m
+LIMIT = RefereeParams().ball_holding_depth * 2 * BALL_RADIUS  # 0.0733 m
 
 
 @pytest.mark.parametrize("model", [Omni4, Omni3], ids=["omni4", "omni3"])
@@ -35,8 +35,11 @@ def test_the_mouth_collider_keeps_the_ball_less_than_a_third_deep(model):
 def test_a_robot_dribbling_hard_keeps_the_ball_less_than_a_third_deep():
     """Every physics step of a robot taking the ball and dribbling it flat out, turning hard (until the grip
     gives): the ball's depth in the footprint never reaches 1/3 of its diameter."""
-    sim = simatch.Simulation("msl_5v5", seed=0, overrides={"teams.cyan.strategy": "none",
-                                                             "teams.magenta.strategy": "none", "judge.kind": "none"})
+    sim = simatch.Simulation(
+        "msl_5v5",
+        seed=0,
+        overrides={"teams.cyan.strategy": "none", "teams.magenta.strategy": "none", "judge.kind": "none"},
+    )
     try:
         sim.step()
         sim.take_control("cyan/2")
@@ -53,7 +56,7 @@ def test_a_robot_dribbling_hard_keeps_the_ball_less_than_a_third_deep():
                 depth = 0.25 + BALL_RADIUS - math.hypot(b.x - r.x, b.y - r.y)
                 deepest = max(deepest, depth)
                 held_steps += depth > 0.06
-        assert held_steps * sim.dt > 1.0            # it did hold the ball (0.066 m deep) for a while
+        assert held_steps * sim.dt > 1.0  # it did hold the ball (0.066 m deep) for a while
         assert deepest < LIMIT
     finally:
         sim.close()

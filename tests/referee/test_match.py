@@ -21,7 +21,7 @@ def test_msl_5v5_is_refereed_and_lasts_a_full_match():
     with simatch.Simulation("msl_5v5") as sim:
         assert sim.judge.name == "msl_referee" and sim.coaches == {}
         assert sim.scene.spec.duration is None
-        assert sim.duration == pytest.approx(2 * 900 + 10, abs=0.1)       # 2 x 15 min and the break
+        assert sim.duration == pytest.approx(2 * 900 + 10, abs=0.1)  # 2 x 15 min and the break
 
 
 def test_run_json_carries_score_fouls_and_every_event():
@@ -35,14 +35,15 @@ def test_run_json_carries_score_fouls_and_every_event():
     assert r["score"] == {"cyan": 0, "magenta": 0}
     assert set(r["fouls"]) == {"cyan", "magenta"} and all(isinstance(v, int) for v in r["fouls"].values())
     assert r["ended"] and r["stage"] == "ended" and r["winner"] is None
-    assert out["sim_seconds"] == pytest.approx(13.0, abs=0.01)             # 6 + 1 + 6: the referee ended it
+    assert out["sim_seconds"] == pytest.approx(13.0, abs=0.01)  # 6 + 1 + 6: the referee ended it
     kinds = [e["type"] for e in out["events"]]
     assert kinds[0] == "stage" and kinds[-1] == "match_end"
     assert {"command", "ball_placed", "set_piece_distance"} <= set(kinds)  # the original start poses are too close
     # the fouls in the result are the foul events of the log, per team
     for team in ("cyan", "magenta"):
-        assert r["fouls"][team] == sum(1 for e in out["events"] if e["type"] == "set_piece_distance"
-                                       and e["team"] == team)
+        assert r["fouls"][team] == sum(
+            1 for e in out["events"] if e["type"] == "set_piece_distance" and e["team"] == team
+        )
     first = out["events"][0]
     assert first == {"t": 0.0, "type": "stage", "value": 6.0, "limit": 0.0, "detail": "first_half begins"}
 
@@ -52,6 +53,7 @@ def test_same_seed_same_match():
         with simatch.Simulation("msl_5v5", seed=4, overrides=SHORT) as sim:
             sim.run()
             return sim.state_digest(), sim.events, sim.result()["result"]
+
     assert play() == play()
 
 
@@ -62,12 +64,12 @@ def test_game_state_topic_explains_the_game():
         sim.run(seconds=4.0)
         assert states, "no GameState published"
         gaps = [b.stamp - a.stamp for a, b in zip(states, states[1:])]
-        assert max(gaps) <= 1.0 + 1e-9                                       # at least once a second
+        assert max(gaps) <= 1.0 + 1e-9  # at least once a second
         last = states[-1]
         assert list(last.teams) == ["cyan", "magenta"] and list(last.score) == [0, 0]
         assert last.stage == "first_half" and last.phase in ("prepare", "taking", "play")
         kickoff = [s for s in states if s.phase == "prepare"][0]
-        assert kickoff.command == 1 and kickoff.command_team == "cyan"       # OUR_KICKOFF, cyan's view
+        assert kickoff.command == 1 and kickoff.command_team == "cyan"  # OUR_KICKOFF, cyan's view
         assert (kickoff.ball_x, kickoff.ball_y) == (0.0, 0.0)
         stopped = states[0]
         assert stopped.phase == "stopped" and stopped.next_command == 1 and "kick-off" in stopped.reason
@@ -77,13 +79,16 @@ def test_game_state_topic_explains_the_game():
         assert game["stage"] == "first_half" and game["time_left"] == pytest.approx(2.0, abs=0.01)
 
 
-@pytest.mark.parametrize("overrides, message", [
-    ({"judge.stop_tme": 1.0}, "judge.stop_tme: unknown key"),
-    ({"judge.charging_speed": -1.0}, "judge.charging_speed: expected greater than 0"),
-    ({"judge.disabled_rules": ["offside"]}, "unknown rule(s) offside"),
-    ({"judge.charging_card": "blue"}, "judge.charging_card"),
-    ({"match.kickoff": "yellow"}, "match.kickoff names team 'yellow'"),
-])
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ({"judge.stop_tme": 1.0}, "judge.stop_tme: unknown key"),
+        ({"judge.charging_speed": -1.0}, "judge.charging_speed: expected greater than 0"),
+        ({"judge.disabled_rules": ["offside"]}, "unknown rule(s) offside"),
+        ({"judge.charging_card": "blue"}, "judge.charging_card"),
+        ({"match.kickoff": "yellow"}, "match.kickoff names team 'yellow'"),
+    ],
+)
 def test_referee_settings_are_checked(overrides, message):
     with pytest.raises(SceneError) as err:
         simatch.Simulation("msl_5v5", overrides=overrides)
@@ -99,20 +104,23 @@ def test_the_referee_needs_two_teams(tmp_path):
 
 def test_the_teams_must_attack_opposite_goals(tmp_path):
     path = tmp_path / "same_way.toml"
-    path.write_text('name = "same_way"\n[teams.blue]\nstart = [[-1.0, 0.0, 0.0]]\n'
-                    '[teams.yellow]\nstart = [[1.0, 0.0, 0.0]]\n[match]\nkickoff = "blue"\n'
-                    '[judge]\nkind = "msl_referee"\n')
+    path.write_text(
+        'name = "same_way"\n[teams.blue]\nstart = [[-1.0, 0.0, 0.0]]\n'
+        '[teams.yellow]\nstart = [[1.0, 0.0, 0.0]]\n[match]\nkickoff = "blue"\n'
+        '[judge]\nkind = "msl_referee"\n'
+    )
     with pytest.raises(SceneError, match="teams.yellow.attacks: blue and yellow both attack"):
         simatch.Simulation(str(path))
-    text = path.read_text().replace('[teams.yellow]\n', '[teams.yellow]\nattacks = "-x"\n')
+    text = path.read_text().replace("[teams.yellow]\n", '[teams.yellow]\nattacks = "-x"\n')
     path.write_text(text)
-    with simatch.Simulation(str(path), overrides=SHORT) as sim:      # any team names, once they face each other
+    with simatch.Simulation(str(path), overrides=SHORT) as sim:  # any team names, once they face each other
         sim.run()
         assert sim.done and set(sim.game["score"]) == {"blue", "yellow"}
 
 
 def test_referee_benchmark_reports_its_figures():
     from simatch.bench.referee import run
+
     out = run(1.0)
     assert set(out) >= {"referee_us_per_step", "referee_overhead_us_per_step", "referee_decisions"}
     assert out["referee_us_per_step"] > 0 and out["referee_sim_seconds"] == 1.0

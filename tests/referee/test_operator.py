@@ -49,7 +49,7 @@ def test_pause_stops_robots_and_the_clock_and_resume_carries_on(match):
     ref.pause()
     assert heard["cyan"][-1].match_mode == MatchMode.STOPROBOT and sim.game["paused"]
     sim.run(seconds=3.0)
-    assert sim.game["clock"] == pytest.approx(clock, abs=1e-9)          # the clock stood still
+    assert sim.game["clock"] == pytest.approx(clock, abs=1e-9)  # the clock stood still
     assert sim.game["phase"] == "paused"
     ref.resume()
     sim.run(seconds=0.5)
@@ -62,16 +62,16 @@ def test_pause_stops_robots_and_the_clock_and_resume_carries_on(match):
 def test_any_command_mirrored_per_team_and_the_ball_placed(match):
     sim, heard = match()
     ref = sim.judge
-    ref.command("opp corner", team="magenta", spot=(-10.7, 6.7))      # a corner for cyan, said from magenta's side
+    ref.command("opp corner", team="magenta", spot=(-10.7, 6.7))  # a corner for cyan, said from magenta's side
     sim.step()
     assert heard["cyan"][-1].match_mode == MatchMode.OUR_CORNERKICK
     assert heard["magenta"][-1].match_mode == MatchMode.OPP_CORNERKICK
     ball = sim.model_states()["ball"]
     assert (ball.x, ball.y) == pytest.approx((-10.7, 6.7))
     c = heard["cyan"][-1]
-    assert (c.ball_x, c.ball_y) == pytest.approx((-10.7, 6.7))                   # cyan's team frame = world
+    assert (c.ball_x, c.ball_y) == pytest.approx((-10.7, 6.7))  # cyan's team frame = world
     m = heard["magenta"][-1]
-    assert (m.ball_x, m.ball_y) == pytest.approx((10.7, -6.7))                   # magenta's is turned by pi
+    assert (m.ball_x, m.ball_y) == pytest.approx((10.7, -6.7))  # magenta's is turned by pi
     ref.place_ball(-9.0, 5.0)
     sim.step()
     assert sim.game["restart"] == "corner kick for cyan at (-9.00, 5.00)"
@@ -87,14 +87,14 @@ def test_send_off_parks_and_disables_and_return_brings_back(match):
     s = sim.model_states()["cyan/3"]
     assert s.y < -7.0 and sim.game["sent_off"] == ["cyan/3"]
     sim.take_control("cyan/3")
-    sim.send_vel("cyan/3", 2.0, 0.0, 0.0)                                       # a sent-off robot does not move
+    sim.send_vel("cyan/3", 2.0, 0.0, 0.0)  # a sent-off robot does not move
     sim.run(seconds=0.5)
     assert sim.model_states()["cyan/3"].x == pytest.approx(s.x, abs=1e-6)
     ref.return_robot("cyan/3")
     sim.run(seconds=0.5)
     back = sim.model_states()["cyan/3"]
-    assert abs(back.y) < 7.0 and back.x < 0 and sim.game["sent_off"] == []      # own half, on the field
-    assert back.x > s.x + 0.5 or back.y > s.y + 0.5                             # and it moves again
+    assert abs(back.y) < 7.0 and back.x < 0 and sim.game["sent_off"] == []  # own half, on the field
+    assert back.x > s.x + 0.5 or back.y > s.y + 0.5  # and it moves again
     assert {"send_off", "robot_returned"} <= set(types(sim))
 
 
@@ -106,14 +106,14 @@ def test_manual_mode_proposes_and_the_operator_decides(match):
     assert sim.game["manual"]
     sim.take_control("cyan/2")
     sim.set_model_state("cyan/2", x=-9.5, y=1.0, yaw=0.0)
-    sim.send_vel("cyan/2", -1.0, 0.0, 0.0)                                     # into its own goal area
+    sim.send_vel("cyan/2", -1.0, 0.0, 0.0)  # into its own goal area
     sim.run(seconds=1.5)
     proposals = [e for e in sim.events if e["type"] == "proposal"]
     assert proposals and proposals[0]["team"] == "cyan" and "goal_area" in proposals[0]["detail"]
-    assert "goal_area" not in types(sim) and sim.game["fouls"]["cyan"] == 0     # not enforced
+    assert "goal_area" not in types(sim) and sim.game["fouls"]["cyan"] == 0  # not enforced
     assert heard["cyan"][-1].match_mode == MatchMode.STARTROBOT and sim.game["phase"] == "play"
     ref.command("OUR_FREEKICK", team="magenta")
-    sim.run(seconds=3.0)                                                        # no automatic START in manual mode
+    sim.run(seconds=3.0)  # no automatic START in manual mode
     assert sim.game["phase"] == "prepare"
     ref.command("STARTROBOT")
     assert sim.game["phase"] == "taking"
@@ -145,20 +145,23 @@ def test_operator_requests_on_the_bus(match):
     assert len(ops) == 6 and all(e["detail"].endswith("(by web)") for e in ops)
 
 
-@pytest.mark.parametrize("fields, reason", [
-    ({"op": "dance"}, "unknown operator request"),
-    ({"op": "command", "command": 99}, "no game command numbered 99"),
-    ({"op": "command", "command": int(MatchMode.OUR_FREEKICK)}, "needs the team"),
-    ({"op": "command", "command": int(MatchMode.TEST)}, "TEST"),
-    ({"op": "card", "team": "cyan", "robot": 9, "card": "yellow"}, "no robot named 'cyan/9'"),
-    ({"op": "card", "team": "cyan", "robot": 2, "card": "green"}, "'yellow' or 'red'"),
-    ({"op": "place_ball", "x": math.nan, "y": 0.0}, "finite"),
-    ({"op": "place_ball", "x": 40.0, "y": 0.0}, "not on the floor"),
-    ({"op": "send_off", "team": "blue", "robot": 2}, "no team named 'blue'"),
-    ({"op": "send_off", "team": "cyan", "robot": 2, "seconds": -5.0}, "positive"),
-    ({"op": "return", "team": "cyan", "robot": 2}, "not sent off"),
-    ({"op": "goal"}, "needs the team"),
-])
+@pytest.mark.parametrize(
+    "fields, reason",
+    [
+        ({"op": "dance"}, "unknown operator request"),
+        ({"op": "command", "command": 99}, "no game command numbered 99"),
+        ({"op": "command", "command": int(MatchMode.OUR_FREEKICK)}, "needs the team"),
+        ({"op": "command", "command": int(MatchMode.TEST)}, "TEST"),
+        ({"op": "card", "team": "cyan", "robot": 9, "card": "yellow"}, "no robot named 'cyan/9'"),
+        ({"op": "card", "team": "cyan", "robot": 2, "card": "green"}, "'yellow' or 'red'"),
+        ({"op": "place_ball", "x": math.nan, "y": 0.0}, "finite"),
+        ({"op": "place_ball", "x": 40.0, "y": 0.0}, "not on the floor"),
+        ({"op": "send_off", "team": "blue", "robot": 2}, "no team named 'blue'"),
+        ({"op": "send_off", "team": "cyan", "robot": 2, "seconds": -5.0}, "positive"),
+        ({"op": "return", "team": "cyan", "robot": 2}, "not sent off"),
+        ({"op": "goal"}, "needs the team"),
+    ],
+)
 def test_bad_operator_requests_are_refused_with_a_reason(match, fields, reason):
     sim, _ = match()
     game = sim.game
@@ -168,9 +171,10 @@ def test_bad_operator_requests_are_refused_with_a_reason(match, fields, reason):
     assert len(refused) == 1 and reason in refused[0]["detail"], refused
     assert "operator" not in types(sim)
     after = sim.game
-    assert {k: after[k] for k in ("score", "sent_off", "yellow_cards", "phase")} == \
-        {k: game[k] for k in ("score", "sent_off", "yellow_cards", "phase")}
-    sim.run(seconds=0.1)                                                        # the run goes on
+    assert {k: after[k] for k in ("score", "sent_off", "yellow_cards", "phase")} == {
+        k: game[k] for k in ("score", "sent_off", "yellow_cards", "phase")
+    }
+    sim.run(seconds=0.1)  # the run goes on
 
 
 def test_the_api_raises_for_a_bad_request(match):

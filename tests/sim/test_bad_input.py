@@ -11,24 +11,33 @@ from simatch.bus import topics
 from tests.conftest import park_everyone_but
 
 
-@pytest.mark.parametrize("vx, vy, w", [(float("nan"), 0.0, 0.0), (0.0, float("inf"), 0.0), (0.0, 0.0, -math.inf),
-                                       (1e6, 0.0, 0.0), (0.0, 0.0, 500.0), ("fast", 0.0, 0.0)])
+@pytest.mark.parametrize(
+    "vx, vy, w",
+    [
+        (float("nan"), 0.0, 0.0),
+        (0.0, float("inf"), 0.0),
+        (0.0, 0.0, -math.inf),
+        (1e6, 0.0, 0.0),
+        (0.0, 0.0, 500.0),
+        ("fast", 0.0, 0.0),
+    ],
+)
 def test_bad_velocity_commands_are_refused_and_counted(field_sim, vx, vy, w):
     sim = field_sim()
     park_everyone_but(sim, ["cyan/2"])
     sim.take_control("cyan/2")
-    sim.send_vel("cyan/2", 1.0, 0.0, 0.0)       # a good command first
+    sim.send_vel("cyan/2", 1.0, 0.0, 0.0)  # a good command first
     sim.run(seconds=0.5)
     pub = sim.bus.publisher(topics.robot_topic("cyan", 2, topics.VEL_CMD), msgs.VelCmd)
     for _ in range(3):
         pub.put(msgs.VelCmd(stamp=0.0, tick=0, vx=vx, vy=vy, w=w))
     sim.release_control("cyan/2")
-    sim.take_control("cyan/2")                   # the manual driver keeps re-sending the good command
+    sim.take_control("cyan/2")  # the manual driver keeps re-sending the good command
     sim.send_vel("cyan/2", 1.0, 0.0, 0.0)
     sim.run(seconds=0.5)
     st = sim.model_states()["cyan/2"]
     assert all(math.isfinite(v) for v in (st.x, st.y, st.vx, st.vy, st.wz))
-    assert math.hypot(st.vx, st.vy) == pytest.approx(1.0, abs=1e-6)   # the good command still applies
+    assert math.hypot(st.vx, st.vy) == pytest.approx(1.0, abs=1e-6)  # the good command still applies
     bad = [e for e in sim.events if e["type"] == "bad_command"]
     assert len(bad) == 1 and bad[0]["team"] == "cyan" and bad[0]["robot"] == 2
     assert sim.simulator.refused[sim.simulator.index_of("cyan/2")] == 3
@@ -37,7 +46,7 @@ def test_bad_velocity_commands_are_refused_and_counted(field_sim, vx, vy, w):
 def test_refusals_are_reported_once_a_second_with_their_count(field_sim):
     sim = field_sim()
     pub = sim.bus.publisher(topics.robot_topic("magenta", 3, topics.VEL_CMD), msgs.VelCmd)
-    for _ in range(450):                        # a broken node flooding NaN for 2.25 s
+    for _ in range(450):  # a broken node flooding NaN for 2.25 s
         pub.put(msgs.VelCmd(stamp=0.0, tick=0, vx=math.nan, vy=0.0, w=0.0))
         sim.step()
     bad = [e for e in sim.events if e["type"] == "bad_command"]
@@ -62,10 +71,12 @@ def test_a_strategy_that_raises_does_not_stop_the_run(tmp_path, monkeypatch):
         "from simatch.strategy import RobotStrategy\n"
         "class Buggy(RobotStrategy):\n"
         "    def decide(self, world):\n"
-        "        raise ZeroDivisionError('oops')\n")
+        "        raise ZeroDivisionError('oops')\n"
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
-    with simatch.Simulation("msl_5v5", overrides={"teams.cyan.strategy": "buggy_team:Buggy",
-                                                  "teams.magenta.strategy": "startpose"}) as sim:
+    with simatch.Simulation(
+        "msl_5v5", overrides={"teams.cyan.strategy": "buggy_team:Buggy", "teams.magenta.strategy": "startpose"}
+    ) as sim:
         sim.run(seconds=1.0)
         errors = [e for e in sim.events if e["type"] == "strategy_error"]
         assert {e["robot"] for e in errors} == {1, 2, 3, 4, 5}

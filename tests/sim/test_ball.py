@@ -43,15 +43,25 @@ def test_bounce_matches_its_restitution(field_sim, e):
     apex = [zs[i] for i in range(1, len(zs) - 1) if zs[i] > zs[i - 1] and zs[i] >= zs[i + 1] and zs[i] > R + 0.01]
     # first rebound apex = e^2 x drop height
     assert apex[0] - R == pytest.approx(e * e * 1.0, rel=0.05)
-    assert zs.min() > R - 0.012      # the floor holds it
+    assert zs.min() > R - 0.012  # the floor holds it
 
 
 def _kick(sim, robot, speed, lob=False):
     sim.take_control(robot)
     st = sim.model_states()[robot]
     mx = sim.simulator.robot_models[sim.simulator.index_of(robot)].mouth_x(R)
-    sim.set_model_state("ball", x=st.x + mx * math.cos(st.yaw), y=st.y + mx * math.sin(st.yaw), z=R,
-                        vx=0.0, vy=0.0, vz=0.0, wx=0.0, wy=0.0, wz=0.0)
+    sim.set_model_state(
+        "ball",
+        x=st.x + mx * math.cos(st.yaw),
+        y=st.y + mx * math.sin(st.yaw),
+        z=R,
+        vx=0.0,
+        vy=0.0,
+        vz=0.0,
+        wx=0.0,
+        wy=0.0,
+        wz=0.0,
+    )
     sim.send_action(robot, dribble=False, kick=speed, lob=lob)
     sim.step()
 
@@ -90,7 +100,7 @@ def test_lob_range_and_apex_follow_ballistics(field_sim):
         sim.step()
         b = ball(sim)
         apex = max(apex, b.z)
-        if prev.vz < 0 <= b.vz:       # the first bounce: the ball has landed during this step
+        if prev.vz < 0 <= b.vz:  # the first bounce: the ball has landed during this step
             landing = b.x
             break
     a = math.radians(angle)
@@ -102,7 +112,7 @@ def test_kicker_fires_only_with_the_ball_in_the_mouth(field_sim):
     sim = field_sim()
     park_everyone_but(sim, ["cyan/2"])
     sim.set_model_state("cyan/2", x=-5.0, y=0.0, yaw=0.0)
-    sim.set_model_state("ball", x=-4.0, y=0.0, z=R)          # 1 m ahead: not in the mouth
+    sim.set_model_state("ball", x=-4.0, y=0.0, z=R)  # 1 m ahead: not in the mouth
     sim.take_control("cyan/2")
     sim.send_action("cyan/2", kick=8.0)
     sim.run(seconds=0.2)
@@ -115,8 +125,15 @@ def _hold(sim, robot):
     st = sim.model_states()[robot]
     mx = sim.simulator.robot_models[sim.simulator.index_of(robot)].mouth_x(R)
     sim.take_control(robot)
-    sim.set_model_state("ball", x=st.x + (mx + 0.03) * math.cos(st.yaw), y=st.y + (mx + 0.03) * math.sin(st.yaw),
-                        z=R, vx=0.0, vy=0.0, vz=0.0)
+    sim.set_model_state(
+        "ball",
+        x=st.x + (mx + 0.03) * math.cos(st.yaw),
+        y=st.y + (mx + 0.03) * math.sin(st.yaw),
+        z=R,
+        vx=0.0,
+        vy=0.0,
+        vz=0.0,
+    )
     sim.send_action(robot, dribble=True)
     sim.run(seconds=0.3)
     assert sim.simulator.ball.holder == sim.simulator.index_of(robot)
@@ -127,7 +144,7 @@ def test_dribbler_holds_through_a_slow_turn_and_loses_the_ball_in_a_violent_one(
     park_everyone_but(sim, ["cyan/2"])
     sim.set_model_state("cyan/2", x=-3.0, y=0.0, yaw=0.0)
     _hold(sim, "cyan/2")
-    sim.send_vel("cyan/2", 1.0, 0.0, 1.5)          # a slow curve with the ball
+    sim.send_vel("cyan/2", 1.0, 0.0, 1.5)  # a slow curve with the ball
     sim.run(seconds=3.0)
     assert sim.simulator.ball.holder == 0 + sim.simulator.index_of("cyan/2")
     st, b = sim.model_states()["cyan/2"], ball(sim)
@@ -135,7 +152,7 @@ def test_dribbler_holds_through_a_slow_turn_and_loses_the_ball_in_a_violent_one(
     assert abs(rel) < math.radians(10) and math.hypot(b.x - st.x, b.y - st.y) < 0.4
     # the ball is not teleported: it keeps rolling on the floor while held
     assert b.z == pytest.approx(R, abs=0.01)
-    sim.send_vel("cyan/2", 0.0, 0.0, 20.0)         # spin on the spot as fast as the wheels allow
+    sim.send_vel("cyan/2", 0.0, 0.0, 20.0)  # spin on the spot as fast as the wheels allow
     sim.run(seconds=2.0)
     assert sim.simulator.ball.holder == -1
     assert sim.simulator.mechanics["dribble_end:grip_exceeded"] >= 1
@@ -175,7 +192,7 @@ def test_the_ball_never_ends_up_inside_a_robot(field_sim):
     s = sim.simulator
     rng = np.random.default_rng(3)
     names = s.robot_names
-    for k, name in enumerate(names):      # everyone around the ball
+    for k, name in enumerate(names):  # everyone around the ball
         a = 2 * math.pi * k / len(names)
         sim.set_model_state(name, x=2.5 * math.cos(a), y=2.5 * math.sin(a), yaw=a + math.pi)
         sim.take_control(name)

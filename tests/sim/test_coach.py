@@ -31,5 +31,5 @@ def test_a_coach_commands_its_own_team_only(field_sim):
     sim.coaches["cyan"].start_play()
     sim.run(seconds=0.05)
     c = heard["cyan"][-1]
-    assert (c.match_mode, c.match_type) == (MatchMode.STARTROBOT, MatchMode.OUR_KICKOFF)   # type keeps the set piece
+    assert (c.match_mode, c.match_type) == (MatchMode.STARTROBOT, MatchMode.OUR_KICKOFF)  # type keeps the set piece
     assert any(e["type"] == "coach_command" and e["team"] == "cyan" for e in sim.events)

@@ -10,7 +10,7 @@ def _digest(seed, **overrides):
         for coach in sim.coaches.values():
             coach.start_play()
         sim.set_model_state("ball", x=0.3, y=-0.2, z=0.11, vx=-2.0, vy=1.0)
-        for name in ("cyan/2", "magenta/3"):       # away from their start poses: they drive back
+        for name in ("cyan/2", "magenta/3"):  # away from their start poses: they drive back
             sim.set_model_state(name, x=0.0, y=3.0 if name == "cyan/2" else -3.0, yaw=1.0)
         sim.run(seconds=3.0)
         return sim.state_digest()

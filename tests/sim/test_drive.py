@@ -156,8 +156,8 @@ def test_pushing_is_force_bounded_and_robots_never_pass_through_each_other(field
         s = sim.model_states()
         closest = min(closest, math.hypot(s["cyan/2"].x - s["magenta/2"].x, s["cyan/2"].y - s["magenta/2"].y))
     s = sim.model_states()
-    assert abs(s["cyan/2"].x + s["magenta/2"].x) < 0.05       # stalemate around the centre
-    assert closest > 0.48                                      # footprints 0.5 m: never through
+    assert abs(s["cyan/2"].x + s["magenta/2"].x) < 0.05  # stalemate around the centre
+    assert closest > 0.48  # footprints 0.5 m: never through
     # one pushes, the other only holds still: the pusher wins, slowly (force limited)
     sim.send_vel("magenta/2", 0.0, 0.0, 0.0)
     x0 = sim.model_states()["magenta/2"].x
@@ -175,4 +175,4 @@ def test_robots_do_not_pass_through_goal_posts(field_sim):
     sim.send_vel("cyan/3", 3.0, 0.0, 0.0)
     sim.run(seconds=2.0)
     st = sim.model_states()["cyan/3"]
-    assert st.x < 11.0 - 0.25 + 0.02      # stopped by the post (front face at the goal line)
+    assert st.x < 11.0 - 0.25 + 0.02  # stopped by the post (front face at the goal line)

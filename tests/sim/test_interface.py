@@ -32,14 +32,14 @@ def test_set_model_state_places_and_launches(field_sim):
     assert (b.x, b.y, b.z, b.vx, b.vz) == (1.0, 0.5, 0.5, 3.0, 2.0)
     sim.step()
     b = sim.model_states()["ball"]
-    assert b.x > 1.0 and b.vz < 2.0      # flying: moved on, gravity acting
+    assert b.x > 1.0 and b.vz < 2.0  # flying: moved on, gravity acting
     sim.set_model_state("cyan/2", x=-2.0, y=1.0, yaw=0.7)
     st = sim.model_states()["cyan/2"]
     assert (st.x, st.y) == (-2.0, 1.0) and st.yaw == pytest.approx(0.7)
     # a robot given a velocity keeps it (its wheels are put at the matching speeds)
     sim.set_model_state("cyan/2", vx=1.0, vy=0.0, wz=0.0)
     sim.take_control("cyan/2")
-    sim.send_vel("cyan/2", math.cos(0.7), -math.sin(0.7), 0.0)   # the same motion, in its body frame
+    sim.send_vel("cyan/2", math.cos(0.7), -math.sin(0.7), 0.0)  # the same motion, in its body frame
     sim.run(seconds=0.5)
     st = sim.model_states()["cyan/2"]
     assert st.vx == pytest.approx(1.0, abs=1e-6) and st.vy == pytest.approx(0.0, abs=1e-6)
@@ -79,7 +79,7 @@ def test_link_states_include_wheels_that_turn_with_the_robot(field_sim):
     sim.run(seconds=2.0)
     links = sim.link_states()
     _, twist = links["cyan/2/wheel_1"]
-    spin = math.hypot(twist[3], twist[4])            # about the wheel's axle
+    spin = math.hypot(twist[3], twist[4])  # about the wheel's axle
     assert spin == pytest.approx(2.0 * d / 0.0625, rel=1e-3)
     with pytest.raises(CommandError, match="a wheel follows its robot's base"):
         sim.set_link_state("cyan/2/wheel_1", x=1.0)
@@ -98,7 +98,7 @@ def test_apply_wrench_for_a_duration(field_sim):
     v = sim.model_states()["ball"].vx
     assert 0.55 < v < 1.05
     sim.run(seconds=0.5)
-    assert sim.model_states()["ball"].vx < v      # the force stopped after its duration
+    assert sim.model_states()["ball"].vx < v  # the force stopped after its duration
     with pytest.raises(CommandError):
         sim.apply_wrench("ball", force=(float("inf"), 0, 0), duration=0.1)
 
@@ -110,9 +110,9 @@ def test_frozen_robots_do_not_move_and_disabled_ones_ignore_commands(field_sim):
     sim.set_model_state("magenta/2", x=1.2, y=0.0, yaw=math.pi)
     sim.simulator.set_frozen("cyan/2", True)
     sim.take_control("magenta/2")
-    sim.send_vel("magenta/2", 3.0, 0.0, 0.0)       # rams the frozen robot
+    sim.send_vel("magenta/2", 3.0, 0.0, 0.0)  # rams the frozen robot
     sim.take_control("cyan/2")
-    sim.send_vel("cyan/2", 3.0, 0.0, 0.0)          # its own commands are ignored too
+    sim.send_vel("cyan/2", 3.0, 0.0, 0.0)  # its own commands are ignored too
     sim.run(seconds=1.5)
     st = sim.model_states()["cyan/2"]
     assert abs(st.x) < 0.01 and abs(st.y) < 0.01
@@ -137,5 +137,5 @@ def test_a_frozen_robot_holds_against_a_full_traction_push(field_sim, angle):
     first = sim.model_states()["cyan/2"]
     sim.run(seconds=4.0)
     last = sim.model_states()["cyan/2"]
-    assert math.hypot(last.x, last.y) < 0.002 and abs(last.yaw - 0.3) < 0.002        # held within 2 mm
-    assert math.hypot(last.x - first.x, last.y - first.y) < 0.0005                  # and not creeping
+    assert math.hypot(last.x, last.y) < 0.002 and abs(last.yaw - 0.3) < 0.002  # held within 2 mm
+    assert math.hypot(last.x - first.x, last.y - first.y) < 0.0005  # and not creeping

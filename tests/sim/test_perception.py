@@ -18,8 +18,11 @@ def _listen(sim, names):
     got = {}
     for name in names:
         team, rid = topics.split_robot_name(name)
-        sim.bus.subscribe(topics.robot_topic(team, rid, topics.OMNI_VISION), msgs.OmniVisionInfo,
-                          lambda m, n=name: got.__setitem__(n, m))
+        sim.bus.subscribe(
+            topics.robot_topic(team, rid, topics.OMNI_VISION),
+            msgs.OmniVisionInfo,
+            lambda m, n=name: got.__setitem__(n, m),
+        )
     return got
 
 
@@ -48,9 +51,9 @@ def test_magentas_perception_is_the_mirror_of_cyans(field_sim):
     # obstacles: every other robot (9), in the team frame
     assert len(c.obstacles.x) == 9 and len(m.obstacles.x) == 9
     oc = set(zip(np.round(c.obstacles.x, 6), np.round(c.obstacles.y, 6)))
-    assert (2.0, -1.0) in oc                      # magenta/2 as cyan/2 sees it
+    assert (2.0, -1.0) in oc  # magenta/2 as cyan/2 sees it
     om = set(zip(np.round(m.obstacles.x, 6), np.round(m.obstacles.y, 6)))
-    assert (2.0, -1.0) in om                      # cyan/2 as magenta/2 sees it (mirrored)
+    assert (2.0, -1.0) in om  # cyan/2 as magenta/2 sees it (mirrored)
     # own team, self included
     assert sorted(r.id for r in c.robots) == [1, 2, 3, 4, 5]
     assert len(me_c.wheel_speeds) == 4
@@ -87,14 +90,15 @@ def test_latency_shows_the_world_as_it_was(field_sim):
         sim.step()
     seen = got["cyan/3"].ball.x
     # the last observation (at step 95) shows the ball of step 75 (0.1 s earlier)
-    assert seen == msgs.f32(history[75])             # at the perception's float32 precision
+    assert seen == msgs.f32(history[75])  # at the perception's float32 precision
 
 
 def test_the_perception_of_some_robots_alone_is_what_they_get_among_all(field_sim):
     """A real-time server takes each robot's perception at its own step: the messages of a few robots are
     those of the whole observation (same noise, same dropouts), and nobody else's are made."""
-    sim = field_sim(**{"perception.position_noise": 0.05, "perception.ball_dropout": 0.3,
-                       "perception.obstacle_dropout": 0.3})
+    sim = field_sim(
+        **{"perception.position_noise": 0.05, "perception.ball_dropout": 0.3, "perception.obstacle_dropout": 0.3}
+    )
     sim.step(3)
     perception = sim.simulator.perception
     snap = sim.simulator.snapshot()

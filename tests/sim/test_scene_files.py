@@ -34,8 +34,9 @@ def test_load_by_path(tmp_path):
 
 
 def test_overrides_are_applied_and_checked():
-    loaded = load_scene("msl_5v5", {"match.half_duration": 300, "teams.magenta.strategy": "none",
-                                    "ball.rolling_deceleration": 0.8})
+    loaded = load_scene(
+        "msl_5v5", {"match.half_duration": 300, "teams.magenta.strategy": "none", "ball.rolling_deceleration": 0.8}
+    )
     assert loaded.spec.match.half_duration == 300
     assert loaded.spec.teams["magenta"].strategy == "none"
     assert loaded.spec.ball.rolling_deceleration == 0.8
@@ -44,16 +45,22 @@ def test_overrides_are_applied_and_checked():
     assert parse_override("ball.position=[1.0, 2.0]") == ("ball.position", [1.0, 2.0])
 
 
-@pytest.mark.parametrize("text, key, expected", [
-    ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmas = 1.0\n', "ball.mas", "unknown key"),
-    ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmass = "heavy"\n', "ball.mass", "valid number"),
-    ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmass = -1.0\n', "ball.mass", "greater than"),
-    ('name = "x"\n[teams.cyan]\nstart = [[0,0]]\n', "teams.cyan.start[0]", "3"),
-    ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[control]\nperiod = 0.0123\n', "control.period",
-     "whole number of physics steps"),
-    ('[teams.cyan]\nstart = [[0,0,0]]\n', "name", "required"),
-    ('name = "x"\n[teams.Cyan]\nstart = [[0,0,0]]\n', "teams", "lower-case"),
-])
+@pytest.mark.parametrize(
+    "text, key, expected",
+    [
+        ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmas = 1.0\n', "ball.mas", "unknown key"),
+        ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmass = "heavy"\n', "ball.mass", "valid number"),
+        ('name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[ball]\nmass = -1.0\n', "ball.mass", "greater than"),
+        ('name = "x"\n[teams.cyan]\nstart = [[0,0]]\n', "teams.cyan.start[0]", "3"),
+        (
+            'name = "x"\n[teams.cyan]\nstart = [[0,0,0]]\n[control]\nperiod = 0.0123\n',
+            "control.period",
+            "whole number of physics steps",
+        ),
+        ("[teams.cyan]\nstart = [[0,0,0]]\n", "name", "required"),
+        ('name = "x"\n[teams.Cyan]\nstart = [[0,0,0]]\n', "teams", "lower-case"),
+    ],
+)
 def test_a_mistake_names_file_key_and_expectation(tmp_path, text, key, expected):
     path = tmp_path / "broken.toml"
     path.write_text(text)

@@ -19,7 +19,7 @@ def test_field_description_is_what_viewers_and_judges_read(field_sim):
     assert (geo.length, geo.width, geo.goal_width, geo.goal_height) == (22.0, 14.0, 2.4, 1.0)
     desc = geo.describe()
     kinds = [line["kind"] for line in desc["lines"]]
-    assert kinds.count("polyline") >= 6 and "arc" in kinds          # boundary, halfway, boxes, circle, corners
+    assert kinds.count("polyline") >= 6 and "arc" in kinds  # boundary, halfway, boxes, circle, corners
     assert geo.in_penalty_area(-10.0, 0.0, -1) and not geo.in_penalty_area(-8.0, 0.0, -1)
     assert geo.in_goal_area(10.5, 1.0, 1) and not geo.in_goal_area(10.5, 2.5, 1)
     assert geo.penalty_spot(1) == (8.0, 0.0)
@@ -36,15 +36,15 @@ def test_the_net_stops_a_shot_inside_the_goal(field_sim):
     sim = field_sim()
     park_everyone_but(sim, [])
     b = _shoot(sim, 8.0, 0.0, 9.0, 0.0)
-    assert 11.0 + R < b.x < 11.0 + 0.6 and abs(b.y) < 1.2       # behind the line, in front of the back net
-    assert math.hypot(b.vx, b.vy) < 1.0                          # the net swallowed it
+    assert 11.0 + R < b.x < 11.0 + 0.6 and abs(b.y) < 1.2  # behind the line, in front of the back net
+    assert math.hypot(b.vx, b.vy) < 1.0  # the net swallowed it
 
 
 def test_posts_and_crossbar_deflect_the_ball(field_sim):
     sim = field_sim()
     park_everyone_but(sim, [])
-    b = _shoot(sim, 8.0, 1.2 + 0.0625, 6.0, 0.0, seconds=1.0)    # straight at the left post of magenta's goal
-    assert b.x < 11.0 and b.vx < 0.0                             # came back into the field
+    b = _shoot(sim, 8.0, 1.2 + 0.0625, 6.0, 0.0, seconds=1.0)  # straight at the left post of magenta's goal
+    assert b.x < 11.0 and b.vx < 0.0  # came back into the field
     sim2 = field_sim()
     park_everyone_but(sim2, [])
     # a lob aimed at the crossbar (lower edge 1.0 m, 0.125 m thick) on its way down
@@ -54,7 +54,7 @@ def test_posts_and_crossbar_deflect_the_ball(field_sim):
     for _ in range(300):
         sim2.step()
         b = sim2.model_states()["ball"]
-        if prev.x <= 11.0 < b.x:                                 # crossing the goal line plane
+        if prev.x <= 11.0 < b.x:  # crossing the goal line plane
             assert not (1.0 - R < b.z < 1.125 + R), "through the crossbar"
         deflected |= b.vx < 0.0
         prev = b
@@ -74,7 +74,7 @@ def test_a_robot_pushes_the_ball_and_never_passes_through_it(field_sim):
     sim.set_model_state("cyan/2", x=-3.0, y=0.0, yaw=0.0)
     sim.set_model_state("ball", x=-2.5, y=0.0, z=R, vx=0.0, vy=0.0)
     sim.take_control("cyan/2")
-    sim.send_vel("cyan/2", 3.0, 0.0, 0.0)                        # dribbler off: it bumps the ball ahead
+    sim.send_vel("cyan/2", 3.0, 0.0, 0.0)  # dribbler off: it bumps the ball ahead
     for _ in range(300):
         sim.step()
         r, b = sim.model_states()["cyan/2"], sim.model_states()["ball"]

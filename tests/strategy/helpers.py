@@ -8,7 +8,7 @@ from simatch import msgs
 from simatch.bus import topics
 from simatch.msgs.game_commands import mirror
 
-BENCH_Y = 8.2          # beyond the 1 m margin: a benched robot is not "valid" (not on the field)
+BENCH_Y = 8.2  # beyond the 1 m margin: a benched robot is not "valid" (not on the field)
 
 
 def scenario(cyan: str = "nubot", magenta: str = "none", seed: int = 0, **overrides) -> simatch.Simulation:

@@ -14,9 +14,28 @@ from tests.strategy.helpers import BallWatch, bench_all_but, goal_side, run_unti
 
 
 def match(cyan: str, magenta: str, half: float, seed: int) -> dict:
-    proc = subprocess.run([sys.executable, "-m", "simatch", "run", "msl_5v5", "--json", "--quiet", "--seed", str(seed),
-                           "--set", f"teams.cyan.strategy={cyan}", "--set", f"teams.magenta.strategy={magenta}",
-                           "--set", f"match.half_duration={half}"], capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "simatch",
+            "run",
+            "msl_5v5",
+            "--json",
+            "--quiet",
+            "--seed",
+            str(seed),
+            "--set",
+            f"teams.cyan.strategy={cyan}",
+            "--set",
+            f"teams.magenta.strategy={magenta}",
+            "--set",
+            f"match.half_duration={half}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout)
 
@@ -52,7 +71,7 @@ def test_the_same_seed_gives_the_same_match():
         sim.run(seconds=30.0)
         other = sim.state_digest()
     assert digests[0] == digests[1]
-    assert other != digests[0]                             # the seed varies the play (the strategies' rng)
+    assert other != digests[0]  # the seed varies the play (the strategies' rng)
 
 
 def test_the_baseline_takes_the_ball_dribbles_to_its_point_and_shoots():
@@ -66,6 +85,6 @@ def test_the_baseline_takes_the_ball_dribbles_to_its_point_and_shoots():
     assert run_until(sim, lambda: bool(watch.kicks), 25.0)
     me = sim.model_states()["cyan/2"]
     assert watch.held_by("cyan/2")
-    assert math.hypot(me.x - 2.0, me.y - 3.0) < 0.6        # the demo's fixed dribbling point
+    assert math.hypot(me.x - 2.0, me.y - 3.0) < 0.6  # the demo's fixed dribbling point
     assert run_until(sim, lambda: goal_side(sim) == 1, 4.0)
     sim.close()

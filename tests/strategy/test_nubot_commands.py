@@ -18,14 +18,14 @@ def test_stop_stands_still_and_park_lines_up_beside_the_field():
     start(sim)
     sim.run(seconds=3.0)
     command(sim, "cyan", M.STOPROBOT)
-    sim.run(seconds=1.5)                              # braking from full speed takes about a second
+    sim.run(seconds=1.5)  # braking from full speed takes about a second
     ms = sim.model_states()
     assert all(math.hypot(ms[n].vx, ms[n].vy) < 0.05 for n in sim.simulator.robot_names)
     command(sim, "cyan", M.PARKINGROBOT)
     sim.run(seconds=12.0)
     ms = sim.model_states()
     for n in sim.simulator.robot_names:
-        side = -1 if n.startswith("cyan") else 1     # each team parks on its right, in its own half
+        side = -1 if n.startswith("cyan") else 1  # each team parks on its right, in its own half
         assert abs(ms[n].y) > 7.0 and side * ms[n].y > 0 and side * ms[n].x > 0, (n, ms[n].x, ms[n].y)
         assert abs(math.remainder(ms[n].yaw - (math.pi / 2 if side < 0 else -math.pi / 2), 2 * math.pi)) < 0.2
     sim.close()
@@ -40,7 +40,7 @@ def test_move_to_a_point_with_and_without_avoidance():
         sim.run(seconds=6.0)
         st = sim.model_states()["cyan/3"]
         assert math.hypot(st.x - 4.0, st.y + 3.0) < 0.1 and abs(math.remainder(st.yaw - 1.0, 2 * math.pi)) < 0.1
-        for n, (x, y) in others.items():            # robots not named stand still
+        for n, (x, y) in others.items():  # robots not named stand still
             assert math.hypot(sim.model_states()[n].x - x, sim.model_states()[n].y - y) < 0.05
         sim.close()
 
@@ -54,9 +54,10 @@ def test_catch_then_shoot_at_a_target():
     sim.coaches["cyan"].send(M.TEST, test_mode=int(T.CATCH_BALL), id_a=2)
     assert run_until(sim, lambda: watch.held_by("cyan/2"), 6.0)
     sim.run(seconds=1.0)
-    assert sim.simulator.ball.holder == sim.simulator.index_of("cyan/2")      # and keeps it
-    sim.coaches["cyan"].send(M.TEST, test_mode=int(T.SHOOT_BALL), id_a=2, point_a_x=-3.0, point_a_y=-5.0,
-                             kick_force=6.0)
+    assert sim.simulator.ball.holder == sim.simulator.index_of("cyan/2")  # and keeps it
+    sim.coaches["cyan"].send(
+        M.TEST, test_mode=int(T.SHOOT_BALL), id_a=2, point_a_x=-3.0, point_a_y=-5.0, kick_force=6.0
+    )
     assert run_until(sim, lambda: bool(watch.kicks), 4.0)
     b = sim.model_states()["ball"]
     me = sim.model_states()["cyan/2"]
@@ -73,8 +74,9 @@ def test_pass_from_a_to_b():
     sim.set_model_state("ball", x=-4.0, y=0.0, z=0.11)
     watch = BallWatch(sim)
     sim.step()
-    sim.coaches["cyan"].send(M.TEST, test_mode=int(T.PASS_BALL), id_a=2, id_b=3, point_a_x=-4.0, point_a_y=-1.0,
-                             point_b_x=0.0, point_b_y=3.0)
+    sim.coaches["cyan"].send(
+        M.TEST, test_mode=int(T.PASS_BALL), id_a=2, id_b=3, point_a_x=-4.0, point_a_y=-1.0, point_b_x=0.0, point_b_y=3.0
+    )
     assert run_until(sim, lambda: watch.held_by("cyan/3"), 15.0), watch.holders
     assert watch.kicks and watch.kicks[0][1] == "cyan/2"
     sim.close()
@@ -106,5 +108,5 @@ def test_roles_are_stable_in_play():
                     flickers[n] += 1
     changes = sum(len(h) - 1 for h in history.values())
     assert sum(flickers.values()) <= len(history) - 2, flickers
-    assert changes < 60 * 10 / 3, changes          # on average a role lasts several seconds
+    assert changes < 60 * 10 / 3, changes  # on average a role lasts several seconds
     sim.close()

@@ -12,13 +12,20 @@ from simatch.bus import topics
 from simatch.msgs.game_commands import MatchMode as M
 from tests.strategy.helpers import bench_all_but, command, run_until, scenario, start
 
-PREPARE = 5.0           # the referee's preparation time before START
+PREPARE = 5.0  # the referee's preparation time before START
 
 
 #: seed 5, t = 71.5 s: the ball is placed for magenta's throw-in at (5.92, -6.70) (world frame)
-THROW_IN = {"cyan/2": (5.40, 2.72, -1.25), "cyan/3": (5.99, -7.23, -0.26), "cyan/4": (-1.16, -1.15, -0.70),
-            "cyan/5": (-0.64, -2.64, -0.57), "magenta/2": (4.90, -5.15, -0.62), "magenta/3": (8.22, -3.92, -2.02),
-            "magenta/4": (4.45, 2.21, -2.33), "magenta/5": (-0.62, 4.45, -0.92)}
+THROW_IN = {
+    "cyan/2": (5.40, 2.72, -1.25),
+    "cyan/3": (5.99, -7.23, -0.26),
+    "cyan/4": (-1.16, -1.15, -0.70),
+    "cyan/5": (-0.64, -2.64, -0.57),
+    "magenta/2": (4.90, -5.15, -0.62),
+    "magenta/3": (8.22, -3.92, -2.02),
+    "magenta/4": (4.45, 2.21, -2.33),
+    "magenta/5": (-0.62, 4.45, -0.92),
+}
 
 
 def place(sim, poses: dict) -> None:
@@ -39,16 +46,24 @@ def test_a_robot_beyond_the_side_line_leaves_the_throw_in_circle_along_the_field
     command(sim, "magenta", M.OUR_THROWIN)
     sim.run(seconds=PREPARE)
     ms = sim.model_states()
-    near = {n: round(math.hypot(ms[n].x - bx, ms[n].y - by), 2) for n in sim.simulator.robot_names
-            if n.startswith("cyan")}
+    near = {
+        n: round(math.hypot(ms[n].x - bx, ms[n].y - by), 2) for n in sim.simulator.robot_names if n.startswith("cyan")
+    }
     assert min(near.values()) >= 3.0, near
     sim.close()
 
 
 #: seed 4 (halves of 150 s), t = 176.85 s: the ball is placed for cyan's throw-in at (-3.11, -6.70)
-LATE_TAKER = {"cyan/2": (3.78, 1.50, 2.97), "cyan/3": (-2.11, -4.99, -2.05), "cyan/4": (-7.48, -3.41, -0.96),
-              "cyan/5": (-6.97, -2.37, -1.55), "magenta/2": (4.60, -3.44, -2.60), "magenta/3": (-1.03, -5.55, -2.27),
-              "magenta/4": (-7.28, -1.08, -1.01), "magenta/5": (2.64, 0.87, -2.57)}
+LATE_TAKER = {
+    "cyan/2": (3.78, 1.50, 2.97),
+    "cyan/3": (-2.11, -4.99, -2.05),
+    "cyan/4": (-7.48, -3.41, -0.96),
+    "cyan/5": (-6.97, -2.37, -1.55),
+    "magenta/2": (4.60, -3.44, -2.60),
+    "magenta/3": (-1.03, -5.55, -2.27),
+    "magenta/4": (-7.28, -1.08, -1.01),
+    "magenta/5": (2.64, 0.87, -2.57),
+}
 
 
 class Contacts:
@@ -99,7 +114,7 @@ def test_a_taker_that_bumped_the_ball_leaves_it_to_a_team_mate():
         sim.run(seconds=0.05)
         ms = sim.model_states()
         if math.hypot(ms["ball"].x - bx, ms["ball"].y - by) >= 0.5:
-            break                                  # in play
+            break  # in play
         if contacts.steps:
             first = sorted(contacts.steps[0][1])[0]
             for n in sim.simulator.robot_names:
@@ -120,13 +135,24 @@ def test_a_late_kick_off_taker_stays_in_its_half():
     (the referee's kickoff_half foul). Every robot of the kicking team stays in its half until the ball
     moved 0.5 m."""
     sim = scenario(cyan="nubot", magenta="nubot")
-    place(sim, {"cyan/2": (-6.0, 3.0, 0.0), "cyan/3": (-8.0, 5.0, 0.0), "cyan/4": (-8.0, -5.0, 0.0),
-                "cyan/5": (-9.0, 0.0, 0.0)})
+    place(
+        sim,
+        {
+            "cyan/2": (-6.0, 3.0, 0.0),
+            "cyan/3": (-8.0, 5.0, 0.0),
+            "cyan/4": (-8.0, -5.0, 0.0),
+            "cyan/5": (-9.0, 0.0, 0.0),
+        },
+    )
     sim.set_model_state("ball", x=0.0, y=0.0, z=0.11)
     sim.step()
     command(sim, "cyan", M.OUR_KICKOFF)
-    run_until(sim, lambda: min(math.hypot(p.x, p.y) for n, p in sim.model_states().items()
-                               if n.startswith("cyan")) < 1.0, 10.0, step=0.025)
+    run_until(
+        sim,
+        lambda: min(math.hypot(p.x, p.y) for n, p in sim.model_states().items() if n.startswith("cyan")) < 1.0,
+        10.0,
+        step=0.025,
+    )
     start(sim)
     worst = (-1.0, "")
     end = sim.time + 7.0

@@ -48,8 +48,9 @@ def test_no_clearance_into_an_opponent_in_front():
     assert plan is not None and plan[0] == "clear"
 
 
-@pytest.mark.parametrize("vx,vy,speed", [(0.0, 0.0, 10.0), (0.0, 1.0, 10.0), (1.5, -1.2, 10.0), (0.3, 0.8, 10.0),
-                                         (0.0, -0.7, 3.0)])
+@pytest.mark.parametrize(
+    "vx,vy,speed", [(0.0, 0.0, 10.0), (0.0, 1.0, 10.0), (1.5, -1.2, 10.0), (0.3, 0.8, 10.0), (0.0, -0.7, 3.0)]
+)
 def test_the_kicked_ball_heads_for_the_target(vx, vy, speed):
     yaw = 0.3
     me = SimpleNamespace(x=5.0, y=-1.0, yaw=yaw, vx=vx, vy=vy, w=0.0)

@@ -11,7 +11,7 @@ import pytest
 from simatch.msgs.game_commands import MatchMode as M
 from tests.strategy.helpers import BallWatch, command, run_until, scenario, start
 
-PREPARE = 5.0           # the referee's preparation time (kick-off: 10 s)
+PREPARE = 5.0  # the referee's preparation time (kick-off: 10 s)
 L2, W2, PA_DEPTH, PA_HALF = 11.0, 7.0, 2.25, 3.45
 
 
@@ -19,9 +19,10 @@ def scatter(sim, seed: int) -> None:
     rng = np.random.default_rng(seed)
     for name in sim.simulator.robot_names:
         if name.endswith("/1"):
-            continue                       # goalkeepers are at their goals
-        sim.set_model_state(name, x=float(rng.uniform(-9, 9)), y=float(rng.uniform(-6, 6)),
-                            yaw=float(rng.uniform(-3, 3)))
+            continue  # goalkeepers are at their goals
+        sim.set_model_state(
+            name, x=float(rng.uniform(-9, 9)), y=float(rng.uniform(-6, 6)), yaw=float(rng.uniform(-3, 3))
+        )
 
 
 def in_penalty_area(x: float, y: float, side: int) -> bool:
@@ -29,12 +30,18 @@ def in_penalty_area(x: float, y: float, side: int) -> bool:
 
 
 CASES = [
-    (M.OUR_KICKOFF, "cyan", (0.0, 0.0)), (M.OUR_KICKOFF, "magenta", (0.0, 0.0)),
-    (M.OUR_FREEKICK, "cyan", (3.0, 2.0)), (M.OUR_FREEKICK, "magenta", (-4.0, -3.0)),
-    (M.OUR_THROWIN, "cyan", (2.0, 6.7)), (M.OUR_THROWIN, "magenta", (-5.0, -6.7)),
-    (M.OUR_GOALKICK, "cyan", (-7.4, 3.5)), (M.OUR_GOALKICK, "magenta", (7.4, -3.5)),
-    (M.OUR_CORNERKICK, "cyan", (10.7, 6.7)), (M.OUR_CORNERKICK, "magenta", (-10.7, -6.7)),
-    (M.OUR_PENALTY, "cyan", (8.0, 0.0)), (M.OUR_PENALTY, "magenta", (-8.0, 0.0)),
+    (M.OUR_KICKOFF, "cyan", (0.0, 0.0)),
+    (M.OUR_KICKOFF, "magenta", (0.0, 0.0)),
+    (M.OUR_FREEKICK, "cyan", (3.0, 2.0)),
+    (M.OUR_FREEKICK, "magenta", (-4.0, -3.0)),
+    (M.OUR_THROWIN, "cyan", (2.0, 6.7)),
+    (M.OUR_THROWIN, "magenta", (-5.0, -6.7)),
+    (M.OUR_GOALKICK, "cyan", (-7.4, 3.5)),
+    (M.OUR_GOALKICK, "magenta", (7.4, -3.5)),
+    (M.OUR_CORNERKICK, "cyan", (10.7, 6.7)),
+    (M.OUR_CORNERKICK, "magenta", (-10.7, -6.7)),
+    (M.OUR_PENALTY, "cyan", (8.0, 0.0)),
+    (M.OUR_PENALTY, "magenta", (-8.0, 0.0)),
     (M.DROPBALL, "cyan", (1.0, 1.0)),
 ]
 
@@ -82,10 +89,15 @@ def test_set_piece_positions_keep_their_distances(cmd, team, spot):
     sim.close()
 
 
-@pytest.mark.parametrize("cmd,team,spot", [(M.OUR_KICKOFF, "cyan", (0.0, 0.0)),
-                                           (M.OUR_FREEKICK, "magenta", (-3.0, 2.0)),
-                                           (M.OUR_THROWIN, "cyan", (-2.0, -6.7)),
-                                           (M.OUR_CORNERKICK, "cyan", (10.7, -6.7))])
+@pytest.mark.parametrize(
+    "cmd,team,spot",
+    [
+        (M.OUR_KICKOFF, "cyan", (0.0, 0.0)),
+        (M.OUR_FREEKICK, "magenta", (-3.0, 2.0)),
+        (M.OUR_THROWIN, "cyan", (-2.0, -6.7)),
+        (M.OUR_CORNERKICK, "cyan", (10.7, -6.7)),
+    ],
+)
 def test_the_restart_is_a_pass_taken_at_once(cmd, team, spot):
     """After START the taker kicks within the 7 s the rules give, without dribbling (it never holds the
     ball), as a pass: the ball heads for a team-mate (at a kick-off, to stop in front of one); and
@@ -106,7 +118,7 @@ def test_the_restart_is_a_pass_taken_at_once(cmd, team, spot):
     ms = sim.model_states()
     b = ms["ball"]
     heading = math.atan2(b.vy, b.vx)
-    lead = 0.6 if cmd == M.OUR_KICKOFF else 0.0          # a kick-off pass stops in front of the receiver
+    lead = 0.6 if cmd == M.OUR_KICKOFF else 0.0  # a kick-off pass stops in front of the receiver
     aimed = []
     for n in sim.simulator.robot_names:
         if n.startswith(team) and n != taker:
@@ -118,6 +130,7 @@ def test_the_restart_is_a_pass_taken_at_once(cmd, team, spot):
     assert aimed, "the restart kick was not played to a team-mate"
     run_until(sim, lambda: any(n != taker for _, n in watch.touches if _ > t_kick + 0.05), 6.0)
     first_other = next(t for t, n in watch.touches if t > t_kick + 0.05 and n != taker)
-    assert not [t for t, n in watch.touches if n == taker and t_kick + 0.2 < t < first_other], \
+    assert not [t for t, n in watch.touches if n == taker and t_kick + 0.2 < t < first_other], (
         "the taker touched the ball again before another robot did"
+    )
     sim.close()

@@ -54,8 +54,9 @@ def test_a_pass_arrives():
     sim.close()
 
 
-@pytest.mark.parametrize("shooter,aim_y", [((5.0, 0.0), -0.6), ((5.0, 0.0), 0.0), ((5.0, 0.0), 0.6),
-                                           ((4.0, 3.0), -0.95), ((4.0, 3.0), 0.95)])
+@pytest.mark.parametrize(
+    "shooter,aim_y", [((5.0, 0.0), -0.6), ((5.0, 0.0), 0.0), ((5.0, 0.0), 0.6), ((4.0, 3.0), -0.95), ((4.0, 3.0), 0.95)]
+)
 def test_the_goalkeeper_stops_a_straight_shot(shooter, aim_y):
     sim = scenario(cyan="none", magenta="nubot")
     bench_all_but(sim, ["magenta/1"])
@@ -63,9 +64,9 @@ def test_the_goalkeeper_stops_a_straight_shot(shooter, aim_y):
     sim.set_model_state("ball", x=bx, y=by, z=0.11)
     sim.step()
     start(sim)
-    sim.run(seconds=1.5)                      # the keeper takes its place for a ball there
+    sim.run(seconds=1.5)  # the keeper takes its place for a ball there
     d = math.hypot(11.0 - bx, aim_y - by)
-    v = 10.0                                  # the kicker's full speed
+    v = 10.0  # the kicker's full speed
     sim.set_model_state("ball", x=bx, y=by, z=0.11, vx=v * (11.0 - bx) / d, vy=v * (aim_y - by) / d, vz=0.0)
     assert not run_until(sim, lambda: goal_side(sim) != 0, 2.5, step=0.01)
     sim.close()
@@ -79,10 +80,9 @@ def test_the_goalkeeper_stops_a_lob():
     sim.step()
     start(sim)
     sim.run(seconds=1.5)
-    a, v = math.radians(37.0), 8.5           # the kicker's lob, landing just in front of the goal
+    a, v = math.radians(37.0), 8.5  # the kicker's lob, landing just in front of the goal
     d = math.hypot(11.0 - bx, -0.5 - by)
     h = v * math.cos(a)
-    sim.set_model_state("ball", x=bx, y=by, z=0.11, vx=h * (11.0 - bx) / d, vy=h * (-0.5 - by) / d,
-                        vz=v * math.sin(a))
+    sim.set_model_state("ball", x=bx, y=by, z=0.11, vx=h * (11.0 - bx) / d, vy=h * (-0.5 - by) / d, vz=v * math.sin(a))
     assert not run_until(sim, lambda: goal_side(sim) != 0, 3.0, step=0.01)
     sim.close()

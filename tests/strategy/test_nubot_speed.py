@@ -24,8 +24,9 @@ def test_route_skips_only_boxes_the_way_cannot_cross():
         x0, x1, hw = rng.choice(boxes)
         px, tx = (rng.choice([x0, x1]) if rng.random() < 0.2 else rng.uniform(-15, 15) for _ in range(2))
         py, ty = (rng.choice([-hw, hw]) if rng.random() < 0.2 else rng.uniform(-8, 8) for _ in range(2))
-        beside = ((px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw)
-                  or (py >= hw and ty >= hw))
+        beside = (
+            (px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw) or (py >= hw and ty >= hw)
+        )
         assert not (beside and segment_hits_box(px, py, tx, ty, x0, x1, hw)), (px, py, tx, ty, x0, x1, hw)
 
 
@@ -61,7 +62,7 @@ def test_load_kernels_loads_what_open_play_calls():
         phases = {n.strategy.picture.phase for n in sim.robot_nodes.values() if n.strategy.picture is not None}
         evaluated = sum({id(n.strategy.shared): n.strategy.shared.evaluated for n in sim.robot_nodes.values()}.values())
     after = {k: set(map(str, f.signatures)) for k, f in _kernels().items()}
-    assert evaluated > 0 and 4 in phases          # open play (gameflow.Phase.PLAY) was reached
+    assert evaluated > 0 and 4 in phases  # open play (gameflow.Phase.PLAY) was reached
     assert after == before
 
 
@@ -69,6 +70,7 @@ def test_a_robot_alone_decides_as_in_its_team():
     """Robots that each compute their own team picture (one robot per process in a distributed run) play
     the very same match as a team sharing one picture per tick: the sharing is only a cache."""
     from simatch.config.loader import load_scene
+
     lone = "simatch.strategy.nubot:NubotRobot"
     digests = []
     for overrides in ({}, {"teams.cyan.strategy": lone, "teams.magenta.strategy": lone}):

@@ -21,7 +21,8 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.fixture
 def plugin_dir(tmp_path, monkeypatch):
     """A folder on sys.path holding test strategy modules."""
-    (tmp_path / "good_strats.py").write_text(textwrap.dedent('''
+    (tmp_path / "good_strats.py").write_text(
+        textwrap.dedent("""
         from pydantic import BaseModel, ConfigDict
         from simatch.strategy import Command, RobotStrategy
 
@@ -40,7 +41,8 @@ def plugin_dir(tmp_path, monkeypatch):
         class Raises(RobotStrategy):
             def decide(self, world):
                 raise RuntimeError("bug in my strategy")
-        '''))
+        """)
+    )
     (tmp_path / "broken_strats.py").write_text("import no_such_dependency_xyz\n")
     (tmp_path / "raising_strats.py").write_text("raise ValueError('half-written module')\n")
     monkeypatch.syspath_prepend(str(tmp_path))
@@ -53,14 +55,17 @@ def make(strategy: str, **extra):
     return simatch.Simulation("msl_5v5", overrides=ov)
 
 
-@pytest.mark.parametrize("spec,expected", [
-    ("nosuchpackage.mod:Team", "cannot import module 'nosuchpackage.mod'"),
-    ("good_strats:Missing", "has no 'Missing'"),
-    ("good_strats:NotAStrategy", "neither a simatch.strategy.RobotStrategy nor a TeamStrategy"),
-    ("broken_strats:Team", "No module named 'no_such_dependency_xyz'"),
-    ("raising_strats:Team", "fails to import: ValueError: half-written module"),
-    ("no_colon_here", "expected one of"),
-])
+@pytest.mark.parametrize(
+    "spec,expected",
+    [
+        ("nosuchpackage.mod:Team", "cannot import module 'nosuchpackage.mod'"),
+        ("good_strats:Missing", "has no 'Missing'"),
+        ("good_strats:NotAStrategy", "neither a simatch.strategy.RobotStrategy nor a TeamStrategy"),
+        ("broken_strats:Team", "No module named 'no_such_dependency_xyz'"),
+        ("raising_strats:Team", "fails to import: ValueError: half-written module"),
+        ("no_colon_here", "expected one of"),
+    ],
+)
 def test_a_strategy_that_cannot_be_used_is_refused_with_the_reason(plugin_dir, spec, expected):
     with pytest.raises((SceneError, PluginError)) as err:
         make(spec)
@@ -91,9 +96,22 @@ def test_a_user_strategy_drives_its_robots_and_its_errors_do_not_stop_the_run(pl
 
 
 def test_the_cli_refuses_an_unknown_strategy_in_one_line():
-    proc = subprocess.run([sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "1",
-                           "--set", "teams.cyan.strategy=nosuch.module:Team"], capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "simatch",
+            "run",
+            "msl_5v5",
+            "--duration",
+            "1",
+            "--set",
+            "teams.cyan.strategy=nosuch.module:Team",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 2
     assert proc.stderr.startswith("simatch: error:") and "nosuch.module" in proc.stderr
     assert proc.stderr.count("\n") == 1
@@ -101,9 +119,24 @@ def test_the_cli_refuses_an_unknown_strategy_in_one_line():
 
 def test_the_tutorial_example_plays_a_refereed_match():
     env = {"PYTHONPATH": str(ROOT / "examples"), "PATH": "/usr/bin:/bin"}
-    proc = subprocess.run([sys.executable, "-m", "simatch", "run", str(ROOT / "examples" / "striker_vs_simple.toml"),
-                           "--duration", "20", "--json", "--quiet"], capture_output=True, text=True, timeout=300,
-                          env=env, cwd=ROOT)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "simatch",
+            "run",
+            str(ROOT / "examples" / "striker_vs_simple.toml"),
+            "--duration",
+            "20",
+            "--json",
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        cwd=ROOT,
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert set(out["result"]["score"]) == {"cyan", "magenta"}

@@ -16,8 +16,16 @@ import simatch
 from simatch.web import LiveView
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "web"
 
 
@@ -25,6 +33,7 @@ ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "web"
 def browser():
     """One headless chromium for the session (Playwright gives each launch a fresh, empty profile)."""
     from playwright import sync_api
+
     if not Path(CHROMIUM).exists():
         pytest.fail("Debian's chromium is missing: run scripts/install-system-deps.sh")
     with sync_api.sync_playwright() as pw:
@@ -86,23 +95,31 @@ def run_until(sim, condition, timeout: float = 10.0, chunk: float = 0.05) -> Non
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError(f"the condition did not come true in time (t={sim.time:.3f}, pace {sim.pace}; last events: "
-                                 f"{sim.events[-4:]})")
+            raise AssertionError(
+                f"the condition did not come true in time (t={sim.time:.3f}, pace {sim.pace}; last events: "
+                f"{sim.events[-4:]})"
+            )
         sim.run(seconds=chunk)
 
 
 def wait_frame(page, sim_time: float, timeout: float = 10_000) -> None:
     """Wait until the page shows the world at ``sim_time`` (or later)."""
-    page.wait_for_function("t => window.simatch && window.simatch.frame && window.simatch.frame.t >= t",
-                           arg=round(sim_time - 0.02, 3), timeout=timeout)
+    page.wait_for_function(
+        "t => window.simatch && window.simatch.frame && window.simatch.frame.t >= t",
+        arg=round(sim_time - 0.02, 3),
+        timeout=timeout,
+    )
 
 
 def drag_ball(page, sim, x: float, y: float) -> None:
     """Drag the ball on the page's field from where the simulator has it to (x, y), with the mouse."""
     ball = sim.model_states()["ball"]
-    wait_frame(page, sim.time)                   # the page shows the present (nothing moves on it any more)
-    page.wait_for_function("([x, y]) => { const b = window.simatch.frame && window.simatch.frame.ball;"
-                           " return b && Math.hypot(b.x - x, b.y - y) < 0.05; }", arg=[ball.x, ball.y])
+    wait_frame(page, sim.time)  # the page shows the present (nothing moves on it any more)
+    page.wait_for_function(
+        "([x, y]) => { const b = window.simatch.frame && window.simatch.frame.ball;"
+        " return b && Math.hypot(b.x - x, b.y - y) < 0.05; }",
+        arg=[ball.x, ball.y],
+    )
     a = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [ball.x, ball.y])
     b = page.evaluate("([x, y]) => window.simatch.view.toScreen(x, y)", [x, y])
     box = page.locator("#field").bounding_box()
@@ -116,9 +133,11 @@ def drag_ball(page, sim, x: float, y: float) -> None:
 def start_request(page, message: dict) -> None:
     """Send ``message`` from the page without waiting (the run must step for the answer to come); the answer
     lands in ``window.answer`` ("ok" or the error's text), read it with `answer`."""
-    page.evaluate("""m => { window.answer = null;
+    page.evaluate(
+        """m => { window.answer = null;
         window.simatch.conn.request(m).then(() => { window.answer = "ok"; }, (e) => { window.answer = e.message; }); }""",
-                  message)
+        message,
+    )
 
 
 def answer(page):

@@ -16,8 +16,9 @@ URL = re.compile(r"^\s+(?P<label>[a-z ]+?)\s+(?P<url>http://\S+)$")
 
 
 def _start(*argv: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "simatch", *argv], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "simatch", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
 
 
 def _urls(proc: subprocess.Popen, timeout: float = 60.0) -> dict[str, str]:
@@ -64,8 +65,9 @@ def _finish(proc: subprocess.Popen, timeout: float = 30.0) -> tuple[str, str]:
     return out, err
 
 
-@pytest.mark.parametrize("command", [["run", "msl_5v5", "--duration", "1", "--view"],
-                                     ["serve", "msl_5v5", "--duration", "1"]])
+@pytest.mark.parametrize(
+    "command", [["run", "msl_5v5", "--duration", "1", "--view"], ["serve", "msl_5v5", "--duration", "1"]]
+)
 def test_a_viewed_run_waits_for_a_page_plays_at_real_time_and_ends_when_the_page_closes(command):
     proc = _start(*command, "--view-port", "0", "--json", "--quiet")
     try:
@@ -110,11 +112,14 @@ def test_a_busy_port_is_a_clear_error():
     assert f"cannot serve the web UI on 127.0.0.1:{port}" in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("argv, why", [
-    (["serve", "/nowhere/match.mcap"], "no such recording"),
-    (["serve", "msl_5v5", "--speed", "2"], "--speed is for a recording"),
-    (["serve", "match.mcap", "--set", "ball.mass=1"], "--set: a recording is shown as it was recorded"),
-])
+@pytest.mark.parametrize(
+    "argv, why",
+    [
+        (["serve", "/nowhere/match.mcap"], "no such recording"),
+        (["serve", "msl_5v5", "--speed", "2"], "--speed is for a recording"),
+        (["serve", "match.mcap", "--set", "ball.mass=1"], "--set: a recording is shown as it was recorded"),
+    ],
+)
 def test_serve_refuses_what_does_not_fit_a_scene_or_a_recording(argv, why):
     proc = _start(*argv, "--view-port", "0")
     out, err = _finish(proc, timeout=60)

@@ -60,12 +60,13 @@ def test_the_referees_answer_reaches_the_page_that_asked():
         assert ask(sim, control, REFEREE, '{"type": "card", "robot": "cyan/4", "card": "yellow"}') is None
         assert sim.game["yellow_cards"]["cyan"] == 1
         assert ask(sim, control, REFEREE, '{"type": "place_ball", "x": 40.0, "y": 0.0}').startswith(
-            "the referee refused: (40.00, 0.00) is not on the floor")
+            "the referee refused: (40.00, 0.00) is not on the floor"
+        )
         assert "no robot named" in ask(sim, control, REFEREE, '{"type": "card", "robot": "cyan/9", "card": "red"}')
         assert "limits are its settings" in ask(sim, control, REFEREE, '{"type": "limits", "max_vel": 2, "max_w": 3}')
         waiting = []
         control.submit(REFEREE, P.parse('{"type": "pause"}', "referee"), waiting.append)
-        control.close()                          # the run ends before the referee could answer
+        control.close()  # the run ends before the referee could answer
         assert waiting == ["the run has ended"]
 
 
@@ -90,7 +91,11 @@ def test_the_referees_operator_requests_are_recorded_and_made_again(tmp_path):
         sim.run(seconds=1.0)
         control.close()
     calls = [(m.call, m.during_step) for _, _, m in Recording(path).messages(topics={"operator"})]
-    assert calls == [("judge.request", False)] * 2 + [("judge.pause", False), ("judge.resume", False),
-                                                      ("judge.place_ball", False), ("judge.request", False)]
+    assert calls == [("judge.request", False)] * 2 + [
+        ("judge.pause", False),
+        ("judge.resume", False),
+        ("judge.place_ball", False),
+        ("judge.request", False),
+    ]
     verdict = verify(path)
     assert verdict.identical and verdict.operator_commands == 6, verdict.describe()

@@ -29,8 +29,12 @@ def near(rgb, want, tol=40) -> bool:
 def test_pages_load_with_the_field_to_scale(live, open_page):
     sim, view = live()
     sim.run(seconds=0.2)
-    for label, name in (("cyan coach", "coach_cyan"), ("magenta coach", "coach_magenta"), ("referee", "referee"),
-                        ("replay", "replay")):
+    for label, name in (
+        ("cyan coach", "coach_cyan"),
+        ("magenta coach", "coach_magenta"),
+        ("referee", "referee"),
+        ("replay", "replay"),
+    ):
         page = open_page(view.urls[label])
         wait_frame(page, sim.time)
         hello = page.evaluate("window.simatch.hello")
@@ -38,7 +42,9 @@ def test_pages_load_with_the_field_to_scale(live, open_page):
         if label.endswith("coach"):
             assert hello["role"] == "coach" and hello["team"] == label.split()[0]
         # to scale: the goal lines are 22 m apart and the side lines 14 m, at one and the same scale
-        (x0, y0), (x1, y1) = page.evaluate("[window.simatch.view.toScreen(-11, 7), window.simatch.view.toScreen(11, -7)]")
+        (x0, y0), (x1, y1) = page.evaluate(
+            "[window.simatch.view.toScreen(-11, 7), window.simatch.view.toScreen(11, -7)]"
+        )
         assert (x1 - x0) / (y1 - y0) == pytest.approx(22.0 / 14.0, rel=1e-6)
         width = page.evaluate("window.simatch.view.w")
         assert x1 - x0 <= width and x1 - x0 >= 0.5 * width
@@ -50,8 +56,12 @@ def test_pages_load_with_the_field_to_scale(live, open_page):
 
 def test_robots_are_drawn_where_the_simulator_says(live, open_page):
     sim, view = live(**{"teams.cyan.strategy": "none", "teams.magenta.strategy": "none"})
-    spots = {"cyan/2": (-6.0, 4.0, 0.3), "cyan/4": (3.0, -5.0, 2.0), "magenta/3": (7.5, 2.5, -1.0),
-             "magenta/5": (-1.0, -2.5, 3.0)}
+    spots = {
+        "cyan/2": (-6.0, 4.0, 0.3),
+        "cyan/4": (3.0, -5.0, 2.0),
+        "magenta/3": (7.5, 2.5, -1.0),
+        "magenta/5": (-1.0, -2.5, 3.0),
+    }
     for name, (x, y, yaw) in spots.items():
         sim.set_model_state(name, x=x, y=y, yaw=yaw)
     sim.run(seconds=0.2)
@@ -67,7 +77,7 @@ def test_robots_are_drawn_where_the_simulator_says(live, open_page):
         team = name.split("/")[0]
         rgb = referee.evaluate(PIXEL_AT, [s.x, s.y, s.yaw, 0.5])
         assert near(rgb, TEAM_RGB[team]), f"{name} at ({s.x:.2f}, {s.y:.2f}): the console shows {rgb} there"
-        if team == "cyan":                # a coach draws its own robots from their perception (exact here)
+        if team == "cyan":  # a coach draws its own robots from their perception (exact here)
             rgb = coach.evaluate(PIXEL_AT, [s.x, s.y, s.yaw, 0.5])
             assert near(rgb, TEAM_RGB[team]), f"{name}: the cyan coach shows {rgb} there"
     frame = referee.evaluate("window.simatch.frame")
@@ -95,7 +105,7 @@ def _displace(sim, team):
 
 
 def test_stop_button_and_space_key_stop_the_team_in_the_simulation(live, open_page):
-    sim, view = live()            # both teams play the plumbing strategy: back to the start pose, still on STOP
+    sim, view = live()  # both teams play the plumbing strategy: back to the start pose, still on STOP
     cyan, magenta = sim.coaches["cyan"], sim.coaches["magenta"]
     sim.run(seconds=0.1)
     page = open_page(view.urls["cyan coach"])
@@ -110,7 +120,7 @@ def test_stop_button_and_space_key_stop_the_team_in_the_simulation(live, open_pa
         if stop == "button":
             page.click("#stop")
         else:
-            page.locator("#field").click(position={"x": 5, "y": 5})    # focus on the page, not in a field
+            page.locator("#field").click(position={"x": 5, "y": 5})  # focus on the page, not in a field
             page.keyboard.press("Space")
         run_until(sim, lambda: cyan.match_mode == MatchMode.STOPROBOT)
         _displace(sim, "magenta")
@@ -120,8 +130,10 @@ def test_stop_button_and_space_key_stop_the_team_in_the_simulation(live, open_pa
         wait_frame(page, sim.time)
         assert page.inner_text("#mode") == "STOPROBOT"
         shot(page, f"stopped_by_{stop}")
-    assert sum(e["type"] == "coach_command" and e["team"] == "cyan" and e.get("detail") == "STOPROBOT"
-               for e in sim.events) == 2
+    assert (
+        sum(e["type"] == "coach_command" and e["team"] == "cyan" and e.get("detail") == "STOPROBOT" for e in sim.events)
+        == 2
+    )
 
 
 def test_a_coach_token_cannot_command_the_other_team(live, open_page):
@@ -186,7 +198,7 @@ def test_replay_plays_pauses_changes_speed_and_seeks(live, open_page):
             at_one = (sim.time, sim.model_states()["cyan/2"].x)
     page = open_page(view.urls["replay"])
     page.wait_for_function("window.simatch.frame && window.simatch.frame.timeline")
-    page.click("#play")                      # it starts playing: pause it
+    page.click("#play")  # it starts playing: pause it
     page.wait_for_function("!window.simatch.frame.timeline.playing")
     page.select_option("#speed", "4")
     page.wait_for_function("window.simatch.frame.timeline.speed === 4")
@@ -211,7 +223,7 @@ def test_pages_reconnect_by_themselves_and_many_watch_at_once(live, open_page):
         wait_frame(p, sim.time)
     view.server.stop()
     pages[2].wait_for_function("document.getElementById('conn').textContent === 'reconnecting…'")
-    view.server.start()                      # same port: the pages come back without a reload
+    view.server.start()  # same port: the pages come back without a reload
     sim.run(seconds=0.3)
     for p in pages:
         p.wait_for_function("document.getElementById('conn').textContent === 'live'", timeout=15_000)

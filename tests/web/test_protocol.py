@@ -25,27 +25,30 @@ def test_the_referee_operators_requests_are_read():
     assert P.parse('{"type": "award_goal", "team": "cyan"}', "referee").team == "cyan"
 
 
-@pytest.mark.parametrize("text, role, why", [
-    ("{nope", "coach", "not JSON"),
-    ("[1, 2]", "coach", "JSON object"),
-    ('{"type": "command", "cmd": "WIN"}', "coach", "unknown game command"),
-    ('{"type": "command", "cmd": 14}', "coach", "unknown game command number"),
-    ('{"type": "command", "cmd": true}', "coach", "name"),
-    ('{"type": "command", "cmd": 0, "extra": 1}', "coach", "extra"),
-    ('{"type": "limits", "max_vel": NaN, "max_w": 3}', "coach", "max_vel"),
-    ('{"type": "limits", "max_vel": 1e9, "max_w": 3}', "coach", "max_vel"),
-    ('{"type": "test", "mode": "fly"}', "coach", "mode"),
-    ('{"type": "place_ball", "x": 0, "y": 0}', "coach", "may not send"),
-    ('{"type": "command", "cmd": 0}', "replay", "may not send"),
-    ('{"type": "teleport"}', "referee", "type"),
-    ('{"type": "timeline", "action": "rewind"}', "replay", "action"),
-    ('"' + "x" * 20000 + '"', "coach", "too long"),
-    ('{"type": "card", "robot": "cyan/2", "card": "blue"}', "referee", "card"),
-    ('{"type": "card", "robot": "cyan/2", "card": "red"}', "coach", "may not send"),
-    ('{"type": "resume"}', "coach", "may not send"),
-    ('{"type": "award_goal"}', "referee", "team"),
-    ('{"type": "send_off", "robot": "cyan/2", "seconds": -5}', "referee", "seconds"),
-])
+@pytest.mark.parametrize(
+    "text, role, why",
+    [
+        ("{nope", "coach", "not JSON"),
+        ("[1, 2]", "coach", "JSON object"),
+        ('{"type": "command", "cmd": "WIN"}', "coach", "unknown game command"),
+        ('{"type": "command", "cmd": 14}', "coach", "unknown game command number"),
+        ('{"type": "command", "cmd": true}', "coach", "name"),
+        ('{"type": "command", "cmd": 0, "extra": 1}', "coach", "extra"),
+        ('{"type": "limits", "max_vel": NaN, "max_w": 3}', "coach", "max_vel"),
+        ('{"type": "limits", "max_vel": 1e9, "max_w": 3}', "coach", "max_vel"),
+        ('{"type": "test", "mode": "fly"}', "coach", "mode"),
+        ('{"type": "place_ball", "x": 0, "y": 0}', "coach", "may not send"),
+        ('{"type": "command", "cmd": 0}', "replay", "may not send"),
+        ('{"type": "teleport"}', "referee", "type"),
+        ('{"type": "timeline", "action": "rewind"}', "replay", "action"),
+        ('"' + "x" * 20000 + '"', "coach", "too long"),
+        ('{"type": "card", "robot": "cyan/2", "card": "blue"}', "referee", "card"),
+        ('{"type": "card", "robot": "cyan/2", "card": "red"}', "coach", "may not send"),
+        ('{"type": "resume"}', "coach", "may not send"),
+        ('{"type": "award_goal"}', "referee", "team"),
+        ('{"type": "send_off", "robot": "cyan/2", "seconds": -5}', "referee", "seconds"),
+    ],
+)
 def test_malformed_or_forbidden_messages_are_refused_with_a_reason(text, role, why):
     with pytest.raises(P.ProtocolError, match=why):
         P.parse(text, role)

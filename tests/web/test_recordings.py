@@ -15,15 +15,37 @@ from .conftest import shot
 from .test_cli import _finish, _start, _urls
 
 #: magenta's robots drive in circles so that the recording moves
-CIRCLES = ["--set", "teams.magenta.strategy=constant", "--set", "teams.magenta.strategy_params.vx=1.0",
-           "--set", "teams.magenta.strategy_params.w=1.0"]
+CIRCLES = [
+    "--set",
+    "teams.magenta.strategy=constant",
+    "--set",
+    "teams.magenta.strategy_params.vx=1.0",
+    "--set",
+    "teams.magenta.strategy_params.w=1.0",
+]
 
 
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     path = tmp_path_factory.mktemp("recording") / "match.mcap"
-    subprocess.run([sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "3", "--quiet", "--record",
-                    str(path), *CIRCLES], check=True, timeout=120, stdout=subprocess.DEVNULL)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "simatch",
+            "run",
+            "msl_5v5",
+            "--duration",
+            "3",
+            "--quiet",
+            "--record",
+            str(path),
+            *CIRCLES,
+        ],
+        check=True,
+        timeout=120,
+        stdout=subprocess.DEVNULL,
+    )
     return path
 
 
@@ -65,8 +87,9 @@ def test_a_recording_plays_in_the_live_pages_and_the_replay_page_goes_through_it
 
         # the referee console watches the replayed bus: the recorded game state, nothing to command
         console = open_page(urls["referee"])
-        console.wait_for_function("window.simatch.frame && window.simatch.frame.game && window.simatch.frame.t > 2.5",
-                                  timeout=20_000)
+        console.wait_for_function(
+            "window.simatch.frame && window.simatch.frame.game && window.simatch.frame.t > 2.5", timeout=20_000
+        )
         assert console.inner_text("#stage") == "first_half"
         assert console.locator("#pause").is_disabled() and "recording" in console.inner_text("#mode-note")
         answer = console.evaluate("""async () => {

@@ -74,7 +74,7 @@ def test_the_console_is_the_referees_operator(live, open_page):
     # automatic judging off (manual mode) and on again
     page.click("#auto")
     run_until(sim, lambda: sim.game["manual"])
-    sim.run(seconds=0.2)          # a frame after the change (wait_frame also takes one from 20 ms before it)
+    sim.run(seconds=0.2)  # a frame after the change (wait_frame also takes one from 20 ms before it)
     wait_frame(page, sim.time)
     page.wait_for_function("document.getElementById('auto').textContent === 'off (manual)'")
     page.click("#auto")
@@ -94,7 +94,9 @@ def test_the_console_is_the_referees_operator(live, open_page):
     sim.run(seconds=0.2)
     wait_frame(page, sim.time)
     page.wait_for_selector("#robots-table tr.off[data-robot='cyan/3']")
-    page.wait_for_function("document.querySelector(\"#robots-table tr[data-robot='magenta/2'] .cards\").textContent.includes('1 Y')")
+    page.wait_for_function(
+        "document.querySelector(\"#robots-table tr[data-robot='magenta/2'] .cards\").textContent.includes('1 Y')"
+    )
     page.locator("#events li.send_off").wait_for()
     shot(page, "referee_sent_off_and_card")
     page.click("#robots-table tr[data-robot='cyan/3'] button.sendoff")

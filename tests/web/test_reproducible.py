@@ -19,7 +19,7 @@ def _near(sim, name, x, y, tol=0.15) -> bool:
 
 
 def test_a_coached_run_driven_from_the_pages_is_reproduced(live, open_page, tmp_path):
-    sim, view = live(seed=3)                      # no referee: a coach per team, robots play 'startpose'
+    sim, view = live(seed=3)  # no referee: a coach per team, robots play 'startpose'
     path = tmp_path / "coached.mcap"
     recorder = Recorder.for_run(sim, path)
     try:
@@ -34,7 +34,7 @@ def test_a_coached_run_driven_from_the_pages_is_reproduced(live, open_page, tmp_
         coach.fill("#maxvel", "2.5")
         coach.click("#limits")
         run_until(sim, lambda: cyan.max_vel == 2.5)
-        coach.locator("#field").click(position={"x": 300, "y": 200})      # the test's target point
+        coach.locator("#field").click(position={"x": 300, "y": 200})  # the test's target point
         coach.click("#tsend")
         run_until(sim, lambda: cyan.match_mode == MatchMode.TEST)
         drag_ball(console, sim, -2.0, 3.0)

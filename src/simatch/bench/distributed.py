@@ -43,13 +43,21 @@ from ..config.loader import load_scene
 
 SCENE = "msl_5v5"
 #: the round trip's load: one robot driving back to its start pose (the bus's figure, not a strategy's)
-RTT_OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "none",
-                 "teams.cyan.ids": [2], "teams.cyan.start": [[-2.0, 1.0, 0.0]], "perception.position_noise": 0.02}
+RTT_OVERRIDES = {
+    "teams.cyan.strategy": "startpose",
+    "teams.magenta.strategy": "none",
+    "teams.cyan.ids": [2],
+    "teams.cyan.start": [[-2.0, 1.0, 0.0]],
+    "perception.position_noise": 0.02,
+}
 #: the eleven processes' load without the shipped strategy: every robot drives back to its start pose
-BUS_OVERRIDES = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose",
-                 "perception.position_noise": 0.02}
+BUS_OVERRIDES = {
+    "teams.cyan.strategy": "startpose",
+    "teams.magenta.strategy": "startpose",
+    "perception.position_noise": 0.02,
+}
 SCATTER_EVERY = 4.0
-WARM_UP = 3.0          # simulated seconds before the figures start: past the kick-off at 2 s
+WARM_UP = 3.0  # simulated seconds before the figures start: past the kick-off at 2 s
 
 
 def _port() -> int:
@@ -62,8 +70,15 @@ def _scatter(sim, k: int) -> None:
     """Throw every robot somewhere else (deterministic), so that they all drive back."""
     rng = np.random.default_rng(k)
     for name in sim.simulator.robot_names:
-        sim.set_model_state(name, x=float(rng.uniform(-9, 9)), y=float(rng.uniform(-6, 6)),
-                            yaw=float(rng.uniform(-math.pi, math.pi)), vx=0.0, vy=0.0, wz=0.0)
+        sim.set_model_state(
+            name,
+            x=float(rng.uniform(-9, 9)),
+            y=float(rng.uniform(-6, 6)),
+            yaw=float(rng.uniform(-math.pi, math.pi)),
+            vx=0.0,
+            vy=0.0,
+            wz=0.0,
+        )
 
 
 def _play(sim, seconds: float) -> float:
@@ -90,15 +105,39 @@ def _server(realtime: bool = False, overrides: dict | None = None):
     folder = tempfile.TemporaryDirectory(prefix="simatch-bench-")
     endpoint = f"tcp/127.0.0.1:{_port()}"
     run = f"bench{os.getpid()}"
-    server = Server(load_scene(SCENE, overrides or {}), seed=0, listen=[endpoint], run=run,
-                    realtime=realtime, team_timeout=120, credentials_dir=folder.name, say=lambda text: None)
+    server = Server(
+        load_scene(SCENE, overrides or {}),
+        seed=0,
+        listen=[endpoint],
+        run=run,
+        realtime=realtime,
+        team_timeout=120,
+        credentials_dir=folder.name,
+        say=lambda text: None,
+    )
     procs: list[subprocess.Popen] = []
 
     def launch(kind: str, who: str) -> None:
         team = who.split("/")[0]
-        procs.append(subprocess.Popen(
-            [sys.executable, "-m", "simatch", kind, who, "--connect", endpoint, "--run", run, "--key",
-             os.path.join(folder.name, f"{team}.key")], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        procs.append(
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "simatch",
+                    kind,
+                    who,
+                    "--connect",
+                    endpoint,
+                    "--run",
+                    run,
+                    "--key",
+                    os.path.join(folder.name, f"{team}.key"),
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
 
     try:
         yield server, launch
@@ -121,9 +160,12 @@ def rtt(seconds: float | None = None) -> dict:
         server.wait_for_teams()
         _play(server.sim, seconds)
         st = server.stats()
-    return {"distributed_rtt_p50_ms": st["latency_p50_ms"], "distributed_rtt_p99_ms": st["latency_p99_ms"],
-            **_parts("distributed_rtt", st, ("feed", "processing", "transit")),
-            "distributed_rtt_samples": st["answers"]}
+    return {
+        "distributed_rtt_p50_ms": st["latency_p50_ms"],
+        "distributed_rtt_p99_ms": st["latency_p99_ms"],
+        **_parts("distributed_rtt", st, ("feed", "processing", "transit")),
+        "distributed_rtt_samples": st["answers"],
+    }
 
 
 def _parts(prefix: str, st: dict, names) -> dict:
@@ -159,11 +201,15 @@ def lockstep(seconds: float | None = None) -> dict:
         digest = server.sim.state_digest()
         st = server.stats()
     rtf, emb = seconds / wall, seconds / embedded_wall
-    return {"distributed_lockstep_rtf": round(rtf, 2), "distributed_lockstep_embedded_rtf": round(emb, 2),
-            "distributed_lockstep_ratio": round(rtf / emb, 3), "distributed_lockstep_digest_equal": digest == embedded_digest,
-            **_parts("distributed_lockstep", st, ("latency", "tick", "feed", "processing", "transit")),
-            "distributed_lockstep_missed": st["missed"],
-            "distributed_lockstep_load": round(os.getloadavg()[0], 2)}
+    return {
+        "distributed_lockstep_rtf": round(rtf, 2),
+        "distributed_lockstep_embedded_rtf": round(emb, 2),
+        "distributed_lockstep_ratio": round(rtf / emb, 3),
+        "distributed_lockstep_digest_equal": digest == embedded_digest,
+        **_parts("distributed_lockstep", st, ("latency", "tick", "feed", "processing", "transit")),
+        "distributed_lockstep_missed": st["missed"],
+        "distributed_lockstep_load": round(os.getloadavg()[0], 2),
+    }
 
 
 def realtime(seconds: float | None = None) -> dict:
@@ -183,9 +229,15 @@ def _realtime(prefix: str, seconds: float, overrides: dict | None = None) -> dic
         server.wait_for_teams()
         wall = _match(server.sim, seconds, server, play=None if overrides is None else _play)
         st = server.stats()
-    return {f"{prefix}_processes": 1 + st["processes"], f"{prefix}_rtf": round(seconds / wall, 4),
-            **_parts(prefix, st, ("latency", "tick", "feed", "processing", "transit")),
-            f"{prefix}_latency_max_ms": st["latency_max_ms"], f"{prefix}_answers": st["answers"],
-            f"{prefix}_late": st["late"], f"{prefix}_missed": st["missed"],
-            f"{prefix}_late_steps": st["realtime_late_steps"], f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
-            f"{prefix}_load": round(os.getloadavg()[0], 2)}
+    return {
+        f"{prefix}_processes": 1 + st["processes"],
+        f"{prefix}_rtf": round(seconds / wall, 4),
+        **_parts(prefix, st, ("latency", "tick", "feed", "processing", "transit")),
+        f"{prefix}_latency_max_ms": st["latency_max_ms"],
+        f"{prefix}_answers": st["answers"],
+        f"{prefix}_late": st["late"],
+        f"{prefix}_missed": st["missed"],
+        f"{prefix}_late_steps": st["realtime_late_steps"],
+        f"{prefix}_max_lag_ms": st["realtime_max_lag_ms"],
+        f"{prefix}_load": round(os.getloadavg()[0], 2),
+    }

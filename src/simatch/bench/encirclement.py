@@ -23,7 +23,7 @@ def _one(seed: int) -> tuple[float, float, float, dict]:
 
 def run(seconds: float | None = None) -> dict:
     seconds = seconds or 60.0
-    _one(0)                                            # warm-up: compiled kernels, every code path once
+    _one(0)  # warm-up: compiled kernels, every code path once
     sim = cpu = wall = 0.0
     times, captured, runs = [], 0, 0
     while sim < seconds:

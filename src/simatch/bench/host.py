@@ -19,7 +19,7 @@ def cpu_times() -> tuple[int, int] | None:
         return None
     if len(fields) < 9 or fields[0] != "cpu":
         return None
-    ticks = [int(v) for v in fields[1:9]]      # user nice system idle iowait irq softirq steal
+    ticks = [int(v) for v in fields[1:9]]  # user nice system idle iowait irq softirq steal
     return ticks[7], sum(ticks)
 
 

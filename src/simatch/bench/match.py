@@ -18,7 +18,7 @@ from ..simulation import Simulation
 from ..strategy.node import RobotNode
 from ..strategy.nubot.warm import load_kernels as load_nubot_kernels
 
-WARM_UP = 5.0          # simulated seconds run first, untimed (compiled kernels load, caches fill)
+WARM_UP = 5.0  # simulated seconds run first, untimed (compiled kernels load, caches fill)
 
 
 def timed_decisions(sim: Simulation, clock=time.perf_counter) -> list[float]:
@@ -52,8 +52,9 @@ def load_kernels(scene) -> None:
         name = next(iter(sim.robot_nodes))
         me = sim.model_states()[name]
         sim.take_control(name)
-        sim.set_model_state("ball", x=me.x + 0.45 * math.cos(me.yaw), y=me.y + 0.45 * math.sin(me.yaw), z=0.11,
-                            vx=0.0, vy=0.0, vz=0.0)
+        sim.set_model_state(
+            "ball", x=me.x + 0.45 * math.cos(me.yaw), y=me.y + 0.45 * math.sin(me.yaw), z=0.11, vx=0.0, vy=0.0, vz=0.0
+        )
         sim.send_action(name, dribble=True)
         sim.send_vel(name, 0.3, 0.0, 0.0)
         sim.run(seconds=0.5, until_done=False)

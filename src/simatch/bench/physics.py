@@ -28,7 +28,7 @@ OPEN, SCRUM_END = 12.0, 17.0
 
 def _script(sim: Simulator, t: float, rng: np.random.Generator, state: dict) -> None:
     """One control period of the scripted drivers (vectorised over the ten robots)."""
-    q = sim.robot_positions()          # (N, 3) view: x y yaw
+    q = sim.robot_positions()  # (N, 3) view: x y yaw
     bx, by = sim.ball_position()[:2]
     phase = t % CYCLE
     yaw = q[:, 2]
@@ -63,13 +63,21 @@ def _script(sim: Simulator, t: float, rng: np.random.Generator, state: dict) -> 
         state["kicked"] = False
     # a ball that leaves the field is put back in play near the centre
     if abs(bx) > 11.5 or abs(by) > 7.5:
-        sim.set_model_state("ball", x=float(rng.uniform(-3, 3)), y=float(rng.uniform(-2, 2)), z=0.11,
-                            vx=0.0, vy=0.0, vz=0.0)
+        sim.set_model_state(
+            "ball", x=float(rng.uniform(-3, 3)), y=float(rng.uniform(-2, 2)), z=0.11, vx=0.0, vy=0.0, vz=0.0
+        )
 
 
 def _state(sim: Simulator) -> dict:
-    return {"spread": np.arange(sim.n) * (2 * math.pi / sim.n), "kicked": False, "kicks_seen": 0, "lobs": 0,
-            "V": np.zeros((sim.n, 3)), "on": np.ones(sim.n, dtype=bool), "off": np.zeros(sim.n, dtype=bool)}
+    return {
+        "spread": np.arange(sim.n) * (2 * math.pi / sim.n),
+        "kicked": False,
+        "kicks_seen": 0,
+        "lobs": 0,
+        "V": np.zeros((sim.n, 3)),
+        "on": np.ones(sim.n, dtype=bool),
+        "off": np.zeros(sim.n, dtype=bool),
+    }
 
 
 def _loop(sim: Simulator, seconds: float, rng: np.random.Generator, state: dict, stats: dict) -> None:
@@ -81,7 +89,7 @@ def _loop(sim: Simulator, seconds: float, rng: np.random.Generator, state: dict,
         t0 = clock()
         _script(sim, sim.time, rng, state)
         sim.step(control)
-        nc = d.ncon          # contacts sampled once per control period
+        nc = d.ncon  # contacts sampled once per control period
         stats["contacts"] += nc
         stats["ticks"] += 1
         if scrum:
@@ -120,7 +128,7 @@ def run(seconds: float | None = None) -> dict:
         steps += sim.step_index
         kicks += sim.mechanics["kick"]
         catches += sim.mechanics["dribble_start"]
-    scrums = stats["scrum_ticks"]       # none in a run shorter than the first scrum (--seconds): no figure
+    scrums = stats["scrum_ticks"]  # none in a run shorter than the first scrum (--seconds): no figure
     return {
         "physics_rtf": round(sim_time / wall, 1),
         "physics_rtf_per_seed": rtfs,

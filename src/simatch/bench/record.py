@@ -40,10 +40,13 @@ from ..strategy.base import Command, RobotStrategy
 
 SCENES = {
     "match": {},
-    "scripted": {"teams.cyan.strategy": "simatch.bench.record:Chaser",
-                 "teams.magenta.strategy": "simatch.bench.record:Chaser", "judge.kind": "none"},
+    "scripted": {
+        "teams.cyan.strategy": "simatch.bench.record:Chaser",
+        "teams.magenta.strategy": "simatch.bench.record:Chaser",
+        "judge.kind": "none",
+    },
 }
-PAIRS = 5                   # alternating runs without and with a recorder, per scene
+PAIRS = 5  # alternating runs without and with a recorder, per scene
 MOVED = {"cyan/2": (1.0, 4.0), "cyan/4": (-8.0, -5.0), "magenta/3": (-1.0, -4.0), "magenta/5": (8.0, 5.0)}
 
 
@@ -58,17 +61,26 @@ class Chaser(RobotStrategy):
         if self.ctx.is_goalkeeper:
             gx = -self.ctx.field.half_length + 0.6
             return Command(target=(gx, max(-1.0, min(1.0, ball.y))), target_ori=0.0, max_vel=2.5)
-        nearest = min([me] + world.teammates, key=lambda r: math.hypot(ball.x - r.x, ball.y - r.y)
-                      if r.id != self.ctx.goalkeeper else math.inf)
+        nearest = min(
+            [me] + world.teammates,
+            key=lambda r: math.hypot(ball.x - r.x, ball.y - r.y) if r.id != self.ctx.goalkeeper else math.inf,
+        )
         if nearest.id == me.id:
             if me.holding_ball:
                 goal = (self.ctx.field.half_length, 2.0 * self.ctx.rng.uniform(-1, 1))
                 ori = math.atan2(goal[1] - me.y, goal[0] - me.x)
                 aligned = abs(math.remainder(ori - me.yaw, 2 * math.pi)) < 0.3
-                return Command(target=(me.x, me.y), target_ori=ori, dribble=True, max_w=4.0,
-                               kick_speed=7.0 if aligned else 0.0, lob=self.ctx.rng.uniform() < 0.2)
-            return Command(target=(ball.x, ball.y), target_ori=math.atan2(ball.y - me.y, ball.x - me.x),
-                           dribble=True, max_vel=3.0)
+                return Command(
+                    target=(me.x, me.y),
+                    target_ori=ori,
+                    dribble=True,
+                    max_w=4.0,
+                    kick_speed=7.0 if aligned else 0.0,
+                    lob=self.ctx.rng.uniform() < 0.2,
+                )
+            return Command(
+                target=(ball.x, ball.y), target_ori=math.atan2(ball.y - me.y, ball.x - me.x), dribble=True, max_vel=3.0
+            )
         sx, sy, _ = self.ctx.start
         tx = max(-self.ctx.field.half_length + 1.0, min(self.ctx.field.half_length - 1.0, 0.5 * sx + 0.6 * ball.x))
         ty = 0.6 * sy + 0.4 * ball.y
@@ -91,7 +103,7 @@ def _one(label: str, seconds: float, seed: int, path: Path | None) -> tuple[floa
         c0, k0, m0, t0 = time.process_time(), _children(), time.thread_time(), time.perf_counter()
         sim.run(seconds=seconds, until_done=False)
         if recorder is not None:
-            recorder.close()          # waits for the writer process: its CPU time is counted below
+            recorder.close()  # waits for the writer process: its CPU time is counted below
         cpu = time.process_time() - c0 + _children() - k0
         main, wall = time.thread_time() - m0, time.perf_counter() - t0
         return cpu, main, wall, sim.state_digest(), (path.stat().st_size if path else 0)
@@ -134,7 +146,7 @@ def run(seconds: float | None = None) -> dict:
     seconds = seconds or 60.0
     out: dict = {}
     with tempfile.TemporaryDirectory(prefix="simatch-bench-record-") as tmp:
-        _one("scripted", 2.0, 9, Path(tmp) / "warm.mcap")      # warm-up: kernels, imports, encoders
+        _one("scripted", 2.0, 9, Path(tmp) / "warm.mcap")  # warm-up: kernels, imports, encoders
         for label in SCENES:
             plain, recorded, size, digests = [], [], 0, set()
             for rep in range(PAIRS):

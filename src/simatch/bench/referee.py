@@ -40,7 +40,7 @@ def _run(kind: str, seconds: float) -> tuple[float, int, object]:
     from ..simulation import Simulation
 
     overrides = {"teams.cyan.strategy": "none", "teams.magenta.strategy": "none", "judge.kind": kind}
-    if kind != "none":      # no cards: every robot stays on the field, as in the run without the referee
+    if kind != "none":  # no cards: every robot stays on the field, as in the run without the referee
         overrides.update({"judge.charging_card": None, "judge.charging_red_speed": None})
     sim = Simulation("msl_5v5", seed=1, overrides=overrides)
     judge = sim.judge
@@ -59,7 +59,7 @@ def _run(kind: str, seconds: float) -> tuple[float, int, object]:
 def run(seconds: float | None = None) -> dict:
     seconds = seconds or 60.0
     timed = f"{__name__}:TimedReferee"
-    _run(timed, 5.0)                                  # warm-up: kernels, every code path once
+    _run(timed, 5.0)  # warm-up: kernels, every code path once
     base, steps, _ = _run("none", seconds)
     wall, steps, judge = _run(timed, seconds)
     own = judge.cpu

@@ -67,7 +67,7 @@ def run(seconds: float | None = None) -> dict:
                     if name != "ball":
                         sim.set_model_state(name, x=s.x, y=-s.y if abs(s.y) > 0.5 else s.y + 2.0)
 
-        sim.run(seconds=seconds, progress=keep_moving)     # one call: paced at real time as `run --view` is
+        sim.run(seconds=seconds, progress=keep_moving)  # one call: paced at real time as `run --view` is
         wall = time.perf_counter() - wall0
         cpu = time.process_time() - cpu0
         fps = {k: v / wall for k, v in counts.items()}

@@ -34,7 +34,7 @@ class BundleError(ValueError):
 
 class Entry(NamedTuple):
     topic: str
-    msgtype: str          # "" for a protocol (raw) sample
+    msgtype: str  # "" for a protocol (raw) sample
     payload: bytes
 
 
@@ -122,12 +122,12 @@ def unpack(data: bytes) -> list[Entry]:
             if k + 4 > n:
                 raise BundleError("broken bundle: a type name (or the payload length after it) runs past its end")
             end = k + 4 + u32(data, k)[0]
-            raw = data[i + 2:j]
+            raw = data[i + 2 : j]
             topic = names.get(raw) or _name(raw)
             if end > n:
                 raise BundleError(f"broken bundle: the payload on {topic!r} runs past its end")
-            raw = data[j + 2:k]
-            add(_new_entry(Entry, (topic, names.get(raw) or _name(raw) if raw else "", data[k + 4:end])))
+            raw = data[j + 2 : k]
+            add(_new_entry(Entry, (topic, names.get(raw) or _name(raw) if raw else "", data[k + 4 : end])))
             i = end
     except UnicodeDecodeError as exc:
         raise BundleError(f"broken bundle: {exc}") from None

@@ -51,7 +51,8 @@ class _Subscription:
         else:
             if self.msgtype is not None and pub.msgtype is not None and _name(self.msgtype) != _name(pub.msgtype):
                 raise TypeError(
-                    f"topic {pub.topic!r} carries {_name(pub.msgtype)}, but a subscriber expects {_name(self.msgtype)}")
+                    f"topic {pub.topic!r} carries {_name(pub.msgtype)}, but a subscriber expects {_name(self.msgtype)}"
+                )
             bound = self.callback
         pub._callbacks.append(bound)
         self._bound.append((pub, bound))

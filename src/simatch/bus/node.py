@@ -46,10 +46,10 @@ class NodeContext:
     """What a node gets from the run it joins."""
 
     bus: Bus
-    dt: float                          # physics step [s]
+    dt: float  # physics step [s]
     seed: int
-    now: Callable[[], float]           # simulated time [s]
-    step: Callable[[], int]            # physics step index
+    now: Callable[[], float]  # simulated time [s]
+    step: Callable[[], int]  # physics step index
 
     def rng(self, *names: str) -> np.random.Generator:
         """A random generator private to this node, reproducible for the same seed and name."""
@@ -95,8 +95,8 @@ class LockstepClock:
         self.offset = offset
         self.step_index = 0
         self._nodes: list[Node] = []
-        self._schedule: list[tuple[Node, int]] = []   # (node, period in steps), sorted by phase
-        self._table: list[list] = [[]]               # tick methods due at step k: _table[k % len(_table)]
+        self._schedule: list[tuple[Node, int]] = []  # (node, period in steps), sorted by phase
+        self._table: list[list] = [[]]  # tick methods due at step k: _table[k % len(_table)]
         self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=lambda: self.step_index)
 
     def now(self) -> float:
@@ -112,7 +112,7 @@ class LockstepClock:
         if node.period is not None:
             period = self.context.steps(node.period, f"period of {node.name}")
             self._schedule.append((node, period))
-            self._schedule.sort(key=lambda item: item[0].phase)   # stable: keeps insertion order in a phase
+            self._schedule.sort(key=lambda item: item[0].phase)  # stable: keeps insertion order in a phase
             self._rebuild()
         return node
 
@@ -121,7 +121,7 @@ class LockstepClock:
         length = 1
         for _, period in self._schedule:
             length = math.lcm(length, period)
-        if length > 10_000:      # periods without a small common multiple: check them one by one
+        if length > 10_000:  # periods without a small common multiple: check them one by one
             self._table = []
             return
         self._table = [[node.tick for node, period in self._schedule if k % period == 0] for k in range(length)]

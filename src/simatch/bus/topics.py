@@ -21,7 +21,7 @@ RECEIVE_FROM_COACH = "receive_from_coach"
 # world
 CLOCK = "clock"
 MODEL_STATES = "model_states"
-STATE_FINGERPRINT = "state_fingerprint"   # the exact states' identity at every control tick (when listened to)
+STATE_FINGERPRINT = "state_fingerprint"  # the exact states' identity at every control tick (when listened to)
 LINK_STATES = "link_states"
 SET_MODEL_STATE = "set_model_state"
 SET_LINK_STATE = "set_link_state"
@@ -31,7 +31,7 @@ BALL_CONTACTS = "ball_contacts"
 # scene
 GAME_STATE = "game_state"
 EVENTS = "events"
-OPERATOR = "operator"          # OperatorCommand: interventions from outside the run's nodes (API, operators)
+OPERATOR = "operator"  # OperatorCommand: interventions from outside the run's nodes (API, operators)
 REFEREE_COMMAND = "referee_command"
 
 

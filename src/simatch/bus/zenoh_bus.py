@@ -94,9 +94,16 @@ def check_run_name(run: str) -> str:
     return run
 
 
-def zenoh_config(mode: str = "peer", listen: Sequence[str] = (), connect: Sequence[str] = (),
-                 user: str | None = None, password: str | None = None, users_file: str | None = None,
-                 access_control: dict | None = None, low_latency: bool | None = None) -> zenoh.Config:
+def zenoh_config(
+    mode: str = "peer",
+    listen: Sequence[str] = (),
+    connect: Sequence[str] = (),
+    user: str | None = None,
+    password: str | None = None,
+    users_file: str | None = None,
+    access_control: dict | None = None,
+    low_latency: bool | None = None,
+) -> zenoh.Config:
     """A Zenoh configuration with simatch's safe defaults: no scouting, only the endpoints given, no shared
     memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'.
 
@@ -142,7 +149,7 @@ def _close_all() -> None:
 
 def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh.Session:
     """Open a session, retrying for up to ``wait`` seconds (e.g. while the server starts)."""
-    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME)     # before Zenoh's runtime starts (its first session)
+    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME)  # before Zenoh's runtime starts (its first session)
     deadline = time.monotonic() + wait
     while True:
         try:
@@ -172,7 +179,7 @@ def calm_sending_threads() -> int:
             if _SENDER_THREAD.match(name):
                 os.sched_setscheduler(int(tid), os.SCHED_BATCH, os.sched_param(0))
                 changed += 1
-        except (OSError, ValueError):       # the thread ended meanwhile, or the system does not allow it
+        except (OSError, ValueError):  # the thread ended meanwhile, or the system does not allow it
             continue
     return changed
 
@@ -180,11 +187,32 @@ def calm_sending_threads() -> int:
 class _RemoteSub:
     """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
 
-    __slots__ = ("topic", "msgtype", "callback", "any_type", "raw", "verify", "closed", "zsub", "wakes", "fed",
-                 "bundled", "early", "__weakref__")
+    __slots__ = (
+        "topic",
+        "msgtype",
+        "callback",
+        "any_type",
+        "raw",
+        "verify",
+        "closed",
+        "zsub",
+        "wakes",
+        "fed",
+        "bundled",
+        "early",
+        "__weakref__",
+    )
 
-    def __init__(self, topic: str, msgtype: Any, callback, any_type: bool = False, raw: bool = False,
-                 verify: bool = True, wakes: bool = True):
+    def __init__(
+        self,
+        topic: str,
+        msgtype: Any,
+        callback,
+        any_type: bool = False,
+        raw: bool = False,
+        verify: bool = True,
+        wakes: bool = True,
+    ):
         self.topic = topic
         self.msgtype = None if msgtype is None else msgs.msgtype_name(msgtype)
         self.callback = callback
@@ -197,8 +225,8 @@ class _RemoteSub:
         self.early: Callable[[str, bytes], bool] | None = None
         self.closed = False
         self.zsub = None
-        self.fed = False           # served by a feed (`ZenohBus.take_feed`), not by a Zenoh subscriber of its own
-        self.bundled = True        # bundle entries may reach it (not liveliness: only Zenoh tells who is alive)
+        self.fed = False  # served by a feed (`ZenohBus.take_feed`), not by a Zenoh subscriber of its own
+        self.bundled = True  # bundle entries may reach it (not liveliness: only Zenoh tells who is alive)
 
 
 class _Subscription:
@@ -235,7 +263,7 @@ class _Matching:
         """Ask Zenoh now whether remote subscribers match (the listener may not have spoken yet)."""
         try:
             self.matching = self._z.matching_status.matching
-        except zenoh.ZError:           # the session is closing
+        except zenoh.ZError:  # the session is closing
             self.matching = False
 
     def close(self) -> None:
@@ -255,7 +283,7 @@ class Feed(_Matching):
         self.topic = topic
         self.covers = tuple(covers)
         self.entries: list[tuple[str, str, bytes]] = []
-        self._covered: dict[str, bool] = {}      # topic -> covered: a raw sample (the tick) asks at every tick
+        self._covered: dict[str, bool] = {}  # topic -> covered: a raw sample (the tick) asks at every tick
         self._watch(zpub)
 
     def covering(self, topic: str) -> bool:
@@ -312,8 +340,7 @@ class _Publisher(_Matching):
 
     @property
     def active(self) -> bool:
-        return (self.matching or self._bus.eager or self._local.active
-                or any(f.matching for f in self.feeds))
+        return self.matching or self._bus.eager or self._local.active or any(f.matching for f in self.feeds)
 
     def put(self, msg: Any) -> None:
         local = self._local
@@ -385,13 +412,23 @@ class ZenohBus:
     * ``take_feed(topic, covers)``: this process receives the topics ``covers`` matches from the feed on
       ``topic`` only (it declares no Zenoh subscriber of its own for them)."""
 
-    def __init__(self, session: zenoh.Session, run: str = "default", *, signer: Signer | None = None,
-                 verifier: Verifier | None = None,
-                 on_refused: Callable[[str, str], None] | None = None,
-                 on_malformed: Callable[[str, str], None] | None = None, eager: bool = False,
-                 wake_on_data: bool = True, drop_when_congested: bool = False, prepare_on_arrival: bool = True,
-                 owns_session: bool = True, entry_verifier: EntryVerifier | None = None,
-                 max_sample: int | None = None):
+    def __init__(
+        self,
+        session: zenoh.Session,
+        run: str = "default",
+        *,
+        signer: Signer | None = None,
+        verifier: Verifier | None = None,
+        on_refused: Callable[[str, str], None] | None = None,
+        on_malformed: Callable[[str, str], None] | None = None,
+        eager: bool = False,
+        wake_on_data: bool = True,
+        drop_when_congested: bool = False,
+        prepare_on_arrival: bool = True,
+        owns_session: bool = True,
+        entry_verifier: EntryVerifier | None = None,
+        max_sample: int | None = None,
+    ):
         self.run = check_run_name(run)
         #: the largest sample this bus sends (None: no limit; `MAX_SAMPLE` on the low-latency transport)
         self.max_sample = max_sample
@@ -411,18 +448,18 @@ class ZenohBus:
         self._owns = owns_session
         self._inbox: deque = deque()
         self._wake = threading.Event()
-        self._queue_lock = threading.Lock()   # the inbox and its count of waking samples change together
-        self._waking = 0                      # waking samples in the inbox
+        self._queue_lock = threading.Lock()  # the inbox and its count of waking samples change together
+        self._waking = 0  # waking samples in the inbox
         self._remote: list[_RemoteSub] = []
         self._pubs: dict[str, _Publisher] = {}
-        self._declared: list[Any] = []        # tokens, queryables, liveliness subscribers
-        self._batch: list[tuple[str, str, bytes]] | None = None     # between begin_batch and send_batch
+        self._declared: list[Any] = []  # tokens, queryables, liveliness subscribers
+        self._batch: list[tuple[str, str, bytes]] | None = None  # between begin_batch and send_batch
         self._feeds: list[Feed] = []
         self._raw_pubs: dict[str, RawPublisher] = {}
-        self._fed_covers: tuple[str, ...] = ()                      # topics this process takes from a feed
-        self._routes: dict[tuple[str, bool, bool], tuple[_RemoteSub, ...]] = {}   # bundle entry -> subscriptions
-        self._routes_lock = threading.Lock()     # Zenoh's threads fill the routes; the owner changes subscriptions
-        self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)   # refusals inside bundles
+        self._fed_covers: tuple[str, ...] = ()  # topics this process takes from a feed
+        self._routes: dict[tuple[str, bool, bool], tuple[_RemoteSub, ...]] = {}  # bundle entry -> subscriptions
+        self._routes_lock = threading.Lock()  # Zenoh's threads fill the routes; the owner changes subscriptions
+        self._notices = _RemoteSub("", None, lambda *a: None, raw=True, verify=False)  # refusals inside bundles
         self._closed = False
         #: samples not sent because they were larger than ``max_sample``, by topic
         self.oversize: dict[str, int] = {}
@@ -434,7 +471,7 @@ class ZenohBus:
 
     def publisher(self, topic: str, msgtype: Any) -> _Publisher:
         pub = self._pubs.get(topic)
-        local = self.local.publisher(topic, msgtype)     # raises TypeError on a type clash
+        local = self.local.publisher(topic, msgtype)  # raises TypeError on a type clash
         if pub is not None:
             return pub
         zpub = self._declare_zpub(topic, _ENCODING_PREFIX + msgs.msgtype_name(msgtype))
@@ -450,8 +487,9 @@ class ZenohBus:
         """Every message on topics matching ``pattern``, typed by its encoding; remote samples that are not
         messages (plain bytes, as the lockstep protocol sends) are left out."""
         local = self.local.subscribe_all(pattern, callback)
-        return _Subscription(self, pattern, local,
-                             self._declare_remote(_RemoteSub(pattern, None, callback, any_type=True)))
+        return _Subscription(
+            self, pattern, local, self._declare_remote(_RemoteSub(pattern, None, callback, any_type=True))
+        )
 
     def topics(self) -> dict[str, str]:
         return self.local.topics()
@@ -463,8 +501,13 @@ class ZenohBus:
             pub.refresh()
 
     # --- raw samples (protocols built on the bus, e.g. lockstep) -------------------------------------------
-    def subscribe_raw(self, topic: str, callback: Callable[[str, bytes, Optional[bytes], float], None],
-                      verify: bool = True, wakes: Callable[[str, bytes], bool] | None = None) -> _Subscription:
+    def subscribe_raw(
+        self,
+        topic: str,
+        callback: Callable[[str, bytes, Optional[bytes], float], None],
+        verify: bool = True,
+        wakes: Callable[[str, bytes], bool] | None = None,
+    ) -> _Subscription:
         """Remote samples on ``topic`` as ``callback(topic, payload, attachment, arrival)``, delivered in
         order with every other sample (``arrival``: `time.monotonic()` when it came in: the
         same clock in every process of a machine).
@@ -513,9 +556,13 @@ class ZenohBus:
         that is all of what the process sends now (a bundle, a tick), it saves a thread wake-up, which on a
         busy machine is what makes the milliseconds of the latency's tail."""
         return self.session.declare_publisher(
-            self.key(topic), encoding=zenoh.Encoding(encoding) if encoding else None,
-            congestion_control=self.congestion, reliability=zenoh.Reliability.RELIABLE,
-            allowed_destination=zenoh.Locality.REMOTE, express=express)
+            self.key(topic),
+            encoding=zenoh.Encoding(encoding) if encoding else None,
+            congestion_control=self.congestion,
+            reliability=zenoh.Reliability.RELIABLE,
+            allowed_destination=zenoh.Locality.REMOTE,
+            express=express,
+        )
 
     # --- bundles ----------------------------------------------------------------------------------------------
     def begin_batch(self) -> None:
@@ -583,16 +630,20 @@ class ZenohBus:
             return True
         n = self.oversize[topic] = self.oversize.get(topic, 0) + 1
         if n == 1 or n % 100 == 0:
-            log.error("not sent: a sample of %d bytes on %s (at most %d bytes; %d so far)", size, topic,
-                      cap, n)
+            log.error("not sent: a sample of %d bytes on %s (at most %d bytes; %d so far)", size, topic, cap, n)
         return False
 
     def _put_signed(self, topic: str, payload: bytes, count: bool = True) -> None:
         if not self._fits(topic, len(payload)):
             return
         attachment = self.signer(topic, payload) if self.signer is not None else None
-        self.session.put(self.key(topic), payload, attachment=attachment, congestion_control=self.congestion,
-                         allowed_destination=zenoh.Locality.REMOTE)
+        self.session.put(
+            self.key(topic),
+            payload,
+            attachment=attachment,
+            congestion_control=self.congestion,
+            allowed_destination=zenoh.Locality.REMOTE,
+        )
         if count:
             self.stats.published += 1
 
@@ -614,8 +665,7 @@ class ZenohBus:
         self._fed_covers = (*self._fed_covers, *covers)
         self._declare_bundles(topic, fed=True, verify=False, handle=handle)
 
-    def _declare_bundles(self, pattern: str, fed: bool, verify: bool,
-                         handle: Callable[[], None] | None = None) -> None:
+    def _declare_bundles(self, pattern: str, fed: bool, verify: bool, handle: Callable[[], None] | None = None) -> None:
         n = len(self.prefix)
         clock = time.monotonic
         notices = self._notices
@@ -627,7 +677,7 @@ class ZenohBus:
             arrival = clock()
             try:
                 items = self._open_bundle(topic, payload, attachment, arrival, fed, verify)
-            except Exception as exc:      # never fail in Zenoh's thread: the owner reports it
+            except Exception as exc:  # never fail in Zenoh's thread: the owner reports it
                 items = [(notices, topic, payload, None, "", arrival, (None, None, exc))]
             if handle is None:
                 self._queue_all(items)
@@ -636,16 +686,16 @@ class ZenohBus:
                 self._inbox.extend(items)
             try:
                 handle()
-            except Exception:       # never fail in Zenoh's thread: wake the owner to deal with it
+            except Exception:  # never fail in Zenoh's thread: wake the owner to deal with it
                 log.exception("handling a feed sample failed")
                 self._wake.set()
 
-        zsub = self.session.declare_subscriber(self.key(pattern), _ZCallback(on_sample, indirect=False),
-                                               allowed_origin=zenoh.Locality.REMOTE)
+        zsub = self.session.declare_subscriber(
+            self.key(pattern), _ZCallback(on_sample, indirect=False), allowed_origin=zenoh.Locality.REMOTE
+        )
         self._declared.append(zsub)
 
-    def _open_bundle(self, topic: str, payload: bytes, attachment, arrival: float, fed: bool,
-                     verify: bool) -> list:
+    def _open_bundle(self, topic: str, payload: bytes, attachment, arrival: float, fed: bool, verify: bool) -> list:
         """The inbox items of one bundle: its entries, each with what `deliver` needs to know
         (``pre``: why refused / decoded message / error), or one notice if the bundle is refused or broken."""
         notices = self._notices
@@ -674,8 +724,8 @@ class ZenohBus:
                     out.append((notices, entry_topic, data, None, "", arrival, (why, None, None)))
                     continue
             encoding = "" if raw else _ENCODING_PREFIX + msgtype
-            decoded = None        # (type, pre): decoded once for every subscription of that type, and the
-            for rsub in subs:     # message shared by them, as the in-process bus shares one message object
+            decoded = None  # (type, pre): decoded once for every subscription of that type, and the
+            for rsub in subs:  # message shared by them, as the in-process bus shares one message object
                 pre = _UNCHECKED
                 if decode and not raw:
                     try:
@@ -691,9 +741,11 @@ class ZenohBus:
     def _route(self, topic: str, raw: bool, fed: bool) -> tuple:
         """The subscriptions an entry on ``topic`` goes to (remembered until subscriptions change)."""
         with self._routes_lock:
-            subs = tuple(r for r in self._remote
-                         if r.raw == raw and r.fed == fed and r.bundled and not r.closed
-                         and _topics.matches(r.topic, topic))
+            subs = tuple(
+                r
+                for r in self._remote
+                if r.raw == raw and r.fed == fed and r.bundled and not r.closed and _topics.matches(r.topic, topic)
+            )
             self._routes[(topic, raw, fed)] = subs
         return subs
 
@@ -711,8 +763,9 @@ class ZenohBus:
     def watch_liveliness(self, pattern: str, callback: Callable[[str, bool], None]) -> None:
         """``callback(topic, alive)`` (in order with the other samples) when a token appears or vanishes;
         tokens present now are reported too."""
-        rsub = _RemoteSub(pattern, None, lambda topic, payload, att, t: callback(topic, payload == b"+"),
-                          raw=True, verify=False)
+        rsub = _RemoteSub(
+            pattern, None, lambda topic, payload, att, t: callback(topic, payload == b"+"), raw=True, verify=False
+        )
         rsub.bundled = False
         n = len(self.prefix)
 
@@ -720,19 +773,20 @@ class ZenohBus:
             alive = b"+" if sample.kind == zenoh.SampleKind.PUT else b"-"
             self._queue((rsub, str(sample.key_expr)[n:], alive, None, "", time.monotonic(), None), True)
 
-        rsub.zsub = self.session.liveliness().declare_subscriber(self.key(pattern), _ZCallback(on_sample,
-                                                                                                indirect=False),
-                                                                 history=True)
+        rsub.zsub = self.session.liveliness().declare_subscriber(
+            self.key(pattern), _ZCallback(on_sample, indirect=False), history=True
+        )
         self._add_remote(rsub)
 
     def serve(self, topic: str, callback: Callable[[Any], None]) -> None:
         """A queryable on ``topic``: each query is queued and ``callback(query)`` runs in `deliver`, which
         must answer it (``query.reply(query.key_expr, payload)`` or ``query.reply_err(...)``)."""
+
         def answer(topic: str, query, attachment, arrival: float) -> None:
             try:
                 callback(query)
             finally:
-                query.drop()           # the query ends once answered
+                query.drop()  # the query ends once answered
 
         rsub = _RemoteSub(topic, None, answer, raw=True, verify=False)
         n = len(self.prefix)
@@ -740,8 +794,9 @@ class ZenohBus:
         def on_query(query) -> None:
             self._queue((rsub, str(query.key_expr)[n:], query, None, "", time.monotonic(), None), True)
 
-        self._declared.append(self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False),
-                                                             complete=True))
+        self._declared.append(
+            self.session.declare_queryable(self.key(topic), _ZCallback(on_query, indirect=False), complete=True)
+        )
 
     def query(self, topic: str, payload: bytes, timeout: float = 5.0) -> list[tuple[bool, bytes]]:
         """Ask the queryables on ``topic``; each answer as (ok, bytes). Blocks up to ``timeout`` seconds."""
@@ -759,7 +814,7 @@ class ZenohBus:
         if not rsub.raw:
             rsub.wakes = self.wake_on_data
         if "*" not in rsub.topic and any(_topics.matches(c, rsub.topic) for c in self._fed_covers):
-            rsub.fed = True                          # served by the feed taken with take_feed
+            rsub.fed = True  # served by the feed taken with take_feed
             self._add_remote(rsub)
             return rsub
         n = len(self.prefix)
@@ -773,13 +828,14 @@ class ZenohBus:
             attachment = att.to_bytes() if att is not None else None
             encoding = str(sample.encoding) if with_encoding else ""
             if with_encoding and not encoding.startswith(_ENCODING_PREFIX):
-                return                                   # not a message (e.g. a lockstep protocol sample)
+                return  # not a message (e.g. a lockstep protocol sample)
             # checked and decoded here, in Zenoh's thread, while the owner is typically waiting: off its path
             pre = prepare(rsub, topic, payload, attachment, encoding) if prepare is not None else None
             self._queue((rsub, topic, payload, attachment, encoding, clock(), pre), _wakes(rsub, topic, payload))
 
-        rsub.zsub = self.session.declare_subscriber(self.key(rsub.topic), _ZCallback(on_sample, indirect=False),
-                                                    allowed_origin=zenoh.Locality.REMOTE)
+        rsub.zsub = self.session.declare_subscriber(
+            self.key(rsub.topic), _ZCallback(on_sample, indirect=False), allowed_origin=zenoh.Locality.REMOTE
+        )
         self._add_remote(rsub)
         return rsub
 
@@ -793,7 +849,7 @@ class ZenohBus:
             return (None, msgs.decode(rsub.msgtype or _type_of(encoding), payload), None)
         except msgs.MessageError as exc:
             return (None, None, exc)
-        except Exception:          # never fail in Zenoh's thread: the owner will try again and report
+        except Exception:  # never fail in Zenoh's thread: the owner will try again and report
             return None
 
     def _drop_remote(self, rsub: _RemoteSub) -> None:
@@ -852,7 +908,7 @@ class ZenohBus:
             if rsub.closed:
                 continue
             if rsub.raw:
-                if pre is not None:                  # from a bundle: checked when it was opened
+                if pre is not None:  # from a bundle: checked when it was opened
                     why, _, error = pre
                     if error is not None:
                         self._malformed(topic, error)
@@ -882,7 +938,7 @@ class ZenohBus:
                     rsub.callback(topic, msg)
                 else:
                     rsub.callback(msg)
-            except Exception as exc:     # a bad payload (or one a node cannot use) never stops the process
+            except Exception as exc:  # a bad payload (or one a node cannot use) never stops the process
                 self._malformed(topic, exc)
                 continue
             stats.delivered += 1
@@ -904,8 +960,9 @@ class ZenohBus:
         if self.on_malformed is not None:
             self.on_malformed(topic, what)
         elif stats.malformed_by_topic[topic] in (1, 10, 100, 1000):
-            log.warning("dropped a malformed sample on %s (%d so far): %s", topic, stats.malformed_by_topic[topic],
-                        what)
+            log.warning(
+                "dropped a malformed sample on %s (%d so far): %s", topic, stats.malformed_by_topic[topic], what
+            )
 
     def pump(self, timeout: float | None = 0.0) -> int:
         """Deliver every queued remote sample (waiting up to ``timeout`` for one); returns how many."""
@@ -960,7 +1017,7 @@ def _wakes(rsub: _RemoteSub, topic: str, payload) -> bool:
         return rsub.wakes
     try:
         return bool(early(topic, payload))
-    except Exception:                # the owner will look at it anyway
+    except Exception:  # the owner will look at it anyway
         log.exception("deciding whether a sample on %s wakes the owner failed", topic)
         return True
 
@@ -968,7 +1025,7 @@ def _wakes(rsub: _RemoteSub, topic: str, payload) -> bool:
 def _type_of(encoding: str) -> str:
     if not encoding.startswith(_ENCODING_PREFIX):
         raise msgs.MessageError(f"sample with encoding {encoding or '(none)'!r}: expected {_ENCODING_PREFIX}<type>")
-    name = encoding[len(_ENCODING_PREFIX):]
+    name = encoding[len(_ENCODING_PREFIX) :]
     if name not in msgs.typestore.types:
         raise msgs.MessageError(f"sample of unknown type {name!r}")
     return name

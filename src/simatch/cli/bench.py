@@ -18,13 +18,17 @@ from . import UsageError
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("bench", help="measure simulation speeds (real-time factors)",
-                       description="Runs the benchmarks one after another, each in a fresh process, and prints "
-                                   "their figures; with --json, one JSON object. Benchmarks: "
-                                   + ", ".join(BENCHMARKS))
+    p = sub.add_parser(
+        "bench",
+        help="measure simulation speeds (real-time factors)",
+        description="Runs the benchmarks one after another, each in a fresh process, and prints "
+        "their figures; with --json, one JSON object. Benchmarks: " + ", ".join(BENCHMARKS),
+    )
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
     p.add_argument("--only", action="append", default=[], metavar="NAME", help="run only this benchmark (repeatable)")
-    p.add_argument("--seconds", type=float, metavar="S", help="simulated seconds per benchmark (default: each one's own)")
+    p.add_argument(
+        "--seconds", type=float, metavar="S", help="simulated seconds per benchmark (default: each one's own)"
+    )
     p.set_defaults(func=main)
 
 

@@ -70,7 +70,7 @@ class Console:
     def report(self) -> None:
         """Say which referee requests were refused, and why (the referee applies them at its next step)."""
         events = self.sim.events
-        for e in events[self._seen:]:
+        for e in events[self._seen :]:
             if e["type"] == "operator_refused":
                 self.say(f"? refused: {e.get('detail', '')}")
         self._seen = len(events)
@@ -174,8 +174,10 @@ class Console:
 
     def _publish(self, **fields) -> None:
         self.pub.put(msgs.new(msgs.RefereeCommand, stamp=self.sim.time, source="cli", **fields))
-        self.say(f"{self.sim.time:9.3f}  referee <- {fields.get('op')} "
-                 + " ".join(f"{k}={v}" for k, v in fields.items() if k != "op"))
+        self.say(
+            f"{self.sim.time:9.3f}  referee <- {fields.get('op')} "
+            + " ".join(f"{k}={v}" for k, v in fields.items() if k != "op")
+        )
 
     # --- helpers ---------------------------------------------------------------------------------------
     @staticmethod
@@ -203,27 +205,58 @@ class Console:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("coach", help="a command-line coach (or referee operator) for a run in this process",
-                       description=__doc__.split("\n\n")[0] + " " + "Type 'help' at the prompt for the commands.",
-                       epilog=HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "coach",
+        help="a command-line coach (or referee operator) for a run in this process",
+        description=__doc__.split("\n\n")[0] + " " + "Type 'help' at the prompt for the commands.",
+        epilog=HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("scene", help="a shipped scene name or a path to a .toml file")
-    p.add_argument("--team", action="append", default=[], metavar="TEAM",
-                   help="coach this team only (repeatable; default: every team)")
-    p.add_argument("--referee", action="store_true",
-                   help="keep the scene's referee and be its operator instead of coaching")
-    p.add_argument("--script", type=argparse.FileType("r"), metavar="FILE",
-                   help="read the commands from FILE (default: standard input)")
-    p.add_argument("--live", action="store_true",
-                   help="run in real time and apply lines as they come (default when the input is a terminal)")
-    p.add_argument("--pace", type=float, default=1.0, metavar="X",
-                   help="live mode: simulated seconds per wall second (default 1)")
-    p.add_argument("--duration", type=float, metavar="S",
-                   help="simulated seconds to run in all (default: until 'quit' or the end of the input)")
+    p.add_argument(
+        "--team",
+        action="append",
+        default=[],
+        metavar="TEAM",
+        help="coach this team only (repeatable; default: every team)",
+    )
+    p.add_argument(
+        "--referee", action="store_true", help="keep the scene's referee and be its operator instead of coaching"
+    )
+    p.add_argument(
+        "--script",
+        type=argparse.FileType("r"),
+        metavar="FILE",
+        help="read the commands from FILE (default: standard input)",
+    )
+    p.add_argument(
+        "--live",
+        action="store_true",
+        help="run in real time and apply lines as they come (default when the input is a terminal)",
+    )
+    p.add_argument(
+        "--pace", type=float, default=1.0, metavar="X", help="live mode: simulated seconds per wall second (default 1)"
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="simulated seconds to run in all (default: until 'quit' or the end of the input)",
+    )
     p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene value, e.g. teams.magenta.strategy=none")
-    p.add_argument("--json", action="store_true",
-                   help="print exactly one JSON object with the run's results (the console's echo goes to stderr)")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene value, e.g. teams.magenta.strategy=none",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print exactly one JSON object with the run's results (the console's echo goes to stderr)",
+    )
     p.set_defaults(func=main)
 
 
@@ -252,8 +285,9 @@ def main(args) -> int:
     live = args.live or (args.script is None and sys.stdin.isatty())
     with Simulation(scene, seed=args.seed) as sim:
         if args.referee and not sim.judge.gives_commands:
-            raise UsageError(f"scene {scene.name} has no referee (judge '{scene.spec.judge.kind}'): "
-                             f"drop --referee to coach")
+            raise UsageError(
+                f"scene {scene.name} has no referee (judge '{scene.spec.judge.kind}'): drop --referee to coach"
+            )
         console = Console(sim, args.team or teams, args.referee, lambda s: print(s, file=echo, flush=True))
         sim.step()
         if live:
@@ -274,7 +308,7 @@ def _apply(console: Console, text: str, echo: TextIO) -> None:
     except (ConsoleError, ValueError) as exc:
         print(f"? {exc}", file=echo, flush=True)
     if console.referee:
-        console.sim.step()              # the referee takes the request at its next step
+        console.sim.step()  # the referee takes the request at its next step
         console.report()
 
 
@@ -314,7 +348,7 @@ def _live(sim, console: Console, source: TextIO, args, echo: TextIO) -> None:
                     console.quit = True
                     break
                 _apply(console, text, echo)
-                console.pending_run = 0.0          # live: the clock runs anyway
+                console.pending_run = 0.0  # live: the clock runs anyway
         except queue.Empty:
             pass
         chunk = 0.1 if args.duration is None else min(0.1, args.duration - sim.time)

@@ -9,10 +9,13 @@ from . import UsageError
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("export", help="write a recording's trajectories and events as Parquet or CSV tables",
-                       description="Writes tidy tables (one row per observation) of a recording: trajectories "
-                                   "(one row per model per physics step), events, perception, commands, game "
-                                   "commands and states, plus metadata.json.")
+    p = sub.add_parser(
+        "export",
+        help="write a recording's trajectories and events as Parquet or CSV tables",
+        description="Writes tidy tables (one row per observation) of a recording: trajectories "
+        "(one row per model per physics step), events, perception, commands, game "
+        "commands and states, plus metadata.json.",
+    )
     p.add_argument("file", metavar="FILE.mcap", help="a recording (simatch run --record)")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="table format (default parquet)")
     p.add_argument("--out", metavar="DIR", help="folder for the tables (default: FILE_tables next to the recording)")

@@ -43,19 +43,35 @@ def speed(text: str) -> float | None:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("replay", help="play a recording back on the bus, or check that it reproduces",
-                       description="Publishes every topic of a recording (simatch run --record) on the bus with "
-                                   "its recorded timing, so that any node or viewer sees the game again. "
-                                   "--verify re-simulates the recorded scene, seed and operator commands and "
-                                   "checks that the model states match the recording bit for bit.")
+    p = sub.add_parser(
+        "replay",
+        help="play a recording back on the bus, or check that it reproduces",
+        description="Publishes every topic of a recording (simatch run --record) on the bus with "
+        "its recorded timing, so that any node or viewer sees the game again. "
+        "--verify re-simulates the recorded scene, seed and operator commands and "
+        "checks that the model states match the recording bit for bit.",
+    )
     p.add_argument("file", metavar="FILE.mcap", help="a recording")
-    p.add_argument("--speed", type=speed, default=1.0, metavar="X",
-                   help="simulated seconds per wall second (default 1: real time; 'max': as fast as possible)")
-    p.add_argument("--from", dest="start", type=float, default=0.0, metavar="T",
-                   help="start at simulated time T seconds (the latest message of every topic before T is "
-                        "published first)")
-    p.add_argument("--verify", action="store_true",
-                   help="re-simulate the run and compare the model states bit for bit (exit status 1 if they differ)")
+    p.add_argument(
+        "--speed",
+        type=speed,
+        default=1.0,
+        metavar="X",
+        help="simulated seconds per wall second (default 1: real time; 'max': as fast as possible)",
+    )
+    p.add_argument(
+        "--from",
+        dest="start",
+        type=float,
+        default=0.0,
+        metavar="T",
+        help="start at simulated time T seconds (the latest message of every topic before T is published first)",
+    )
+    p.add_argument(
+        "--verify",
+        action="store_true",
+        help="re-simulate the run and compare the model states bit for bit (exit status 1 if they differ)",
+    )
     p.add_argument("--info", action="store_true", help="describe the recording and exit")
     p.add_argument("--json", action="store_true", help="with --verify or --info: print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -120,30 +136,46 @@ def _play(rec, args) -> int:
             progress.close()
     wall = time.perf_counter() - t0
     _warn(rec.problems, shown)
-    print(f"replayed {player.published} messages on {len(player.topics)} topics, "
-          f"t={args.start:.3f}..{player.time:.3f} s, in {wall:.2f} s wall")
+    print(
+        f"replayed {player.published} messages on {len(player.topics)} topics, "
+        f"t={args.start:.3f}..{player.time:.3f} s, in {wall:.2f} s wall"
+    )
     return 0
 
 
 def _info(rec, args) -> int:
     meta = rec.metadata
     counts = json.loads(rec.end["messages"]) if rec.end and "messages" in rec.end else None
-    info = {"file": str(rec.path), "simatch": rec.is_simatch, "finalised": rec.finalised,
-            "status": (rec.end or {}).get("status", "not finalised"),
-            "scene": meta.get("scene_name"), "seed": int(meta["seed"]) if "seed" in meta else None,
-            "overrides": rec.overrides(), "simatch_version": meta.get("simatch_version"),
-            "command_line": json.loads(meta.get("command_line", "null")),
-            "start": rec.start_ns / 1e9, "end": rec.end_ns / 1e9, "chunks": len(rec.chunks),
-            "state_digest": (rec.end or {}).get("state_digest"), "topics": rec.topics(), "messages": counts,
-            "problems": rec.problems}
+    info = {
+        "file": str(rec.path),
+        "simatch": rec.is_simatch,
+        "finalised": rec.finalised,
+        "status": (rec.end or {}).get("status", "not finalised"),
+        "scene": meta.get("scene_name"),
+        "seed": int(meta["seed"]) if "seed" in meta else None,
+        "overrides": rec.overrides(),
+        "simatch_version": meta.get("simatch_version"),
+        "command_line": json.loads(meta.get("command_line", "null")),
+        "start": rec.start_ns / 1e9,
+        "end": rec.end_ns / 1e9,
+        "chunks": len(rec.chunks),
+        "state_digest": (rec.end or {}).get("state_digest"),
+        "topics": rec.topics(),
+        "messages": counts,
+        "problems": rec.problems,
+    }
     if args.json:
         print(json.dumps(info))
         return 0
-    print(f"{info['file']}: {'simatch recording' if rec.is_simatch else 'MCAP file (no simatch metadata)'}, "
-          f"{info['status']}")
+    print(
+        f"{info['file']}: {'simatch recording' if rec.is_simatch else 'MCAP file (no simatch metadata)'}, "
+        f"{info['status']}"
+    )
     if rec.is_simatch:
-        print(f"scene {info['scene']}  seed {info['seed']}  overrides {json.dumps(info['overrides'])}  "
-              f"simatch {info['simatch_version']}")
+        print(
+            f"scene {info['scene']}  seed {info['seed']}  overrides {json.dumps(info['overrides'])}  "
+            f"simatch {info['simatch_version']}"
+        )
         print(f"command line: {' '.join(info['command_line'] or [])}")
     print(f"simulated time {info['start']:.3f} .. {info['end']:.3f} s in {info['chunks']} chunks")
     if info["state_digest"]:

@@ -26,18 +26,30 @@ EXTENSIONS: list[str] = [
 
 def add_run_options(p, with_extensions: bool = True) -> None:
     p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
-    p.add_argument("--duration", type=float, metavar="S",
-                   help="simulated seconds to run (default: until the judge ends the run)")
+    p.add_argument(
+        "--duration", type=float, metavar="S", help="simulated seconds to run (default: until the judge ends the run)"
+    )
     p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene value (dotted path into the TOML), e.g. teams.magenta.strategy=simple")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene value (dotted path into the TOML), e.g. teams.magenta.strategy=simple",
+    )
     p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--events", type=_event_count, default=30, metavar="N|all",
-                   help="how many of the run's last events the summary prints (default 30; `all`: the whole "
-                        "event log; --json always carries every event)")
-    for ext in (extensions() if with_extensions else ()):
+    p.add_argument(
+        "--events",
+        type=_event_count,
+        default=30,
+        metavar="N|all",
+        help="how many of the run's last events the summary prints (default 30; `all`: the whole "
+        "event log; --json always carries every event)",
+    )
+    for ext in extensions() if with_extensions else ():
         ext.add_arguments(p)
 
 
@@ -62,11 +74,14 @@ def extensions() -> list[Any]:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("run", help="run a scene embedded in this process",
-                       description="Run a scene (world, teams, judge) in this process, in lockstep: the same "
-                                   "scene and seed give the same run bit for bit. With --json, prints one "
-                                   "JSON object: scene, seed, sim_seconds, wall_seconds, rtf, state_digest, "
-                                   "result (judge-specific) and events.")
+    p = sub.add_parser(
+        "run",
+        help="run a scene embedded in this process",
+        description="Run a scene (world, teams, judge) in this process, in lockstep: the same "
+        "scene and seed give the same run bit for bit. With --json, prints one "
+        "JSON object: scene, seed, sim_seconds, wall_seconds, rtf, state_digest, "
+        "result (judge-specific) and events.",
+    )
     add_run_options(p)
     p.set_defaults(func=main)
 
@@ -81,8 +96,10 @@ def run_duration(sim, args) -> float:
             raise UsageError("--duration must be positive")
         return args.duration
     if sim.duration is None:
-        raise UsageError(f"scene {sim.scene.name} has no natural end (its judge is '{sim.scene.spec.judge.kind}'); "
-                         f"give --duration SECONDS")
+        raise UsageError(
+            f"scene {sim.scene.name} has no natural end (its judge is '{sim.scene.spec.judge.kind}'); "
+            f"give --duration SECONDS"
+        )
     return sim.duration
 
 
@@ -96,8 +113,13 @@ class Progress:
         if enabled and sys.stderr.isatty():
             from tqdm import tqdm
 
-            self.bar = tqdm(total=round(total, 3), unit="sim s", file=sys.stderr, dynamic_ncols=True,
-                            bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]{postfix}")
+            self.bar = tqdm(
+                total=round(total, 3),
+                unit="sim s",
+                file=sys.stderr,
+                dynamic_ncols=True,
+                bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]{postfix}",
+            )
         self.last = 0.0
         self._shown = ""
 
@@ -144,18 +166,22 @@ def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
     """The run for people: what ran, how fast, the result, and the last ``limit`` events (None: all)."""
     print(f"scene {out['scene']}  seed {out['seed']}", file=file)
     rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
-    print(f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})",
-          file=file)
+    print(
+        f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})", file=file
+    )
     print(f"state digest {out['state_digest']}", file=file)
     print("result:", file=file)
     for key, value in out["result"].items():
         print(f"  {key}: {json.dumps(_readable(value))}", file=file)
     events = out["events"]
-    shown = events if limit is None else events[max(0, len(events) - limit):]
+    shown = events if limit is None else events[max(0, len(events) - limit) :]
     print(f"events: {len(events)}", file=file)
     if len(shown) < len(events):
-        print(f"  ... ({len(events) - len(shown)} earlier events: --events all prints every one, "
-              f"--json gives them as data)", file=file)
+        print(
+            f"  ... ({len(events) - len(shown)} earlier events: --events all prints every one, "
+            f"--json gives them as data)",
+            file=file,
+        )
     for ev in shown:
         rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
         print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(_readable(rest)) if rest else ''}", file=file)

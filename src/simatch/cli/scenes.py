@@ -8,12 +8,21 @@ from ..config.loader import load_scene, parse_override, shipped_scenes
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("scenes", help="list the shipped scenes, or show one scene's settings",
-                       description="Without SCENE: the shipped scenes. With SCENE: every setting of that scene "
-                                   "(defaults filled in, overrides applied), as JSON.")
+    p = sub.add_parser(
+        "scenes",
+        help="list the shipped scenes, or show one scene's settings",
+        description="Without SCENE: the shipped scenes. With SCENE: every setting of that scene "
+        "(defaults filled in, overrides applied), as JSON.",
+    )
     p.add_argument("scene", nargs="?", help="a shipped scene name or a path to a .toml file")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene value (dotted path), e.g. match.half_duration=300")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene value (dotted path), e.g. match.half_duration=300",
+    )
     p.set_defaults(func=main)
 
 

@@ -21,7 +21,7 @@ from ..config.loader import load_scene
 from . import UsageError
 from .run import add_run_options, overrides_of, print_summary
 
-CHUNK = 0.05        # [s] simulated between two looks at the open pages
+CHUNK = 0.05  # [s] simulated between two looks at the open pages
 MCAP_MAGIC = b"\x89MCAP"
 
 
@@ -29,20 +29,28 @@ def add_parser(sub) -> None:
     from ..web.view import add_view_options
     from .replay import speed
 
-    p = sub.add_parser("serve", help="serve a scene (or a recording) to the web UI: coach pages, referee "
-                                     "console, replay",
-                       description="Run a scene for the web UI: the coach page of each team, the referee "
-                                   "console and the replay page, each with its own token (printed here). "
-                                   "The match goes at real time while a live page is open and waits "
-                                   "otherwise. Given a recording (FILE.mcap), show it: it plays on the bus for "
-                                   "the live pages and the replay page goes through all of it.")
+    p = sub.add_parser(
+        "serve",
+        help="serve a scene (or a recording) to the web UI: coach pages, referee console, replay",
+        description="Run a scene for the web UI: the coach page of each team, the referee "
+        "console and the replay page, each with its own token (printed here). "
+        "The match goes at real time while a live page is open and waits "
+        "otherwise. Given a recording (FILE.mcap), show it: it plays on the bus for "
+        "the live pages and the replay page goes through all of it.",
+    )
     add_run_options(p, with_extensions=False)
     add_view_options(p.add_argument_group("web UI"), default_wait=None)
     rec = p.add_argument_group("a recording (SCENE is a FILE.mcap)")
-    rec.add_argument("--speed", type=speed, default=None, metavar="X",
-                     help="simulated seconds per wall second (default 1: real time; 'max': as fast as possible)")
-    rec.add_argument("--from", dest="start", type=float, default=None, metavar="T",
-                     help="start playing at simulated time T seconds")
+    rec.add_argument(
+        "--speed",
+        type=speed,
+        default=None,
+        metavar="X",
+        help="simulated seconds per wall second (default 1: real time; 'max': as fast as possible)",
+    )
+    rec.add_argument(
+        "--from", dest="start", type=float, default=None, metavar="T", help="start playing at simulated time T seconds"
+    )
     p.set_defaults(func=main)
 
 
@@ -75,7 +83,7 @@ def serve_scene(args) -> int:
     with Simulation(scene, seed=args.seed) as sim, start_view(sim, args.view_host, args.view_port) as view:
         print_urls(view)
         end = args.duration if args.duration is not None else sim.duration
-        anchor = None               # (wall, sim time) since the run has been watched without a break
+        anchor = None  # (wall, sim time) since the run has been watched without a break
         try:
             while not sim.done and (end is None or sim.time < end - 1e-9):
                 if view.server.live_viewers == 0:
@@ -85,12 +93,15 @@ def serve_scene(args) -> int:
                     anchor = (time.perf_counter(), sim.time)
                 step = CHUNK if end is None else min(CHUNK, end - sim.time)
                 sim.run(seconds=step)
-                ahead = (sim.time - anchor[1]) - (time.perf_counter() - anchor[0])   # real time, across chunks
+                ahead = (sim.time - anchor[1]) - (time.perf_counter() - anchor[0])  # real time, across chunks
                 if ahead > 0:
                     time.sleep(ahead)
             if view.server.clients:
-                print("simatch: the match has ended; its pages stay up until they are all closed (Ctrl-C to quit)",
-                      file=sys.stderr, flush=True)
+                print(
+                    "simatch: the match has ended; its pages stay up until they are all closed (Ctrl-C to quit)",
+                    file=sys.stderr,
+                    flush=True,
+                )
             view.finish()
         except KeyboardInterrupt:
             print("simatch: stopped", file=sys.stderr)
@@ -108,8 +119,16 @@ def serve_recording(args) -> int:
     from ..record.reader import Recording, RecordingError
     from ..web.view import linger, print_urls, start_recording_view, wait_for_page
 
-    given = [name for name, value in (("--set", args.overrides), ("--seed", args.seed), ("--duration", args.duration),
-                                      ("--realtime", args.realtime)) if value]
+    given = [
+        name
+        for name, value in (
+            ("--set", args.overrides),
+            ("--seed", args.seed),
+            ("--duration", args.duration),
+            ("--realtime", args.realtime),
+        )
+        if value
+    ]
     if given:
         raise UsageError(f"{', '.join(given)}: a recording is shown as it was recorded (use --speed and --from)")
     start = args.start or 0.0

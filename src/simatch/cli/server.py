@@ -15,38 +15,60 @@ import sys
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from ..config.loader import load_scene
 from . import UsageError
-from .run import (Progress, add_run_options, extensions, match_status, overrides_of, print_summary,
-                  run_duration)
+from .run import Progress, add_run_options, extensions, match_status, overrides_of, print_summary, run_duration
 
 
 def add_network_options(p, run_help: str) -> None:
-    p.add_argument("--run", default="default", metavar="NAME",
-                   help=f"{run_help} (default: 'default'); several runs can share a network")
+    p.add_argument(
+        "--run",
+        default="default",
+        metavar="NAME",
+        help=f"{run_help} (default: 'default'); several runs can share a network",
+    )
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "server", help="run the simulator and judge; teams connect over the network",
+        "server",
+        help="run the simulator and judge; teams connect over the network",
         description="Run a scene's simulator, judge and coaches, and wait for the teams (simatch team / simatch "
-                    "robot) to connect. Lockstep by default: every control tick waits for every connected robot's "
-                    "command (up to --deadline), so the run equals `simatch run` bit for bit; --realtime paces it "
-                    "at wall-clock speed, each process's robots sensing and deciding at their own physics step of "
-                    "the control period. Prints what `simatch run` prints.")
+        "robot) to connect. Lockstep by default: every control tick waits for every connected robot's "
+        "command (up to --deadline), so the run equals `simatch run` bit for bit; --realtime paces it "
+        "at wall-clock speed, each process's robots sensing and deciding at their own physics step of "
+        "the control period. Prints what `simatch run` prints.",
+    )
     add_run_options(p)
-    p.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
-                   help=f"Zenoh endpoint to listen on (repeatable; default {DEFAULT_ENDPOINT}, loopback only; "
-                        f"e.g. tcp/0.0.0.0:7447 to accept other machines)")
+    p.add_argument(
+        "--listen",
+        action="append",
+        default=[],
+        metavar="ENDPOINT",
+        help=f"Zenoh endpoint to listen on (repeatable; default {DEFAULT_ENDPOINT}, loopback only; "
+        f"e.g. tcp/0.0.0.0:7447 to accept other machines)",
+    )
     add_network_options(p, "name of this run on the network")
-    p.add_argument("--deadline", type=float, default=5.0, metavar="S",
-                   help="lockstep: longest wait for a process's commands of one tick, wall seconds (default 5; a "
-                        "process that dies is noticed at once); a process that misses it is not waited for until "
-                        "it answers again, and the run is no longer bit-exact")
-    p.add_argument("--team-timeout", type=float, default=30.0, metavar="S",
-                   help="how long to wait for the teams to connect before playing without the missing ones "
-                        "(default 30 s)")
-    p.add_argument("--credentials", metavar="DIR",
-                   help="folder of the per-team credentials <team>.key (created if missing; default: a private "
-                        "folder per run under $XDG_RUNTIME_DIR or /tmp, where local teams find them)")
+    p.add_argument(
+        "--deadline",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="lockstep: longest wait for a process's commands of one tick, wall seconds (default 5; a "
+        "process that dies is noticed at once); a process that misses it is not waited for until "
+        "it answers again, and the run is no longer bit-exact",
+    )
+    p.add_argument(
+        "--team-timeout",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="how long to wait for the teams to connect before playing without the missing ones (default 30 s)",
+    )
+    p.add_argument(
+        "--credentials",
+        metavar="DIR",
+        help="folder of the per-team credentials <team>.key (created if missing; default: a private "
+        "folder per run under $XDG_RUNTIME_DIR or /tmp, where local teams find them)",
+    )
     p.set_defaults(func=main)
 
 
@@ -63,13 +85,23 @@ def main(args) -> int:
     interrupted = False
     with interrupt_on_term():
         try:
-            server = Server(scene, seed=args.seed, listen=listen, run=args.run, realtime=args.realtime,
-                            deadline=args.deadline, team_timeout=args.team_timeout, credentials_dir=args.credentials)
+            server = Server(
+                scene,
+                seed=args.seed,
+                listen=listen,
+                run=args.run,
+                realtime=args.realtime,
+                deadline=args.deadline,
+                team_timeout=args.team_timeout,
+                credentials_dir=args.credentials,
+            )
         except (TransportError, CredentialError, ValueError) as exc:
             raise UsageError(str(exc)) from None
         with server, contextlib.ExitStack() as stack:
-            server.say(f"run {args.run!r} ({server.mode}) listening on {', '.join(listen)}; "
-                       f"team credentials in {server.credentials_dir}")
+            server.say(
+                f"run {args.run!r} ({server.mode}) listening on {', '.join(listen)}; "
+                f"team credentials in {server.credentials_dir}"
+            )
             for ext in extensions():
                 stack.enter_context(ext.attach(server.sim, args))
             duration = run_duration(server.sim, args)
@@ -77,7 +109,7 @@ def main(args) -> int:
                 server.wait_for_teams()
                 progress = Progress(duration, not args.quiet, match_status(server.sim))
                 try:
-                    with server.sim.stopping_on(signal.SIGINT, KeyboardInterrupt):   # at a step boundary
+                    with server.sim.stopping_on(signal.SIGINT, KeyboardInterrupt):  # at a step boundary
                         server.sim.run(seconds=duration, progress=progress)
                 finally:
                     progress.close()

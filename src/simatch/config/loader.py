@@ -25,8 +25,8 @@ class LoadedScene:
     """A validated scene plus where it came from (kept in recordings so that a run can be reproduced)."""
 
     spec: Scene
-    source: str                      # path, or "<shipped>/name.toml"
-    text: str                        # the file's text as read
+    source: str  # path, or "<shipped>/name.toml"
+    text: str  # the file's text as read
     overrides: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -53,8 +53,9 @@ def resolve(name_or_path: str) -> tuple[str, str]:
     shipped = shipped_scenes()
     if name_or_path in shipped:
         return f"<shipped>/{name_or_path}.toml", shipped[name_or_path].read_text(encoding="utf-8")
-    raise SceneError(f"no scene named {name_or_path!r}: give a path to a .toml file or one of "
-                     f"{', '.join(sorted(shipped))}")
+    raise SceneError(
+        f"no scene named {name_or_path!r}: give a path to a .toml file or one of {', '.join(sorted(shipped))}"
+    )
 
 
 def parse_override(item: str) -> tuple[str, Any]:
@@ -149,7 +150,7 @@ def _parent_fields(model: type[BaseModel] | None, loc: tuple) -> list[str]:
         if part in fields:
             current = _model_of(fields[part].annotation)
         else:
-            current = None   # dict keys (team names) keep the value model
+            current = None  # dict keys (team names) keep the value model
             continue
     fields = getattr(current, "model_fields", None)
     return sorted(fields) if fields else []

@@ -28,9 +28,13 @@ class PhysicsSpec(Strict):
     timestep: float = Field(0.005, gt=0.0, le=0.02, description="physics step [s] (paper: 0.005, 200 Hz)")
     gravity: float = Field(9.8, ge=0.0, le=100.0, description="[m/s^2]")
     solver_iterations: int = Field(50, ge=1, le=1000)
-    solver_tolerance: float = Field(1e-6, gt=0.0, le=1e-2,
-                                    description="constraint solver tolerance (MuJoCo's default is 1e-8; 1e-6 "
-                                                "gives the same physics within the chaos of a scrum, faster)")
+    solver_tolerance: float = Field(
+        1e-6,
+        gt=0.0,
+        le=1e-2,
+        description="constraint solver tolerance (MuJoCo's default is 1e-8; 1e-6 "
+        "gives the same physics within the chaos of a scrum, faster)",
+    )
 
 
 class AreaSpec(Strict):
@@ -86,8 +90,9 @@ class WorldSpec(Strict):
 class BallSpec(Strict):
     radius: float = Field(0.11, gt=0.01, le=1.0, description="[m]")
     mass: float = Field(0.43, gt=0.01, le=10.0, description="[kg]")
-    rolling_deceleration: float = Field(0.5, ge=0.0, le=20.0,
-                                        description="deceleration of a freely rolling ball [m/s^2]")
+    rolling_deceleration: float = Field(
+        0.5, ge=0.0, le=20.0, description="deceleration of a freely rolling ball [m/s^2]"
+    )
     restitution: float = Field(0.6, ge=0.0, le=0.95, description="bounce on the floor: rebound/impact speed")
     friction: float = Field(0.6, ge=0.0, le=2.0, description="sliding friction against floor and robots")
     position: tuple[float, float] = (0.0, 0.0)
@@ -96,16 +101,19 @@ class BallSpec(Strict):
 class TeamSpec(Strict):
     color: Optional[str] = Field(None, description="display colour; defaults to the team's name")
     attacks: Optional[Literal["+x", "-x"]] = Field(
-        None, description="direction of this team's team frame +x; default +x, except magenta -x")
+        None, description="direction of this team's team frame +x; default +x, except magenta -x"
+    )
     model: str = Field("omni4", min_length=1, description="robot model: a shipped name or package.module:Class")
     model_params: dict[str, Any] = Field(default_factory=dict)
-    strategy: str = Field("none", min_length=1,
-                          description="a shipped strategy name, package.module:Class, or 'external'")
+    strategy: str = Field(
+        "none", min_length=1, description="a shipped strategy name, package.module:Class, or 'external'"
+    )
     strategy_params: dict[str, Any] = Field(default_factory=dict)
     goalkeeper: Optional[int] = Field(1, ge=1, description="id of the goalkeeper, if any")
     ids: Optional[list[int]] = Field(None, description="robot ids; default 1..n in the order of start")
-    start: list[Pose] = Field(min_length=1, max_length=32,
-                              description="one start pose [x, y, yaw] per robot, world frame [m, rad]")
+    start: list[Pose] = Field(
+        min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
+    )
 
     @model_validator(mode="after")
     def _ids(self):
@@ -122,24 +130,30 @@ class TeamSpec(Strict):
 
 class ControlSpec(Strict):
     period: float = Field(0.025, gt=0.0, le=1.0, description="robot control period [s]")
-    command_timeout: float = Field(0.1, gt=0.0, le=10.0,
-                                   description="a robot with no fresh command for this long is stopped [s]")
-    strategy_pub_period: Optional[float] = Field(None, gt=0.0, le=1.0,
-                                                 description="StrategyPub period [s]; default: the control period")
-    strategy_stale_after: float = Field(0.1, gt=0.0, le=10.0,
-                                        description="StrategyPub drops entries older than this [s]")
+    command_timeout: float = Field(
+        0.1, gt=0.0, le=10.0, description="a robot with no fresh command for this long is stopped [s]"
+    )
+    strategy_pub_period: Optional[float] = Field(
+        None, gt=0.0, le=1.0, description="StrategyPub period [s]; default: the control period"
+    )
+    strategy_stale_after: float = Field(
+        0.1, gt=0.0, le=10.0, description="StrategyPub drops entries older than this [s]"
+    )
 
 
 class DribblerSpec(Strict):
     distance: float = Field(0.40, gt=0.0, le=2.0, description="max robot-centre to ball-centre distance [m]")
     angle: float = Field(10.0, gt=0.0, le=90.0, description="max bearing of the ball off the kicker axis [deg]")
-    grip_force: float = Field(15.0, gt=0.0, le=1000.0,
-                              description="largest force the dribbler can exert on the ball before losing it [N]")
+    grip_force: float = Field(
+        15.0, gt=0.0, le=1000.0, description="largest force the dribbler can exert on the ball before losing it [N]"
+    )
     pull_speed: float = Field(1.0, gt=0.0, le=10.0, description="speed at which the rollers draw the ball in [m/s]")
-    catch_speed: float = Field(3.5, gt=0.0, le=30.0,
-                               description="fastest ball (relative to the mouth) the rollers can take [m/s]")
-    settle_time: float = Field(0.1, ge=0.0, le=2.0,
-                               description="after taking the ball, time before the grip limit applies [s]")
+    catch_speed: float = Field(
+        3.5, gt=0.0, le=30.0, description="fastest ball (relative to the mouth) the rollers can take [m/s]"
+    )
+    settle_time: float = Field(
+        0.1, ge=0.0, le=2.0, description="after taking the ball, time before the grip limit applies [s]"
+    )
 
 
 class KickerSpec(Strict):
@@ -199,13 +213,14 @@ class Scene(Strict):
     @model_validator(mode="after")
     def _consistent(self):
         dt = self.physics.timestep
-        for what, value in (("control.period", self.control.period),
-                            ("control.strategy_pub_period", self.control.strategy_pub_period)):
+        for what, value in (
+            ("control.period", self.control.period),
+            ("control.strategy_pub_period", self.control.strategy_pub_period),
+        ):
             if value is not None:
                 n = round(value / dt)
                 if n < 1 or abs(n * dt - value) > 1e-9:
-                    raise ValueError(f"{what} ({value} s) must be a whole number of physics steps "
-                                     f"({dt} s)")
+                    raise ValueError(f"{what} ({value} s) must be a whole number of physics steps ({dt} s)")
         if self.control.strategy_pub_period is not None:
             ratio = self.control.strategy_pub_period / self.control.period
             if abs(ratio - round(ratio)) > 1e-9:

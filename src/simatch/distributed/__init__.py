@@ -11,6 +11,7 @@ import signal
 def interrupt_on_term():
     """SIGTERM and SIGHUP interrupt like Ctrl-C, so every way of stopping a process closes its session (a
     Zenoh session left open can hang the interpreter at exit) and tells the other processes."""
+
     def interrupt(signum, frame):
         raise KeyboardInterrupt(signal.Signals(signum).name)
 
@@ -18,7 +19,7 @@ def interrupt_on_term():
     for sig in (signal.SIGTERM, signal.SIGHUP):
         try:
             old[sig] = signal.signal(sig, interrupt)
-        except ValueError:          # not the main thread: leave signals alone
+        except ValueError:  # not the main thread: leave signals alone
             pass
     try:
         yield

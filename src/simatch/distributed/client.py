@@ -21,8 +21,15 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 from ..bus import LockstepClock
-from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, TransportError, ZenohBus, open_session,
-                              zenoh_config)
+from ..bus.zenoh_bus import (
+    DEFAULT_ENDPOINT,
+    LOW_LATENCY,
+    MAX_SAMPLE,
+    TransportError,
+    ZenohBus,
+    open_session,
+    zenoh_config,
+)
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
@@ -40,10 +47,20 @@ def _stderr(text: str) -> None:
 
 
 class TeamProcess:
-    def __init__(self, team: str, robots: Sequence[int] | None = None, *, connect: str = DEFAULT_ENDPOINT,
-                 run: str = "default", key: str | Path | None = None, strategy: str | None = None,
-                 params: Mapping[str, Any] | None = None, wait: float = 30.0, server_timeout: float = 5.0,
-                 say: Callable[[str], None] = _stderr):
+    def __init__(
+        self,
+        team: str,
+        robots: Sequence[int] | None = None,
+        *,
+        connect: str = DEFAULT_ENDPOINT,
+        run: str = "default",
+        key: str | Path | None = None,
+        strategy: str | None = None,
+        params: Mapping[str, Any] | None = None,
+        wait: float = 30.0,
+        server_timeout: float = 5.0,
+        say: Callable[[str], None] = _stderr,
+    ):
         """``robots``: the robot ids to run (None: the whole team, with its StrategyPub); ``wait``: how
         long to wait for the server (and for a robot held by a dead process to be released)."""
         self.team = team
@@ -61,13 +78,13 @@ class TeamProcess:
         self.ticks = 0
         self.phase = 0
         self.tick_topic = protocol.tick_topic(0)
-        self.skipped = 0              # ticks skipped because a newer one was already there
+        self.skipped = 0  # ticks skipped because a newer one was already there
         self.ended: str | None = None
         self.joined = False
         self._server_alive = False
         self._server_lost_at: float | None = None
         self.bus: ZenohBus | None = None
-        self.stats = None             # the bus's counters (kept after it closes)
+        self.stats = None  # the bus's counters (kept after it closes)
         self.clock: LockstepClock | None = None
         #: ticks are answered by Zenoh's receiving thread, the rest by the main thread: one at a time
         self._delivering = threading.Lock()
@@ -86,8 +103,13 @@ class TeamProcess:
             session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
         except TransportError as exc:
             raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
-        self.bus = ZenohBus(session, self.run_name, signer=cred.signer(self.run_name), wake_on_data=False,
-                            max_sample=MAX_SAMPLE if LOW_LATENCY else None)
+        self.bus = ZenohBus(
+            session,
+            self.run_name,
+            signer=cred.signer(self.run_name),
+            wake_on_data=False,
+            max_sample=MAX_SAMPLE if LOW_LATENCY else None,
+        )
         self.stats = self.bus.stats
         try:
             self._setup()
@@ -119,8 +141,10 @@ class TeamProcess:
         if self.team not in spec.teams:
             raise ClientError(f"the server's scene has no team {self.team!r} (teams: {', '.join(spec.teams)})")
         if spec.teams[self.team].strategy in NO_NODES:
-            raise ClientError(f"the server's scene does not say which strategy {self.team} plays "
-                              f"(teams.{self.team}.strategy = {spec.teams[self.team].strategy!r}): give --strategy")
+            raise ClientError(
+                f"the server's scene does not say which strategy {self.team} plays "
+                f"(teams.{self.team}.strategy = {spec.teams[self.team].strategy!r}): give --strategy"
+            )
         self.scene = scene
         self.seed = int(offer["seed"])
         self.mode = offer.get("mode", protocol.LOCKSTEP)
@@ -131,12 +155,13 @@ class TeamProcess:
         self.tick_topic = protocol.tick_topic(self.phase)
         #: one sample per tick each way (the server's feed in, this process's bundle out): see `protocol`
         self.bundles = bool(offer.get("bundles"))
-        if self.bundles:         # the tick is answered in the thread that receives it: one hand-off less
-            bus.take_feed(protocol.feed_topic(self.team, self.phase), protocol.feed_covers(self.team, self.phase),
-                          self._answer)
+        if self.bundles:  # the tick is answered in the thread that receives it: one hand-off less
+            bus.take_feed(
+                protocol.feed_topic(self.team, self.phase), protocol.feed_covers(self.team, self.phase), self._answer
+            )
         nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
         strategy = str(spec.teams[self.team].strategy)
-        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))   # not at the kick-off
+        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))  # not at the kick-off
         self.clock = LockstepClock(bus, spec.physics.timestep, self.seed, offset=self.phase)
         for node in nodes:
             self.clock.add(node)
@@ -144,7 +169,7 @@ class TeamProcess:
         bus.subscribe_raw(protocol.END, self._on_end, verify=False)
         bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
         bus.declare_token(protocol.alive_topic(self.team, self.proc))
-        if self.bundles:     # declared before the join, so that it knows the server listens when ticks come
+        if self.bundles:  # declared before the join, so that it knows the server listens when ticks come
             bus.raw_publisher(protocol.bundle_topic(self.team))
         self._join()
 
@@ -160,8 +185,15 @@ class TeamProcess:
             time.sleep(0.2)
 
     def _join(self) -> None:
-        req = {"proc": self.proc, "team": self.team, "robots": self.served, "kind": self.kind,
-               "strategy_pub": self.robots is None, "host": socket.gethostname(), "pid": os.getpid()}
+        req = {
+            "proc": self.proc,
+            "team": self.team,
+            "robots": self.served,
+            "kind": self.kind,
+            "strategy_pub": self.robots is None,
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+        }
         deadline = time.monotonic() + self.wait
         while True:
             why = "no answer"
@@ -169,14 +201,15 @@ class TeamProcess:
                 if ok:
                     reply = protocol.loads(payload)
                     if reply.get("phase", self.phase) != self.phase:
-                        raise ClientError(f"the server puts {self.what} at phase {reply['phase']}, not "
-                                          f"{self.phase}: is it another version of simatch?")
+                        raise ClientError(
+                            f"the server puts {self.what} at phase {reply['phase']}, not "
+                            f"{self.phase}: is it another version of simatch?"
+                        )
                     # the server's subscriptions (and one it made for this join, e.g. a StrategyPub) were
                     # declared to this session before the answer: from now on, what matches is known
                     self.bus.refresh_matching()
                     self.joined = True
-                    where = "; its team's StrategyPub runs on the server" if reply.get("strategy_pub_on_server") \
-                        else ""
+                    where = "; its team's StrategyPub runs on the server" if reply.get("strategy_pub_on_server") else ""
                     at = f", step {self.phase} of each control period" if self.phase else ""
                     self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{at}{where})")
                     return
@@ -184,7 +217,7 @@ class TeamProcess:
                     why = protocol.loads(payload, "error")["error"]
                 except protocol.ProtocolError:
                     why = payload.decode(errors="replace")
-            retry = why == "no answer" or "already served" in why    # a dead predecessor not yet noticed
+            retry = why == "no answer" or "already served" in why  # a dead predecessor not yet noticed
             if not retry or time.monotonic() >= deadline:
                 raise ClientError(f"the server refused {self.what}: {why}")
             time.sleep(0.25)
@@ -226,7 +259,7 @@ class TeamProcess:
         """Deliver what is queued (the nodes run here, one thread at a time)."""
         with self._delivering:
             bus = self.bus
-            if bus is not None:           # None once closing: nothing more is answered
+            if bus is not None:  # None once closing: nothing more is answered
                 bus.deliver(self._latest_tick_only(bus.take(0.0)))
 
     def serve(self) -> str:
@@ -252,7 +285,7 @@ class TeamProcess:
 
     def close(self) -> None:
         """Leave (saying so while the server is there to hear it) and close the session."""
-        with self._delivering:        # a tick being answered in Zenoh's thread ends first
+        with self._delivering:  # a tick being answered in Zenoh's thread ends first
             bus = self.bus
             if bus is None:
                 return
@@ -260,12 +293,12 @@ class TeamProcess:
         try:
             if self.joined and self._server_alive:
                 bus.put_raw(protocol.bye_topic(self.team), protocol.dumps({"proc": self.proc}))
-                time.sleep(0.05)      # let the goodbye leave before the session closes
+                time.sleep(0.05)  # let the goodbye leave before the session closes
             if self.clock is not None:
                 with self._delivering:
                     self.clock.close()
         finally:
-            bus.close()               # not under the lock: closing waits for Zenoh's callbacks to return
+            bus.close()  # not under the lock: closing waits for Zenoh's callbacks to return
 
     def run(self) -> str:
         self.open()

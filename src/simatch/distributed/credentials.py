@@ -34,7 +34,7 @@ class CredentialError(ValueError):
 @dataclass(frozen=True)
 class Credential:
     name: str
-    secret: str          # hex
+    secret: str  # hex
 
     @property
     def key(self) -> bytes:
@@ -42,10 +42,15 @@ class Credential:
 
     def signer(self, run: str):
         """The function that signs what this process sends in ``run`` (for `ZenohBus(signer=...)`)."""
-        key, head, prefix = self.key, _MAGIC + bytes([len(self.name.encode())]) + self.name.encode(), run.encode() + b"\0"
+        key, head, prefix = (
+            self.key,
+            _MAGIC + bytes([len(self.name.encode())]) + self.name.encode(),
+            run.encode() + b"\0",
+        )
 
         def sign(topic: str, payload: bytes) -> bytes:
             return head + hmac.digest(key, prefix + topic.encode() + b"\0" + payload, "sha256")[:_MAC_BYTES]
+
         return sign
 
 
@@ -60,8 +65,10 @@ def read(path: str | os.PathLike) -> Credential:
     try:
         text = p.read_text(encoding="utf-8").strip()
     except FileNotFoundError:
-        raise CredentialError(f"credential file {p} does not exist (the server writes one per team in its "
-                              f"credentials folder: use --key FILE)") from None
+        raise CredentialError(
+            f"credential file {p} does not exist (the server writes one per team in its "
+            f"credentials folder: use --key FILE)"
+        ) from None
     except OSError as exc:
         raise CredentialError(f"credential file {p} cannot be read: {exc}") from None
     name, sep, secret = text.partition(":")
@@ -110,7 +117,7 @@ def claimed_name(attachment: Optional[bytes]) -> Optional[str]:
     """The name an attachment claims (trust it only once `Verifier.signer_of` accepted the sample)."""
     if not attachment or len(attachment) < 6 or attachment[:4] != _MAGIC:
         return None
-    return attachment[5:5 + attachment[4]].decode(errors="replace")
+    return attachment[5 : 5 + attachment[4]].decode(errors="replace")
 
 
 class Verifier:
@@ -124,7 +131,7 @@ class Verifier:
         if not attachment or len(attachment) < 6 or attachment[:4] != _MAGIC:
             return None
         n = attachment[4]
-        name, mac = attachment[5:5 + n], attachment[5 + n:]
+        name, mac = attachment[5 : 5 + n], attachment[5 + n :]
         key = self._keys.get(name)
         if key is None or len(mac) != _MAC_BYTES:
             return None

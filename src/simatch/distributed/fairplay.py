@@ -31,8 +31,17 @@ TEAM_EVENT_TYPES = frozenset({"strategy_error"})
 
 _MAX_VERDICTS = 4096
 
-_ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
-                 "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"]
+_ALL_MESSAGES = [
+    "put",
+    "delete",
+    "declare_subscriber",
+    "query",
+    "reply",
+    "declare_queryable",
+    "liveliness_token",
+    "liveliness_query",
+    "declare_liveliness_subscriber",
+]
 
 
 class Refusal(str):
@@ -85,7 +94,7 @@ class FairPlay:
                 why = self._verdicts[key]
             except KeyError:
                 why = self.may_send(who, topic, payload)
-                if len(self._verdicts) >= _MAX_VERDICTS:     # a sender inventing topics cannot grow it
+                if len(self._verdicts) >= _MAX_VERDICTS:  # a sender inventing topics cannot grow it
                     self._verdicts.clear()
                 self._verdicts[key] = why
         return None if why is None else Refusal.of(who, why)
@@ -112,8 +121,10 @@ class FairPlay:
             except msgs.MessageError as exc:
                 return f"{team} sent an event that does not decode: {exc}"
             if ev.team != team or ev.type not in TEAM_EVENT_TYPES:
-                return (f"{team} may log only its own {', '.join(sorted(TEAM_EVENT_TYPES))} events, "
-                        f"not a {ev.type!r} event of team {ev.team!r}")
+                return (
+                    f"{team} may log only its own {', '.join(sorted(TEAM_EVENT_TYPES))} events, "
+                    f"not a {ev.type!r} event of team {ev.team!r}"
+                )
             return None
         return f"{team} may not publish on {topic}"
 
@@ -124,16 +135,35 @@ class FairPlay:
         def keys(*rel: str) -> list[str]:
             return [f"{base}/{r}" for r in rel]
 
-        rules = [{"id": "admin", "permission": "allow", "flows": ["ingress", "egress"], "messages": _ALL_MESSAGES,
-                  "key_exprs": ["**"]}]
+        rules = [
+            {
+                "id": "admin",
+                "permission": "allow",
+                "flows": ["ingress", "egress"],
+                "messages": _ALL_MESSAGES,
+                "key_exprs": ["**"],
+            }
+        ]
         subjects = [{"id": "admin", "usernames": [ADMIN]}]
         policies = [{"rules": ["admin"], "subjects": ["admin"]}]
         for team in self.teams:
-            sends = keys(*(f"*/*/{leaf}" for leaf in ROBOT_OUTPUTS), f"{team}/{topics.TEAM_STRATEGY}",
-                         topics.EVENTS, f"{team}/lockstep/**", *PRIVILEGED)
-            hears = keys(f"{team}/*/{topics.OMNI_VISION}", f"{team}/{topics.RECEIVE_FROM_COACH}",
-                         f"{team}/{topics.TEAM_STRATEGY}", topics.CLOCK, topics.GAME_STATE, protocol.TICKS,
-                         protocol.END, protocol.feeds_of(team))
+            sends = keys(
+                *(f"*/*/{leaf}" for leaf in ROBOT_OUTPUTS),
+                f"{team}/{topics.TEAM_STRATEGY}",
+                topics.EVENTS,
+                f"{team}/lockstep/**",
+                *PRIVILEGED,
+            )
+            hears = keys(
+                f"{team}/*/{topics.OMNI_VISION}",
+                f"{team}/{topics.RECEIVE_FROM_COACH}",
+                f"{team}/{topics.TEAM_STRATEGY}",
+                topics.CLOCK,
+                topics.GAME_STATE,
+                protocol.TICKS,
+                protocol.END,
+                protocol.feeds_of(team),
+            )
             asks = keys(protocol.SCENE, protocol.JOIN)
             mine = [
                 (f"{team}-send", ["ingress"], ["put"], sends),
@@ -143,14 +173,24 @@ class FairPlay:
                 (f"{team}-ask", ["ingress"], ["query"], asks),
                 (f"{team}-answers", ["egress"], ["reply", "declare_queryable"], asks),
                 (f"{team}-alive", ["ingress"], ["liveliness_token"], keys(f"{team}/lockstep/alive/*")),
-                (f"{team}-server-alive-watch", ["ingress"], ["declare_liveliness_subscriber", "liveliness_query"],
-                 keys(protocol.SERVER_ALIVE)),
+                (
+                    f"{team}-server-alive-watch",
+                    ["ingress"],
+                    ["declare_liveliness_subscriber", "liveliness_query"],
+                    keys(protocol.SERVER_ALIVE),
+                ),
                 (f"{team}-server-alive", ["egress"], ["liveliness_token", "reply"], keys(protocol.SERVER_ALIVE)),
             ]
             for rid, flows, messages, key_exprs in mine:
-                rules.append({"id": rid, "permission": "allow", "flows": flows, "messages": messages,
-                              "key_exprs": key_exprs})
+                rules.append(
+                    {"id": rid, "permission": "allow", "flows": flows, "messages": messages, "key_exprs": key_exprs}
+                )
             subjects.append({"id": team, "usernames": [team]})
             policies.append({"rules": [r[0] for r in mine], "subjects": [team]})
-        return {"enabled": True, "default_permission": "deny", "rules": rules, "subjects": subjects,
-                "policies": policies}
+        return {
+            "enabled": True,
+            "default_permission": "deny",
+            "rules": rules,
+            "subjects": subjects,
+            "policies": policies,
+        }

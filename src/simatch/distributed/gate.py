@@ -37,9 +37,18 @@ class LockstepGate(Node):
     phase = Phase.ROBOT
     name = "lockstep_gate"
 
-    def __init__(self, period: float, deadline: float, realtime: bool, active: Callable[[], list],
-                 on_ack: Callable[[dict, str, float, bool], object], on_missed: Callable[[set, float], None],
-                 order: Callable[[tuple], object], teams: Sequence[str] = (), phases: int = 1):
+    def __init__(
+        self,
+        period: float,
+        deadline: float,
+        realtime: bool,
+        active: Callable[[], list],
+        on_ack: Callable[[dict, str, float, bool], object],
+        on_missed: Callable[[set, float], None],
+        order: Callable[[tuple], object],
+        teams: Sequence[str] = (),
+        phases: int = 1,
+    ):
         """``period``: the control period, of ``phases`` phases (1, or one per physics step);
         ``active()`` lists the processes to wait for (objects with ``id`` and ``phase``);
         ``on_ack(msg, team, arrival, in_step)`` returns the process that answered (or None; ``in_step``: a
@@ -57,10 +66,10 @@ class LockstepGate(Node):
         self._on_missed = on_missed
         self._order = order
         # every answer in time [s]; the parts need the process's clock to be this one's (same machine)
-        self.latencies: list[float] = []      # tick opened -> answer arrived: the whole round trip
-        self.feeds: list[float] = []          # tick opened -> the tick reached the process ("got")
-        self.thinking: list[float] = []       # the tick reached the process -> its answer was ready ("sent")
-        self.transits: list[float] = []       # the answer was ready -> it arrived here
+        self.latencies: list[float] = []  # tick opened -> answer arrived: the whole round trip
+        self.feeds: list[float] = []  # tick opened -> the tick reached the process ("got")
+        self.thinking: list[float] = []  # the tick reached the process -> its answer was ready ("sent")
+        self.transits: list[float] = []  # the answer was ready -> it arrived here
         #: per tick that every process answered in time: opened -> the last answer arrived [s] (what the
         #: server waits at the barrier)
         self.completions: list[float] = []
@@ -96,9 +105,10 @@ class LockstepGate(Node):
         self._tick_pubs, self._feeds = {}, {}
         for phase in range(0, self.control_steps, every):
             self._tick_pubs[phase] = self.bus.raw_publisher(protocol.tick_topic(phase), always=False)
-            self._feeds[phase] = [self.bus.declare_feed(protocol.feed_topic(team, phase),
-                                                        protocol.feed_covers(team, phase)).topic
-                                  for team in self.teams]
+            self._feeds[phase] = [
+                self.bus.declare_feed(protocol.feed_topic(team, phase), protocol.feed_covers(team, phase)).topic
+                for team in self.teams
+            ]
 
     def forget(self, proc_id: str) -> None:
         """Stop waiting for a process (it left or died)."""
@@ -117,9 +127,12 @@ class LockstepGate(Node):
             return False
         with self._early_lock:
             if isinstance(msg, dict) and len(self._parsed) < 1024:
-                self._parsed[payload] = msg        # read once: `_ack` takes it from here
-            if tick != self._early_tick or not isinstance(proc, str) or \
-                    self._early.get(proc) != protocol.team_of(topic):
+                self._parsed[payload] = msg  # read once: `_ack` takes it from here
+            if (
+                tick != self._early_tick
+                or not isinstance(proc, str)
+                or self._early.get(proc) != protocol.team_of(topic)
+            ):
                 return False
             del self._early[proc]
             return not self._early
@@ -148,7 +161,7 @@ class LockstepGate(Node):
             return
         entry = opens.pop(tick, None)
         for older in [t for t in opens if t < tick]:
-            del opens[older]                  # it skipped them (it was behind): they were counted as missed
+            del opens[older]  # it skipped them (it was behind): they were counted as missed
         if entry is None:
             return
         opened, counted = entry
@@ -180,17 +193,17 @@ class LockstepGate(Node):
         bus = self.bus
         step = self.ctx.step()
         pending: list = []
-        self._absorb(bus.take(0.0), pending)          # joins, late answers, requests since the last tick
+        self._absorb(bus.take(0.0), pending)  # joins, late answers, requests since the last tick
         self._tick = step // self.control_steps
         phase = step % self.control_steps
         everyone = self._active()
         active = [p for p in everyone if p.phase == phase]
-        if self.realtime:       # a process whose last tick is still unanswered, a control period on, missed it
+        if self.realtime:  # a process whose last tick is still unanswered, a control period on, missed it
             unanswered = {p.id for p in active if self._count_missed(p.id)}
             if unanswered:
                 self.missed += len(unanswered)
                 self._on_missed(unanswered, now)
-                everyone = self._active()             # one that is now late is not waited for
+                everyone = self._active()  # one that is now late is not waited for
                 active = [p for p in everyone if p.phase == phase]
         self._waiting = {p.id for p in active}
         self._await(active)
@@ -201,20 +214,21 @@ class LockstepGate(Node):
             while len(opens) > OPEN_KEPT:
                 del opens[min(opens)]
         self._tick_pubs[phase].put(protocol.dumps({"step": step, "tick": self._tick}))
-        bus.flush_feeds(self._feeds[phase])           # each team's inputs of this tick, then the tick
-        limit = opened + (min(self.deadline, 0.8 * self._until_next(phase, everyone)) if self.realtime
-                          else self.deadline)
+        bus.flush_feeds(self._feeds[phase])  # each team's inputs of this tick, then the tick
+        limit = opened + (
+            min(self.deadline, 0.8 * self._until_next(phase, everyone)) if self.realtime else self.deadline
+        )
         while self._waiting:
             left = limit - time.monotonic()
             if left <= 0:
                 break
             self._absorb(bus.take(left), pending)
-            if self._waiting:      # woken by something else, or an answer was refused: look again
+            if self._waiting:  # woken by something else, or an answer was refused: look again
                 self._await([p for p in active if p.id in self._waiting])
-                self._absorb(bus.take(0.0), pending)           # answers queued before that
+                self._absorb(bus.take(0.0), pending)  # answers queued before that
         with self._early_lock:
             self._early = {}
-            self._parsed.clear()      # (an answer handled later is parsed again)
+            self._parsed.clear()  # (an answer handled later is parsed again)
         if self._waiting:
             if not self.realtime:
                 for pid in self._waiting:

@@ -21,10 +21,10 @@ class Pacer(Node):
         self.dt = dt
         self.pace = pace
         self.slack = slack
-        self.anchor: tuple[float, float] | None = None     # (wall, sim) when pacing began
+        self.anchor: tuple[float, float] | None = None  # (wall, sim) when pacing began
         self.steps = 0
-        self.late_steps = 0           # steps that started behind their wall-clock time
-        self.max_lag = 0.0            # [s]
+        self.late_steps = 0  # steps that started behind their wall-clock time
+        self.max_lag = 0.0  # [s]
         self.reanchored = 0
 
     def tick(self, now: float) -> None:
@@ -49,5 +49,9 @@ class Pacer(Node):
         self.max_lag = 0.0
 
     def stats(self) -> dict:
-        return {"late_steps": self.late_steps, "steps": self.steps, "max_lag_ms": round(self.max_lag * 1e3, 3),
-                "reanchored": self.reanchored}
+        return {
+            "late_steps": self.late_steps,
+            "steps": self.steps,
+            "max_lag_ms": round(self.max_lag * 1e3, 3),
+            "reanchored": self.reanchored,
+        }

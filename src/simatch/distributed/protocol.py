@@ -99,8 +99,13 @@ def feeds_of(team: str) -> str:
 def feed_covers(team: str, phase: int) -> list[str]:
     """What the feed of ``team``'s processes of ``phase`` carries: what its robot nodes and StrategyPub hear
     from the server (the same list on both sides: a client takes these topics from the feed only)."""
-    return [topics.robot_topic(team, "*", topics.OMNI_VISION), topics.team_topic(team, topics.RECEIVE_FROM_COACH),
-            topics.team_topic(team, topics.TEAM_STRATEGY), topics.GAME_STATE, tick_topic(phase)]
+    return [
+        topics.robot_topic(team, "*", topics.OMNI_VISION),
+        topics.team_topic(team, topics.RECEIVE_FROM_COACH),
+        topics.team_topic(team, topics.TEAM_STRATEGY),
+        topics.GAME_STATE,
+        tick_topic(phase),
+    ]
 
 
 def phases(spec: Scene, mode: str) -> int:
@@ -155,8 +160,13 @@ def loads(payload: bytes, *required: str) -> dict:
 
 # --- the scene offer: what a team process needs to build its nodes exactly as the embedded run does ----------
 def scene_offer(scene: LoadedScene, seed: int, run: str, mode: str) -> dict:
-    return {"scene": {"text": scene.text, "source": scene.source, "overrides": scene.overrides},
-            "seed": int(seed), "run": run, "mode": mode, "bundles": 1}
+    return {
+        "scene": {"text": scene.text, "source": scene.source, "overrides": scene.overrides},
+        "seed": int(seed),
+        "run": run,
+        "mode": mode,
+        "bundles": 1,
+    }
 
 
 def scene_from_offer(offer: Mapping[str, Any], local: Mapping[str, Any] | None = None) -> LoadedScene:

@@ -25,15 +25,15 @@ class Proc:
     id: str
     team: str
     robots: list[int]
-    kind: str                       # "team" or "robot"
-    strategy_pub: bool              # runs its team's StrategyPub itself
+    kind: str  # "team" or "robot"
+    strategy_pub: bool  # runs its team's StrategyPub itself
     joined_step: int
     state: ProcState = ProcState.ACTIVE
-    missed: int = 0                 # ticks it did not answer in time
-    streak: int = 0                 # ... in a row
+    missed: int = 0  # ticks it did not answer in time
+    streak: int = 0  # ... in a row
     answered: int = 0
     host: str = ""
-    phase: int = 0                  # the physics step of the control period its ticks open at (protocol.phase_of)
+    phase: int = 0  # the physics step of the control period its ticks open at (protocol.phase_of)
 
     @property
     def label(self) -> str:
@@ -49,7 +49,7 @@ class JoinError(ValueError):
 class Registry:
     scene: Scene
     procs: dict[str, Proc] = field(default_factory=dict)
-    owner: dict[str, str] = field(default_factory=dict)          # robot name -> proc id
+    owner: dict[str, str] = field(default_factory=dict)  # robot name -> proc id
 
     def expected_robots(self) -> dict[str, list[int]]:
         """The robots a server waits for: every robot of every team that has a strategy (not 'none')."""
@@ -73,7 +73,7 @@ class Registry:
         replaced = []
         for rid in proc.robots:
             old = self.procs.get(self.owner.get(f"{proc.team}/{rid}", ""))
-            if old is not None and old.state is ProcState.LATE:     # a hung process is replaced
+            if old is not None and old.state is ProcState.LATE:  # a hung process is replaced
                 replaced.append(self.leave(old.id))
             self.owner[f"{proc.team}/{rid}"] = proc.id
         self.procs[proc.id] = proc
@@ -94,8 +94,11 @@ class Registry:
         return [p for p in self.procs.values() if p.state is ProcState.ACTIVE]
 
     def served(self, team: str) -> list[int]:
-        return sorted(int(name.split("/")[1]) for name, pid in self.owner.items()
-                      if name.startswith(team + "/") and self.procs[pid].state is not ProcState.GONE)
+        return sorted(
+            int(name.split("/")[1])
+            for name, pid in self.owner.items()
+            if name.startswith(team + "/") and self.procs[pid].state is not ProcState.GONE
+        )
 
     def missing(self) -> dict[str, list[int]]:
         """Expected robots nobody serves, per team (teams with none missing left out)."""

@@ -25,8 +25,15 @@ import numpy as np
 
 from .. import msgs
 from ..bus import topics
-from ..bus.zenoh_bus import (DEFAULT_ENDPOINT, LOW_LATENCY, MAX_SAMPLE, ZenohBus, calm_sending_threads,
-                              open_session, zenoh_config)
+from ..bus.zenoh_bus import (
+    DEFAULT_ENDPOINT,
+    LOW_LATENCY,
+    MAX_SAMPLE,
+    ZenohBus,
+    calm_sending_threads,
+    open_session,
+    zenoh_config,
+)
 from ..config.loader import LoadedScene
 from ..strategy.node import StrategyPub
 from . import credentials, protocol
@@ -44,9 +51,19 @@ def _stderr(text: str) -> None:
 
 
 class Server:
-    def __init__(self, scene: LoadedScene, seed: int = 0, *, listen: Sequence[str] = (DEFAULT_ENDPOINT,),
-                 run: str = "default", realtime: bool = False, deadline: float = 5.0, team_timeout: float = 30.0,
-                 credentials_dir: str | Path | None = None, say: Callable[[str], None] = _stderr):
+    def __init__(
+        self,
+        scene: LoadedScene,
+        seed: int = 0,
+        *,
+        listen: Sequence[str] = (DEFAULT_ENDPOINT,),
+        run: str = "default",
+        realtime: bool = False,
+        deadline: float = 5.0,
+        team_timeout: float = 30.0,
+        credentials_dir: str | Path | None = None,
+        say: Callable[[str], None] = _stderr,
+    ):
         from ..simulation import Simulation
 
         spec = scene.spec
@@ -62,31 +79,57 @@ class Server:
         teams = {t: spec.teams[t].robot_ids() for t in spec.teams}
         offered = len(protocol.dumps(protocol.scene_offer(scene, seed, run, self.mode)))
         if LOW_LATENCY and offered > MAX_SAMPLE:
-            raise ValueError(f"the scene is too large to offer to the team processes ({offered} bytes with its "
-                             f"overrides; at most {MAX_SAMPLE})")
+            raise ValueError(
+                f"the scene is too large to offer to the team processes ({offered} bytes with its "
+                f"overrides; at most {MAX_SAMPLE})"
+            )
         self.credentials_dir = Path(credentials_dir) if credentials_dir else credentials.default_dir(run)
         self.creds = credentials.ensure(self.credentials_dir, [*teams, credentials.ADMIN])
         self.fair = FairPlay(run, self.creds, teams)
         admin = self.creds[credentials.ADMIN]
-        conf = zenoh_config("router", listen=list(listen), user=admin.name, password=admin.secret,
-                            users_file=credentials.users_file(self.credentials_dir, self.creds.values()),
-                            access_control=self.fair.access_control())
+        conf = zenoh_config(
+            "router",
+            listen=list(listen),
+            user=admin.name,
+            password=admin.secret,
+            users_file=credentials.users_file(self.credentials_dir, self.creds.values()),
+            access_control=self.fair.access_control(),
+        )
         session = open_session(conf, what=f"listening on {', '.join(listen)}")
-        self.bus = ZenohBus(session, run, verifier=self.fair.check, entry_verifier=self.fair.check_entry,
-                            on_refused=self._refused, on_malformed=self._malformed, wake_on_data=False, drop_when_congested=True,
-                            prepare_on_arrival=not realtime, max_sample=MAX_SAMPLE if LOW_LATENCY else None)
+        self.bus = ZenohBus(
+            session,
+            run,
+            verifier=self.fair.check,
+            entry_verifier=self.fair.check_entry,
+            on_refused=self._refused,
+            on_malformed=self._malformed,
+            wake_on_data=False,
+            drop_when_congested=True,
+            prepare_on_arrival=not realtime,
+            max_sample=MAX_SAMPLE if LOW_LATENCY else None,
+        )
         self.registry = Registry(spec)
-        self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}   # rate limit of refusal/malformed events
+        self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}  # rate limit of refusal/malformed events
         self.ended = False
         try:
             self.sim = Simulation(scene, seed=seed, bus=self.bus, run_name=run, teams="external")
             self.pub_events = self.bus.publisher(topics.EVENTS, msgs.GameEvent)
             self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
-            self._topic_order: dict[str, tuple] = {}      # a robot's topic -> its place (see `_order`)
+            self._topic_order: dict[str, tuple] = {}  # a robot's topic -> its place (see `_order`)
             clock = self.sim.clock
-            self.gate = clock.add(LockstepGate(spec.control.period, deadline, realtime, self.registry.active,
-                                               self._on_ack, self._on_missed, self._order, teams=list(teams),
-                                               phases=protocol.phases(spec, self.mode)))
+            self.gate = clock.add(
+                LockstepGate(
+                    spec.control.period,
+                    deadline,
+                    realtime,
+                    self.registry.active,
+                    self._on_ack,
+                    self._on_missed,
+                    self._order,
+                    teams=list(teams),
+                    phases=protocol.phases(spec, self.mode),
+                )
+            )
             self.world_service = clock.add(WorldService(self.sim, self.emit))
             self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
             self.strategy_pubs: dict[str, StrategyPub] = {}
@@ -105,8 +148,19 @@ class Server:
 
     # --- events -------------------------------------------------------------------------------------------
     def emit(self, kind: str, team: str = "", robot: int = 0, value: float = 0.0, detail: str = "") -> None:
-        self.pub_events.put(msgs.GameEvent(stamp=self.sim.time, type=kind, team=team, robot=int(robot), x=0.0,
-                                           y=0.0, value=float(value), limit=0.0, detail=detail))
+        self.pub_events.put(
+            msgs.GameEvent(
+                stamp=self.sim.time,
+                type=kind,
+                team=team,
+                robot=int(robot),
+                x=0.0,
+                y=0.0,
+                value=float(value),
+                limit=0.0,
+                detail=detail,
+            )
+        )
 
     def _report(self, kind: str, who: str, topic: str, text: str) -> None:
         """At most one event a simulated second per (kind, sender, topic), with the count so far."""
@@ -144,30 +198,48 @@ class Server:
             if who not in (team, credentials.ADMIN):
                 self._report("refused", who, protocol.JOIN, f"{who} tried to join as team {team}")
                 raise JoinError(f"the credential of {who} cannot serve robots of team {team}")
-            proc = Proc(id=str(req["proc"]), team=team, robots=[int(r) for r in req["robots"]],
-                        kind="team" if req["kind"] == "team" else "robot",
-                        strategy_pub=bool(req.get("strategy_pub", False)), joined_step=self.sim.simulator.step_index,
-                        host=str(req.get("host", "")))
+            proc = Proc(
+                id=str(req["proc"]),
+                team=team,
+                robots=[int(r) for r in req["robots"]],
+                kind="team" if req["kind"] == "team" else "robot",
+                strategy_pub=bool(req.get("strategy_pub", False)),
+                joined_step=self.sim.simulator.step_index,
+                host=str(req.get("host", "")),
+            )
             for old in self.registry.join(proc):
                 self.gate.forget(old.id)
             proc.phase = protocol.phase_of(self.scene.spec, team, proc.robots, self.mode)
-            for rid in proc.robots:          # its perception is taken when its tick opens
+            for rid in proc.robots:  # its perception is taken when its tick opens
                 self.sim.set_perception_phase(f"{team}/{rid}", proc.phase)
-            self.bus.refresh_matching()      # its subscriptions came before its join
-            calm_sending_threads()           # Zenoh starts them with the first link: the feeds leave together
+            self.bus.refresh_matching()  # its subscriptions came before its join
+            calm_sending_threads()  # Zenoh starts them with the first link: the feeds leave together
         except (protocol.ProtocolError, JoinError, TypeError, ValueError) as exc:
             query.reply_err(protocol.dumps({"error": str(exc)}))
             return
-        if proc.strategy_pub and team in self.strategy_pubs:        # the team now fuses its own picture
+        if proc.strategy_pub and team in self.strategy_pubs:  # the team now fuses its own picture
             self.sim.clock.remove(self.strategy_pubs.pop(team))
         elif not proc.strategy_pub and not self.registry.team_has_strategy_pub(team):
             self._host_strategy_pub(team)
-        query.reply(query.key_expr, protocol.dumps({"ok": True, "step": self.sim.simulator.step_index,
-                                                     "strategy_pub_on_server": team in self.strategy_pubs,
-                                                     "phase": proc.phase}))
+        query.reply(
+            query.key_expr,
+            protocol.dumps(
+                {
+                    "ok": True,
+                    "step": self.sim.simulator.step_index,
+                    "strategy_pub_on_server": team in self.strategy_pubs,
+                    "phase": proc.phase,
+                }
+            ),
+        )
         robots = ",".join(str(r) for r in proc.robots)
-        self.emit("process_joined", team=team, robot=proc.robots[0] if len(proc.robots) == 1 else 0,
-                  value=len(proc.robots), detail=f"{proc.kind} process {proc.id} serves {team}/{robots}")
+        self.emit(
+            "process_joined",
+            team=team,
+            robot=proc.robots[0] if len(proc.robots) == 1 else 0,
+            value=len(proc.robots),
+            detail=f"{proc.kind} process {proc.id} serves {team}/{robots}",
+        )
         self.say(f"{proc.label} joined")
 
     def _host_strategy_pub(self, team: str) -> None:
@@ -176,14 +248,15 @@ class Server:
             return
         spec = self.scene.spec
         self.strategy_pubs[team] = self.sim.clock.add(
-            StrategyPub(team, spec.strategy_pub_period, spec.control.strategy_stale_after))
+            StrategyPub(team, spec.strategy_pub_period, spec.control.strategy_stale_after)
+        )
 
     def _on_ack(self, msg: dict, team: str, arrival: float, in_step: bool):
         proc = self.registry.procs.get(str(msg["proc"]))
         if proc is None or proc.team != team or proc.state is ProcState.GONE:
             return None
         proc.answered += 1
-        if proc.state is ProcState.LATE and in_step:      # back (a stale answer is applied, no more)
+        if proc.state is ProcState.LATE and in_step:  # back (a stale answer is applied, no more)
             proc.state = ProcState.ACTIVE
             proc.streak = 0
             self.emit("process_back", team=team, detail=f"{proc.label} answers again")
@@ -199,9 +272,13 @@ class Server:
             if proc.streak < self.late_after:
                 continue
             proc.state = ProcState.LATE
-            self.emit("process_late", team=proc.team, value=self.gate.deadline,
-                      detail=f"{proc.label} did not answer {proc.streak} tick(s) in time: not waited for "
-                             f"until it answers again")
+            self.emit(
+                "process_late",
+                team=proc.team,
+                value=self.gate.deadline,
+                detail=f"{proc.label} did not answer {proc.streak} tick(s) in time: not waited for "
+                f"until it answers again",
+            )
             self.say(f"{proc.label} is late: not waiting for it")
 
     def _gone(self, proc_id: str, kind: str, why: str) -> None:
@@ -209,7 +286,7 @@ class Server:
         if proc is None:
             return
         self.gate.forget(proc_id)
-        if self.ended:               # leaving after the end is what the end asks for
+        if self.ended:  # leaving after the end is what the end asks for
             return
         self.emit(kind, team=proc.team, detail=f"{proc.label} {why}")
         self.say(f"{proc.label} {why}")
@@ -240,7 +317,7 @@ class Server:
         if len(head) >= 2:
             i = self._robot_order.get(f"{head[0]}/{head[1]}")
             if i is not None:
-                if len(self._topic_order) < 4096:     # the same few dozen topics every tick (bounded all the same)
+                if len(self._topic_order) < 4096:  # the same few dozen topics every tick (bounded all the same)
                     self._topic_order[topic] = (i,)
                 return (i,)
         if topic == topics.EVENTS:
@@ -264,16 +341,22 @@ class Server:
             if now - t0 >= timeout:
                 break
             if now >= next_note:
-                self.say("waiting for " + "; ".join(
-                    f"{team} (robots {','.join(map(str, ids))})" for team, ids in missing.items())
-                    + f" to connect [{timeout - (now - t0):.0f} s left]")
+                self.say(
+                    "waiting for "
+                    + "; ".join(f"{team} (robots {','.join(map(str, ids))})" for team, ids in missing.items())
+                    + f" to connect [{timeout - (now - t0):.0f} s left]"
+                )
                 next_note = now + 5.0
             self.bus.pump(min(poll, max(0.0, timeout - (now - t0))))
             missing = self.registry.missing()
         for team, ids in missing.items():
             robots = ",".join(map(str, ids))
-            self.emit("team_absent", team=team, value=len(ids),
-                      detail=f"robots {robots} of {team} not connected after {timeout:g} s: playing without them")
+            self.emit(
+                "team_absent",
+                team=team,
+                value=len(ids),
+                detail=f"robots {robots} of {team} not connected after {timeout:g} s: playing without them",
+            )
             self.say(f"team {team} did not connect (robots {robots}) within {timeout:g} s: playing without it")
         return missing
 
@@ -289,7 +372,7 @@ class Server:
         self.ended = True
         try:
             self.bus.put_raw(protocol.END, protocol.dumps({"reason": reason}))
-        except Exception as exc:     # the session may already be closing (interrupted)
+        except Exception as exc:  # the session may already be closing (interrupted)
             log.debug("could not announce the end: %s", exc)
             return
         deadline = time.monotonic() + linger
@@ -312,10 +395,21 @@ class Server:
           process (the bus, and the wait for a core), ``processing`` until its answer was ready (decoding,
           the decisions, encoding), ``transit`` until it arrived here (packing and signing it, the bus)."""
         gate = self.gate
-        out = {"mode": self.mode, "ticks": gate.ticks, "processes": len(self.registry.procs),
-               "answers": len(gate.latencies), "missed": gate.missed, "late": gate.late}
-        for name, values in (("latency", gate.latencies), ("tick", gate.completions), ("feed", gate.feeds),
-                             ("processing", gate.thinking), ("transit", gate.transits)):
+        out = {
+            "mode": self.mode,
+            "ticks": gate.ticks,
+            "processes": len(self.registry.procs),
+            "answers": len(gate.latencies),
+            "missed": gate.missed,
+            "late": gate.late,
+        }
+        for name, values in (
+            ("latency", gate.latencies),
+            ("tick", gate.completions),
+            ("feed", gate.feeds),
+            ("processing", gate.thinking),
+            ("transit", gate.transits),
+        ):
             out.update(_percentiles(name, values, max_too=name == "latency"))
         out.update({"refused": self.bus.stats.refused, "malformed": self.bus.stats.malformed})
         if self.pacer is not None:
@@ -346,8 +440,10 @@ class Server:
 def _percentiles(name: str, seconds: Sequence[float], max_too: bool = False) -> dict:
     """``<name>_p50_ms``, ``<name>_p99_ms`` (and ``<name>_max_ms``) of durations in seconds (None if none)."""
     ms = np.array(seconds) * 1e3
-    out = {f"{name}_p50_ms": round(float(np.percentile(ms, 50)), 3) if ms.size else None,
-           f"{name}_p99_ms": round(float(np.percentile(ms, 99)), 3) if ms.size else None}
+    out = {
+        f"{name}_p50_ms": round(float(np.percentile(ms, 50)), 3) if ms.size else None,
+        f"{name}_p99_ms": round(float(np.percentile(ms, 99)), 3) if ms.size else None,
+    }
     if max_too:
         out[f"{name}_max_ms"] = round(float(ms.max()), 3) if ms.size else None
     return out

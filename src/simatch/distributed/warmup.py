@@ -23,7 +23,7 @@ log = logging.getLogger(__name__)
 def preload_compiled_kernels(prefixes: tuple[str, ...] = ("simatch",)) -> int:
     """Load the disk-cached compilations of every numba kernel in the imported modules whose name starts
     with one of ``prefixes``; returns how many were loaded (0 if numba is not in use)."""
-    if "numba" not in sys.modules:          # the strategy does not use numba: nothing to warm
+    if "numba" not in sys.modules:  # the strategy does not use numba: nothing to warm
         return 0
     try:
         from numba.core.registry import CPUDispatcher
@@ -41,6 +41,6 @@ def preload_compiled_kernels(prefixes: tuple[str, ...] = ("simatch",)) -> int:
                 for key in index:
                     obj.compile(key[0])
                     loaded += 1
-            except Exception as exc:      # internals changed, or a stale cache: it loads at first use instead
+            except Exception as exc:  # internals changed, or a stale cache: it loads at first use instead
                 log.debug("could not preload %s.%s: %s", name, getattr(obj, "__name__", "?"), exc)
     return loaded

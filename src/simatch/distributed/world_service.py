@@ -54,7 +54,7 @@ class WorldService(Node):
     def _apply(self, what: str, call: Callable[[], None]) -> None:
         try:
             call()
-        except ValueError as exc:               # CommandError: unknown model, bad value
+        except ValueError as exc:  # CommandError: unknown model, bad value
             log.warning("%s refused: %s", what, exc)
             self.emit("bad_request", detail=f"{what}: {exc}")
             return
@@ -67,8 +67,12 @@ class WorldService(Node):
         self._apply(f"set_link_state({msg.name!r})", lambda: self.world.set_link_state(msg.name, **state_of(msg)))
 
     def _wrench(self, msg) -> None:
-        self._apply(f"apply_wrench({msg.name!r})", lambda: self.world.apply_wrench(
-            msg.name, force=(msg.fx, msg.fy, msg.fz), torque=(msg.tx, msg.ty, msg.tz), duration=msg.duration))
+        self._apply(
+            f"apply_wrench({msg.name!r})",
+            lambda: self.world.apply_wrench(
+                msg.name, force=(msg.fx, msg.fy, msg.fz), torque=(msg.tx, msg.ty, msg.tz), duration=msg.duration
+            ),
+        )
 
     def stop(self) -> None:
         for sub in getattr(self, "subs", []):

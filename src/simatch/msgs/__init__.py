@@ -75,8 +75,19 @@ for _name, _text in _TEXTS.items():
 typestore.register(_defs)
 
 #: what `dataclasses` generates in a class, made again for the slotted one
-_GENERATED = {"__dict__", "__weakref__", "__init__", "__repr__", "__eq__", "__hash__", "__match_args__",
-              "__annotations__", "__dataclass_fields__", "__dataclass_params__", "__qualname__"}
+_GENERATED = {
+    "__dict__",
+    "__weakref__",
+    "__init__",
+    "__repr__",
+    "__eq__",
+    "__hash__",
+    "__match_args__",
+    "__annotations__",
+    "__dataclass_fields__",
+    "__dataclass_params__",
+    "__qualname__",
+}
 
 
 def _with_slots(cls: type) -> type:
@@ -93,7 +104,7 @@ def _with_slots(cls: type) -> type:
     namespace = {k: v for k, v in vars(cls).items() if k not in _GENERATED}
     slotted = dataclasses.make_dataclass(cls.__name__, fields, namespace=namespace, slots=True)
     slotted.__qualname__ = cls.__qualname__
-    setattr(sys.modules[cls.__module__], cls.__name__, slotted)     # where pickle looks it up
+    setattr(sys.modules[cls.__module__], cls.__name__, slotted)  # where pickle looks it up
     return slotted
 
 
@@ -123,8 +134,16 @@ def definition(msgtype: Any) -> str:
 # ones with zero values (fresh containers for arrays and nested messages).
 
 _ARRAY_DTYPES = {
-    "float64": np.float64, "float32": np.float32, "int8": np.int8, "int16": np.int16, "int32": np.int32,
-    "int64": np.int64, "uint8": np.uint8, "uint16": np.uint16, "uint32": np.uint32, "uint64": np.uint64,
+    "float64": np.float64,
+    "float32": np.float32,
+    "int8": np.int8,
+    "int16": np.int16,
+    "int32": np.int32,
+    "int64": np.int64,
+    "uint8": np.uint8,
+    "uint16": np.uint16,
+    "uint32": np.uint32,
+    "uint64": np.uint64,
 }
 
 
@@ -235,7 +254,7 @@ def encode(msg) -> bytes:
         return _codec.encode(msg)
     except MessageError:
         raise
-    except Exception as exc:      # a field of the wrong type or size
+    except Exception as exc:  # a field of the wrong type or size
         raise MessageError(f"cannot encode {getattr(msg, '__msgtype__', type(msg).__name__)}: {exc}") from None
 
 

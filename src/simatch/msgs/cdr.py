@@ -55,7 +55,7 @@ from . import MessageError
 #: machine without a C compiler runs (tests compare both)
 PURE_PYTHON_ENV = "SIMATCH_CDR_PURE_PYTHON"
 
-try:                                # the C encoder (setup.py builds it where a compiler is at hand)
+try:  # the C encoder (setup.py builds it where a compiler is at hand)
     if os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0"):
         raise ImportError(f"{PURE_PYTHON_ENV} is set")
     from ._cdr_accel import Log
@@ -65,38 +65,76 @@ try:                                # the C encoder (setup.py builds it where a 
     from ._cdr_accel import encode as _accel_encode
     from ._cdr_accel import setup as _accel_setup
     from ._cdr_accel import setup_decoding as _accel_setup_decoding
-except ImportError:                 # a machine without a C compiler
+except ImportError:  # a machine without a C compiler
     _accel_encode = _accel_setup = _accel_compile = Log = None
     _accel_decode = _accel_compile_decoder = _accel_setup_decoding = None
 
-if sys.byteorder != "little":       # encoders append numpy buffers as they lie in memory
+if sys.byteorder != "little":  # encoders append numpy buffers as they lie in memory
     raise ImportError("simatch.msgs.cdr needs a little-endian machine")
 
-HEADER = b"\x00\x01\x00\x00"        # CDR_LE encapsulation
+HEADER = b"\x00\x01\x00\x00"  # CDR_LE encapsulation
 
 #: ROS base types: struct format character and size (= CDR alignment)
 BASE = {
-    "bool": ("?", 1), "byte": ("B", 1), "char": ("B", 1), "octet": ("B", 1),
-    "int8": ("b", 1), "uint8": ("B", 1), "int16": ("h", 2), "uint16": ("H", 2),
-    "int32": ("i", 4), "uint32": ("I", 4), "int64": ("q", 8), "uint64": ("Q", 8),
-    "float32": ("f", 4), "float64": ("d", 8),
+    "bool": ("?", 1),
+    "byte": ("B", 1),
+    "char": ("B", 1),
+    "octet": ("B", 1),
+    "int8": ("b", 1),
+    "uint8": ("B", 1),
+    "int16": ("h", 2),
+    "uint16": ("H", 2),
+    "int32": ("i", 4),
+    "uint32": ("I", 4),
+    "int64": ("q", 8),
+    "uint64": ("Q", 8),
+    "float32": ("f", 4),
+    "float64": ("d", 8),
 }
-_DTYPE = {"bool": "<?", "byte": "<u1", "char": "<u1", "octet": "<u1", "int8": "<i1", "uint8": "<u1",
-          "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4", "int64": "<i8", "uint64": "<u8",
-          "float32": "<f4", "float64": "<f8"}
+_DTYPE = {
+    "bool": "<?",
+    "byte": "<u1",
+    "char": "<u1",
+    "octet": "<u1",
+    "int8": "<i1",
+    "uint8": "<u1",
+    "int16": "<i2",
+    "uint16": "<u2",
+    "int32": "<i4",
+    "uint32": "<u4",
+    "int64": "<i8",
+    "uint64": "<u8",
+    "float32": "<f4",
+    "float64": "<f8",
+}
 _U32 = struct.Struct("<I")
-_LEN = [struct.Struct(f"<{p}xI") if p else _U32 for p in range(4)]      # by padding needed
+_LEN = [struct.Struct(f"<{p}xI") if p else _U32 for p in range(4)]  # by padding needed
 _ZEROS = [bytes(p) for p in range(8)]
-_MEMO_LIMIT = 4096                  # string lists kept by value
+_MEMO_LIMIT = 4096  # string lists kept by value
 #: kinds of the C encoder's programs (see _cdr_accel.c)
-_KIND = {"bool": 1, "int8": 2, "uint8": 3, "byte": 3, "char": 3, "octet": 3, "int16": 4, "uint16": 5,
-         "int32": 6, "uint32": 7, "int64": 8, "uint64": 9, "float32": 10, "float64": 11}
+_KIND = {
+    "bool": 1,
+    "int8": 2,
+    "uint8": 3,
+    "byte": 3,
+    "char": 3,
+    "octet": 3,
+    "int16": 4,
+    "uint16": 5,
+    "int32": 6,
+    "uint32": 7,
+    "int64": 8,
+    "uint64": 9,
+    "float32": 10,
+    "float64": 11,
+}
 _K_STR, _K_MSG, _K_PSEQ, _K_SSEQ, _K_MSEQ = 20, 21, 22, 23, 24
 #: the C encoder is used when it was built
 ACCELERATED = _accel_encode is not None
 #: ... and reads numpy arrays directly when it recognises their layout (otherwise: the buffer protocol)
 DIRECT_ARRAYS = ACCELERATED and _accel_setup(
-    np.ndarray, {k: np.dtype(_DTYPE[b]) for b, k in _KIND.items()}, np.arange(3.0))
+    np.ndarray, {k: np.dtype(_DTYPE[b]) for b, k in _KIND.items()}, np.arange(3.0)
+)
 #: little-endian payloads are decoded by the C decoder too (it makes its arrays with the ndarray type above)
 C_DECODER = DIRECT_ARRAYS and _accel_decode is not None
 if C_DECODER:
@@ -144,20 +182,32 @@ class Codec:
         self._programs: dict[str, tuple] = {}
         self._compiled_programs: dict[str, Any] = {}
         self._appenders: dict[str, Callable] = {}
-        self._memo = ({}, {})                           # the C encoder's: this period's, the last one's
-        self._whole: dict[str, Callable] = {}           # type -> encode(msg) -> bytes
-        self._parts: dict[str, Callable] = {}           # type -> enc(msg, out, pos) -> pos
-        self._decoders: dict[str, Callable] = {}        # type -> decode(body) -> msg
-        self._decoders_at: dict[str, Callable] = {}     # type -> dec(body, pos) -> (msg, pos)
-        self._c_decoders: dict[str, Any] = {}           # type -> the C decoder's compiled program
+        self._memo = ({}, {})  # the C encoder's: this period's, the last one's
+        self._whole: dict[str, Callable] = {}  # type -> encode(msg) -> bytes
+        self._parts: dict[str, Callable] = {}  # type -> enc(msg, out, pos) -> pos
+        self._decoders: dict[str, Callable] = {}  # type -> decode(body) -> msg
+        self._decoders_at: dict[str, Callable] = {}  # type -> dec(body, pos) -> (msg, pos)
+        self._c_decoders: dict[str, Any] = {}  # type -> the C decoder's compiled program
         self.c_decoding = self.accelerate and C_DECODER
-        self._seqs: dict[int, tuple] = {}               # memo: id(list) -> (list, phase, bytes)
+        self._seqs: dict[int, tuple] = {}  # memo: id(list) -> (list, phase, bytes)
         self._strings: dict[tuple, bytes] = {}
         self._elements = self._element_types()
         self._ns: dict[str, Any] = {
-            "_LEN": _LEN, "_U32": _U32, "_ZEROS": _ZEROS, "_asb": _as_bytes, "_ndarray": np.ndarray, "_np": np,
-            "_seqs": self._seqs, "_objs": {}, "_objs_old": {}, "_strings": self._strings, "_LIMIT": _MEMO_LIMIT,
-            "_HEADER": HEADER, "Error": MessageError, "_codec": self}
+            "_LEN": _LEN,
+            "_U32": _U32,
+            "_ZEROS": _ZEROS,
+            "_asb": _as_bytes,
+            "_ndarray": np.ndarray,
+            "_np": np,
+            "_seqs": self._seqs,
+            "_objs": {},
+            "_objs_old": {},
+            "_strings": self._strings,
+            "_LIMIT": _MEMO_LIMIT,
+            "_HEADER": HEADER,
+            "Error": MessageError,
+            "_codec": self,
+        }
 
     # --- public ------------------------------------------------------------------------------------------
     def encode(self, msg, typename: str | None = None) -> bytes:
@@ -190,18 +240,17 @@ class Codec:
             self._ns[f"_WH_{ident}"] = whole
             if self.accelerate and not self._fixed_size(typename):
                 args = "_memo, " + str(typename in self._elements) if self.memo else "None, False"
-                lines = [f"def into_{ident}(m, out):",
-                         f"    n = _accel(_PROG_{ident}, m, {args}, out)",
-                         "    if n is None:",
-                         f"        d = _PY_{ident}(m)",
-                         "        out += d",
-                         "        return len(d)",
-                         "    return n"]
+                lines = [
+                    f"def into_{ident}(m, out):",
+                    f"    n = _accel(_PROG_{ident}, m, {args}, out)",
+                    "    if n is None:",
+                    f"        d = _PY_{ident}(m)",
+                    "        out += d",
+                    "        return len(d)",
+                    "    return n",
+                ]
             else:
-                lines = [f"def into_{ident}(m, out):",
-                         f"    d = _WH_{ident}(m)",
-                         "    out += d",
-                         "    return len(d)"]
+                lines = [f"def into_{ident}(m, out):", f"    d = _WH_{ident}(m)", "    out += d", "    return len(d)"]
             found = self._appenders[typename] = self._compile(lines, typename, f"into_{ident}")
         return found
 
@@ -231,7 +280,7 @@ class Codec:
             if typename not in self.typestore.fielddefs:
                 raise MessageError(f"unknown message type {typename!r}")
             func = self._generate_decoder(typename)
-        if data[:2] != b"\x00\x01":                # not little-endian CDR: rosbags reads it (or refuses)
+        if data[:2] != b"\x00\x01":  # not little-endian CDR: rosbags reads it (or refuses)
             try:
                 return self.typestore.deserialize_cdr(data, typename)
             except Exception as exc:
@@ -311,7 +360,7 @@ class Codec:
 
     def _generate_whole(self, typename: str) -> Callable:
         func = self._generate_python_whole(typename)
-        if self.accelerate and not self._fixed_size(typename):    # one struct call beats C's field walk
+        if self.accelerate and not self._fixed_size(typename):  # one struct call beats C's field walk
             func = self._accelerated(typename, func)
         self._whole[typename] = func
         return func
@@ -333,9 +382,7 @@ class Codec:
             call = f"_accel(_PROG_{ident}, m, _memo, {keep})"
         else:
             call = f"_accel(_PROG_{ident}, m)"
-        lines = [f"def fast_{ident}(m):",
-                 f"    data = {call}",
-                 f"    return _PY_{ident}(m) if data is None else data"]
+        lines = [f"def fast_{ident}(m):", f"    data = {call}", f"    return _PY_{ident}(m) if data is None else data"]
         return self._compile(lines, typename, f"fast_{ident}")
 
     def _compiled(self, typename: str):
@@ -391,7 +438,7 @@ class Codec:
         ops: list = []
         self._flatten(typename, "m", ops, [0])
         ident = _ident(typename)
-        if self._fixed_size(typename):                          # one struct, header included
+        if self._fixed_size(typename):  # one struct, header included
             key = f"_W_{ident}"
             scalars = [op for op in ops if op[0] == "scalar"]
             body = _run_structs([(ch, size) for _, _, ch, size in scalars])[0]
@@ -402,11 +449,13 @@ class Codec:
         else:
             parts = self._parts_of(typename)
             self._ns[f"_P_{ident}"] = parts
-            lines = [f"def whole_{ident}(m):",
-                     "    out = [_HEADER]",
-                     f"    _P_{ident}(m, out, 0)",
-                     "    data = b''.join(out)"]
-            if self.memo and typename in self._elements:      # may be met again inside a sequence
+            lines = [
+                f"def whole_{ident}(m):",
+                "    out = [_HEADER]",
+                f"    _P_{ident}(m, out, 0)",
+                "    data = b''.join(out)",
+            ]
+            if self.memo and typename in self._elements:  # may be met again inside a sequence
                 lines.append("    _objs[id(m)] = (m, data)")
             lines.append("    return data")
         return self._compile(lines, typename, f"whole_{ident}")
@@ -444,30 +493,36 @@ class Codec:
             flush_run()
             e = op[1]
             if kind == "string":
-                lines += [f"    b = {e}.encode()",
-                          "    app(_LEN[-pos & 3].pack(len(b) + 1) + b + b'\\x00')",
-                          "    pos += (-pos & 3) + 5 + len(b)"]
+                lines += [
+                    f"    b = {e}.encode()",
+                    "    app(_LEN[-pos & 3].pack(len(b) + 1) + b + b'\\x00')",
+                    "    pos += (-pos & 3) + 5 + len(b)",
+                ]
             elif kind == "strings":
                 # a list of names (every model of the run) repeats message after message: kept by value
                 length = op[2]
                 lines += [f"    v = {e}"]
                 if length is not None:
-                    lines += [f"    if len(v) != {length}:",
-                              f"        raise Error('{e.partition('.')[2]}: expected {length} strings, got %d' % len(v))"]
-                by_value = ["key = (pos & 7, tuple(v))",
-                            "hit = _strings.get(key)",
-                            "if hit is None:",
-                            f"    hit = _encode_strings(v, pos & 7, {length is None})",
-                            "    if len(_strings) >= _LIMIT:",
-                            "        _strings.clear()",
-                            "    _strings[key] = hit"]
-                if self.memo:           # the same list again (the simulator's model names): no tuple, no hash
-                    lines += ["    hit = _seqs.get(id(v))",
-                              "    if hit is None or hit[0] is not v or hit[1] != pos & 7:"]
+                    lines += [
+                        f"    if len(v) != {length}:",
+                        f"        raise Error('{e.partition('.')[2]}: expected {length} strings, got %d' % len(v))",
+                    ]
+                by_value = [
+                    "key = (pos & 7, tuple(v))",
+                    "hit = _strings.get(key)",
+                    "if hit is None:",
+                    f"    hit = _encode_strings(v, pos & 7, {length is None})",
+                    "    if len(_strings) >= _LIMIT:",
+                    "        _strings.clear()",
+                    "    _strings[key] = hit",
+                ]
+                if self.memo:  # the same list again (the simulator's model names): no tuple, no hash
+                    lines += [
+                        "    hit = _seqs.get(id(v))",
+                        "    if hit is None or hit[0] is not v or hit[1] != pos & 7:",
+                    ]
                     lines += ["        " + line for line in by_value]
-                    lines += ["        _seqs[id(v)] = (v, pos & 7, hit)",
-                              "    else:",
-                              "        hit = hit[2]"]
+                    lines += ["        _seqs[id(v)] = (v, pos & 7, hit)", "    else:", "        hit = hit[2]"]
                 else:
                     lines += ["    " + line for line in by_value]
                 lines += ["    app(hit)", "    pos += len(hit)"]
@@ -481,20 +536,24 @@ class Codec:
                 if length is None:
                     hkey = f"_H{size}"
                     self._ns[hkey] = _lenpad(size)
-                    lines += ["    if len(v):",
-                              f"        h = {hkey}[pos & 7]",
-                              "        app(h.pack(len(v)))",
-                              "        pos += h.size",
-                              f"        {convert}",
-                              "        app(b)",
-                              "        pos += len(b)",
-                              "    else:",
-                              "        app(_LEN[-pos & 3].pack(0))",
-                              "        pos += (-pos & 3) + 4"]
+                    lines += [
+                        "    if len(v):",
+                        f"        h = {hkey}[pos & 7]",
+                        "        app(h.pack(len(v)))",
+                        "        pos += h.size",
+                        f"        {convert}",
+                        "        app(b)",
+                        "        pos += len(b)",
+                        "    else:",
+                        "        app(_LEN[-pos & 3].pack(0))",
+                        "        pos += (-pos & 3) + 4",
+                    ]
                 else:
                     lines.append(f"    {convert}")
-                    lines += [f"    if len(b) != {length * size}:",
-                              f"        raise Error('{e.partition('.')[2]}: expected {length} elements, got %d' % (len(b) // {size}))"]
+                    lines += [
+                        f"    if len(b) != {length * size}:",
+                        f"        raise Error('{e.partition('.')[2]}: expected {length} elements, got %d' % (len(b) // {size}))",
+                    ]
                     if size > 1:
                         lines += [f"    p = -pos & {size - 1}", "    app(_ZEROS[p])", "    pos += p"]
                     lines += ["    app(b)", "    pos += len(b)"]
@@ -519,37 +578,41 @@ class Codec:
         if length is None:
             lines += ["    app(_LEN[-pos & 3].pack(len(v)))", "    pos += (-pos & 3) + 4"]
         else:
-            lines += [f"    if len(v) != {length}:",
-                      f"        raise Error('{e.partition('.')[2]}: expected {length} messages, got %d' % len(v))"]
+            lines += [
+                f"    if len(v) != {length}:",
+                f"        raise Error('{e.partition('.')[2]}: expected {length} messages, got %d' % len(v))",
+            ]
         body = ["f = {fkey}.get()".format(fkey=fkey), "for it in v:"]
         if reuse:
-            body += ["    hit = _objs.get(id(it))",
-                     "    if hit is None:",
-                     "        hit = _objs_old.get(id(it))",
-                     "    if hit is not None and hit[0] is it:",
-                     f"        q = pos + (-pos & {align - 1})",
-                     "        if not q & 7:",
-                     "            if q != pos:",
-                     "                sub.append(_ZEROS[q - pos])",
-                     "            sub.append(hit[1][4:])",
-                     "            pos = q + len(hit[1]) - 4",
-                     "            continue"]
+            body += [
+                "    hit = _objs.get(id(it))",
+                "    if hit is None:",
+                "        hit = _objs_old.get(id(it))",
+                "    if hit is not None and hit[0] is it:",
+                f"        q = pos + (-pos & {align - 1})",
+                "        if not q & 7:",
+                "            if q != pos:",
+                "                sub.append(_ZEROS[q - pos])",
+                "            sub.append(hit[1][4:])",
+                "            pos = q + len(hit[1]) - 4",
+                "            continue",
+            ]
         body.append("    pos = f(it, sub, pos)")
         if not self.memo:
             lines.append("    sub = out")
             lines += ["    " + line for line in body]
             return
-        lines += ["    hit = _seqs.get(id(v))",
-                  "    if hit is not None and hit[0] is v and hit[1] == pos & 7:",
-                  "        app(hit[2])",
-                  "        pos += len(hit[2])",
-                  "    else:",
-                  "        sub = []",
-                  "        start = pos"]
+        lines += [
+            "    hit = _seqs.get(id(v))",
+            "    if hit is not None and hit[0] is v and hit[1] == pos & 7:",
+            "        app(hit[2])",
+            "        pos += len(hit[2])",
+            "    else:",
+            "        sub = []",
+            "        start = pos",
+        ]
         lines += ["        " + line for line in body]
-        lines += ["        b = b''.join(sub)",
-                  "        _seqs[id(v)] = (v, start & 7, b)",
-                  "        app(b)"]
+        lines += ["        b = b''.join(sub)", "        _seqs[id(v)] = (v, start & 7, b)", "        app(b)"]
 
     # --- decoders -------------------------------------------------------------------------------------------
     def _decoder_at(self, typename: str) -> Callable:
@@ -563,19 +626,21 @@ class Codec:
         ident = _ident(typename)
         at = self._decoder_at(typename)
         self._ns[f"_A_{ident}"] = at
-        lines = [f"def decode_{ident}(data):",
-                 "    b = data[4:]",
-                 f"    msg, pos = _A_{ident}(b, 0)",
-                 "    return msg, pos + 4"]
+        lines = [
+            f"def decode_{ident}(data):",
+            "    b = data[4:]",
+            f"    msg, pos = _A_{ident}(b, 0)",
+            "    return msg, pos + 4",
+        ]
         func = self._compile(lines, typename, f"decode_{ident}")
         self._decoders[typename] = func
         return func
 
     def _generate_decoder_at(self, typename: str) -> Callable:
         ident = _ident(typename)
-        self._decoders_at[typename] = None                  # type: ignore[assignment]  (recursion guard)
+        self._decoders_at[typename] = None  # type: ignore[assignment]  (recursion guard)
         lines = [f"def dec_{ident}(b, pos):"]
-        run: list = []          # (local, char, size)
+        run: list = []  # (local, char, size)
         k = [0]
 
         def local() -> str:
@@ -635,27 +700,33 @@ class Codec:
             self._ns[dkey] = np.dtype(_DTYPE[base])
             if size > 1:
                 lines += ["    if n:", f"        pos += -pos & {size - 1}"]
-            lines += [f"    if pos + n * {size} > len(b):",
-                      f"        raise Error('{fname}: %d elements do not fit' % n)",
-                      f"    {x} = _ndarray((n,), {dkey}, b, pos)",
-                      f"    pos += n * {size}"]
+            lines += [
+                f"    if pos + n * {size} > len(b):",
+                f"        raise Error('{fname}: %d elements do not fit' % n)",
+                f"    {x} = _ndarray((n,), {dkey}, b, pos)",
+                f"    pos += n * {size}",
+            ]
         elif sub_kind == Nodetype.BASE:
-            lines += ["    if n * 5 > len(b) - pos:",
-                      f"        raise Error('{fname}: %d strings do not fit' % n)",
-                      f"    {x} = []",
-                      "    for _ in range(n):"]
+            lines += [
+                "    if n * 5 > len(b) - pos:",
+                f"        raise Error('{fname}: %d strings do not fit' % n)",
+                f"    {x} = []",
+                "    for _ in range(n):",
+            ]
             lines.extend(_read_string("        ", "y"))
             lines.append(f"        {x}.append(y)")
         else:
             dkey = f"_Q_{_ident(sub_info)}"
             self._ns[dkey] = _LazyDecoder(self, sub_info)
-            lines += ["    if n > len(b) - pos:",
-                      f"        raise Error('{fname}: %d messages do not fit' % n)",
-                      f"    d = {dkey}.get()",
-                      f"    {x} = []",
-                      "    for _ in range(n):",
-                      "        y, pos = d(b, pos)",
-                      f"        {x}.append(y)"]
+            lines += [
+                "    if n > len(b) - pos:",
+                f"        raise Error('{fname}: %d messages do not fit' % n)",
+                f"    d = {dkey}.get()",
+                f"    {x} = []",
+                "    for _ in range(n):",
+                "        y, pos = d(b, pos)",
+                f"        {x}.append(y)",
+            ]
 
     def _compile(self, lines: list[str], typename: str, fname: str) -> Callable:
         exec(compile("\n".join(lines) + "\n", f"<cdr {typename}>", "exec"), self._ns)
@@ -667,12 +738,14 @@ def _ident(typename: str) -> str:
 
 
 def _read_string(indent: str, x: str) -> list[str]:
-    return [f"{indent}pos += -pos & 3",
-            f"{indent}k, = _U32.unpack_from(b, pos)",
-            f"{indent}if k < 1 or pos + 4 + k > len(b) or b[pos + 3 + k] != 0:",
-            f"{indent}    raise Error('bad string at byte %d' % pos)",
-            f"{indent}{x} = b[pos + 4:pos + 3 + k].decode()",
-            f"{indent}pos += 4 + k"]
+    return [
+        f"{indent}pos += -pos & 3",
+        f"{indent}k, = _U32.unpack_from(b, pos)",
+        f"{indent}if k < 1 or pos + 4 + k > len(b) or b[pos + 3 + k] != 0:",
+        f"{indent}    raise Error('bad string at byte %d' % pos)",
+        f"{indent}{x} = b[pos + 4:pos + 3 + k].decode()",
+        f"{indent}pos += 4 + k",
+    ]
 
 
 def _encode_strings(values, start: int, counted: bool) -> bytes:

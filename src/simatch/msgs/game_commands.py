@@ -46,8 +46,9 @@ class TestMode(enum.IntEnum):
 
 #: set pieces: OUR_x and OPP_x pairs (and the dropped ball, which belongs to nobody)
 SET_PIECES = frozenset(range(1, 14))
-NEUTRAL = frozenset({MatchMode.STOPROBOT, MatchMode.DROPBALL, MatchMode.STARTROBOT, MatchMode.PARKINGROBOT,
-                     MatchMode.TEST})
+NEUTRAL = frozenset(
+    {MatchMode.STOPROBOT, MatchMode.DROPBALL, MatchMode.STARTROBOT, MatchMode.PARKINGROBOT, MatchMode.TEST}
+)
 
 
 def is_ours(cmd: int) -> bool:
@@ -89,13 +90,24 @@ RESTART_OF_COMMAND = {int(cmd): kind for kind, cmd in RESTART_COMMANDS.items()}
 
 #: words a person may type for a command (the CLI coach, the operator console), besides the enum names
 ALIASES = {
-    "stop": MatchMode.STOPROBOT, "start": MatchMode.STARTROBOT, "park": MatchMode.PARKINGROBOT,
-    "parking": MatchMode.PARKINGROBOT, "test": MatchMode.TEST, "dropball": MatchMode.DROPBALL,
-    "drop": MatchMode.DROPBALL, "dropped_ball": MatchMode.DROPBALL,
-    "kickoff": MatchMode.OUR_KICKOFF, "throwin": MatchMode.OUR_THROWIN, "throw_in": MatchMode.OUR_THROWIN,
-    "penalty": MatchMode.OUR_PENALTY, "goalkick": MatchMode.OUR_GOALKICK, "goal_kick": MatchMode.OUR_GOALKICK,
-    "corner": MatchMode.OUR_CORNERKICK, "cornerkick": MatchMode.OUR_CORNERKICK,
-    "corner_kick": MatchMode.OUR_CORNERKICK, "freekick": MatchMode.OUR_FREEKICK,
+    "stop": MatchMode.STOPROBOT,
+    "start": MatchMode.STARTROBOT,
+    "park": MatchMode.PARKINGROBOT,
+    "parking": MatchMode.PARKINGROBOT,
+    "test": MatchMode.TEST,
+    "dropball": MatchMode.DROPBALL,
+    "drop": MatchMode.DROPBALL,
+    "dropped_ball": MatchMode.DROPBALL,
+    "kickoff": MatchMode.OUR_KICKOFF,
+    "throwin": MatchMode.OUR_THROWIN,
+    "throw_in": MatchMode.OUR_THROWIN,
+    "penalty": MatchMode.OUR_PENALTY,
+    "goalkick": MatchMode.OUR_GOALKICK,
+    "goal_kick": MatchMode.OUR_GOALKICK,
+    "corner": MatchMode.OUR_CORNERKICK,
+    "cornerkick": MatchMode.OUR_CORNERKICK,
+    "corner_kick": MatchMode.OUR_CORNERKICK,
+    "freekick": MatchMode.OUR_FREEKICK,
     "free_kick": MatchMode.OUR_FREEKICK,
 }
 

@@ -18,9 +18,18 @@ from __future__ import annotations
 
 import importlib
 
-_WHERE = {"ExportError": "tables", "export": "tables", "Player": "player", "Recording": "reader",
-          "RecordingError": "reader", "RecordError": "recorder", "Recorder": "recorder", "Verdict": "reproduce",
-          "VerifyError": "reproduce", "verify": "reproduce"}
+_WHERE = {
+    "ExportError": "tables",
+    "export": "tables",
+    "Player": "player",
+    "Recording": "reader",
+    "RecordingError": "reader",
+    "RecordError": "recorder",
+    "Recorder": "recorder",
+    "Verdict": "reproduce",
+    "VerifyError": "reproduce",
+    "verify": "reproduce",
+}
 
 __all__ = sorted(_WHERE)
 

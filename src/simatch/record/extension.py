@@ -18,12 +18,17 @@ from ..errors import UsageError
 class RecordExtension:
     def add_arguments(self, parser) -> None:
         group = parser.add_argument_group("recording")
-        group.add_argument("--record", metavar="FILE.mcap",
-                           help="record every topic of the run, the 3D scene and the metadata needed to reproduce "
-                                "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`)")
-        group.add_argument("--record-links", action="store_true",
-                           help="also record link states (every wheel) at the physics rate (slows the run down "
-                                "several times)")
+        group.add_argument(
+            "--record",
+            metavar="FILE.mcap",
+            help="record every topic of the run, the 3D scene and the metadata needed to reproduce "
+            "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`)",
+        )
+        group.add_argument(
+            "--record-links",
+            action="store_true",
+            help="also record link states (every wheel) at the physics rate (slows the run down several times)",
+        )
 
     def attach(self, sim, args):
         path = getattr(args, "record", None)

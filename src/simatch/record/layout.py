@@ -27,7 +27,7 @@ MESSAGE_ENCODING = "cdr"
 META_START = "simatch"
 META_END = "simatch_end"
 NS = 1_000_000_000
-CHUNK_NS = NS // 2          # simulated time per chunk
+CHUNK_NS = NS // 2  # simulated time per chunk
 
 
 def channel_topic(bus_topic: str) -> str:

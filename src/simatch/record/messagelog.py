@@ -46,15 +46,15 @@ from ..msgs import cdr
 
 #: a Message record up to its data: opcode, record length, channel id, sequence, log time, publish time
 MESSAGE_HEADER = struct.Struct("<BQHIQQ")
-MESSAGE_FIXED = 22                     # bytes of a Message record's content before its data
+MESSAGE_FIXED = 22  # bytes of a Message record's content before its data
 OPCODE_MESSAGE = 0x05
 _GAP = bytes(MESSAGE_HEADER.size)
 _pack_header = MESSAGE_HEADER.pack_into
-_MAX_NS = 2**63 - 1          # log times are signed 64-bit in the C log
+_MAX_NS = 2**63 - 1  # log times are signed 64-bit in the C log
 
 Fallback = Callable[[str, Any], None]
-CLOCK_STEP = 1              # the message's step sets the log time
-CLOCK_TICK = 2              # ... and opens a new memo period
+CLOCK_STEP = 1  # the message's step sets the log time
+CLOCK_TICK = 2  # ... and opens a new memo period
 
 
 #: a slot of a pose template: (byte offset of a geometry_msgs/Pose in the template, row of the model in the
@@ -112,8 +112,11 @@ class MessageLog:
         return len(self._buf)
 
     def add(self, topic: str, channel_id: int, typename: str, clock: int = 0) -> None:
-        self._channels[topic] = (_channel(channel_id), self._codec.appender(typename),
-                                 clock & (CLOCK_STEP | CLOCK_TICK))
+        self._channels[topic] = (
+            _channel(channel_id),
+            self._codec.appender(typename),
+            clock & (CLOCK_STEP | CLOCK_TICK),
+        )
 
     def timing(self, step_ns: int, chunk_ns: int, on_chunk: Callable[[], None]) -> None:
         if step_ns <= 0 or chunk_ns <= 0 or not callable(on_chunk):
@@ -130,10 +133,10 @@ class MessageLog:
             self._clock(msg, clock)
         buf = self._buf
         start = len(buf)
-        buf += _GAP                 # the record header, written once the message's size is known
+        buf += _GAP  # the record header, written once the message's size is known
         try:
             n = append(msg, buf)
-        except Exception:           # the fallback encodes it again and reports what is wrong
+        except Exception:  # the fallback encodes it again and reports what is wrong
             del buf[start:]
             self._fallback(topic, msg)
         else:
@@ -149,8 +152,7 @@ class MessageLog:
         self._poses = (topic, _channel(channel_id), every, fallback)
         self._template = None
 
-    def pose_template(self, names, template: bytes, slots: Sequence[PoseSlot], grid: float,
-                      turn_grid: float) -> None:
+    def pose_template(self, names, template: bytes, slots: Sequence[PoseSlot], grid: float, turn_grid: float) -> None:
         if self._poses is None:
             raise ValueError("pose_template: call poses() first")
         if not (grid > 0.0 and turn_grid > 0.0):
@@ -172,7 +174,7 @@ class MessageLog:
             try:
                 if msg.name == names:
                     data = fill_poses(template, slots, _float_buffer(msg.pose), grid, turn_grid)
-            except Exception:         # not as the template expects: the fallback says what is wrong
+            except Exception:  # not as the template expects: the fallback says what is wrong
                 data = None
         if data is None:
             return fallback(msg)
@@ -184,7 +186,7 @@ class MessageLog:
         except (AttributeError, TypeError, ValueError):
             step = -1
         self._step = step
-        if self._step_ns > 0 and 0 <= step <= _MAX_NS // self._step_ns:     # else ignored, as by the C log
+        if self._step_ns > 0 and 0 <= step <= _MAX_NS // self._step_ns:  # else ignored, as by the C log
             now = step * self._step_ns
             if now != self.now:
                 self.now = now

@@ -70,7 +70,7 @@ class Player:
         start_ns = layout.ns(self.start)
         if start_ns > 0:
             self._catch_up(start_ns)
-        anchor: tuple[float, float, float | None] | None = None      # (wall, sim, pace) when pacing began
+        anchor: tuple[float, float, float | None] | None = None  # (wall, sim, pace) when pacing began
         last_progress = -1.0
         for topic, t_ns, data in rec.raw(topics=self.topics, start_ns=start_ns):
             if self._stop:

@@ -39,8 +39,8 @@ class RecordingError(Exception):
 @dataclass
 class ChannelInfo:
     id: int
-    topic: str              # bus topic (no leading slash)
-    schema: str             # message type name
+    topic: str  # bus topic (no leading slash)
+    schema: str  # message type name
     encoding: str
     definition: bytes = b""  # the ros2msg schema it was recorded with
 
@@ -48,7 +48,7 @@ class ChannelInfo:
 @dataclass
 class ChunkInfo:
     offset: int
-    start: int              # log time of its first and last message [ns]
+    start: int  # log time of its first and last message [ns]
     end: int
 
 
@@ -88,10 +88,13 @@ class Recording:
                 except (McapError, EOFError, struct.error, ValueError, UnicodeDecodeError, MemoryError) as exc:
                     if offset == 0:
                         raise RecordingError(f"{self.path} is not an MCAP recording ({_describe(exc)})") from None
-                    self._problem("end", f"{self.path.name} breaks off at byte {offset} of "
-                                         f"{self.path.stat().st_size} ({_describe(exc)}): it was not finalised "
-                                         f"(the recording process was probably killed); what comes before "
-                                         f"is read")
+                    self._problem(
+                        "end",
+                        f"{self.path.name} breaks off at byte {offset} of "
+                        f"{self.path.stat().st_size} ({_describe(exc)}): it was not finalised "
+                        f"(the recording process was probably killed); what comes before "
+                        f"is read",
+                    )
                     return
                 yield offset, record
 
@@ -114,9 +117,12 @@ class Recording:
                 self.finalised = True
         if not self.finalised:
             if "end" not in self._reported:
-                self._problem("end", f"{self.path.name} was not finalised (the recording process stopped before "
-                                     f"closing it): it is read up to where it is intact")
-            self._scan_chunks()      # no summary: channels are known only from inside the chunks
+                self._problem(
+                    "end",
+                    f"{self.path.name} was not finalised (the recording process stopped before "
+                    f"closing it): it is read up to where it is intact",
+                )
+            self._scan_chunks()  # no summary: channels are known only from inside the chunks
 
     def _scan_chunks(self) -> None:
         for offset, record in self._records():
@@ -131,17 +137,21 @@ class Recording:
         """The records inside a chunk, or None if it is damaged (noted in `problems`)."""
         try:
             return breakup_chunk(record, validate_crc=True)
-        except Exception as exc:       # checksum mismatch, broken compression, broken records
-            self._problem(f"chunk{offset}", f"{self.path.name}: the chunk at byte {offset} "
-                          f"(t={record.message_start_time / layout.NS:.3f}..{record.message_end_time / layout.NS:.3f} s) "
-                          f"is damaged ({_describe(exc)}): its messages are skipped")
+        except Exception as exc:  # checksum mismatch, broken compression, broken records
+            self._problem(
+                f"chunk{offset}",
+                f"{self.path.name}: the chunk at byte {offset} "
+                f"(t={record.message_start_time / layout.NS:.3f}..{record.message_end_time / layout.NS:.3f} s) "
+                f"is damaged ({_describe(exc)}): its messages are skipped",
+            )
             return None
 
     def _add_channel(self, record: Channel) -> None:
         if record.id not in self.channels:
             name, data = self._schemas.get(record.schema_id, ("", b""))
-            self.channels[record.id] = ChannelInfo(record.id, layout.bus_topic(record.topic), name,
-                                                   record.message_encoding, data)
+            self.channels[record.id] = ChannelInfo(
+                record.id, layout.bus_topic(record.topic), name, record.message_encoding, data
+            )
 
     def _problem(self, key: str, text: str) -> None:
         if key not in self._reported:
@@ -240,16 +250,24 @@ class Recording:
         this simatch does not know, or whose definition differs from the one in the recording."""
         ok = self._checked.get(typename)
         if ok is None:
-            store = msgs.typestore if typename in msgs.typestore.fielddefs else (
-                fg.typestore if typename in fg.typestore.fielddefs else None)
+            store = (
+                msgs.typestore
+                if typename in msgs.typestore.fielddefs
+                else (fg.typestore if typename in fg.typestore.fielddefs else None)
+            )
             recorded = next((c.definition for c in self.channels.values() if c.schema == typename), b"")
             if store is None:
-                self._problem(f"type{typename}", f"{self.path.name}: type {typename!r} is unknown to this simatch: "
-                                                 f"its messages are skipped")
+                self._problem(
+                    f"type{typename}",
+                    f"{self.path.name}: type {typename!r} is unknown to this simatch: its messages are skipped",
+                )
             elif recorded and recorded.decode(errors="replace") != layout.schema_text(store, typename):
-                self._problem(f"type{typename}", f"{self.path.name}: {typename} was recorded with another "
-                                                 f"definition than this simatch's (another version?): its "
-                                                 f"messages are skipped")
+                self._problem(
+                    f"type{typename}",
+                    f"{self.path.name}: {typename} was recorded with another "
+                    f"definition than this simatch's (another version?): its "
+                    f"messages are skipped",
+                )
                 store = None
             ok = self._checked[typename] = store
         return ok
@@ -264,8 +282,11 @@ class Recording:
                 codec = self._codecs[id(store)] = Codec(store)
             return codec.decode(typename, data)
         except Exception as exc:
-            self._problem(f"decode{topic}", f"{self.path.name}: a message on {topic} does not decode as "
-                                            f"{typename} ({_describe(exc)}): such messages are skipped")
+            self._problem(
+                f"decode{topic}",
+                f"{self.path.name}: a message on {topic} does not decode as "
+                f"{typename} ({_describe(exc)}): such messages are skipped",
+            )
             return None
 
 

@@ -45,9 +45,16 @@ from .writer import McapWriter, WriterError
 log = logging.getLogger(__name__)
 
 #: single-level topics recorded besides every ``<team>/...`` topic (link_states only on request)
-WORLD_TOPICS = (topics.CLOCK, topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.BALL_CONTACTS, topics.EVENTS,
-                topics.GAME_STATE, topics.OPERATOR)
-TEAM_TOPICS = "*/*/**"      # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
+WORLD_TOPICS = (
+    topics.CLOCK,
+    topics.MODEL_STATES,
+    topics.STATE_FINGERPRINT,
+    topics.BALL_CONTACTS,
+    topics.EVENTS,
+    topics.GAME_STATE,
+    topics.OPERATOR,
+)
+TEAM_TOPICS = "*/*/**"  # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
 CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
 #: zstd level of the chunks: level 3 costs what level 1 does here and saves 1 %; levels 5-9 save 2-3 % more
@@ -74,10 +81,21 @@ class Recorder:
     starts (0: from the beginning, which `simatch replay --verify` needs). ``accelerate=False`` uses the
     pure-Python message log and encoders even where the C extension is built (the same bytes)."""
 
-    def __init__(self, bus, path: str | Path, *, scene: LoadedScene, seed: int, dt: float, first_step: int = 0,
-                 command_line: Iterable[str] | None = None, links: bool = False,
-                 extra_topics: Iterable[str] = (), compression_level: int = COMPRESSION_LEVEL,
-                 accelerate: bool = True):
+    def __init__(
+        self,
+        bus,
+        path: str | Path,
+        *,
+        scene: LoadedScene,
+        seed: int,
+        dt: float,
+        first_step: int = 0,
+        command_line: Iterable[str] | None = None,
+        links: bool = False,
+        extra_topics: Iterable[str] = (),
+        compression_level: int = COMPRESSION_LEVEL,
+        accelerate: bool = True,
+    ):
         self.path = Path(path)
         _check_path(self.path)
         self.bus = bus
@@ -85,29 +103,41 @@ class Recorder:
         self.dt_ns = layout.ns(dt)
         self.status = "recording"
         try:
-            self._writer = McapWriter(self.path, profile=layout.PROFILE, library=f"simatch {version()}",
-                                      compression_level=compression_level)
+            self._writer = McapWriter(
+                self.path, profile=layout.PROFILE, library=f"simatch {version()}", compression_level=compression_level
+            )
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
         self._log = new_log(self._fallback, accelerate=accelerate)
-        self._codec = Codec(msgs.typestore, accelerate=accelerate)     # for what the log does not take as it is
+        self._codec = Codec(msgs.typestore, accelerate=accelerate)  # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
-        self._totals: dict[int, int] = defaultdict(int)   # messages per channel id in chunks handed over
+        self._totals: dict[int, int] = defaultdict(int)  # messages per channel id in chunks handed over
         self._log.now = first_step * self.dt_ns
         self._log.timing(self.dt_ns, layout.CHUNK_NS, self._end_chunk)
-        self._chunk_end = self._log.now                # log time of the last message handed over
+        self._chunk_end = self._log.now  # log time of the last message handed over
         self.first_step = first_step
-        self._writer.metadata(layout.META_START, {
-            "format": layout.FORMAT, "format_version": layout.FORMAT_VERSION, "simatch_version": version(),
-            "scene_name": scene.name, "scene_source": scene.source, "scene_text": scene.text,
-            "overrides": json.dumps(scene.overrides), "seed": str(int(seed)), "run": str(getattr(bus, "run", "")),
-            "dt": repr(float(dt)), "control_period": repr(float(scene.spec.control.period)),
-            "first_step": str(first_step), "links": json.dumps(bool(links)),
-            "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
-            "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        })
+        self._writer.metadata(
+            layout.META_START,
+            {
+                "format": layout.FORMAT,
+                "format_version": layout.FORMAT_VERSION,
+                "simatch_version": version(),
+                "scene_name": scene.name,
+                "scene_source": scene.source,
+                "scene_text": scene.text,
+                "overrides": json.dumps(scene.overrides),
+                "seed": str(int(seed)),
+                "run": str(getattr(bus, "run", "")),
+                "dt": repr(float(dt)),
+                "control_period": repr(float(scene.spec.control.period)),
+                "first_step": str(first_step),
+                "links": json.dumps(bool(links)),
+                "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
+                "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            },
+        )
         self._scene3d = SceneBuilder(scene.spec)
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
@@ -122,8 +152,9 @@ class Recorder:
         """A new channel (and its schema if new); their records go into the current chunk."""
         sid = self._schemas.get(typename)
         if sid is None:
-            sid, record = self._writer.schema(typename, layout.SCHEMA_ENCODING,
-                                              layout.schema_text(typestore, typename).encode())
+            sid, record = self._writer.schema(
+                typename, layout.SCHEMA_ENCODING, layout.schema_text(typestore, typename).encode()
+            )
             self._schemas[typename] = sid
             self._log.append(record)
         cid, record = self._writer.channel(channel_topic, sid, layout.MESSAGE_ENCODING)
@@ -135,8 +166,9 @@ class Recorder:
         if typename is None or typename not in msgs.typestore.fielddefs:
             self._skip(topic, f"type {typename or type(msg).__name__} is not a simatch message type")
             return None
-        ch = self._channels[topic] = _Channel(self._raw_channel(layout.channel_topic(topic), msgs.typestore,
-                                                                typename), typename)
+        ch = self._channels[topic] = _Channel(
+            self._raw_channel(layout.channel_topic(topic), msgs.typestore, typename), typename
+        )
         self._log.add(topic, ch.id, typename, CLOCKS.get(topic, 0))
         return ch
 
@@ -158,11 +190,10 @@ class Recorder:
             return
         try:
             data = self._codec.encode(msg, ch.typename)
-        except Exception as exc:      # a malformed message from a producer: counted, never raised
+        except Exception as exc:  # a malformed message from a producer: counted, never raised
             ch.errors += 1
             if ch.errors == 1:
-                log.warning("recording: a message on %s does not encode (%s); such messages are skipped",
-                            topic, exc)
+                log.warning("recording: a message on %s does not encode (%s); such messages are skipped", topic, exc)
             return
         self._log.record(ch.id, data)
 
@@ -174,7 +205,7 @@ class Recorder:
         if data:
             for cid, n in counts.items():
                 self._totals[cid] += n
-            if first < 0:                             # only schema and channel records
+            if first < 0:  # only schema and channel records
                 first = last = self._chunk_end
             self._writer.end_chunk(data, first, last, counts)
             self._chunk_end = last
@@ -211,10 +242,13 @@ class Recorder:
         try:
             self._end_chunk()
             errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
-            end = {"status": status, "sim_seconds": repr(self.sim_seconds),
-                   "messages": json.dumps(self.counts(), sort_keys=True),
-                   "skipped_topics": json.dumps(self._skipped, sort_keys=True),
-                   "encode_errors": json.dumps(errors, sort_keys=True)}
+            end = {
+                "status": status,
+                "sim_seconds": repr(self.sim_seconds),
+                "messages": json.dumps(self.counts(), sort_keys=True),
+                "skipped_topics": json.dumps(self._skipped, sort_keys=True),
+                "encode_errors": json.dumps(errors, sort_keys=True),
+            }
             for key, value in (summary or {}).items():
                 end[key] = value if isinstance(value, str) else json.dumps(value)
             self._writer.metadata(layout.META_END, end)
@@ -237,8 +271,9 @@ class Recorder:
 
     # --- a Simulation ----------------------------------------------------------------------------------------
     @classmethod
-    def for_run(cls, sim, path: str | Path, *, command_line: Iterable[str] | None = None, links: bool = False,
-                **options) -> "RunRecorder":
+    def for_run(
+        cls, sim, path: str | Path, *, command_line: Iterable[str] | None = None, links: bool = False, **options
+    ) -> "RunRecorder":
         """A recorder of ``sim`` (a `simatch.Simulation`); attach it before the first step so that the
         recording can be re-simulated. Closing it adds the run's state digest to the metadata."""
         return RunRecorder(sim, path, command_line=command_line, links=links, **options)
@@ -247,14 +282,18 @@ class Recorder:
 class RunRecorder(Recorder):
     def __init__(self, sim, path, **options):
         self.sim = sim
-        super().__init__(sim.bus, path, scene=sim.scene, seed=sim.seed, dt=sim.dt,
-                         first_step=sim.simulator.step_index, **options)
+        super().__init__(
+            sim.bus, path, scene=sim.scene, seed=sim.seed, dt=sim.dt, first_step=sim.simulator.step_index, **options
+        )
 
     def close(self, status: str = "complete", summary: dict | None = None) -> None:
         if self.status != "recording":
             return
-        out = {"state_digest": self.sim.state_digest(), "run_sim_seconds": repr(self.sim.time),
-               "events": len(self.sim.events)}
+        out = {
+            "state_digest": self.sim.state_digest(),
+            "run_sim_seconds": repr(self.sim.time),
+            "events": len(self.sim.events),
+        }
         out.update(summary or {})
         super().close(status, out)
 

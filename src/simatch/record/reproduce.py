@@ -31,11 +31,18 @@ from ..msgs.cdr import Codec
 from .reader import Recording, RecordingError
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
-WORLD_CALLS = {"set_model_state", "set_link_state", "apply_wrench", "take_control", "release_control", "send_vel",
-               "send_action"}
+WORLD_CALLS = {
+    "set_model_state",
+    "set_link_state",
+    "apply_wrench",
+    "take_control",
+    "release_control",
+    "send_vel",
+    "send_action",
+}
 POSE_FIELDS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 TWIST_FIELDS = ("vx", "vy", "vz", "wx", "wy", "wz")
-_STEP = struct.Struct("<4xdQ")           # CDR header, then ModelStates.stamp and .step
+_STEP = struct.Struct("<4xdQ")  # CDR header, then ModelStates.stamp and .step
 
 
 class VerifyError(Exception):
@@ -53,25 +60,29 @@ class Difference:
     differing_values: int
 
     def describe(self) -> str:
-        return (f"first difference at t={self.t:.3f} s (physics step {self.step}): {self.model} {self.field} "
-                f"recorded {self.recorded!r}, re-simulated {self.simulated!r} "
-                f"({self.differing_values} value(s) of that step differ)")
+        return (
+            f"first difference at t={self.t:.3f} s (physics step {self.step}): {self.model} {self.field} "
+            f"recorded {self.recorded!r}, re-simulated {self.simulated!r} "
+            f"({self.differing_values} value(s) of that step differ)"
+        )
 
 
 @dataclass
 class Verdict:
     identical: bool
-    compared: int                         # model-state samples compared
-    until: float                          # simulated time of the last one [s]
+    compared: int  # model-state samples compared
+    until: float  # simulated time of the last one [s]
     first_difference: Difference | None = None
     operator_commands: int = 0
     problems: list[str] = field(default_factory=list)
-    complete: bool = True                 # the whole run was recorded and compared (file intact, finalised)
+    complete: bool = True  # the whole run was recorded and compared (file intact, finalised)
 
     def describe(self) -> str:
         if self.identical:
-            head = (f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
-                    f"{self.operator_commands} operator command(s) re-applied")
+            head = (
+                f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
+                f"{self.operator_commands} operator command(s) re-applied"
+            )
             if not self.complete:
                 head += "; the recording is incomplete, so only what it holds was checked"
         else:
@@ -79,9 +90,15 @@ class Verdict:
         return "\n".join([head] + [f"note: {p}" for p in self.problems])
 
     def as_dict(self) -> dict:
-        out = {"identical": self.identical, "compared": self.compared, "until": self.until,
-               "operator_commands": self.operator_commands, "complete": self.complete, "problems": self.problems,
-               "first_difference": None}
+        out = {
+            "identical": self.identical,
+            "compared": self.compared,
+            "until": self.until,
+            "operator_commands": self.operator_commands,
+            "complete": self.complete,
+            "problems": self.problems,
+            "first_difference": None,
+        }
         if self.first_difference:
             out["first_difference"] = dict(self.first_difference.__dict__)
         return out
@@ -99,8 +116,10 @@ def apply_operator(sim, op) -> None:
     elif call == "coach":
         coach = sim.coaches.get(target)
         if coach is None:
-            raise VerifyError(f"operator command at t={op.stamp:.3f} s gives a command to the coach of {target!r}, "
-                              f"which this run does not have")
+            raise VerifyError(
+                f"operator command at t={op.stamp:.3f} s gives a command to the coach of {target!r}, "
+                f"which this run does not have"
+            )
         cmd = args.pop("cmd")
         coach.send(cmd, **args)
     elif call.startswith("judge."):
@@ -114,24 +133,30 @@ def apply_operator(sim, op) -> None:
 
 def verify(path: str | Path, progress: Callable[[float], None] | None = None) -> Verdict:
     """Re-simulate the recording at ``path`` and compare its model states step by step."""
-    from ..simulation import Simulation      # the embedded run: composes every subsystem
+    from ..simulation import Simulation  # the embedded run: composes every subsystem
 
     rec = Recording(path)
     meta = rec.metadata
     if not rec.is_simatch:
         raise VerifyError(f"{rec.path} is not a simatch recording (no simatch metadata): nothing to re-simulate")
     if int(meta.get("first_step", "0")) != 0:
-        raise VerifyError(f"{rec.path}: the recording started at t={int(meta['first_step']) * float(meta['dt']):.3f} s, "
-                          f"after the run began; a run can only be re-simulated from a recording of its start")
+        raise VerifyError(
+            f"{rec.path}: the recording started at t={int(meta['first_step']) * float(meta['dt']):.3f} s, "
+            f"after the run began; a run can only be re-simulated from a recording of its start"
+        )
     problems = []
     if meta.get("simatch_version") != version():
-        problems.append(f"recorded with simatch {meta.get('simatch_version')}, re-simulated with {version()}: "
-                        f"a different version may simulate differently")
+        problems.append(
+            f"recorded with simatch {meta.get('simatch_version')}, re-simulated with {version()}: "
+            f"a different version may simulate differently"
+        )
     scene = rec.scene()
     external = [t for t, spec in scene.spec.teams.items() if spec.strategy == "external"]
     if external:
-        raise VerifyError(f"{rec.path}: team(s) {', '.join(external)} ran outside the simulator process "
-                          f"(strategy 'external'): their decisions cannot be re-simulated")
+        raise VerifyError(
+            f"{rec.path}: team(s) {', '.join(external)} ran outside the simulator process "
+            f"(strategy 'external'): their decisions cannot be re-simulated"
+        )
     with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
         return _compare(rec, sim, problems, progress)
 
@@ -161,8 +186,10 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))
     prints = _Fingerprints()
-    subs = [sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
-            sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated)]
+    subs = [
+        sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
+        sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
+    ]
     pending: list = []
     last_report = -1.0
 
@@ -233,8 +260,15 @@ class _Fingerprints:
         for step in sorted(k for k in self.theirs if k <= upto):
             theirs, mine = self.theirs.pop(step), self.mine.get(step)
             if found is None and theirs != mine:
-                found = Difference(step * dt, step, "(every model)", "fingerprint of the exact states", theirs,
-                                   "none" if mine is None else mine, 1)
+                found = Difference(
+                    step * dt,
+                    step,
+                    "(every model)",
+                    "fingerprint of the exact states",
+                    theirs,
+                    "none" if mine is None else mine,
+                    1,
+                )
         for step in [k for k in self.mine if k <= upto]:
             del self.mine[step]
         return found
@@ -269,12 +303,15 @@ def _difference(rec: Recording, data: bytes, mine, dt: float) -> Difference:
         return Difference(t, step, "?", "?", "undecodable", "", 0)
     if list(theirs.name) != list(mine.name):
         return Difference(t, step, "(models)", "name", ", ".join(theirs.name), ", ".join(mine.name), 1)
+
     # widened to float64 (exact for float32), compared bit for bit (which also tells -0.0 from 0.0)
     def rows(values, fields):
         return np.asarray(values, dtype=float).reshape(-1, len(fields))
 
-    groups = [(fields, rows(a, fields), rows(b, fields))
-              for fields, a, b in ((POSE_FIELDS, theirs.pose, mine.pose), (TWIST_FIELDS, theirs.twist, mine.twist))]
+    groups = [
+        (fields, rows(a, fields), rows(b, fields))
+        for fields, a, b in ((POSE_FIELDS, theirs.pose, mine.pose), (TWIST_FIELDS, theirs.twist, mine.twist))
+    ]
     diffs = [a.view(np.uint64) != b.view(np.uint64) for _, a, b in groups]
     for (fields, a, b), diff in zip(groups, diffs):
         if diff.any():

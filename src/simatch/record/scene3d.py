@@ -34,17 +34,27 @@ from .messagelog import PoseSlot, fill_poses
 FIELD_TOPIC = "/scene/field"
 GAME_TOPIC = "/scene/game"
 FRAME = "world"
-GAME_RATE = 20.0            # game updates per simulated second
+GAME_RATE = 20.0  # game updates per simulated second
 
 NAMED_COLORS = {
-    "cyan": (0.0, 0.8, 0.9), "magenta": (0.9, 0.1, 0.8), "red": (0.9, 0.1, 0.1), "blue": (0.1, 0.3, 0.9),
-    "green": (0.1, 0.7, 0.2), "yellow": (0.95, 0.85, 0.1), "orange": (1.0, 0.55, 0.0),
-    "purple": (0.5, 0.2, 0.8), "white": (0.95, 0.95, 0.95), "black": (0.1, 0.1, 0.1), "gray": (0.5, 0.5, 0.5),
-    "grey": (0.5, 0.5, 0.5), "pink": (1.0, 0.6, 0.75), "brown": (0.55, 0.35, 0.15),
+    "cyan": (0.0, 0.8, 0.9),
+    "magenta": (0.9, 0.1, 0.8),
+    "red": (0.9, 0.1, 0.1),
+    "blue": (0.1, 0.3, 0.9),
+    "green": (0.1, 0.7, 0.2),
+    "yellow": (0.95, 0.85, 0.1),
+    "orange": (1.0, 0.55, 0.0),
+    "purple": (0.5, 0.2, 0.8),
+    "white": (0.95, 0.95, 0.95),
+    "black": (0.1, 0.1, 0.1),
+    "gray": (0.5, 0.5, 0.5),
+    "grey": (0.5, 0.5, 0.5),
+    "pink": (1.0, 0.6, 0.75),
+    "brown": (0.55, 0.35, 0.15),
 }
 
-GRID = 1024.0              # positions drawn: steps per metre
-TURN_GRID = 4096.0         # orientations drawn: steps per unit of a quaternion
+GRID = 1024.0  # positions drawn: steps per metre
+TURN_GRID = 4096.0  # orientations drawn: steps per unit of a quaternion
 
 
 def color_rgb(name: str) -> tuple[float, float, float]:
@@ -54,7 +64,7 @@ def color_rgb(name: str) -> tuple[float, float, float]:
         return NAMED_COLORS[key]
     if key.startswith("#") and len(key) == 7:
         try:
-            return tuple(int(key[i:i + 2], 16) / 255.0 for i in (1, 3, 5))   # type: ignore[return-value]
+            return tuple(int(key[i : i + 2], 16) / 255.0 for i in (1, 3, 5))  # type: ignore[return-value]
         except ValueError:
             pass
     hue = hashlib.sha256(key.encode()).digest()[0] / 255.0
@@ -83,7 +93,8 @@ class SceneBuilder:
         P = self._T
         return P["geometry_msgs/msg/Pose"](
             position=P["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=float(z)),
-            orientation=P["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+            orientation=P["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+        )
 
     def _vec(self, x, y, z):
         return self._T["geometry_msgs/msg/Vector3"](x=float(x), y=float(y), z=float(z))
@@ -93,22 +104,39 @@ class SceneBuilder:
 
     def _entity(self, eid: str, **prims):
         T = self._T
-        fields = {k: prims.get(k, []) for k in ("arrows", "cubes", "spheres", "cylinders", "lines", "triangles",
-                                                "texts", "models")}
-        return self._msg("SceneEntity", timestamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
-                         frame_id=FRAME, id=eid,
-                         lifetime=T["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
-                         frame_locked=False, metadata=[], **fields)
+        fields = {
+            k: prims.get(k, [])
+            for k in ("arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models")
+        }
+        return self._msg(
+            "SceneEntity",
+            timestamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+            frame_id=FRAME,
+            id=eid,
+            lifetime=T["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+            frame_locked=False,
+            metadata=[],
+            **fields,
+        )
 
     def _cube(self, x, y, z, sx, sy, sz, rgb, a=1.0, yaw=0.0):
-        return self._msg("CubePrimitive", pose=self._pose(x, y, z, yaw), size=self._vec(sx, sy, sz),
-                         color=self._color(rgb, a))
+        return self._msg(
+            "CubePrimitive", pose=self._pose(x, y, z, yaw), size=self._vec(sx, sy, sz), color=self._color(rgb, a)
+        )
 
     def _line(self, points, width, rgb, z=0.003, loop=False):
         P = self._T["geometry_msgs/msg/Point"]
-        return self._msg("LinePrimitive", type=1 if loop else 0, pose=self._pose(), thickness=float(width),
-                         scale_invariant=False, points=[P(x=float(px), y=float(py), z=z) for px, py in points],
-                         color=self._color(rgb), colors=[], indices=np.zeros(0, dtype=np.uint32))
+        return self._msg(
+            "LinePrimitive",
+            type=1 if loop else 0,
+            pose=self._pose(),
+            thickness=float(width),
+            scale_invariant=False,
+            points=[P(x=float(px), y=float(py), z=z) for px, py in points],
+            color=self._color(rgb),
+            colors=[],
+            indices=np.zeros(0, dtype=np.uint32),
+        )
 
     def _update(self, entities) -> bytes:
         return self.codec.encode(self._msg("SceneUpdate", deletions=[], entities=entities), fg.SCENE_UPDATE)
@@ -127,17 +155,32 @@ class SceneBuilder:
                 (cx, cy), r = item["center"], item["radius"]
                 a0, a1 = item["start"], item["end"]
                 n = max(4, int(abs(a1 - a0) / (2 * math.pi) * 72))
-                pts = [(cx + r * math.cos(a0 + (a1 - a0) * k / n), cy + r * math.sin(a0 + (a1 - a0) * k / n))
-                       for k in range(n + 1)]
+                pts = [
+                    (cx + r * math.cos(a0 + (a1 - a0) * k / n), cy + r * math.sin(a0 + (a1 - a0) * k / n))
+                    for k in range(n + 1)
+                ]
                 lines.append(self._line(pts, F.line_width, white))
             elif item["kind"] == "dot":
                 (cx, cy), r = item["center"], item["radius"]
-                cylinders.append(self._msg("CylinderPrimitive", pose=self._pose(cx, cy, 0.003),
-                                           size=self._vec(2 * r, 2 * r, 0.004), bottom_scale=1.0, top_scale=1.0,
-                                           color=self._color(white)))
+                cylinders.append(
+                    self._msg(
+                        "CylinderPrimitive",
+                        pose=self._pose(cx, cy, 0.003),
+                        size=self._vec(2 * r, 2 * r, 0.004),
+                        bottom_scale=1.0,
+                        top_scale=1.0,
+                        color=self._color(white),
+                    )
+                )
         for area in F.areas:
-            lines.append(self._line([(area.x0, area.y0), (area.x1, area.y0), (area.x1, area.y1), (area.x0, area.y1)],
-                                    F.line_width, (0.95, 0.85, 0.1), loop=True))
+            lines.append(
+                self._line(
+                    [(area.x0, area.y0), (area.x1, area.y0), (area.x1, area.y1), (area.x0, area.y1)],
+                    F.line_width,
+                    (0.95, 0.85, 0.1),
+                    loop=True,
+                )
+            )
         if F.walls:
             h, t = F.wall_height, 0.05
             board = (0.25, 0.25, 0.28)
@@ -155,7 +198,7 @@ class SceneBuilder:
         L, p, gw, gh, gd = F.half_length, F.goal_post_size, F.goal_width, F.goal_height, F.goal_depth
         defenders = {}
         for team in self.scene.teams:
-            defenders[-self.scene.team_sign(team)] = team     # attacking +x means defending the goal at -x
+            defenders[-self.scene.team_sign(team)] = team  # attacking +x means defending the goal at -x
         out = []
         for side in (-1, 1):
             x = side * (L + p / 2)
@@ -190,7 +233,7 @@ class SceneBuilder:
         sentinels: list[tuple[int, float, str, float]] = []
 
         def mark(k: int, kind: str, z: float):
-            value = 7.0e5 + len(sentinels) / 64.0          # exact in binary, never a real coordinate
+            value = 7.0e5 + len(sentinels) / 64.0  # exact in binary, never a real coordinate
             sentinels.append((k, value, kind, z))
             return self._pose(value, 0.0, z)
 
@@ -198,21 +241,49 @@ class SceneBuilder:
         for k, name in enumerate(names):
             if name == "ball":
                 r = self.scene.ball.radius
-                entities.append(self._entity("ball", spheres=[self._msg(
-                    "SpherePrimitive", pose=mark(k, "ball", 0.0), size=self._vec(2 * r, 2 * r, 2 * r),
-                    color=self._color((1.0, 0.5, 0.0)))]))
+                entities.append(
+                    self._entity(
+                        "ball",
+                        spheres=[
+                            self._msg(
+                                "SpherePrimitive",
+                                pose=mark(k, "ball", 0.0),
+                                size=self._vec(2 * r, 2 * r, 2 * r),
+                                color=self._color((1.0, 0.5, 0.0)),
+                            )
+                        ],
+                    )
+                )
                 continue
             team, _, rid = name.partition("/")
             radius, height = self._robot_shape(team)
             rgb = color_rgb(self.scene.team_color(team)) if team in self.scene.teams else (0.6, 0.6, 0.6)
-            body = self._msg("CylinderPrimitive", pose=mark(k, "robot", height / 2),
-                             size=self._vec(2 * radius, 2 * radius, height), bottom_scale=1.0, top_scale=1.0,
-                             color=self._color(rgb))
-            kicker = self._msg("ArrowPrimitive", pose=mark(k, "robot", height + 0.02), shaft_length=0.8 * radius,
-                               shaft_diameter=0.06, head_length=0.2 * radius + 0.05, head_diameter=0.14,
-                               color=self._color((0.1, 0.1, 0.1)))
-            label = self._msg("TextPrimitive", pose=mark(k, "text", height + 0.35), billboard=True, font_size=0.4,
-                              scale_invariant=False, color=self._color((1.0, 1.0, 1.0)), text=rid or name)
+            body = self._msg(
+                "CylinderPrimitive",
+                pose=mark(k, "robot", height / 2),
+                size=self._vec(2 * radius, 2 * radius, height),
+                bottom_scale=1.0,
+                top_scale=1.0,
+                color=self._color(rgb),
+            )
+            kicker = self._msg(
+                "ArrowPrimitive",
+                pose=mark(k, "robot", height + 0.02),
+                shaft_length=0.8 * radius,
+                shaft_diameter=0.06,
+                head_length=0.2 * radius + 0.05,
+                head_diameter=0.14,
+                color=self._color((0.1, 0.1, 0.1)),
+            )
+            label = self._msg(
+                "TextPrimitive",
+                pose=mark(k, "text", height + 0.35),
+                billboard=True,
+                font_size=0.4,
+                scale_invariant=False,
+                color=self._color((1.0, 1.0, 1.0)),
+                text=rid or name,
+            )
             entities.append(self._entity(name, cylinders=[body], arrows=[kicker], texts=[label]))
         template = self._update(entities)
         slots = []

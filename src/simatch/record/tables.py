@@ -42,9 +42,20 @@ from .reader import Recording
 FORMATS = ("parquet", "csv")
 BATCH_ROWS = 200_000
 _ARROW = {
-    "bool": pa.bool_(), "byte": pa.uint8(), "char": pa.uint8(), "octet": pa.uint8(), "int8": pa.int8(),
-    "uint8": pa.uint8(), "int16": pa.int16(), "uint16": pa.uint16(), "int32": pa.int32(), "uint32": pa.uint32(),
-    "int64": pa.int64(), "uint64": pa.uint64(), "float32": pa.float32(), "float64": pa.float64(),
+    "bool": pa.bool_(),
+    "byte": pa.uint8(),
+    "char": pa.uint8(),
+    "octet": pa.uint8(),
+    "int8": pa.int8(),
+    "uint8": pa.uint8(),
+    "int16": pa.int16(),
+    "uint16": pa.uint16(),
+    "int32": pa.int32(),
+    "uint32": pa.uint32(),
+    "int64": pa.int64(),
+    "uint64": pa.uint64(),
+    "float32": pa.float32(),
+    "float64": pa.float64(),
     "string": pa.string(),
 }
 
@@ -110,8 +121,11 @@ class _Table:
             data[f.name] = pa.array(values, type=f.type)
         batch = pa.record_batch(data, schema=self.schema)
         if self._writer is None:
-            self._writer = (pq.ParquetWriter(self.path, self.schema) if self.fmt == "parquet"
-                            else pacsv.CSVWriter(self.path, self.schema))
+            self._writer = (
+                pq.ParquetWriter(self.path, self.schema)
+                if self.fmt == "parquet"
+                else pacsv.CSVWriter(self.path, self.schema)
+            )
         self._writer.write_batch(batch)
         self.rows += self._pending
         self._pending = 0
@@ -191,7 +205,9 @@ class Exporter:
 
     def run(self) -> dict[str, int]:
         types = self.rec.topics()
-        for topic, t_ns, msg in self.rec.messages(topics=[t for t, ty in types.items() if ty in msgs.typestore.fielddefs]):
+        for topic, t_ns, msg in self.rec.messages(
+            topics=[t for t, ty in types.items() if ty in msgs.typestore.fielddefs]
+        ):
             t = t_ns / layout.NS
             kind = msg.__msgtype__.rsplit("/", 1)[1]
             if kind in ("ModelStates", "LinkStates"):
@@ -209,18 +225,36 @@ class Exporter:
         n = len(names)
         pose = np.asarray(msg.pose, dtype=float).reshape(n, 7)
         twist = np.asarray(msg.twist, dtype=float).reshape(n, 6)
-        table = self.table(name, pa.schema(
-            [("t", pa.float64()), ("step", pa.uint64()), ("model", pa.string()), ("team", pa.string()),
-             ("robot", pa.int32())] + [(c, pa.float64()) for c in
-                                       ("x", "y", "z", "yaw", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")]))
+        table = self.table(
+            name,
+            pa.schema(
+                [
+                    ("t", pa.float64()),
+                    ("step", pa.uint64()),
+                    ("model", pa.string()),
+                    ("team", pa.string()),
+                    ("robot", pa.int32()),
+                ]
+                + [
+                    (c, pa.float64())
+                    for c in ("x", "y", "z", "yaw", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
+                ]
+            ),
+        )
         teams, robots = [], []
         for model in names:
             parts = model.split("/")
             ok = len(parts) >= 2 and parts[1].isdigit()
             teams.append(parts[0] if ok else None)
             robots.append(int(parts[1]) if ok else None)
-        cols = {"t": t, "step": int(msg.step), "model": names, "team": teams, "robot": robots,
-                "yaw": _yaw(pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6])}
+        cols = {
+            "t": t,
+            "step": int(msg.step),
+            "model": names,
+            "team": teams,
+            "robot": robots,
+            "yaw": _yaw(pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]),
+        }
         for k, c in enumerate(("x", "y", "z", "qw", "qx", "qy", "qz")):
             cols[c] = pose[:, k]
         for k, c in enumerate(("vx", "vy", "vz", "wx", "wy", "wz")):
@@ -229,10 +263,20 @@ class Exporter:
 
     def _perception(self, t: float, topic: str, msg) -> None:
         where = _where(topic)
-        base = {"t": t, "team": where.get("team"), "robot": where.get("robot"), "stamp": msg.stamp,
-                "tick": int(msg.tick)}
-        lead = [("t", pa.float64()), ("team", pa.string()), ("robot", pa.int32()), ("stamp", pa.float64()),
-                ("tick", pa.uint64())]
+        base = {
+            "t": t,
+            "team": where.get("team"),
+            "robot": where.get("robot"),
+            "stamp": msg.stamp,
+            "tick": int(msg.tick),
+        }
+        lead = [
+            ("t", pa.float64()),
+            ("team", pa.string()),
+            ("robot", pa.int32()),
+            ("stamp", pa.float64()),
+            ("tick", pa.uint64()),
+        ]
         ball = self._cols("simatch_msgs/msg/BallInfo", "ball_")
         row = dict(base)
         for c, _, get in ball:
@@ -249,8 +293,9 @@ class Exporter:
         fields = ("x", "y", "vx", "vy", "angle", "distance", "radius")
         n = len(ob.x)
         if n:
-            table = self.table("perception_obstacles", pa.schema(lead + [("index", pa.int32())] +
-                                                                [(c, pa.float64()) for c in fields]))
+            table = self.table(
+                "perception_obstacles", pa.schema(lead + [("index", pa.int32())] + [(c, pa.float64()) for c in fields])
+            )
             cols = dict(base)
             cols["index"] = list(range(n))
             for c in fields:
@@ -275,7 +320,9 @@ class Exporter:
         table.add(row)
 
 
-def export(path: str | Path, fmt: str = "parquet", out: str | Path | None = None) -> tuple[Path, dict[str, int], Recording]:
+def export(
+    path: str | Path, fmt: str = "parquet", out: str | Path | None = None
+) -> tuple[Path, dict[str, int], Recording]:
     """Write the tables of the recording at ``path`` into folder ``out`` (default: next to the recording,
     ``<name>_tables``); returns the folder, the row count of each table, and the recording (its
     ``problems`` say what was damaged)."""
@@ -289,8 +336,10 @@ def export(path: str | Path, fmt: str = "parquet", out: str | Path | None = None
         raise ExportError(f"cannot create the folder {folder}: {exc}") from None
     clash = [p.name for p in folder.glob(f"*.{fmt}")]
     if clash:
-        raise ExportError(f"{folder} already holds {fmt} tables ({', '.join(sorted(clash)[:3])}...): "
-                          f"export into an empty folder (--out DIR); nothing was overwritten")
+        raise ExportError(
+            f"{folder} already holds {fmt} tables ({', '.join(sorted(clash)[:3])}...): "
+            f"export into an empty folder (--out DIR); nothing was overwritten"
+        )
     counts = Exporter(rec, folder, fmt).run()
     meta = dict(rec.metadata)
     for key in ("overrides", "command_line"):

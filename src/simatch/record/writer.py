@@ -57,7 +57,7 @@ log = logging.getLogger(__name__)
 #: chunks handed over and not yet written, at most: one being written and one in the pipe (the writer process
 #: starts in some 30 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
 MAX_HANDED = 2
-_PIPE_SIZE = 1 << 20                  # a chunk (about half a megabyte) fits: handed over in one copy
+_PIPE_SIZE = 1 << 20  # a chunk (about half a megabyte) fits: handed over in one copy
 
 
 class WriterError(Exception):
@@ -69,7 +69,7 @@ class McapWriter:
 
     def __init__(self, path: str | Path, *, profile: str, library: str, compression_level: int = 1):
         try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)   # never overwrites a file
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # never overwrites a file
         except OSError as exc:
             raise WriterError(f"cannot write {path}: {exc.strerror or exc}") from None
         self.path = Path(path)
@@ -82,20 +82,30 @@ class McapWriter:
         self._times: tuple[int, int] | None = None
         self._records = RecordBuilder()
         self._closed = False
-        self._pending = 0                                   # acknowledgements still to come
+        self._pending = 0  # acknowledgements still to come
         to_child, self._out = os.pipe()
         self._back, from_child = os.pipe()
         _widen(self._out)
-        try:       # the file itself (it needs only zstd and mcap), -P: nothing of its folder on the path
+        try:  # the file itself (it needs only zstd and mcap), -P: nothing of its folder on the path
             self._proc = subprocess.Popen(
-                [sys.executable, "-P", writer_process.__file__, str(to_child), str(from_child), str(fd),
-                 str(compression_level)],
-                pass_fds=(to_child, from_child, fd), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                start_new_session=True)
+                [
+                    sys.executable,
+                    "-P",
+                    writer_process.__file__,
+                    str(to_child),
+                    str(from_child),
+                    str(fd),
+                    str(compression_level),
+                ],
+                pass_fds=(to_child, from_child, fd),
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                start_new_session=True,
+            )
         except OSError as exc:
             for end in (self._out, self._back):
                 os.close(end)
-            os.unlink(path)                                  # the empty file made above: nothing recorded
+            os.unlink(path)  # the empty file made above: nothing recorded
             raise WriterError(f"cannot start the writer process: {exc}") from None
         finally:
             for end in (to_child, from_child, fd):
@@ -113,8 +123,9 @@ class McapWriter:
 
     def channel(self, topic: str, schema_id: int, message_encoding: str) -> tuple[int, bytes]:
         """Register a channel: its id and its record, for the chunk of its first message."""
-        record = Channel(id=len(self._channels) + 1, topic=topic, message_encoding=message_encoding,
-                         schema_id=schema_id, metadata={})
+        record = Channel(
+            id=len(self._channels) + 1, topic=topic, message_encoding=message_encoding, schema_id=schema_id, metadata={}
+        )
         self._channels.append(record)
         self._counts[record.id] = 0
         record.write(self._records)
@@ -153,9 +164,20 @@ class McapWriter:
             return
         self._closed = True
         first, last = self._times or (0, 0)
-        self._send(SUMMARY, pickle.dumps({
-            "schemas": self._schemas, "channels": self._channels, "counts": dict(self._counts),
-            "messages": self._message_count, "chunks": self._chunk_count, "first": first, "last": last}))
+        self._send(
+            SUMMARY,
+            pickle.dumps(
+                {
+                    "schemas": self._schemas,
+                    "channels": self._channels,
+                    "counts": dict(self._counts),
+                    "messages": self._message_count,
+                    "chunks": self._chunk_count,
+                    "first": first,
+                    "last": last,
+                }
+            ),
+        )
         os.close(self._out)
         status = b""
         try:
@@ -164,7 +186,7 @@ class McapWriter:
         finally:
             os.close(self._back)
             self._proc.wait()
-        status = status[self._pending:].decode(errors="replace").strip()      # after the acknowledgements due
+        status = status[self._pending :].decode(errors="replace").strip()  # after the acknowledgements due
         if self.error is None and status != "ok":
             self.error = status or f"the writer process ended with status {self._proc.returncode}"
         if self.error is not None:
@@ -177,7 +199,7 @@ class McapWriter:
         head = FRAME.pack(kind, sum(len(p) for p in parts))
         try:
             write_all(self._out, [head, *parts])
-        except OSError as exc:           # the writer process died: keep the run going, say so at the end
+        except OSError as exc:  # the writer process died: keep the run going, say so at the end
             self._failed(f"the writer process is gone ({exc.strerror or exc})")
             return False
         return True
@@ -202,5 +224,5 @@ def _widen(fd: int) -> None:
         import fcntl
 
         fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, _PIPE_SIZE)
-    except (ImportError, AttributeError, OSError):       # not Linux, or a lower limit: smaller copies, the same bytes
+    except (ImportError, AttributeError, OSError):  # not Linux, or a lower limit: smaller copies, the same bytes
         pass

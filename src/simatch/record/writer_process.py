@@ -17,9 +17,9 @@ import sys
 import zlib
 
 MAGIC = b"\x89MCAP0\r\n"
-FRAME = struct.Struct("<BQ")          # a frame's kind and payload length
+FRAME = struct.Struct("<BQ")  # a frame's kind and payload length
 RAW, CHUNK, METADATA, SUMMARY, FLUSH = 1, 2, 3, 4, 5
-SPAN = struct.Struct("<QQ")           # a chunk's payload starts with its first and last log time
+SPAN = struct.Struct("<QQ")  # a chunk's payload starts with its first and last log time
 ACK = b"A"
 _CHUNK_HEADER = struct.Struct("<BQQQQI")
 _ZSTD = struct.pack("<I", 4) + b"zstd"
@@ -53,7 +53,7 @@ class FileWriter:
         self._fd = fd
         self._compressor = zstandard.ZstdCompressor(level=level, write_checksum=True)
         self._pos = 0
-        self._metadata_index: list = []          # (offset, length, name)
+        self._metadata_index: list = []  # (offset, length, name)
         self.error: str | None = None
 
     def run(self) -> None:
@@ -61,15 +61,15 @@ class FileWriter:
             kind, size = FRAME.unpack(head)
             payload = self._read(size)
             if payload is None:
-                break                                          # the recording process died mid-frame
+                break  # the recording process died mid-frame
             if self.error is None:
                 try:
                     self._do(kind, payload)
-                except Exception as exc:    # the disk, mostly: write nothing more, keep acknowledging
+                except Exception as exc:  # the disk, mostly: write nothing more, keep acknowledging
                     self.error = f"{type(exc).__name__}: {exc}"
             if kind in (CHUNK, FLUSH):
                 os.write(self._acks, ACK)
-                _summary_imports()          # while the run goes on, not when it waits for the end
+                _summary_imports()  # while the run goes on, not when it waits for the end
         os.close(self._fd)
         os.write(self._acks, b"ok\n" if self.error is None else (self.error + "\n").encode())
 
@@ -91,10 +91,10 @@ class FileWriter:
             self._write(payload)
         elif kind == CHUNK:
             start_ns, end_ns = SPAN.unpack_from(payload)
-            data = memoryview(payload)[SPAN.size:]
+            data = memoryview(payload)[SPAN.size :]
             packed = self._compressor.compress(data)
             length = 8 + 8 + 8 + 4 + len(_ZSTD) + 8 + len(packed)
-            head = _CHUNK_HEADER.pack(_OPCODE_CHUNK, length, start_ns, end_ns, len(data), 0)   # CRC: zstd's
+            head = _CHUNK_HEADER.pack(_OPCODE_CHUNK, length, start_ns, end_ns, len(data), 0)  # CRC: zstd's
             self._write(head, _ZSTD, _U64.pack(len(packed)), packed)
         elif kind == METADATA:
             import pickle
@@ -123,16 +123,29 @@ class FileWriter:
             for record in records:
                 record.write(builder)
             if builder.count > at:
-                offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + at,
-                                             group_length=builder.count - at))
+                offsets.append(
+                    SummaryOffset(group_opcode=opcode, group_start=start + at, group_length=builder.count - at)
+                )
 
         index = [MetadataIndex(offset=o, length=n, name=name) for o, n, name in self._metadata_index]
         group(Opcode.SCHEMA, s["schemas"])
         group(Opcode.CHANNEL, s["channels"])
-        group(Opcode.STATISTICS, [Statistics(
-            message_count=s["messages"], schema_count=len(s["schemas"]), channel_count=len(s["channels"]),
-            attachment_count=0, metadata_count=len(index), chunk_count=s["chunks"],
-            message_start_time=s["first"], message_end_time=s["last"], channel_message_counts=s["counts"])])
+        group(
+            Opcode.STATISTICS,
+            [
+                Statistics(
+                    message_count=s["messages"],
+                    schema_count=len(s["schemas"]),
+                    channel_count=len(s["channels"]),
+                    attachment_count=0,
+                    metadata_count=len(index),
+                    chunk_count=s["chunks"],
+                    message_start_time=s["first"],
+                    message_end_time=s["last"],
+                    channel_message_counts=s["counts"],
+                )
+            ],
+        )
         group(Opcode.METADATA_INDEX, index)
         offset_start = start + builder.count
         for record in offsets:
@@ -151,10 +164,11 @@ def _summary_imports() -> None:
 
 def main(argv: list[str]) -> int:
     if len(argv) != 4 or not all(a.isdigit() for a in argv):
-        print("usage: writer_process.py FRAMES_FD ACKS_FD FILE_FD LEVEL (started by simatch's recorder)",
-              file=sys.stderr)
+        print(
+            "usage: writer_process.py FRAMES_FD ACKS_FD FILE_FD LEVEL (started by simatch's recorder)", file=sys.stderr
+        )
         return 2
-    signal.signal(signal.SIGINT, signal.SIG_IGN)      # the recording process decides when it ends
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the recording process decides when it ends
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     frames, acks, fd, level = map(int, argv)
     FileWriter(frames, acks, fd, level).run()

@@ -20,7 +20,7 @@ from typing import ClassVar, Optional
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-HULL_HEIGHT = 0.4   # height of every robot's hull sphere centre [m]: keeps robot-robot contacts planar
+HULL_HEIGHT = 0.4  # height of every robot's hull sphere centre [m]: keeps robot-robot contacts planar
 
 
 class OmniParams(BaseModel):
@@ -36,20 +36,25 @@ class OmniParams(BaseModel):
     mass: float = Field(39.0, gt=1.0, le=500.0, description="[kg]")
     radius: float = Field(0.25, gt=0.05, le=2.0, description="footprint radius [m]")
     height: float = Field(0.8, gt=0.1, le=3.0, description="[m]")
-    mouth_depth: float = Field(0.07, ge=0.0, le=0.2,
-                               description="how far the ball sits inside the footprint when held [m]")
+    mouth_depth: float = Field(
+        0.07, ge=0.0, le=0.2, description="how far the ball sits inside the footprint when held [m]"
+    )
     max_force: float = Field(350.0, gt=0.0, le=1e5, description="largest traction force of the base [N]")
     max_torque: float = Field(120.0, gt=0.0, le=1e5, description="largest turning torque of the base [N m]")
     response_time: Optional[float] = Field(
-        None, gt=0.0, le=1.0, description="time constant of the base's velocity servo [s]; default one physics "
-                                          "step (the base follows its wheel speeds at once, as far as traction "
-                                          "allows); must be at least one physics step")
+        None,
+        gt=0.0,
+        le=1.0,
+        description="time constant of the base's velocity servo [s]; default one physics "
+        "step (the base follows its wheel speeds at once, as far as traction "
+        "allows); must be at least one physics step",
+    )
 
 
 @dataclass(frozen=True)
 class Wheel:
-    alpha: float          # angle of the wheel centre around the robot centre [rad]
-    distance: float       # d [m]
+    alpha: float  # angle of the wheel centre around the robot centre [rad]
+    distance: float  # d [m]
 
 
 class RobotModel:
@@ -99,7 +104,7 @@ class RobotModel:
         """Distance from the robot centre to a held ball's centre, along the kicker axis [m]."""
         return self.params.radius - self.params.mouth_depth + ball_radius + self.ball_gap
 
-    ball_gap: ClassVar[float] = 0.004   # air between a held ball and the robot's front [m]
+    ball_gap: ClassVar[float] = 0.004  # air between a held ball and the robot's front [m]
 
     def ball_collider(self, ball_radius: float) -> tuple[float, float]:
         """(x offset, radius) of the vertical capsule the ball collides with: its front is the mouth."""

@@ -40,8 +40,9 @@ def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np
 
 
 @numba.njit(cache=True, nogil=True)
-def plan_drive(M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, bias, kv,
-               ramping, dt):
+def plan_drive(
+    M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, bias, kv, ramping, dt
+):
     """Plan the wheel ramps of the robots marked in ``due`` for the next ``window`` physics steps.
 
     M (N, W, 3) rim-speed matrices, P (N, 3, W) their pseudo-inverses, cmd (N, 3) body-frame commands,
@@ -137,10 +138,10 @@ class OmniDrive:
         self.up = np.ascontiguousarray(np.broadcast_to(np.asarray(max_accel, dtype=float), (n,)) * dt)
         self.down = np.ascontiguousarray(np.broadcast_to(np.asarray(max_decel, dtype=float), (n,)) * dt)
         self.dt = dt
-        self.cmd = np.zeros((n, 3))          # latest body-frame command per robot
-        self.U_target = np.zeros((n, W))     # speed-limited target rim speeds
-        self.dirty = np.zeros(n, dtype=bool)     # a command arrived since the last plan
-        self.ramping = np.zeros(n, dtype=bool)   # the last plan did not reach the target
+        self.cmd = np.zeros((n, 3))  # latest body-frame command per robot
+        self.U_target = np.zeros((n, W))  # speed-limited target rim speeds
+        self.dirty = np.zeros(n, dtype=bool)  # a command arrived since the last plan
+        self.ramping = np.zeros(n, dtype=bool)  # the last plan did not reach the target
         self.any_dirty = False
 
     # --- commands -----------------------------------------------------------------------------------------
@@ -163,10 +164,35 @@ class OmniDrive:
         return u * scale[:, None]
 
     # --- planning -------------------------------------------------------------------------------------------
-    def plan(self, due: np.ndarray, act: np.ndarray, window: int, actrange: np.ndarray, ctrl: np.ndarray,
-             bias: np.ndarray, kv: np.ndarray) -> None:
+    def plan(
+        self,
+        due: np.ndarray,
+        act: np.ndarray,
+        window: int,
+        actrange: np.ndarray,
+        ctrl: np.ndarray,
+        bias: np.ndarray,
+        kv: np.ndarray,
+    ) -> None:
         """Plan the next ``window`` steps of the robots marked in ``due`` whose servo set points are ``act``
         (N, 3); writes the set points' bounds, rates and bias (see `plan_drive`)."""
-        plan_drive(self.M, self.Mpinv, self.cmd, self.dirty, due, self.U_target, self.up, self.down,
-                   self.max_speed, act, window, actrange, ctrl, bias, kv, self.ramping, self.dt)
+        plan_drive(
+            self.M,
+            self.Mpinv,
+            self.cmd,
+            self.dirty,
+            due,
+            self.U_target,
+            self.up,
+            self.down,
+            self.max_speed,
+            act,
+            window,
+            actrange,
+            ctrl,
+            bias,
+            kv,
+            self.ramping,
+            self.dt,
+        )
         self.any_dirty = bool(self.dirty.any())

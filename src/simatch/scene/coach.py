@@ -17,15 +17,21 @@ from ..msgs.game_commands import SET_PIECES, MatchMode, parse
 class Coach(Node):
     phase = Phase.JUDGE
 
-    def __init__(self, team: str, period: float, max_vel: float = 4.5, max_w: float = 10.0,
-                 initial: MatchMode = MatchMode.STOPROBOT):
+    def __init__(
+        self,
+        team: str,
+        period: float,
+        max_vel: float = 4.5,
+        max_w: float = 10.0,
+        initial: MatchMode = MatchMode.STOPROBOT,
+    ):
         self.team = team
         self.name = f"{team}/coach"
         self.period = period
         self.match_mode = MatchMode(initial)
         self.match_type = MatchMode(initial)
-        self.max_vel = max_vel            # the original coach's default: 450 cm/s
-        self.max_w = max_w                # and 10 rad/s
+        self.max_vel = max_vel  # the original coach's default: 450 cm/s
+        self.max_w = max_w  # and 10 rad/s
         self.extra: dict = {}
         self._dirty = True
 
@@ -55,8 +61,19 @@ class Coach(Node):
         self.extra = fields
         self._dirty = True
         if hasattr(self, "pub_events"):
-            self.pub_events.put(msgs.GameEvent(stamp=self.ctx.now(), type="coach_command", team=self.team, robot=0,
-                                               x=0.0, y=0.0, value=float(cmd), limit=0.0, detail=cmd.name))
+            self.pub_events.put(
+                msgs.GameEvent(
+                    stamp=self.ctx.now(),
+                    type="coach_command",
+                    team=self.team,
+                    robot=0,
+                    x=0.0,
+                    y=0.0,
+                    value=float(cmd),
+                    limit=0.0,
+                    detail=cmd.name,
+                )
+            )
 
     def start_play(self) -> None:
         self.send(MatchMode.STARTROBOT)
@@ -69,12 +86,34 @@ class Coach(Node):
 
     def info(self, now: float):
         if self.extra:
-            return msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(self.match_mode),
-                            match_type=int(self.match_type), max_vel=self.max_vel, max_w=self.max_w, **self.extra)
-        return msgs.CoachInfo(stamp=now, match_mode=int(self.match_mode), match_type=int(self.match_type), test_mode=0,
-                              point_a_x=0.0, point_a_y=0.0, point_b_x=0.0, point_b_y=0.0, angle_a=0.0, angle_b=0.0,
-                              id_a=0, id_b=0, kick_force=0.0, max_vel=self.max_vel, max_w=self.max_w, ball_x=0.0,
-                              ball_y=0.0)
+            return msgs.new(
+                msgs.CoachInfo,
+                stamp=now,
+                match_mode=int(self.match_mode),
+                match_type=int(self.match_type),
+                max_vel=self.max_vel,
+                max_w=self.max_w,
+                **self.extra,
+            )
+        return msgs.CoachInfo(
+            stamp=now,
+            match_mode=int(self.match_mode),
+            match_type=int(self.match_type),
+            test_mode=0,
+            point_a_x=0.0,
+            point_a_y=0.0,
+            point_b_x=0.0,
+            point_b_y=0.0,
+            angle_a=0.0,
+            angle_b=0.0,
+            id_a=0,
+            id_b=0,
+            kick_force=0.0,
+            max_vel=self.max_vel,
+            max_w=self.max_w,
+            ball_x=0.0,
+            ball_y=0.0,
+        )
 
     def tick(self, now: float) -> None:
         self.pub.put(self.info(now))

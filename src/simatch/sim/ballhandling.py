@@ -53,25 +53,25 @@ class BallHandling:
         self.recharge_steps = round(kk.recharge / model.opt.timestep)
         self.mouth = np.array([[rm.mouth_x(self.ball_r), 0.0, 0.0] for rm in robot_models])
         self.dribble_on = np.zeros(self.n, dtype=bool)
-        self.dribbling = [False] * self.n       # the same as plain bools (read for every command and step)
-        self._dribblers = 0                     # how many are on
+        self.dribbling = [False] * self.n  # the same as plain bools (read for every command and step)
+        self._dribblers = 0  # how many are on
         self.holder = -1
         self.hold_since = 0
         self.kicks: dict[int, KickRequest] = {}
         self.ready_at = np.zeros(self.n, dtype=np.int64)
         self.on_event = on_event
-        self.kicked_by = -1          # robot whose kicker fired during the last step, -1 if none
+        self.kicked_by = -1  # robot whose kicker fired during the last step, -1 if none
         self.kicked_speed = 0.0
         self.kicked_lob = False
         self._eq_rows_type = mujoco.mjtConstraint.mjCNSTR_EQUALITY.value
-        self._catch_idle_until = 0        # no catch is possible before this step (see _catch)
+        self._catch_idle_until = 0  # no catch is possible before this step (see _catch)
         # a robot that lost the ball cannot take it again until the ball has left its mouth (or for
         # RECATCH_WAIT seconds): the lost ball is on its way out, not to be caught back at once
         self.lost_by = -1
         self.lost_until = 0
         self._dt = model.opt.timestep
         self.recatch_steps = round(RECATCH_WAIT / self._dt)
-        self._robot_q0 = int(index.robot_qpos[0, 0]) if self.n else 0   # robots' joints are consecutive
+        self._robot_q0 = int(index.robot_qpos[0, 0]) if self.n else 0  # robots' joints are consecutive
         self._robot_v0 = int(index.robot_qvel[0, 0]) if self.n else 0
 
     # --- requests from commands -----------------------------------------------------------------------------
@@ -102,7 +102,7 @@ class BallHandling:
     def in_mouth(self, i: int) -> bool:
         bx, by, bz = self._ball_in_robot_frame(i)
         dist = math.hypot(bx, by)
-        return (dist <= self.hold_dist and bx >= self.hold_cos * dist and bz <= self.ball_r + 0.05)
+        return dist <= self.hold_dist and bx >= self.hold_cos * dist and bz <= self.ball_r + 0.05
 
     def _mouth_velocity(self, i: int) -> np.ndarray:
         """World velocity of robot i's mouth point (robot velocity plus w x r)."""
@@ -146,19 +146,19 @@ class BallHandling:
         if req.lob:
             ch, sv = math.cos(self.lob_angle), math.sin(self.lob_angle)
             v += (req.speed * ch * c, req.speed * ch * s, req.speed * sv)
-            self.d.qvel[bv:bv + 3] = v
-            self.d.qvel[bv + 3:bv + 6] = 0.0
+            self.d.qvel[bv : bv + 3] = v
+            self.d.qvel[bv + 3 : bv + 6] = 0.0
         else:
             v += (req.speed * c, req.speed * s, 0.0)
-            self.d.qvel[bv:bv + 3] = v
+            self.d.qvel[bv : bv + 3] = v
             # rolling without slipping: w = z x v / r, expressed in the ball's own frame (free-joint convention)
             w_world = np.array([-v[1], v[0], 0.0]) / self.ball_r
-            quat = self.d.qpos[self.ix.ball_qpos + 3:self.ix.ball_qpos + 7]
+            quat = self.d.qpos[self.ix.ball_qpos + 3 : self.ix.ball_qpos + 7]
             inv = np.empty(4)
             mujoco.mju_negQuat(inv, quat)
             w_local = np.empty(3)
             mujoco.mju_rotVecQuat(w_local, w_world, inv)
-            self.d.qvel[bv + 3:bv + 6] = w_local
+            self.d.qvel[bv + 3 : bv + 6] = w_local
         self.ready_at[i] = step + self.recharge_steps
         self.kicked_by, self.kicked_speed, self.kicked_lob = i, req.speed, req.lob
         self.on_event("kick", i, value=req.speed, detail="lob" if req.lob else "ground")
@@ -176,15 +176,25 @@ class BallHandling:
         if cand.size == 0:
             return
         ix = self.ix
-        i, fwd, lat, nearest = catch_candidate(q, self.d.qvel, self._robot_q0, self._robot_v0, ix.ball_qpos,
-                                               ix.ball_qvel, cand, self.hold_dist, self.hold_cos,
-                                               self.mouth[:, 0], self.catch_speed)
+        i, fwd, lat, nearest = catch_candidate(
+            q,
+            self.d.qvel,
+            self._robot_q0,
+            self._robot_v0,
+            ix.ball_qpos,
+            ix.ball_qvel,
+            cand,
+            self.hold_dist,
+            self.hold_cos,
+            self.mouth[:, 0],
+            self.catch_speed,
+        )
         if i >= 0:
             self._attach(i, fwd, lat, step)
         elif nearest > self.hold_dist:
             # nothing can come within reach before the gap closes at the fastest possible closing speed
             # (ball speed plus a robot's top speed): sleep until then (switching a dribbler on wakes it)
-            bv = self.d.qvel[ix.ball_qvel:ix.ball_qvel + 2]
+            bv = self.d.qvel[ix.ball_qvel : ix.ball_qvel + 2]
             closing = math.hypot(bv[0], bv[1]) + _ROBOT_TOP_SPEED
             self._catch_idle_until = step + max(0, int((nearest - self.hold_dist) / (closing * self._dt)))
 
@@ -203,9 +213,23 @@ class BallHandling:
             self.release("dribbler_off")
             return
         d = self.d
-        status, force = keep_ball(self.m.eq_data, self.ix.dribble_eq[i], d.qpos, self._robot_q0, self.ix.ball_qpos, i,
-                                  self.mouth[i, 0], self.pull_step, step - self.hold_since >= self.settle_steps,
-                                  d.efc_type, d.efc_id, d.efc_force, d.nefc, self._eq_rows_type, self.grip)
+        status, force = keep_ball(
+            self.m.eq_data,
+            self.ix.dribble_eq[i],
+            d.qpos,
+            self._robot_q0,
+            self.ix.ball_qpos,
+            i,
+            self.mouth[i, 0],
+            self.pull_step,
+            step - self.hold_since >= self.settle_steps,
+            d.efc_type,
+            d.efc_id,
+            d.efc_force,
+            d.nefc,
+            self._eq_rows_type,
+            self.grip,
+        )
         if status == 1:
             self.release("grip_exceeded", value=force, limit=self.grip, step=step)
         elif status == 2:

@@ -30,8 +30,9 @@ def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
 
 
 @numba.njit(cache=True, nogil=True)
-def catch_candidate(qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, mouth_x,
-                    catch_speed):
+def catch_candidate(
+    qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, mouth_x, catch_speed
+):
     """The robot (index) that can take the ball now: among ``candidates`` (dribbler on, usable), those
     with the ball within ``hold_dist`` and within the bearing cone, arriving no faster than
     ``catch_speed`` relative to the mouth; the nearest wins (ties: lowest index). Returns
@@ -75,8 +76,23 @@ def catch_candidate(qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, ho
 
 
 @numba.njit(cache=True, nogil=True)
-def keep_ball(eq_data, eq, qpos, robot_q, ball_q, robot, target_x, pull_step, check_grip, efc_type, efc_id,
-              efc_force, nefc, eq_type, grip):
+def keep_ball(
+    eq_data,
+    eq,
+    qpos,
+    robot_q,
+    ball_q,
+    robot,
+    target_x,
+    pull_step,
+    check_grip,
+    efc_type,
+    efc_id,
+    efc_force,
+    nefc,
+    eq_type,
+    grip,
+):
     """One physics step of a held ball: draw the dribble constraint's anchor (robot frame) towards the mouth
     point at the rollers' speed, then measure the constraint's horizontal force. Returns (status, force):
     status 0 = still held, 1 = the force exceeds the grip, 2 = the ball was pulled away from the anchor."""

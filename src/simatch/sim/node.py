@@ -22,7 +22,7 @@ from .simulator import Simulator
 _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
 _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerprint")
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
-_F32 = np.float32             # the states' numbers, as the messages define them
+_F32 = np.float32  # the states' numbers, as the messages define them
 _sha256 = hashlib.sha256
 _from_bytes = int.from_bytes
 
@@ -72,18 +72,28 @@ class SimulatorNode(Node):
         self.pub_vision = []
         self.subs = []
         for i, entry in enumerate(sim.ix.robots):
-            self.pub_vision.append(bus.publisher(topics.robot_topic(entry.team, entry.rid, topics.OMNI_VISION),
-                                                 msgs.OmniVisionInfo))
-            self.subs.append(bus.subscribe(topics.robot_topic(entry.team, entry.rid, topics.VEL_CMD), msgs.VelCmd,
-                                           self._vel_callback(i)))
-            self.subs.append(bus.subscribe(topics.robot_topic(entry.team, entry.rid, topics.ACTION_CMD),
-                                           msgs.ActionCmd, self._action_callback(i)))
+            self.pub_vision.append(
+                bus.publisher(topics.robot_topic(entry.team, entry.rid, topics.OMNI_VISION), msgs.OmniVisionInfo)
+            )
+            self.subs.append(
+                bus.subscribe(
+                    topics.robot_topic(entry.team, entry.rid, topics.VEL_CMD), msgs.VelCmd, self._vel_callback(i)
+                )
+            )
+            self.subs.append(
+                bus.subscribe(
+                    topics.robot_topic(entry.team, entry.rid, topics.ACTION_CMD),
+                    msgs.ActionCmd,
+                    self._action_callback(i),
+                )
+            )
 
     def _vel_callback(self, i: int):
         command = self.sim.command_velocity
 
         def on_vel(msg) -> None:
             command(i, msg.vx, msg.vy, msg.w)
+
         return on_vel
 
     def _action_callback(self, i: int):
@@ -92,6 +102,7 @@ class SimulatorNode(Node):
 
         def on_action(msg) -> None:
             command(i, msg.dribble, msg.kick_speed, msg.kick_type == lob)
+
         return on_action
 
     def tick(self, now: float) -> None:
@@ -107,8 +118,9 @@ class SimulatorNode(Node):
         if due is not None:
             pubs = self.pub_vision
             if any(pubs[i].active for i in due):
-                infos = perception.observe(perception.delayed(sim.snapshot()), now, k // cs,
-                                           None if len(due) == len(pubs) else due)
+                infos = perception.observe(
+                    perception.delayed(sim.snapshot()), now, k // cs, None if len(due) == len(pubs) else due
+                )
                 for i in due:
                     if pubs[i].active:
                         pubs[i].put(infos[i])
@@ -121,18 +133,27 @@ class SimulatorNode(Node):
             self.pub_fingerprint.put(_StateFingerprint(now, k, fingerprint(pose, twist)))
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()
-            self.pub_links.put(msgs.LinkStates(stamp=now, step=k, name=names, pose=pose.astype(_F32).ravel(),
-                                               twist=twist.astype(_F32).ravel()))
+            self.pub_links.put(
+                msgs.LinkStates(
+                    stamp=now, step=k, name=names, pose=pose.astype(_F32).ravel(), twist=twist.astype(_F32).ravel()
+                )
+            )
         if self.pub_contacts.active:
             touching = sim.ball_touches()
             holder, kicker = sim.ball.holder, sim.ball.kicked_by
             if touching or holder >= 0 or kicker >= 0:
                 names = sim.robot_names
-                self.pub_contacts.put(msgs.BallContacts(
-                    stamp=now, step=k, touching=[names[i] for i in touching],
-                    holder=names[holder] if holder >= 0 else "", kicker=names[kicker] if kicker >= 0 else "",
-                    kick_speed=sim.ball.kicked_speed if kicker >= 0 else 0.0,
-                    lob=bool(sim.ball.kicked_lob) if kicker >= 0 else False))
+                self.pub_contacts.put(
+                    msgs.BallContacts(
+                        stamp=now,
+                        step=k,
+                        touching=[names[i] for i in touching],
+                        holder=names[holder] if holder >= 0 else "",
+                        kicker=names[kicker] if kicker >= 0 else "",
+                        kick_speed=sim.ball.kicked_speed if kicker >= 0 else 0.0,
+                        lob=bool(sim.ball.kicked_lob) if kicker >= 0 else False,
+                    )
+                )
         if sim.events:
             self.flush_events()
 

@@ -39,12 +39,12 @@ class Snapshot:
     """What the world looked like at one physics step (world frame)."""
 
     step: int
-    robots: np.ndarray      # (N, 6): x y yaw vx vy w
-    ball: np.ndarray        # (6,): x y z vx vy vz
+    robots: np.ndarray  # (N, 6): x y yaw vx vy w
+    ball: np.ndarray  # (6,): x y z vx vy vz
     holder: int
-    wheels: np.ndarray      # (N, W) rim speeds
-    valid: np.ndarray       # (N,) bool
-    stuck: np.ndarray       # (N,) bool
+    wheels: np.ndarray  # (N, W) rim speeds
+    valid: np.ndarray  # (N,) bool
+    stuck: np.ndarray  # (N,) bool
 
 
 def wrap(a):
@@ -53,8 +53,16 @@ def wrap(a):
 
 
 class Perception:
-    def __init__(self, robots, signs: np.ndarray, radii: np.ndarray, n_wheels: np.ndarray, spec, dt: float,
-                 rng: np.random.Generator):
+    def __init__(
+        self,
+        robots,
+        signs: np.ndarray,
+        radii: np.ndarray,
+        n_wheels: np.ndarray,
+        spec,
+        dt: float,
+        rng: np.random.Generator,
+    ):
         self.n = len(robots)
         self.ids = np.array([r.rid for r in robots], dtype=np.int32)
         self.team_of = [r.team for r in robots]
@@ -71,13 +79,22 @@ class Perception:
         self.others = np.array([[j for j in range(n) if j != i] for i in range(n)], dtype=int).reshape(n, max(n - 1, 0))
         self._turn = np.where(self.sign > 0, 0.0, np.pi)
         m = max(n - 1, 0)
-        self._no_own_noise, self._no_ball_noise, self._no_obs_noise = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4))
+        self._no_own_noise, self._no_ball_noise, self._no_obs_noise = (
+            np.zeros((n, 5)),
+            np.zeros((n, 4)),
+            np.zeros((n, m, 4)),
+        )
         self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(_F32)
         self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
         self._nw = [int(k) for k in n_wheels]
-        self.exact = (spec.position_noise == 0 and spec.velocity_noise == 0 and spec.heading_noise == 0
-                      and spec.ball_dropout == 0 and spec.obstacle_dropout == 0)
+        self.exact = (
+            spec.position_noise == 0
+            and spec.velocity_noise == 0
+            and spec.heading_noise == 0
+            and spec.ball_dropout == 0
+            and spec.obstacle_dropout == 0
+        )
 
     @property
     def needs_history(self) -> bool:
@@ -105,7 +122,7 @@ class Perception:
             own_noise = np.zeros((n, 5))
             ball_noise = np.zeros((n, 4))
             obs_noise = np.zeros((n, m, 4))
-            if pos > 0:        # own pose (self-localisation), the ball and every obstacle
+            if pos > 0:  # own pose (self-localisation), the ball and every obstacle
                 own_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
                 ball_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
                 obs_noise[:, :, :2] = rng.normal(0.0, pos, (n, m, 2))
@@ -116,7 +133,7 @@ class Perception:
                 ball_noise[:, 2:] = rng.normal(0.0, vel, (n, 2))
                 obs_noise[:, :, 2:] = rng.normal(0.0, vel, (n, m, 2))
         own, balls, obs = perceive(snap.robots, snap.ball, self.sign, self.others, own_noise, ball_noise, obs_noise)
-        own, balls, obs = own.astype(_F32), balls.astype(_F32), obs.astype(_F32)     # the messages' precision
+        own, balls, obs = own.astype(_F32), balls.astype(_F32), obs.astype(_F32)  # the messages' precision
         seen = [True] * n if spec.ball_dropout == 0 else (rng.random(n) >= spec.ball_dropout).tolist()
         keep = None
         if spec.obstacle_dropout > 0 and n > 1:
@@ -133,12 +150,26 @@ class Perception:
         team_infos = {}
         for team in teams:
             idx = self.members[team]
-            team_infos[team] = [_RobotInfo(ids[i], tx[i], ty[i], tyaw[i], tvx[i], tvy[i], tw[i], valid[i], stuck[i],
-                                           holder == i, wheels[i][: nw[i]]) for i in idx]
+            team_infos[team] = [
+                _RobotInfo(
+                    ids[i],
+                    tx[i],
+                    ty[i],
+                    tyaw[i],
+                    tvx[i],
+                    tvy[i],
+                    tw[i],
+                    valid[i],
+                    stuck[i],
+                    holder == i,
+                    wheels[i][: nw[i]],
+                )
+                for i in idx
+            ]
         sx, sy, svx, svy, bang, bdist = balls.T.tolist()
         bz, bvz = msgs.f32s(snap.ball[2], snap.ball[5])
         if n > 1:
-            if only is None and keep is None:       # each robot's row of every array
+            if only is None and keep is None:  # each robot's row of every array
                 obstacles = [_ObstaclesInfo(*row) for row in zip(*(list(a) for a in obs), self._orad_rows)]
             else:
                 obstacles = [None] * n
@@ -150,8 +181,10 @@ class Perception:
         unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
         out = [None] * n
         for i in wanted:
-            ball = (_BallInfo(1, sx[i], sy[i], bz, svx[i], svy[i], bvz, bang[i], bdist[i], True, True) if seen[i]
-                    else unseen)
+            ball = (
+                _BallInfo(1, sx[i], sy[i], bz, svx[i], svy[i], bvz, bang[i], bdist[i], True, True)
+                if seen[i]
+                else unseen
+            )
             out[i] = _OmniVisionInfo(stamp, tick, ids[i], ball, obstacles[i], team_infos[team_of[i]])
         return out
-

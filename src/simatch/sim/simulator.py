@@ -31,11 +31,11 @@ from .world import BALL_NAME, build_world
 _f32s = msgs.f32s
 
 #: Commands beyond these are refused as absurd (anything a robot could follow is far below them).
-MAX_COMMAND_SPEED = 50.0      # m/s
-MAX_COMMAND_TURN = 100.0      # rad/s
-MAX_KICK_REQUEST = 100.0      # m/s (requests above the kicker's limit but below this are clamped)
-MAX_WRENCH = 1e5              # N, N m
-BOUNCE_MIN_SPEED = 0.3        # m/s: slower impacts are absorbed (the ball settles instead of chattering)
+MAX_COMMAND_SPEED = 50.0  # m/s
+MAX_COMMAND_TURN = 100.0  # rad/s
+MAX_KICK_REQUEST = 100.0  # m/s (requests above the kicker's limit but below this are clamped)
+MAX_WRENCH = 1e5  # N, N m
+BOUNCE_MIN_SPEED = 0.3  # m/s: slower impacts are absorbed (the ball settles instead of chattering)
 
 
 class CommandError(ValueError):
@@ -74,8 +74,10 @@ def _finite(*values: float) -> bool:
 def _describe_bad_velocity(vx, vy, w) -> str:
     if not _finite(vx, vy, w):
         return f"velocity command with a non-finite or non-numeric value: vx={vx!r} vy={vy!r} w={w!r}"
-    return (f"absurd velocity command vx={vx:g} vy={vy:g} w={w:g} (limits {MAX_COMMAND_SPEED:g} m/s, "
-            f"{MAX_COMMAND_TURN:g} rad/s)")
+    return (
+        f"absurd velocity command vx={vx:g} vy={vy:g} w={w:g} (limits {MAX_COMMAND_SPEED:g} m/s, "
+        f"{MAX_COMMAND_TURN:g} rad/s)"
+    )
 
 
 class Simulator:
@@ -97,36 +99,40 @@ class Simulator:
         self.ball_radius = scene.ball.radius
         p = [rm.params for rm in self.robot_models]
         self.control_steps = max(1, round(scene.control.period / self.dt))
-        self.drive = OmniDrive([rm.rim_matrix() for rm in self.robot_models],
-                               [q.max_wheel_speed for q in p], [q.max_acceleration for q in p],
-                               [q.max_deceleration for q in p], self.dt)
+        self.drive = OmniDrive(
+            [rm.rim_matrix() for rm in self.robot_models],
+            [q.max_wheel_speed for q in p],
+            [q.max_acceleration for q in p],
+            [q.max_deceleration for q in p],
+            self.dt,
+        )
         self._on_event = on_event
-        self.events: list = []                       # GameEvent messages not yet taken by the bus adapter
-        self.mechanics: Counter = Counter()          # kicks, catches, ball losses by reason
+        self.events: list = []  # GameEvent messages not yet taken by the bus adapter
+        self.mechanics: Counter = Counter()  # kicks, catches, ball losses by reason
         self.ball = BallHandling(self.m, self.d, self.ix, self.robot_models, scene, self._mechanism_event)
         self.enabled = np.ones(self.n, dtype=bool)
         self.frozen = np.zeros(self.n, dtype=bool)
-        self.usable = np.ones(self.n, dtype=bool)     # enabled and not frozen
+        self.usable = np.ones(self.n, dtype=bool)  # enabled and not frozen
         self.last_command_step = np.zeros(self.n, dtype=np.int64)
         self.watchdog_tripped = np.zeros(self.n, dtype=bool)
-        self.commanded = np.zeros(self.n, dtype=bool)      # has ever received a command
+        self.commanded = np.zeros(self.n, dtype=bool)  # has ever received a command
         # per robot: commanded, not stopped by the watchdog, and usable (a command needs no other check then);
         # plain bools, read for every command
         self._live = [False] * self.n
         self.refused = np.zeros(self.n, dtype=np.int64)
-        self._refused_reported_step = np.full(self.n, -10**9, dtype=np.int64)
+        self._refused_reported_step = np.full(self.n, -(10**9), dtype=np.int64)
         self._refused_since_report = np.zeros(self.n, dtype=np.int64)
         self.stuck = np.zeros(self.n, dtype=bool)
         self._slow_since = np.full(self.n, -1, dtype=np.int64)
         self._stuck_steps = round(0.5 / self.dt)
         # robots within 1 m of the lines count as on the field ("valid" in their perception)
         self._valid_box = np.array([self.field.half_length + 1.0, self.field.half_width + 1.0])
-        self._wrenches: list[tuple[int, np.ndarray, int]] = []    # (body, 6-vector, until step)
+        self._wrenches: list[tuple[int, np.ndarray, int]] = []  # (body, 6-vector, until step)
         self._wheel_r = np.array([rm.params.wheel_radius for rm in self.robot_models])[:, None]
-        self.touching: list[int] = []                 # robots touching the ball after the last step
+        self.touching: list[int] = []  # robots touching the ball after the last step
         self._ctrl_ids = self.ix.robot_ctrl
         self._act_ids = self.ix.robot_act
-        self._kv = np.ascontiguousarray(self.m.actuator_gainprm[self._ctrl_ids, 0])   # (N, 3)
+        self._kv = np.ascontiguousarray(self.m.actuator_gainprm[self._ctrl_ids, 0])  # (N, 3)
         self._inv_dt = 1.0 / self.dt
         self._command_limits = np.array([MAX_COMMAND_SPEED, MAX_COMMAND_SPEED, MAX_COMMAND_TURN])
         # the servos are the model's first 3N actuators, in robot order: views instead of fancy indexing
@@ -138,16 +144,16 @@ class Simulator:
         self._bias3 = self.m.actuator_biasprm[: 3 * self.n, 0].reshape(self.n, 3)
         assert np.shares_memory(self._bias3, self.m.actuator_biasprm)
         self.track_wheels = False
-        self.wheel_travel = np.zeros((self.n, self.drive.max_wheels))   # rim distance rolled [m]
+        self.wheel_travel = np.zeros((self.n, self.drive.max_wheels))  # rim distance rolled [m]
         self._rq = self.ix.robot_qpos
         self._rv = self.ix.robot_qvel
         # robots' joints are consecutive (x, y, yaw per robot): views instead of fancy indexing
         q0, v0 = int(self._rq[0, 0]), int(self._rv[0, 0])
         assert np.array_equal(self._rq.ravel(), np.arange(q0, q0 + 3 * self.n))
         assert np.array_equal(self._rv.ravel(), np.arange(v0, v0 + 3 * self.n))
-        self._qpos3 = self.d.qpos[q0:q0 + 3 * self.n].reshape(self.n, 3)
+        self._qpos3 = self.d.qpos[q0 : q0 + 3 * self.n].reshape(self.n, 3)
         self._q0, self._v0 = q0, v0
-        self._qvel3 = self.d.qvel[v0:v0 + 3 * self.n].reshape(self.n, 3)
+        self._qvel3 = self.d.qvel[v0 : v0 + 3 * self.n].reshape(self.n, 3)
         self._bq = self.ix.ball_qpos
         self._bv = self.ix.ball_qvel
         self._bz = self._bq + 2
@@ -157,8 +163,15 @@ class Simulator:
         for g, i in self.ix.robot_of_geom.items():
             self._geom_robot[g] = i
         self._geom_robot_list = self._geom_robot.tolist()
-        self.perception = Perception(robots, self.signs, self.radii, self.drive.n_wheels, scene.perception,
-                                     self.dt, np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]))
+        self.perception = Perception(
+            robots,
+            self.signs,
+            self.radii,
+            self.drive.n_wheels,
+            scene.perception,
+            self.dt,
+            np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]),
+        )
         self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
 
     # --- time --------------------------------------------------------------------------------------------
@@ -167,15 +180,32 @@ class Simulator:
         return self.step_index * self.dt
 
     # --- events ---------------------------------------------------------------------------------------------
-    def event(self, kind: str, robot: int = -1, value: float = 0.0, limit: float = 0.0, detail: str = "",
-              x: float | None = None, y: float | None = None) -> None:
+    def event(
+        self,
+        kind: str,
+        robot: int = -1,
+        value: float = 0.0,
+        limit: float = 0.0,
+        detail: str = "",
+        x: float | None = None,
+        y: float | None = None,
+    ) -> None:
         team, rid = ("", 0)
         if robot >= 0:
             team, rid = self.team_of[robot], self.ix.robots[robot].rid
             if x is None:
                 x, y = (float(v) for v in self.d.qpos[self._rq[robot, :2]])
-        ev = msgs.GameEvent(stamp=self.time, type=kind, team=team, robot=rid, x=float(x or 0.0), y=float(y or 0.0),
-                            value=float(value), limit=float(limit), detail=detail)
+        ev = msgs.GameEvent(
+            stamp=self.time,
+            type=kind,
+            team=team,
+            robot=rid,
+            x=float(x or 0.0),
+            y=float(y or 0.0),
+            value=float(value),
+            limit=float(limit),
+            detail=detail,
+        )
         self.events.append(ev)
         if self._on_event is not None:
             self._on_event(ev)
@@ -208,8 +238,11 @@ class Simulator:
     def command_velocity(self, i: int, vx: float, vy: float, w: float) -> bool:
         """Robot i's body-frame velocity command. False (and an event) if refused."""
         try:
-            ok = (-MAX_COMMAND_SPEED <= vx <= MAX_COMMAND_SPEED and -MAX_COMMAND_SPEED <= vy <= MAX_COMMAND_SPEED
-                  and -MAX_COMMAND_TURN <= w <= MAX_COMMAND_TURN)      # False for NaN, inf and absurd values
+            ok = (
+                -MAX_COMMAND_SPEED <= vx <= MAX_COMMAND_SPEED
+                and -MAX_COMMAND_SPEED <= vy <= MAX_COMMAND_SPEED
+                and -MAX_COMMAND_TURN <= w <= MAX_COMMAND_TURN
+            )  # False for NaN, inf and absurd values
         except TypeError:
             ok = False
         if not ok:
@@ -220,7 +253,7 @@ class Simulator:
                 self._fresh(i)
             if not self.usable[i]:
                 return True
-        self.drive.command(i, *_f32s(vx, vy, w))     # at VelCmd's precision, however the command came
+        self.drive.command(i, *_f32s(vx, vy, w))  # at VelCmd's precision, however the command came
         return True
 
     def command_all(self, V: np.ndarray, dribble: np.ndarray | None = None) -> None:
@@ -252,8 +285,9 @@ class Simulator:
                 for i in np.flatnonzero(changed):
                     self.ball.set_dribbler(int(i), bool(want[i]))
 
-    def command_action(self, i: int, dribble: bool, kick_speed: float = 0.0, lob: bool = False,
-                       window: float | None = None) -> bool:
+    def command_action(
+        self, i: int, dribble: bool, kick_speed: float = 0.0, lob: bool = False, window: float | None = None
+    ) -> bool:
         """Robot i's dribbler state and kick request (fires at the first step the ball is in the mouth,
         within ``window`` seconds, by default one control period)."""
         try:
@@ -274,7 +308,9 @@ class Simulator:
             self.ball.set_dribbler(i, on)
         if kick_speed > 0.0 and usable:
             window = self.scene.control.period if window is None else window
-            self.ball.request_kick(i, msgs.f32(kick_speed), bool(lob), self.step_index + max(1, round(window / self.dt)))
+            self.ball.request_kick(
+                i, msgs.f32(kick_speed), bool(lob), self.step_index + max(1, round(window / self.dt))
+            )
         return True
 
     def _fresh(self, i: int) -> None:
@@ -298,14 +334,21 @@ class Simulator:
         ``next_check`` steps from now (its node died or hangs): it is stopped within ``timeout``."""
         limit = round(timeout / self.dt)
         if self.last_command_step.min() > self.step_index + next_check - limit:
-            return          # every robot commanded recently (the usual case): nothing to check one by one
-        stale = (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
+            return  # every robot commanded recently (the usual case): nothing to check one by one
+        stale = (
+            (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
+        )
         for i in np.flatnonzero(stale):
             self.watchdog_tripped[i] = True
             self._live[i] = False
             self.stop_robot(int(i))
-            self.event("watchdog_stop", int(i), value=(self.step_index - self.last_command_step[i]) * self.dt,
-                       limit=timeout, detail="no fresh command: robot stopped, dribbler off")
+            self.event(
+                "watchdog_stop",
+                int(i),
+                value=(self.step_index - self.last_command_step[i]) * self.dt,
+                limit=timeout,
+                detail="no fresh command: robot stopped, dribbler off",
+            )
 
     # --- stepping --------------------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -319,8 +362,9 @@ class Simulator:
         k = self.step_index
         into = k % self.control_steps
         if drive.any_dirty or (into == 0 and drive.ramping.any()):
-            self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(),
-                             self.control_steps - into)
+            self._plan_drive(
+                drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), self.control_steps - into
+            )
         if self.track_wheels:
             self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self._act3) * self.dt
         self.ball.before_step(self.step_index, self.usable)
@@ -415,7 +459,7 @@ class Simulator:
 
     def ball_position(self) -> np.ndarray:
         """(3,) view of the ball's x, y, z (world frame); valid until the next step, do not modify."""
-        return self.d.qpos[self._bq:self._bq + 3]
+        return self.d.qpos[self._bq : self._bq + 3]
 
     def robot_array(self) -> np.ndarray:
         """(N, 6): x y yaw vx vy w of every robot, world frame."""
@@ -432,7 +476,7 @@ class Simulator:
 
     def _ball_angular_world(self) -> np.ndarray:
         w = np.empty(3)
-        mujoco.mju_rotVecQuat(w, self.d.qvel[self._bv + 3:self._bv + 6], self.d.qpos[self._bq + 3:self._bq + 7])
+        mujoco.mju_rotVecQuat(w, self.d.qvel[self._bv + 3 : self._bv + 6], self.d.qpos[self._bq + 3 : self._bq + 7])
         return w
 
     def model_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
@@ -506,12 +550,28 @@ class Simulator:
         """The current world for perception (also updates each robot's 'stuck' flag)."""
         R = self.robot_array()
         F = self.field
-        wheels, valid, stuck = robot_flags(R, self._act3, self.drive.M, self.drive.n_wheels, self.enabled,
-                                           self._slow_since, self.step_index, self._stuck_steps,
-                                           F.half_length, F.half_width)
+        wheels, valid, stuck = robot_flags(
+            R,
+            self._act3,
+            self.drive.M,
+            self.drive.n_wheels,
+            self.enabled,
+            self._slow_since,
+            self.step_index,
+            self._stuck_steps,
+            F.half_length,
+            F.half_width,
+        )
         self.stuck = stuck
-        return Snapshot(step=self.step_index, robots=R, ball=self.ball_array(), holder=self.ball.holder,
-                        wheels=wheels, valid=valid, stuck=stuck.copy())
+        return Snapshot(
+            step=self.step_index,
+            robots=R,
+            ball=self.ball_array(),
+            holder=self.ball.holder,
+            wheels=wheels,
+            valid=valid,
+            stuck=stuck.copy(),
+        )
 
     def _update_stuck(self, R: np.ndarray) -> None:
         """Stuck: commanded to move (> 0.2 m/s) but moving at less than half of it for 0.5 s or more."""
@@ -540,8 +600,9 @@ class Simulator:
         allowed = {"x", "y", "z", "yaw", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"}
         unknown = set(state) - allowed
         if unknown:
-            raise CommandError(f"set_model_state: unknown key(s) {', '.join(sorted(unknown))}; "
-                               f"allowed: {', '.join(sorted(allowed))}")
+            raise CommandError(
+                f"set_model_state: unknown key(s) {', '.join(sorted(unknown))}; allowed: {', '.join(sorted(allowed))}"
+            )
         for k, v in state.items():
             if not _finite(v) or abs(v) > 1e4:
                 raise CommandError(f"set_model_state({name!r}): {k}={v!r} is not a finite value of sensible size")
@@ -562,11 +623,13 @@ class Simulator:
                 q[b + off] = s[k]
         q[b + 2] = max(q[b + 2], self.ball_radius)
         if any(k in s for k in ("qw", "qx", "qy", "qz")):
-            quat = np.array([s.get("qw", q[b + 3]), s.get("qx", q[b + 4]), s.get("qy", q[b + 5]), s.get("qz", q[b + 6])])
+            quat = np.array(
+                [s.get("qw", q[b + 3]), s.get("qx", q[b + 4]), s.get("qy", q[b + 5]), s.get("qz", q[b + 6])]
+            )
             norm = np.linalg.norm(quat)
             if norm < 1e-9:
                 raise CommandError("set_model_state('ball'): the quaternion has zero length")
-            q[b + 3:b + 7] = quat / norm
+            q[b + 3 : b + 7] = quat / norm
         for k, off in (("vx", 0), ("vy", 1), ("vz", 2)):
             if k in s:
                 v[bv + off] = s[k]
@@ -576,16 +639,22 @@ class Simulator:
                 if k in s:
                     w_world[off] = s[k]
             inv = np.empty(4)
-            mujoco.mju_negQuat(inv, q[b + 3:b + 7])
+            mujoco.mju_negQuat(inv, q[b + 3 : b + 7])
             w_local = np.empty(3)
             mujoco.mju_rotVecQuat(w_local, w_world, inv)
-            v[bv + 3:bv + 6] = w_local
+            v[bv + 3 : bv + 6] = w_local
 
     def _set_robot(self, i: int, s: dict) -> None:
         q, v = self.d.qpos, self.d.qvel
         qa, va = self._rq[i], self._rv[i]
-        lifted = abs(s.get("z", 0.0)) > 1e-9 or abs(s.get("qx", 0.0)) > 1e-9 or abs(s.get("qy", 0.0)) > 1e-9 \
-            or abs(s.get("vz", 0.0)) > 1e-9 or abs(s.get("wx", 0.0)) > 1e-9 or abs(s.get("wy", 0.0)) > 1e-9
+        lifted = (
+            abs(s.get("z", 0.0)) > 1e-9
+            or abs(s.get("qx", 0.0)) > 1e-9
+            or abs(s.get("qy", 0.0)) > 1e-9
+            or abs(s.get("vz", 0.0)) > 1e-9
+            or abs(s.get("wx", 0.0)) > 1e-9
+            or abs(s.get("wy", 0.0)) > 1e-9
+        )
         if "x" in s:
             q[qa[0]] = s["x"]
         if "y" in s:
@@ -640,20 +709,25 @@ class Simulator:
         if link == "base":
             return self.set_model_state(robot, **state)
         if link.startswith("wheel_") and robot in self.robot_index:
-            raise CommandError(f"set_link_state({name!r}): a wheel follows its robot's base; "
-                               f"set the state of {robot!r} (or {robot}/base) instead")
+            raise CommandError(
+                f"set_link_state({name!r}): a wheel follows its robot's base; "
+                f"set the state of {robot!r} (or {robot}/base) instead"
+            )
         raise CommandError(f"no link named {name!r} (links: <robot>/base, <robot>/wheel_<k>, ball)")
 
-    def apply_wrench(self, name: str, force: Iterable[float] = (0, 0, 0), torque: Iterable[float] = (0, 0, 0),
-                     duration: float = 0.0) -> None:
+    def apply_wrench(
+        self, name: str, force: Iterable[float] = (0, 0, 0), torque: Iterable[float] = (0, 0, 0), duration: float = 0.0
+    ) -> None:
         """Apply a world-frame force [N] and torque [N m] at a model's centre for ``duration`` seconds
         (at least one physics step). On a robot only the planar part acts (x, y force, z torque)."""
         f, t = list(force), list(torque)
         if len(f) != 3 or len(t) != 3:
             raise CommandError("apply_wrench: force and torque must have 3 components each")
         if not _finite(*f, *t, duration) or duration < 0 or any(abs(x) > MAX_WRENCH for x in f + t):
-            raise CommandError(f"apply_wrench({name!r}): force {f}, torque {t}, duration {duration!r} must be "
-                               f"finite, |value| <= {MAX_WRENCH:g}, duration >= 0")
+            raise CommandError(
+                f"apply_wrench({name!r}): force {f}, torque {t}, duration {duration!r} must be "
+                f"finite, |value| <= {MAX_WRENCH:g}, duration >= 0"
+            )
         body = self.ix.ball_body if name == BALL_NAME else int(self.ix.robot_body[self.index_of(name)])
         steps = max(1, round(duration / self.dt))
         self._wrenches.append((body, np.array(f + t, dtype=float), self.step_index + steps))

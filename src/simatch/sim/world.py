@@ -31,7 +31,7 @@ BALL_NAME = "ball"
 
 @dataclass
 class RobotEntry:
-    name: str            # "cyan/2"
+    name: str  # "cyan/2"
     team: str
     rid: int
     model: RobotModel
@@ -43,21 +43,21 @@ class WorldIndex:
     """Addresses into MjModel/MjData, resolved once."""
 
     robots: list[RobotEntry]
-    robot_body: np.ndarray            # (N,) body ids
-    robot_qpos: np.ndarray            # (N, 3) qpos addresses of x, y, yaw
-    robot_qvel: np.ndarray            # (N, 3) dof addresses of vx, vy, w (world frame)
-    robot_ctrl: np.ndarray            # (N, 3) actuator ids of the body-frame velocity servo
-    robot_act: np.ndarray             # (N, 3) their activation addresses (the servo set points)
-    robot_hull_geom: np.ndarray       # (N,)
-    robot_mouth_geom: np.ndarray      # (N,)
-    dribble_eq: np.ndarray            # (N,) connect constraint robot-ball (inactive)
-    freeze_eq: np.ndarray             # (N,) weld robot-world (inactive)
+    robot_body: np.ndarray  # (N,) body ids
+    robot_qpos: np.ndarray  # (N, 3) qpos addresses of x, y, yaw
+    robot_qvel: np.ndarray  # (N, 3) dof addresses of vx, vy, w (world frame)
+    robot_ctrl: np.ndarray  # (N, 3) actuator ids of the body-frame velocity servo
+    robot_act: np.ndarray  # (N, 3) their activation addresses (the servo set points)
+    robot_hull_geom: np.ndarray  # (N,)
+    robot_mouth_geom: np.ndarray  # (N,)
+    dribble_eq: np.ndarray  # (N,) connect constraint robot-ball (inactive)
+    freeze_eq: np.ndarray  # (N,) weld robot-world (inactive)
     ball_body: int
-    ball_qpos: int                    # 7 numbers: x y z qw qx qy qz
-    ball_qvel: int                    # 6 numbers: vx vy vz wx wy wz
+    ball_qpos: int  # 7 numbers: x y z qw qx qy qz
+    ball_qvel: int  # 6 numbers: vx vy vz wx wy wz
     ball_geom: int
     static_geoms: np.ndarray
-    robot_of_geom: dict[int, int] = field(default_factory=dict)   # geom id -> robot index
+    robot_of_geom: dict[int, int] = field(default_factory=dict)  # geom id -> robot index
 
 
 #: contact of the ball with robots, goals and boards: a stiff spring-damper that returns about a third of
@@ -85,8 +85,14 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
 
     half_x = geo.half_length + geo.margin
     half_y = geo.half_width + geo.margin
-    floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half_x + 2.0, half_y + 2.0, 0.1],
-                        contype=FLOOR, conaffinity=0, condim=3)
+    floor = wb.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[half_x + 2.0, half_y + 2.0, 0.1],
+        contype=FLOOR,
+        conaffinity=0,
+        condim=3,
+    )
 
     statics: list = []
 
@@ -96,8 +102,16 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
         return wb.add_body(name=name)
 
     def static_box(body, name: str, center, half_sizes, damped: bool = False):
-        g = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(center), size=list(half_sizes),
-                          contype=STATIC, conaffinity=0, condim=3, friction=[0.3, 0.005, 0.0001])
+        g = body.add_geom(
+            name=name,
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            pos=list(center),
+            size=list(half_sizes),
+            contype=STATIC,
+            conaffinity=0,
+            condim=3,
+            friction=[0.3, 0.005, 0.0001],
+        )
         if damped:
             # nets swallow the ball: an overdamped contact, and no friction (with the ball's own friction a
             # spinning ball would climb the net and roll back out; priority makes the net's friction count)
@@ -111,10 +125,12 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
 
     if geo.walls:
         t, h = 0.05, geo.wall_height
-        for name, center, size in (("board_+x", (half_x + t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
-                                   ("board_-x", (-half_x - t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
-                                   ("board_+y", (0, half_y + t, h / 2), (half_x, t, h / 2)),
-                                   ("board_-y", (0, -half_y - t, h / 2), (half_x, t, h / 2))):
+        for name, center, size in (
+            ("board_+x", (half_x + t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
+            ("board_-x", (-half_x - t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
+            ("board_+y", (0, half_y + t, h / 2), (half_x, t, h / 2)),
+            ("board_-y", (0, -half_y - t, h / 2), (half_x, t, h / 2)),
+        ):
             static_box(static_body(name), name, center, size)
 
     if geo.goals:
@@ -125,24 +141,50 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
             x_line = side * geo.half_length
             x_post = x_line + side * p / 2
             for sy, ytag in ((1, "left"), (-1, "right")):
-                static_box(body, f"goal_{tag}_post_{ytag}", (x_post, sy * (gw / 2 + p / 2), (gh + p) / 2),
-                           (p / 2, p / 2, (gh + p) / 2))
-                static_box(body, f"goal_{tag}_net_{ytag}", (x_line + side * gd / 2, sy * (gw / 2 + p + net), gh / 2),
-                           (gd / 2, net, gh / 2), damped=True)
+                static_box(
+                    body,
+                    f"goal_{tag}_post_{ytag}",
+                    (x_post, sy * (gw / 2 + p / 2), (gh + p) / 2),
+                    (p / 2, p / 2, (gh + p) / 2),
+                )
+                static_box(
+                    body,
+                    f"goal_{tag}_net_{ytag}",
+                    (x_line + side * gd / 2, sy * (gw / 2 + p + net), gh / 2),
+                    (gd / 2, net, gh / 2),
+                    damped=True,
+                )
             static_box(body, f"goal_{tag}_crossbar", (x_post, 0.0, gh + p / 2), (p / 2, gw / 2 + p, p / 2))
-            static_box(body, f"goal_{tag}_net_back", (x_line + side * (gd + net), 0.0, gh / 2),
-                       (net, gw / 2 + p, gh / 2), damped=True)
-            static_box(body, f"goal_{tag}_net_top", (x_line + side * gd / 2, 0.0, gh + net), (gd / 2, gw / 2 + p, net),
-                       damped=True)
+            static_box(
+                body,
+                f"goal_{tag}_net_back",
+                (x_line + side * (gd + net), 0.0, gh / 2),
+                (net, gw / 2 + p, gh / 2),
+                damped=True,
+            )
+            static_box(
+                body,
+                f"goal_{tag}_net_top",
+                (x_line + side * gd / 2, 0.0, gh + net),
+                (gd / 2, gw / 2 + p, net),
+                damped=True,
+            )
 
     # --- ball -----------------------------------------------------------------------------------------------
     b = scene.ball
     ball = wb.add_body(name=BALL_NAME, pos=[b.position[0], b.position[1], b.radius])
     ball.add_freejoint(name="ball")
-    ball_geom = ball.add_geom(name="ball", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[b.radius, 0, 0], mass=b.mass,
-                              typeinertia=mujoco.mjtGeomInertia.mjINERTIA_SHELL,
-                              contype=BALL, conaffinity=MOUTH | STATIC, condim=3,
-                              friction=[b.friction, 0.005, 0.0001])
+    ball_geom = ball.add_geom(
+        name="ball",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[b.radius, 0, 0],
+        mass=b.mass,
+        typeinertia=mujoco.mjtGeomInertia.mjINERTIA_SHELL,
+        contype=BALL,
+        conaffinity=MOUTH | STATIC,
+        condim=3,
+        friction=[b.friction, 0.005, 0.0001],
+    )
     # Rolling resistance: a rolling hollow ball (I = 2/3 m r^2) under rolling friction mu_r decelerates at
     # a = mu_r g / (r (1 + 2/3)); solve for mu_r so that a equals the scene's rolling deceleration.
     g = max(scene.physics.gravity, 1e-9)
@@ -176,13 +218,29 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
         body.inertia = list(model.inertia())
         body.ipos = [0.0, 0.0, p.height / 2]
         body.explicitinertial = True
-        body.add_geom(name=f"{entry.name}/hull", type=mujoco.mjtGeom.mjGEOM_SPHERE, pos=[0, 0, HULL_HEIGHT],
-                      size=[p.radius, 0, 0], contype=HULL, conaffinity=HULL | STATIC, condim=1, mass=0)
+        body.add_geom(
+            name=f"{entry.name}/hull",
+            type=mujoco.mjtGeom.mjGEOM_SPHERE,
+            pos=[0, 0, HULL_HEIGHT],
+            size=[p.radius, 0, 0],
+            contype=HULL,
+            conaffinity=HULL | STATIC,
+            condim=1,
+            mass=0,
+        )
         cx, cr = model.ball_collider(b.radius)
-        body.add_geom(name=f"{entry.name}/mouth", type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-                      fromto=[cx, 0, b.radius, cx, 0, max(p.height - cr, b.radius + 1e-3)], size=[cr, 0, 0],
-                      contype=MOUTH, conaffinity=0, condim=3, friction=[0.3, 0.005, 0.0001], mass=0,
-                      solref=BALL_BODY_SOLREF)
+        body.add_geom(
+            name=f"{entry.name}/mouth",
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            fromto=[cx, 0, b.radius, cx, 0, max(p.height - cr, b.radius + 1e-3)],
+            size=[cr, 0, 0],
+            contype=MOUTH,
+            conaffinity=0,
+            condim=3,
+            friction=[0.3, 0.005, 0.0001],
+            mass=0,
+            solref=BALL_BODY_SOLREF,
+        )
         body.add_site(name=f"{entry.name}/base", pos=[0, 0, 0])
         # The base's velocity servo, one per body axis (x, y, turn), acting in the robot frame through a
         # site: force = kv (act - v) + bias, bounded by the traction limit. With the default response time
@@ -192,8 +250,12 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
         # bias carries a small correction for exact arcs (see Simulator._plan_drive).
         tau = p.response_time or scene.physics.timestep
         for k, gear in enumerate(([1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 0, 0, 0, 1])):
-            act = spec.add_actuator(name=f"{entry.name}/servo_{'xyw'[k]}", trntype=mujoco.mjtTrn.mjTRN_SITE,
-                                    target=f"{entry.name}/base", gear=gear)
+            act = spec.add_actuator(
+                name=f"{entry.name}/servo_{'xyw'[k]}",
+                trntype=mujoco.mjtTrn.mjTRN_SITE,
+                target=f"{entry.name}/base",
+                gear=gear,
+            )
             inertia = model.mass if k < 2 else model.inertia()[2]
             kv = inertia / tau
             act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
@@ -203,16 +265,28 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
             act.biasprm[0:3] = [0.0, 0.0, -kv]
             act.actearly = True
             act.actlimited = True
-            act.actrange = [-1.0, 1.0]        # set at run time by every plan
+            act.actrange = [-1.0, 1.0]  # set at run time by every plan
             act.forcelimited = True
             limit = p.max_force if k < 2 else p.max_torque
             act.forcerange = [-limit, limit]
-        spec.add_equality(name=f"{entry.name}/dribble", type=mujoco.mjtEq.mjEQ_CONNECT, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1=entry.name, name2=BALL_NAME, active=False,
-                          solref=[0.02, 1.0])
-        spec.add_equality(name=f"{entry.name}/freeze", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1=entry.name, name2="world", active=False,
-                          solref=[2.0 * scene.physics.timestep, 1.0])   # as stiff as the step allows
+        spec.add_equality(
+            name=f"{entry.name}/dribble",
+            type=mujoco.mjtEq.mjEQ_CONNECT,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=entry.name,
+            name2=BALL_NAME,
+            active=False,
+            solref=[0.02, 1.0],
+        )
+        spec.add_equality(
+            name=f"{entry.name}/freeze",
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=entry.name,
+            name2="world",
+            active=False,
+            solref=[2.0 * scene.physics.timestep, 1.0],
+        )  # as stiff as the step allows
 
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -226,12 +300,19 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     index = WorldIndex(
         robots=robots,
         robot_body=np.array([model.body(r.name).id for r in robots], dtype=int),
-        robot_qpos=np.array([[jq(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(-1, 3),
-        robot_qvel=np.array([[jv(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(-1, 3),
-        robot_ctrl=np.array([[model.actuator(f"{r.name}/servo_{a}").id for a in "xyw"] for r in robots],
-                            dtype=int).reshape(-1, 3),
-        robot_act=np.array([[model.actuator_actadr[model.actuator(f"{r.name}/servo_{a}").id] for a in "xyw"]
-                            for r in robots], dtype=int).reshape(-1, 3),
+        robot_qpos=np.array([[jq(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(
+            -1, 3
+        ),
+        robot_qvel=np.array([[jv(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(
+            -1, 3
+        ),
+        robot_ctrl=np.array(
+            [[model.actuator(f"{r.name}/servo_{a}").id for a in "xyw"] for r in robots], dtype=int
+        ).reshape(-1, 3),
+        robot_act=np.array(
+            [[model.actuator_actadr[model.actuator(f"{r.name}/servo_{a}").id] for a in "xyw"] for r in robots],
+            dtype=int,
+        ).reshape(-1, 3),
         robot_hull_geom=np.array([model.geom(f"{r.name}/hull").id for r in robots], dtype=int),
         robot_mouth_geom=np.array([model.geom(f"{r.name}/mouth").id for r in robots], dtype=int),
         dribble_eq=np.array([model.equality(f"{r.name}/dribble").id for r in robots], dtype=int),

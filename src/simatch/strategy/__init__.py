@@ -29,10 +29,19 @@ NO_NODES = ("none", "external")
 def strategy_class(spec: str) -> type:
     cls = load(spec, SHIPPED, "strategy")
     if not (isinstance(cls, type) and issubclass(cls, (RobotStrategy, TeamStrategy))):
-        raise PluginError(f"strategy {spec!r} is neither a simatch.strategy.RobotStrategy nor a TeamStrategy "
-                          f"subclass")
+        raise PluginError(f"strategy {spec!r} is neither a simatch.strategy.RobotStrategy nor a TeamStrategy subclass")
     return cls
 
 
-__all__ = ["Command", "NO_NODES", "PassIntent", "RobotContext", "RobotStrategy", "SHIPPED", "TeamContext",
-           "TeamStrategy", "WorldModel", "strategy_class"]
+__all__ = [
+    "Command",
+    "NO_NODES",
+    "PassIntent",
+    "RobotContext",
+    "RobotStrategy",
+    "SHIPPED",
+    "TeamContext",
+    "TeamStrategy",
+    "WorldModel",
+    "strategy_class",
+]

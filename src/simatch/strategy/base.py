@@ -80,11 +80,11 @@ class RobotContext:
     team: str
     id: int
     goalkeeper: Optional[int]
-    ids: list[int]                       # every robot id of the team
-    field: FieldGeometry                 # in the team frame
-    start: tuple[float, float, float]    # start pose, team frame
-    control_period: float                # [s]
-    params: Any                          # validated strategy_params (a pydantic model or a dict)
+    ids: list[int]  # every robot id of the team
+    field: FieldGeometry  # in the team frame
+    start: tuple[float, float, float]  # start pose, team frame
+    control_period: float  # [s]
+    params: Any  # validated strategy_params (a pydantic model or a dict)
     rng: np.random.Generator = field(repr=False, default_factory=np.random.default_rng)
 
     @property

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import math
 
-POSITION_GAIN = 5.0   # [1/s]: speed = gain x distance, capped
-HEADING_GAIN = 2.0    # [1/s]
+POSITION_GAIN = 5.0  # [1/s]: speed = gain x distance, capped
+HEADING_GAIN = 2.0  # [1/s]
 
 
 def velocity_towards(x: float, y: float, yaw: float, cmd, max_vel: float, max_w: float) -> tuple[float, float, float]:

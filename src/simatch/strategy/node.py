@@ -21,10 +21,16 @@ _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
 # built positionally (three messages per robot and control tick; see msgs.positional)
 _VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
-_ActionCmd = msgs.positional(msgs.ActionCmd, "stamp tick move_action rotate_action rotate_mode target_x target_y "
-                             "target_ori target_vx target_vy max_vel max_w dribble kick_speed kick_type")
-_StrategyInfo = msgs.positional(msgs.StrategyInfo, "stamp tick agent_id role action is_dribble is_kickoff role_time "
-                                "target_x target_y target_num static_pass_num static_catch_num pass_cmd user")
+_ActionCmd = msgs.positional(
+    msgs.ActionCmd,
+    "stamp tick move_action rotate_action rotate_mode target_x target_y "
+    "target_ori target_vx target_vy max_vel max_w dribble kick_speed kick_type",
+)
+_StrategyInfo = msgs.positional(
+    msgs.StrategyInfo,
+    "stamp tick agent_id role action is_dribble is_kickoff role_time "
+    "target_x target_y target_num static_pass_num static_catch_num pass_cmd user",
+)
 _TeamStrategy = msgs.positional(msgs.TeamStrategy, "stamp tick strategies")
 _MOVE, _NO_ACTION = msgs.ActionCmd.MOVE, msgs.ActionCmd.NO_ACTION
 _LOB, _GROUND = msgs.ActionCmd.KICK_LOB, msgs.ActionCmd.KICK_GROUND
@@ -70,14 +76,14 @@ class RobotNode(Node):
             if not isinstance(cmd, Command):
                 raise TypeError(f"decide() returned {type(cmd).__name__}, not a Command")
             vx, vy, w = self._velocity(cmd)
-        except Exception as exc:   # a strategy bug must not stop the match: this robot stands still
+        except Exception as exc:  # a strategy bug must not stop the match: this robot stands still
             self._error(now, exc)
             cmd, (vx, vy, w) = Command(), (0.0, 0.0, 0.0)
         self.publish(now, world.tick, cmd, vx, vy, w)
 
     def _velocity(self, cmd: Command) -> tuple[float, float, float]:
         if cmd.target is None and cmd.target_ori is None:
-            return cmd.vx, cmd.vy, cmd.w           # a velocity command: no limits to look up
+            return cmd.vx, cmd.vy, cmd.w  # a velocity command: no limits to look up
         coach = self.world.coach
         max_vel, max_w = cmd.max_vel, cmd.max_w
         if coach is not None and coach.max_vel > 0:
@@ -101,11 +107,29 @@ class RobotNode(Node):
         rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
         tvx, tvy = cmd.target_vel
         # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
-        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel,
-                                                                       cmd.max_w, cmd.kick_speed)
+        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(
+            vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed
+        )
         self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
-        self.pub_action.put(_ActionCmd(now, tick, move, rotate, 0, tx, ty, ori, tvx, tvy, max_vel, max_w,
-                                       cmd.dribble, kick, _LOB if cmd.lob else _GROUND))
+        self.pub_action.put(
+            _ActionCmd(
+                now,
+                tick,
+                move,
+                rotate,
+                0,
+                tx,
+                ty,
+                ori,
+                tvx,
+                tvy,
+                max_vel,
+                max_w,
+                cmd.dribble,
+                kick,
+                _LOB if cmd.lob else _GROUND,
+            )
+        )
         if self.pub_info.active:
             self.pub_info.put(self.strategy_info(now, tick, cmd))
 
@@ -116,15 +140,36 @@ class RobotNode(Node):
         else:
             px, py, cx, cy = _f32s(p.pass_x, p.pass_y, p.catch_x, p.catch_y)
             pass_cmd = msgs.PassCommands(
-                pass_id=self.rid, catch_id=p.catch_id, pass_x=px, pass_y=py, catch_x=cx, catch_y=cy,
-                is_passout=bool(p.kicked), is_dynamic_pass=bool(p.dynamic), is_static_pass=bool(p.static),
-                is_valid=True)
+                pass_id=self.rid,
+                catch_id=p.catch_id,
+                pass_x=px,
+                pass_y=py,
+                catch_x=cx,
+                catch_y=cy,
+                is_passout=bool(p.kicked),
+                is_dynamic_pass=bool(p.dynamic),
+                is_static_pass=bool(p.static),
+                is_valid=True,
+            )
         intent = cmd.intent if cmd.intent is not None else cmd.target
         ix, iy = _f32s(*intent) if intent is not None else (math.nan, math.nan)
         return _StrategyInfo(
-            now, tick, self.rid, cmd.role, cmd.action, self._holding(), False, 0.0, ix, iy,
-            np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32, 0, 0, pass_cmd,
-            np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64)
+            now,
+            tick,
+            self.rid,
+            cmd.role,
+            cmd.action,
+            self._holding(),
+            False,
+            0.0,
+            ix,
+            iy,
+            np.array(cmd.target_num, dtype=np.int32) if cmd.target_num else _EMPTY_I32,
+            0,
+            0,
+            pass_cmd,
+            np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64,
+        )
 
     def _holding(self) -> bool:
         try:
@@ -138,8 +183,19 @@ class RobotNode(Node):
             where = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
             detail = f"{type(exc).__name__}: {exc}" + (f" ({where.filename}:{where.lineno})" if where else "")
             log.warning("strategy of %s failed (%d errors so far): %s", self.name, self.errors, detail)
-            self.pub_events.put(msgs.GameEvent(stamp=now, type="strategy_error", team=self.team, robot=self.rid,
-                                               x=0.0, y=0.0, value=float(self.errors), limit=0.0, detail=detail))
+            self.pub_events.put(
+                msgs.GameEvent(
+                    stamp=now,
+                    type="strategy_error",
+                    team=self.team,
+                    robot=self.rid,
+                    x=0.0,
+                    y=0.0,
+                    value=float(self.errors),
+                    limit=0.0,
+                    detail=detail,
+                )
+            )
 
     def stop(self) -> None:
         for sub in getattr(self, "subs", []):
@@ -161,8 +217,9 @@ class StrategyPub(Node):
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
-        self.sub = ctx.bus.subscribe(topics.team_topic(self.team, f"*/{topics.STRATEGY_INFO}"), msgs.StrategyInfo,
-                                     self._on_info)
+        self.sub = ctx.bus.subscribe(
+            topics.team_topic(self.team, f"*/{topics.STRATEGY_INFO}"), msgs.StrategyInfo, self._on_info
+        )
         self.pub = ctx.bus.publisher(topics.team_topic(self.team, topics.TEAM_STRATEGY), msgs.TeamStrategy)
 
     def _on_info(self, msg) -> None:

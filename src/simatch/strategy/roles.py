@@ -10,16 +10,16 @@ import types
 
 class Role(enum.IntEnum):
     GOALIE = 0
-    ACTIVE = 1         # has the ball or goes for it
-    PASSIVE = 2        # defends between the ball and its own goal
-    MIDFIELD = 3       # marks an opponent, or supports behind the attack
-    ASSISTANT = 4      # offers itself for a pass
+    ACTIVE = 1  # has the ball or goes for it
+    PASSIVE = 2  # defends between the ball and its own goal
+    MIDFIELD = 3  # marks an opponent, or supports behind the attack
+    ASSISTANT = 4  # offers itself for a pass
     ACIDPASSIVE = 5
     GAZER = 6
     BLOCK = 7
     NOROLE = 8
-    CATCHOFPASS = 9    # receives a pass under way
-    PASSOFPASS = 10    # has just passed
+    CATCHOFPASS = 9  # receives a pass under way
+    PASSOFPASS = 10  # has just passed
 
 
 class Action(enum.IntEnum):

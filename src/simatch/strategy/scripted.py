@@ -30,7 +30,7 @@ class StartPose(RobotStrategy):
     plays the ball."""
 
     def decide(self, world) -> Command:
-        if world.match_mode == 0:          # STOPROBOT
+        if world.match_mode == 0:  # STOPROBOT
             return Command()
         x, y, yaw = self.ctx.start
         return Command(target=(x, y), target_ori=yaw, max_vel=2.0, max_w=3.0)

@@ -27,12 +27,12 @@ from ..msgs.game_commands import MatchMode, is_ours
 from .base import Command, RobotStrategy
 from .roles import Action, Role
 
-ARRIVED = 0.2                 # move2target's threshold [m]
-FACING = math.radians(8.0)    # move2ori's threshold [rad]
-DRIBBLE_TO = (2.0, 3.0)       # the fixed point the demo dribbles to [m]
-AIM_HALF = 0.6                # the kick window on the goal line: y in [-0.6, 0.6] [m]
-REST_AFTER_KICK = 20          # control periods the demo ignores the ball after a kick
-OPPONENT_WAIT = 7.0           # at an opponents' restart, the robots keep away this long at most [s]
+ARRIVED = 0.2  # move2target's threshold [m]
+FACING = math.radians(8.0)  # move2ori's threshold [rad]
+DRIBBLE_TO = (2.0, 3.0)  # the fixed point the demo dribbles to [m]
+AIM_HALF = 0.6  # the kick window on the goal line: y in [-0.6, 0.6] [m]
+REST_AFTER_KICK = 20  # control periods the demo ignores the ball after a kick
+OPPONENT_WAIT = 7.0  # at an opponents' restart, the robots keep away this long at most [s]
 
 THEIR_SET_PIECE = {1: (-10.5, 0.0), 2: (-2.0, 1.0), 3: (-2.0, -1.0), 4: (-5.5, 2.0), 5: (-5.5, -2.0)}
 KEEP_AWAY = 3.0
@@ -46,7 +46,7 @@ class SimpleRobot(RobotStrategy):
         super().__init__(ctx)
         self.rest = 0
         self.last_mode = -1
-        self.wait_from: tuple[float, float, float] | None = None   # (time, ball x, y) of an opponents' restart
+        self.wait_from: tuple[float, float, float] | None = None  # (time, ball x, y) of an opponents' restart
         L2 = ctx.field.half_length
         self.goal = (L2, 0.0)
         self.own_penalty = (-L2 + ctx.field.penalty_area_depth, 0.5 * ctx.field.penalty_area_width)
@@ -68,8 +68,13 @@ class SimpleRobot(RobotStrategy):
         """Remember when START follows an opponents' set piece, and where the ball was then: until the
         ball is in play the robots keep away (the one rule the demo is taught, so that matches go on)."""
         mode, ball = world.match_mode, world.ball
-        if mode == MatchMode.STARTROBOT and 1 <= self.last_mode <= 13 and not is_ours(self.last_mode) \
-                and self.last_mode != MatchMode.DROPBALL and ball is not None:
+        if (
+            mode == MatchMode.STARTROBOT
+            and 1 <= self.last_mode <= 13
+            and not is_ours(self.last_mode)
+            and self.last_mode != MatchMode.DROPBALL
+            and ball is not None
+        ):
             self.wait_from = (world.time, ball.x, ball.y)
         if self.wait_from is not None and ball is not None:
             t0, x0, y0 = self.wait_from
@@ -82,8 +87,15 @@ class SimpleRobot(RobotStrategy):
     def move(self, me, target, ori, dribble=False, role=Role.NOROLE, action=Action.POSITIONED) -> Command:
         d = math.hypot(target[0] - me.x, target[1] - me.y)
         err = abs(math.remainder(ori - me.yaw, 2 * math.pi))
-        return Command(target=target if d > ARRIVED else None, target_ori=ori, max_vel=max(d, 0.05),
-                       max_w=max(2.0 * err, 0.05), dribble=dribble, role=role, action=action)
+        return Command(
+            target=target if d > ARRIVED else None,
+            target_ori=ori,
+            max_vel=max(d, 0.05),
+            max_w=max(2.0 * err, 0.05),
+            dribble=dribble,
+            role=role,
+            action=action,
+        )
 
     # --- set pieces -----------------------------------------------------------------------------------
     def set_piece(self, world, mode: int) -> Command:
@@ -121,10 +133,12 @@ class SimpleRobot(RobotStrategy):
         if not me.holding_ball:
             face = math.atan2(ball.y - me.y, ball.x - me.x)
             if abs(math.remainder(face - me.yaw, 2 * math.pi)) > FACING:
-                return self.move(me, (me.x, me.y), face, dribble=self.rest == 0, role=Role.ACTIVE,
-                                 action=Action.CATCH_BALL)
-            return self.move(me, (ball.x, ball.y), face, dribble=self.rest == 0, role=Role.ACTIVE,
-                             action=Action.CATCH_BALL)
+                return self.move(
+                    me, (me.x, me.y), face, dribble=self.rest == 0, role=Role.ACTIVE, action=Action.CATCH_BALL
+                )
+            return self.move(
+                me, (ball.x, ball.y), face, dribble=self.rest == 0, role=Role.ACTIVE, action=Action.CATCH_BALL
+            )
         if math.hypot(DRIBBLE_TO[0] - me.x, DRIBBLE_TO[1] - me.y) > 0.3:
             face = math.atan2(DRIBBLE_TO[1] - me.y, DRIBBLE_TO[0] - me.x)
             return self.move(me, DRIBBLE_TO, face, dribble=True, role=Role.ACTIVE, action=Action.MOVE_WITH_BALL)

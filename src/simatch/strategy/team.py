@@ -26,8 +26,9 @@ def _params(cls: type, raw: dict, scene: LoadedScene, team: str) -> Any:
     return validate_params(model, raw, scene.source, key)
 
 
-def build_team(scene: LoadedScene, team: str, seed: int, robot_ids: Iterable[int] | None = None,
-               with_strategy_pub: bool = True) -> list[Node]:
+def build_team(
+    scene: LoadedScene, team: str, seed: int, robot_ids: Iterable[int] | None = None, with_strategy_pub: bool = True
+) -> list[Node]:
     """The nodes of one team (all its robots, or only ``robot_ids``), in tick order."""
     spec = scene.spec
     tspec = spec.teams[team]
@@ -50,8 +51,10 @@ def build_team(scene: LoadedScene, team: str, seed: int, robot_ids: Iterable[int
         team_strategy = cls(TeamContext(team, ids, tspec.goalkeeper, field, starts, spec.control.period, params))
         make = team_strategy.make_robot
     else:
+
         def make(ctx: RobotContext) -> RobotStrategy:
             return cls(ctx)
+
     wanted = set(ids if robot_ids is None else robot_ids)
     unknown = wanted - set(ids)
     if unknown:
@@ -62,9 +65,17 @@ def build_team(scene: LoadedScene, team: str, seed: int, robot_ids: Iterable[int
     for rid in ids:
         if rid not in wanted:
             continue
-        ctx = RobotContext(team=team, id=rid, goalkeeper=tspec.goalkeeper, ids=ids, field=field, start=starts[rid],
-                           control_period=spec.control.period, params=params,
-                           rng=np.random.default_rng(stable_seed(seed, "strategy", team, str(rid))))
+        ctx = RobotContext(
+            team=team,
+            id=rid,
+            goalkeeper=tspec.goalkeeper,
+            ids=ids,
+            field=field,
+            start=starts[rid],
+            control_period=spec.control.period,
+            params=params,
+            rng=np.random.default_rng(stable_seed(seed, "strategy", team, str(rid))),
+        )
         world = WorldModel(team, rid, sign, geo, tspec.goalkeeper)
         nodes.append(RobotNode(team, rid, make(ctx), world, spec.control.period))
     return nodes

@@ -36,10 +36,10 @@ class Ball:
     vx: float
     vy: float
     vz: float
-    angle: float          # bearing from my kicker axis [rad]
-    distance: float       # from my centre [m]
-    seen: bool            # seen in the latest observation (else: last known position)
-    age: float            # seconds since it was last seen
+    angle: float  # bearing from my kicker axis [rad]
+    distance: float  # from my centre [m]
+    seen: bool  # seen in the latest observation (else: last known position)
+    age: float  # seconds since it was last seen
 
 
 class WorldModel:
@@ -49,14 +49,14 @@ class WorldModel:
         self.sign = sign
         self.field = team_field(field, sign)
         self.goalkeeper = goalkeeper
-        self.vision = None              # latest OmniVisionInfo
-        self.coach = None               # latest CoachInfo
-        self.game = None                # latest GameState from the judge (None if it publishes none)
-        self.strategies: dict = {}      # teammate id -> latest StrategyInfo (from the team picture)
+        self.vision = None  # latest OmniVisionInfo
+        self.coach = None  # latest CoachInfo
+        self.game = None  # latest GameState from the judge (None if it publishes none)
+        self.strategies: dict = {}  # teammate id -> latest StrategyInfo (from the team picture)
         self.time = 0.0
         self.tick = 0
         self._ball: Ball | None = None
-        self._last_ball = None          # the BallInfo of the last observation that saw the ball
+        self._last_ball = None  # the BallInfo of the last observation that saw the ball
         self._last_seen = -math.inf
 
     # --- inputs (bus callbacks) -------------------------------------------------------------------------
@@ -67,7 +67,7 @@ class WorldModel:
         if msg.ball.pos_known:
             self._last_seen = msg.stamp
             self._last_ball = msg.ball
-        self._ball = None            # built on first use this tick
+        self._ball = None  # built on first use this tick
 
     def on_team(self, msg) -> None:
         self.strategies = {s.agent_id: s for s in msg.strategies}
@@ -112,9 +112,18 @@ class WorldModel:
             elif self._last_ball is not None:
                 last, me = self._last_ball, self.me
                 dx, dy = last.x - me.x, last.y - me.y
-                self._ball = Ball(last.x, last.y, last.z, 0.0, 0.0, 0.0,
-                                  math.remainder(math.atan2(dy, dx) - me.yaw, 2 * math.pi), math.hypot(dx, dy),
-                                  False, self.time - self._last_seen)
+                self._ball = Ball(
+                    last.x,
+                    last.y,
+                    last.z,
+                    0.0,
+                    0.0,
+                    0.0,
+                    math.remainder(math.atan2(dy, dx) - me.yaw, 2 * math.pi),
+                    math.hypot(dx, dy),
+                    False,
+                    self.time - self._last_seen,
+                )
         return self._ball
 
     @property

@@ -29,8 +29,13 @@ class RecordingArchive:
     ``topics()``, ``raw(topics)``, ``decode(type, data, topic)``), which the loader uses in its thread while the
     player reads the same file in another."""
 
-    def __init__(self, open_recording: Callable[[], object], robots: dict[str, list[int]], control_period: float,
-                 name: str = "the recording"):
+    def __init__(
+        self,
+        open_recording: Callable[[], object],
+        robots: dict[str, list[int]],
+        control_period: float,
+        name: str = "the recording",
+    ):
         self.open_recording = open_recording
         self.name = name
         self.bus = InProcessBus("archive")
@@ -59,13 +64,13 @@ class RecordingArchive:
             pubs = {t: self.bus.publisher(t, types[t]) for t in wanted}
             every = int(self.observer.SAMPLE_PERIOD * NS)
             due = -1
-            skipped = None                  # the last model states not sampled: the recording's end
+            skipped = None  # the last model states not sampled: the recording's end
             for topic, t_ns, data in rec.raw(topics=wanted):
                 if self._stop:
                     return
                 if topic == topics.MODEL_STATES:
                     if t_ns < due:
-                        skipped = data      # the observer would skip it: do not even decode it
+                        skipped = data  # the observer would skip it: do not even decode it
                         continue
                     due, skipped = t_ns + every - 1, None
                 msg = rec.decode(types[topic], data, topic)
@@ -74,7 +79,7 @@ class RecordingArchive:
             last = rec.decode(types[topics.MODEL_STATES], skipped, topics.MODEL_STATES) if skipped else None
             if last is not None:
                 self.observer.add_states(last)
-        except Exception as exc:          # a damaged file must not bring the server down: the page shows less
+        except Exception as exc:  # a damaged file must not bring the server down: the page shows less
             self.error = str(exc)
             log.warning("the replay page cannot load %s: %s", self.name, exc)
         finally:

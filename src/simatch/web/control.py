@@ -109,7 +109,7 @@ class RunControl:
         self.teams = list(spec.teams)
         self.ids = {team: spec.teams[team].robot_ids() for team in self.teams}
         self.field = spec.world.geometry()
-        self.sent_off: set[str] = set()          # robots the console sent off in a run without a referee
+        self.sent_off: set[str] = set()  # robots the console sent off in a run without a referee
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self.ended = False
         self.referee = RefereeLink(sim.bus, lambda: sim.time) if self.has_referee else None
@@ -134,8 +134,16 @@ class RunControl:
         ref = self.has_referee
         if grant.role == "coach":
             return {"commands": grant.team in self.sim.coaches, "referee": ref}
-        return {"referee": ref, "commands": ref or bool(self.sim.coaches), "resume": ref, "auto_referee": ref,
-                "cards": ref, "award_goal": ref, "place_ball": True, "send_off": True}
+        return {
+            "referee": ref,
+            "commands": ref or bool(self.sim.coaches),
+            "resume": ref,
+            "auto_referee": ref,
+            "cards": ref,
+            "award_goal": ref,
+            "place_ball": True,
+            "send_off": True,
+        }
 
     # --- the run's thread ------------------------------------------------------------------------------------
     def apply_pending(self) -> None:
@@ -146,7 +154,7 @@ class RunControl:
                 answered_later = self.apply(grant, message, reply)
             except (ControlError, ValueError) as exc:
                 reply(str(exc))
-            except Exception as exc:        # a page must never bring the run down
+            except Exception as exc:  # a page must never bring the run down
                 log.exception("web request %r failed", message)
                 reply(f"internal error: {type(exc).__name__}: {exc}")
             else:
@@ -194,8 +202,10 @@ class RunControl:
             if self.has_referee:
                 raise ControlError(f"the referee gives the commands in this run: the {team} coach page only watches")
             if self.judge_commands:
-                raise ControlError(f"the judge ({self.spec.judge.kind}) gives the commands in this run and takes "
-                                   f"no operator's requests")
+                raise ControlError(
+                    f"the judge ({self.spec.judge.kind}) gives the commands in this run and takes "
+                    f"no operator's requests"
+                )
             raise ControlError(f"team {team} has no coach in this run")
         return coach
 
@@ -214,9 +224,12 @@ class RunControl:
         x, y = frames.point(sign, m.x, m.y)
         fields: dict[str, Any] = {"id_a": m.robot}
         if m.mode == "move":
-            mode = {(False, False): TestMode.MOVE_NOBALL_NOAVOID, (False, True): TestMode.MOVE_NOBALL_AVOID,
-                    (True, False): TestMode.MOVE_BALL_NOAVOID, (True, True): TestMode.MOVE_BALL_AVOID}[
-                (m.dribble, m.avoid)]
+            mode = {
+                (False, False): TestMode.MOVE_NOBALL_NOAVOID,
+                (False, True): TestMode.MOVE_NOBALL_AVOID,
+                (True, False): TestMode.MOVE_BALL_NOAVOID,
+                (True, True): TestMode.MOVE_BALL_AVOID,
+            }[(m.dribble, m.avoid)]
             fields.update(point_a_x=x, point_a_y=y, angle_a=frames.yaw(sign, m.heading))
         elif m.mode == "pass":
             mode = TestMode.PASS_BALL
@@ -290,8 +303,9 @@ class RunControl:
         elif isinstance(m, P.SendOff):
             self._send_off(m.robot, m.off)
         elif isinstance(m, (P.Resume, P.Card, P.AwardGoal, P.AutoReferee)):
-            raise ControlError(f"this run has no automatic referee ('{m.type}' needs one); "
-                               f"Start gives START to both teams")
+            raise ControlError(
+                f"this run has no automatic referee ('{m.type}' needs one); Start gives START to both teams"
+            )
         else:
             raise ControlError(f"'{m.type}' cannot be carried out on a live run")
 
@@ -305,8 +319,9 @@ class RunControl:
         f = self.field
         if not f.in_field(x, y, margin=f.margin - 0.2):
             raise ControlError(f"({x:.2f}, {y:.2f}) is off the floor: the ball stays where it is")
-        self.sim.set_model_state("ball", x=x, y=y, z=self.spec.ball.radius, vx=0.0, vy=0.0, vz=0.0,
-                                 wx=0.0, wy=0.0, wz=0.0)
+        self.sim.set_model_state(
+            "ball", x=x, y=y, z=self.spec.ball.radius, vx=0.0, vy=0.0, vz=0.0, wx=0.0, wy=0.0, wz=0.0
+        )
 
     def _send_off(self, name: str, off: bool) -> None:
         """Send a robot off (to the margin beside the side line, where it stands still under the console's
@@ -324,14 +339,23 @@ class RunControl:
         if off:
             sim.take_control(name)
             sim.send_vel(name, 0.0, 0.0, 0.0)
-            sim.set_model_state(name, x=x, y=-(f.half_width + 0.5 * f.margin), yaw=math.pi / 2,
-                                vx=0.0, vy=0.0, wz=0.0)
+            sim.set_model_state(name, x=x, y=-(f.half_width + 0.5 * f.margin), yaw=math.pi / 2, vx=0.0, vy=0.0, wz=0.0)
             self.sent_off.add(name)
         else:
             sim.set_model_state(name, x=x, y=-(f.half_width - 0.4), vx=0.0, vy=0.0, wz=0.0)
             sim.release_control(name)
             self.sent_off.discard(name)
-        sim.bus.publisher(topics.EVENTS, msgs.GameEvent).put(msgs.GameEvent(
-            stamp=sim.time, type="send_off" if off else "robot_returned", team=team, robot=rid, x=0.0, y=0.0,
-            value=0.0, limit=0.0, detail=f"{name} {'sent off' if off else 'back on the field'} "
-                                         f"(by the referee console; no automatic referee in this run)"))
+        sim.bus.publisher(topics.EVENTS, msgs.GameEvent).put(
+            msgs.GameEvent(
+                stamp=sim.time,
+                type="send_off" if off else "robot_returned",
+                team=team,
+                robot=rid,
+                x=0.0,
+                y=0.0,
+                value=0.0,
+                limit=0.0,
+                detail=f"{name} {'sent off' if off else 'back on the field'} "
+                f"(by the referee console; no automatic referee in this run)",
+            )
+        )

@@ -17,11 +17,21 @@ from .picture import Picture
 def hello_of(spec, picture: Picture, fps: float, **extra) -> dict:
     """What every page gets first: the scene, the field to scale, the teams and robots, the commands."""
     return {
-        "scene": spec.name, "description": spec.description, "fps": fps,
-        "field": spec.world.geometry().describe(), "ball_radius": spec.ball.radius,
-        "teams": [{"name": team, "color": spec.team_color(team), "sign": spec.team_sign(team),
-                   "ids": spec.teams[team].robot_ids(), "goalkeeper": spec.teams[team].goalkeeper}
-                  for team in spec.teams],
+        "scene": spec.name,
+        "description": spec.description,
+        "fps": fps,
+        "field": spec.world.geometry().describe(),
+        "ball_radius": spec.ball.radius,
+        "teams": [
+            {
+                "name": team,
+                "color": spec.team_color(team),
+                "sign": spec.team_sign(team),
+                "ids": spec.teams[team].robot_ids(),
+                "goalkeeper": spec.teams[team].goalkeeper,
+            }
+            for team in spec.teams
+        ],
         "robots": picture.robots_meta(),
         "commands": [m.name for m in MatchMode],
         "source": "run",
@@ -53,7 +63,7 @@ class Hosted:
             while count() == 0:
                 if deadline is not None and time.monotonic() >= deadline:
                     return False
-                time.sleep(0.05)           # short sleeps: Ctrl-C works
+                time.sleep(0.05)  # short sleeps: Ctrl-C works
             return True
         finally:
             self.server.status = "running"

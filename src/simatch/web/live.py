@@ -17,19 +17,27 @@ from .server import ViewServer
 
 
 class LiveView(Hosted):
-    def __init__(self, sim, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
-                 access: Access | None = None):
+    def __init__(self, sim, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0, access: Access | None = None):
         spec = sim.scene.spec
         self.sim = sim
         self._own_pace = sim.pace
-        self.observer = RunObserver(sim.bus, {team: spec.teams[team].robot_ids() for team in spec.teams},
-                                    spec.control.period)
+        self.observer = RunObserver(
+            sim.bus, {team: spec.teams[team].robot_ids() for team in spec.teams}, spec.control.period
+        )
         self.control = RunControl(sim)
         self.access = access or Access(list(spec.teams))
         self.picture = Picture(self.observer, spec, sent_off=lambda: tuple(self.control.sent_off))
-        self.server = ViewServer(self.observer, self.picture, self.access, hello_of(spec, self.picture, fps),
-                                 control=self.control, host=host, port=port, fps=fps,
-                                 on_viewers=self._on_viewers)
+        self.server = ViewServer(
+            self.observer,
+            self.picture,
+            self.access,
+            hello_of(spec, self.picture, fps),
+            control=self.control,
+            host=host,
+            port=port,
+            fps=fps,
+            on_viewers=self._on_viewers,
+        )
 
     def _on_viewers(self, n: int) -> None:
         """Called in the server's thread; ``Simulation.run`` reads ``pace`` between its chunks."""

@@ -51,7 +51,7 @@ class Timeline:
             self._starts.append(t)
         self._times[k][j] = t
         self._data[k][j] = sample
-        self.count += 1            # last: a reader never sees a slot before it is filled
+        self.count += 1  # last: a reader never sees a slot before it is filled
 
     @property
     def start(self) -> float:
@@ -82,7 +82,7 @@ class Timeline:
 
 def _stamped_before(buffer: deque, t: float):
     """The newest (stamp, message) entry of ``buffer`` not after ``t`` (else the oldest), or None."""
-    entries = tuple(buffer)        # one C call: atomic under the GIL while the simulation appends
+    entries = tuple(buffer)  # one C call: atomic under the GIL while the simulation appends
     for entry in reversed(entries):
         if entry[0] <= t + 1e-9:
             return entry[1]
@@ -119,23 +119,37 @@ def game_record(msg) -> dict:
         return {team: int(v) for team, v in zip(teams, values)}
 
     return {
-        "t": round(float(msg.stamp), 3), "stage": msg.stage, "phase": msg.phase, "paused": bool(msg.paused),
-        "reason": msg.reason, "clock": round(float(msg.clock), 2),
-        "stage_time_left": round(float(msg.stage_time_left), 2), "command": int(msg.command),
-        "next_command": int(msg.next_command), "command_name": command_name(msg.command),
-        "next_command_name": command_name(msg.next_command), "command_team": msg.command_team, "teams": teams,
-        "score": per_team(msg.score), "yellow_cards": per_team(msg.yellow_cards),
-        "red_cards": per_team(msg.red_cards), "fouls": per_team(msg.fouls), "sent_off": list(msg.sent_off),
-        "last_touch": msg.last_touch, "ball_in_play": bool(msg.ball_in_play), "manual": bool(msg.manual),
-        "ball_x": round(float(msg.ball_x), 3), "ball_y": round(float(msg.ball_y), 3),
+        "t": round(float(msg.stamp), 3),
+        "stage": msg.stage,
+        "phase": msg.phase,
+        "paused": bool(msg.paused),
+        "reason": msg.reason,
+        "clock": round(float(msg.clock), 2),
+        "stage_time_left": round(float(msg.stage_time_left), 2),
+        "command": int(msg.command),
+        "next_command": int(msg.next_command),
+        "command_name": command_name(msg.command),
+        "next_command_name": command_name(msg.next_command),
+        "command_team": msg.command_team,
+        "teams": teams,
+        "score": per_team(msg.score),
+        "yellow_cards": per_team(msg.yellow_cards),
+        "red_cards": per_team(msg.red_cards),
+        "fouls": per_team(msg.fouls),
+        "sent_off": list(msg.sent_off),
+        "last_touch": msg.last_touch,
+        "ball_in_play": bool(msg.ball_in_play),
+        "manual": bool(msg.manual),
+        "ball_x": round(float(msg.ball_x), 3),
+        "ball_y": round(float(msg.ball_y), 3),
     }
 
 
 class RunObserver:
     """Subscribes to a run's topics on ``bus`` and keeps what the pages draw (see the module docstring)."""
 
-    SAMPLE_PERIOD = 1.0 / 66.0     # [s] of simulated time between Timeline samples
-    RECENT = 1.0                   # [s] of perception and intentions kept per robot
+    SAMPLE_PERIOD = 1.0 / 66.0  # [s] of simulated time between Timeline samples
+    RECENT = 1.0  # [s] of perception and intentions kept per robot
 
     def __init__(self, bus: Bus, robots: dict[str, list[int]], control_period: float):
         self.bus = bus
@@ -143,7 +157,7 @@ class RunObserver:
         self.timeline: Timeline | None = None
         self.events: list[dict] = []
         self.games: list[tuple[float, dict]] = []
-        self.cards: dict[str, list[int]] = {}      # robot -> [yellow, red] cards shown so far
+        self.cards: dict[str, list[int]] = {}  # robot -> [yellow, red] cards shown so far
         keep = max(4, int(math.ceil(self.RECENT / control_period)) + 1)
         self.vision: dict[tuple[str, int], deque] = {}
         self.intent: dict[tuple[str, int], deque] = {}
@@ -156,15 +170,24 @@ class RunObserver:
             bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_game),
         ]
         for team, ids in robots.items():
-            self._subs.append(bus.subscribe(topics.team_topic(team, topics.RECEIVE_FROM_COACH), msgs.CoachInfo,
-                                            self._coach_callback(team)))
+            self._subs.append(
+                bus.subscribe(
+                    topics.team_topic(team, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, self._coach_callback(team)
+                )
+            )
             for rid in ids:
                 self.vision[(team, rid)] = v = deque(maxlen=keep)
                 self.intent[(team, rid)] = s = deque(maxlen=keep)
-                self._subs.append(bus.subscribe(topics.robot_topic(team, rid, topics.OMNI_VISION),
-                                                msgs.OmniVisionInfo, self._stamped(v)))
-                self._subs.append(bus.subscribe(topics.robot_topic(team, rid, topics.STRATEGY_INFO),
-                                                msgs.StrategyInfo, self._stamped(s)))
+                self._subs.append(
+                    bus.subscribe(
+                        topics.robot_topic(team, rid, topics.OMNI_VISION), msgs.OmniVisionInfo, self._stamped(v)
+                    )
+                )
+                self._subs.append(
+                    bus.subscribe(
+                        topics.robot_topic(team, rid, topics.STRATEGY_INFO), msgs.StrategyInfo, self._stamped(s)
+                    )
+                )
 
     # --- bus callbacks (the simulation's thread) ----------------------------------------------------------
     def _on_states(self, msg) -> None:
@@ -201,12 +224,14 @@ class RunObserver:
     def _coach_callback(self, team: str):
         def on_coach(msg) -> None:
             self.coach[team] = msg
+
         return on_coach
 
     @staticmethod
     def _stamped(buffer: deque):
         def on_msg(msg) -> None:
             buffer.append((float(msg.stamp), msg))
+
         return on_msg
 
     # --- reading (the server's thread) -----------------------------------------------------------------------

@@ -39,8 +39,15 @@ class Picture:
         for team in self.teams:
             radius = float(self.spec.teams[team].model_params.get("radius", 0.25))
             for rid in self.ids[team]:
-                out.append({"name": f"{team}/{rid}", "team": team, "id": rid, "radius": radius,
-                            "goalkeeper": rid == self.spec.teams[team].goalkeeper})
+                out.append(
+                    {
+                        "name": f"{team}/{rid}",
+                        "team": team,
+                        "id": rid,
+                        "radius": radius,
+                        "goalkeeper": rid == self.spec.teams[team].goalkeeper,
+                    }
+                )
         return out
 
     def _off(self, game: dict | None) -> list[str]:
@@ -49,8 +56,12 @@ class Picture:
     def _commands(self) -> dict:
         out = {}
         for team, info in list(self.obs.coach.items()):
-            out[team] = {"mode": command_name(info.match_mode), "type": command_name(info.match_type),
-                         "max_vel": _r(info.max_vel, 2), "max_w": _r(info.max_w, 2)}
+            out[team] = {
+                "mode": command_name(info.match_mode),
+                "type": command_name(info.match_type),
+                "max_vel": _r(info.max_vel, 2),
+                "max_w": _r(info.max_w, 2),
+            }
         return out
 
     # --- the exact world ----------------------------------------------------------------------------------
@@ -67,11 +78,28 @@ class Picture:
                 ball = {"x": _r(x), "y": _r(y), "z": _r(z), "vx": _r(vx, 2), "vy": _r(vy, 2)}
             else:
                 team, _, rid = name.partition("/")
-                robots.append({"name": name, "team": team, "id": int(rid), "x": _r(x), "y": _r(y),
-                               "yaw": _r(yaw), "vx": _r(vx, 2), "vy": _r(vy, 2)})
+                robots.append(
+                    {
+                        "name": name,
+                        "team": team,
+                        "id": int(rid),
+                        "x": _r(x),
+                        "y": _r(y),
+                        "yaw": _r(yaw),
+                        "vx": _r(vx, 2),
+                        "vy": _r(vy, 2),
+                    }
+                )
         game = self.obs.game_at(t)
-        out = {"type": "frame", "t": _r(t), "robots": robots, "ball": ball, "game": game,
-               "commands": self._commands(), "sent_off": self._off(game)}
+        out = {
+            "type": "frame",
+            "t": _r(t),
+            "robots": robots,
+            "ball": ball,
+            "game": game,
+            "commands": self._commands(),
+            "sent_off": self._off(game),
+        }
         if live:
             out["cards"] = {name: list(c) for name, c in list(self.obs.cards.items())}
         return out
@@ -96,21 +124,38 @@ class Picture:
             if me is not None:
                 x, y = frames.point(sign, me.x, me.y)
                 vx, vy = frames.point(sign, me.vx, me.vy)
-                entry.update(seen=True, x=_r(x), y=_r(y), yaw=_r(frames.yaw(sign, me.yaw)), vx=_r(vx, 2),
-                             vy=_r(vy, 2), w=_r(me.w, 2), speed=_r(math.hypot(me.vx, me.vy), 2),
-                             wheels=[_r(u, 2) for u in me.wheel_speeds], valid=bool(me.valid), stuck=bool(me.stuck),
-                             holding=bool(me.holding_ball))
+                entry.update(
+                    seen=True,
+                    x=_r(x),
+                    y=_r(y),
+                    yaw=_r(frames.yaw(sign, me.yaw)),
+                    vx=_r(vx, 2),
+                    vy=_r(vy, 2),
+                    w=_r(me.w, 2),
+                    speed=_r(math.hypot(me.vx, me.vy), 2),
+                    wheels=[_r(u, 2) for u in me.wheel_speeds],
+                    valid=bool(me.valid),
+                    stuck=bool(me.stuck),
+                    holding=bool(me.holding_ball),
+                )
                 obstacles[rid] = self._obstacles(vision, sign, team)
                 b = vision.ball
                 if b.pos_known and b.distance < best_dist:
                     best_dist = b.distance
                     bx, by = frames.point(sign, b.x, b.y)
                     bvx, bvy = frames.point(sign, b.vx, b.vy)
-                    best_ball = {"x": _r(bx), "y": _r(by), "z": _r(b.z), "vx": _r(bvx, 2), "vy": _r(bvy, 2),
-                                 "seen_by": rid}
+                    best_ball = {
+                        "x": _r(bx),
+                        "y": _r(by),
+                        "z": _r(b.z),
+                        "vx": _r(bvx, 2),
+                        "vy": _r(bvy, 2),
+                        "seen_by": rid,
+                    }
             if intent is not None:
-                entry.update(role=role_name(intent.role), action=action_name(intent.action),
-                             dribble=bool(intent.is_dribble))
+                entry.update(
+                    role=role_name(intent.role), action=action_name(intent.action), dribble=bool(intent.is_dribble)
+                )
                 tx, ty = float(intent.target_x), float(intent.target_y)
                 if math.isfinite(tx) and math.isfinite(ty):
                     wx, wy = frames.point(sign, tx, ty)
@@ -118,16 +163,37 @@ class Picture:
                 p = intent.pass_cmd
                 if p.is_valid and me is not None:
                     cx, cy = frames.point(sign, p.catch_x, p.catch_y)
-                    passes.append({"passer": rid, "catcher": int(p.catch_id), "from": [entry["x"], entry["y"]],
-                                   "to": [_r(cx), _r(cy)], "kicked": bool(p.is_passout)})
+                    passes.append(
+                        {
+                            "passer": rid,
+                            "catcher": int(p.catch_id),
+                            "from": [entry["x"], entry["y"]],
+                            "to": [_r(cx), _r(cy)],
+                            "kicked": bool(p.is_passout),
+                        }
+                    )
             robots.append(entry)
         info = self.obs.coach.get(team)
         command = None
         if info is not None:
-            command = {"mode": command_name(info.match_mode), "type": command_name(info.match_type),
-                       "test_mode": int(info.test_mode), "max_vel": _r(info.max_vel, 2), "max_w": _r(info.max_w, 2)}
-        return {"type": "frame", "t": _r(t), "team": team, "robots": robots, "ball": best_ball,
-                "obstacles": obstacles, "passes": passes, "command": command, "game": game}
+            command = {
+                "mode": command_name(info.match_mode),
+                "type": command_name(info.match_type),
+                "test_mode": int(info.test_mode),
+                "max_vel": _r(info.max_vel, 2),
+                "max_w": _r(info.max_w, 2),
+            }
+        return {
+            "type": "frame",
+            "t": _r(t),
+            "team": team,
+            "robots": robots,
+            "ball": best_ball,
+            "obstacles": obstacles,
+            "passes": passes,
+            "command": command,
+            "game": game,
+        }
 
     @staticmethod
     def _obstacles(vision, sign: int, team: str) -> list[list[float]]:
@@ -137,7 +203,7 @@ class Picture:
         for k in range(len(o.x)):
             ox, oy = float(o.x[k]), float(o.y[k])
             if any(math.hypot(ox - mx, oy - my) < 0.1 for mx, my in mates):
-                continue                       # a teammate, not an obstacle to avoid (as the original's oppinfo)
+                continue  # a teammate, not an obstacle to avoid (as the original's oppinfo)
             wx, wy = frames.point(sign, ox, oy)
             out.append([_r(wx), _r(wy), _r(float(o.radius[k]) if len(o.radius) > k else 0.25, 2)])
         return out

@@ -38,8 +38,9 @@ def _command(value) -> MatchMode:
         try:
             return MatchMode[value.strip().upper()]
         except KeyError:
-            raise ValueError(f"unknown game command {value!r} (expected one of "
-                             f"{', '.join(m.name for m in MatchMode)})") from None
+            raise ValueError(
+                f"unknown game command {value!r} (expected one of {', '.join(m.name for m in MatchMode)})"
+            ) from None
     try:
         return MatchMode(value)
     except ValueError:
@@ -137,9 +138,10 @@ class Timeline(_Msg):
     value: float = Field(0.0, ge=-1e9, le=1e9)
 
 
-ClientMessage = Annotated[Union[Command, Limits, Test, PlaceBall, SendOff, Pause, Resume, Card, AwardGoal, AutoReferee,
-                                Timeline],
-                          Field(discriminator="type")]
+ClientMessage = Annotated[
+    Union[Command, Limits, Test, PlaceBall, SendOff, Pause, Resume, Card, AwardGoal, AutoReferee, Timeline],
+    Field(discriminator="type"),
+]
 _adapter = TypeAdapter(ClientMessage)
 
 #: what each page may send
@@ -161,8 +163,11 @@ def parse(text: str | bytes, role: str) -> ClientMessage:
     if not isinstance(data, dict):
         raise ProtocolError("a message is a JSON object with a 'type'")
     kind = data.get("type")
-    if isinstance(kind, str) and kind in ALLOWED.get("coach", set()) | ALLOWED["referee"] | ALLOWED["replay"] \
-            and kind not in ALLOWED.get(role, set()):
+    if (
+        isinstance(kind, str)
+        and kind in ALLOWED.get("coach", set()) | ALLOWED["referee"] | ALLOWED["replay"]
+        and kind not in ALLOWED.get(role, set())
+    ):
         raise ProtocolError(f"a {role} page may not send '{kind}' messages")
     try:
         return _adapter.validate_python(data)

@@ -24,12 +24,14 @@ class RecordingError(ValueError):
 
 
 class RecordingView(Hosted):
-    def __init__(self, player, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
-                 access: Access | None = None):
+    def __init__(
+        self, player, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0, access: Access | None = None
+    ):
         scene = player.scene
         if scene is None:
-            raise RecordingError(f"{player.recording.path} holds no simatch scene (no simatch metadata): "
-                                 f"the pages cannot draw it")
+            raise RecordingError(
+                f"{player.recording.path} holds no simatch scene (no simatch metadata): the pages cannot draw it"
+            )
         spec = scene.spec
         self.player = player
         robots = {team: spec.teams[team].robot_ids() for team in spec.teams}
@@ -40,12 +42,20 @@ class RecordingView(Hosted):
         archive = Archive(self.archive.observer, Picture(self.archive.observer, spec), lambda: self.archive.complete)
         self.access = access or Access(list(spec.teams))
         name = player.recording.path.name
-        hello = hello_of(spec, self.picture, fps, source="recording", recording=name,
-                         duration=round(player.duration, 3))
-        self.server = ViewServer(self.observer, self.picture, self.access, hello, host=host, port=port, fps=fps,
-                                 archive=archive,
-                                 read_only=f"this is a recording ({name}): it is shown as it was, nothing can "
-                                           f"be commanded")
+        hello = hello_of(
+            spec, self.picture, fps, source="recording", recording=name, duration=round(player.duration, 3)
+        )
+        self.server = ViewServer(
+            self.observer,
+            self.picture,
+            self.access,
+            hello,
+            host=host,
+            port=port,
+            fps=fps,
+            archive=archive,
+            read_only=f"this is a recording ({name}): it is shown as it was, nothing can be commanded",
+        )
 
     def start(self) -> "RecordingView":
         self.archive.start()

@@ -32,9 +32,9 @@ from .picture import Picture
 log = logging.getLogger(__name__)
 
 PAGES = {"referee": "referee.html", "replay": "replay.html", "coach": "coach.html"}
-LAG = 0.25              # [s] the live picture trails the newest state by at most this
-EVENT_BACKLOG = 300     # events a page gets when it (re)connects
-RECENT_EVENTS = 12      # events a replay frame carries (those before its time)
+LAG = 0.25  # [s] the live picture trails the newest state by at most this
+EVENT_BACKLOG = 300  # events a page gets when it (re)connects
+RECENT_EVENTS = 12  # events a replay frame carries (those before its time)
 
 
 @dataclass
@@ -101,10 +101,20 @@ class ViewServer:
     commanded from here, e.g. a recording, and ``read_only`` says why); ``archive`` is what replay pages go
     through (default: the live observer's timeline); ``on_viewers(n)`` hears how many live pages are open."""
 
-    def __init__(self, observer: RunObserver, picture: Picture, access: Access, hello: dict,
-                 control=None, host: str = "127.0.0.1", port: int = 8765, fps: float = 40.0,
-                 on_viewers: Callable[[int], None] | None = None, archive: Archive | None = None,
-                 read_only: str = "this server shows a run it does not command"):
+    def __init__(
+        self,
+        observer: RunObserver,
+        picture: Picture,
+        access: Access,
+        hello: dict,
+        control=None,
+        host: str = "127.0.0.1",
+        port: int = 8765,
+        fps: float = 40.0,
+        on_viewers: Callable[[int], None] | None = None,
+        archive: Archive | None = None,
+        read_only: str = "this server shows a run it does not command",
+    ):
         self.observer = observer
         self.picture = picture
         self.access = access
@@ -115,7 +125,7 @@ class ViewServer:
         self.host, self.port = host, port
         self.fps = fps
         self.on_viewers = on_viewers
-        self.status = "running"           # "waiting", "running" or "ended": the pages show it
+        self.status = "running"  # "waiting", "running" or "ended": the pages show it
         self.clients: set[Client] = set()
         self.live_t: float | None = None
         self._live: dict[tuple[str, str], str] = {}
@@ -137,8 +147,10 @@ class ViewServer:
             sock.bind((self.host, self.port))
         except OSError as exc:
             sock.close()
-            raise OSError(f"cannot serve the web UI on {self.host}:{self.port}: {exc.strerror} "
-                          f"(choose another port with --view-port, 0 for any free one)") from None
+            raise OSError(
+                f"cannot serve the web UI on {self.host}:{self.port}: {exc.strerror} "
+                f"(choose another port with --view-port, 0 for any free one)"
+            ) from None
         sock.listen(64)
         sock.setblocking(False)
         self.port = sock.getsockname()[1]
@@ -178,7 +190,7 @@ class ViewServer:
         self._loop = loop
         try:
             loop.run_until_complete(self._serve())
-        except BaseException as exc:           # reported to start(); the run goes on without a viewer
+        except BaseException as exc:  # reported to start(); the run goes on without a viewer
             self._error = exc
             log.exception("the web server stopped")
         finally:
@@ -214,6 +226,7 @@ class ViewServer:
     def _page(self, filename: str):
         async def handler(request):
             return web.FileResponse(str(self._static.joinpath(filename)))
+
         return handler
 
     async def _coach_page(self, request):
@@ -227,7 +240,7 @@ class ViewServer:
         period = 1.0 / self.fps
         last = due = loop.time()
         while True:
-            due += period                       # a fixed schedule: sleeping late does not drift the rate
+            due += period  # a fixed schedule: sleeping late does not drift the rate
             now = loop.time()
             if due < now - period:
                 due = now
@@ -237,7 +250,7 @@ class ViewServer:
             try:
                 self._advance_live(dt)
                 self._build_live()
-            except Exception:                  # a picture that fails must not stop the others
+            except Exception:  # a picture that fails must not stop the others
                 log.exception("building a live picture failed")
             for c in list(self.clients):
                 c.wake.set()
@@ -281,11 +294,20 @@ class ViewServer:
         pic = archive.picture.world(tl.index_at(cur.t))
         events = archive.observer.events
         n = bisect.bisect_right(events, cur.t + 1e-6, key=lambda e: e["t"])
-        recent = events[max(0, n - RECENT_EVENTS):n]
-        pic.update(status=self.status, events=recent,
-                   timeline={"start": round(tl.start, 3), "end": round(tl.end, 3), "t": round(cur.t, 3),
-                             "speed": cur.speed, "playing": cur.playing, "complete": complete,
-                             "follow": None if self.live_t is None else round(self.live_t, 3)})
+        recent = events[max(0, n - RECENT_EVENTS) : n]
+        pic.update(
+            status=self.status,
+            events=recent,
+            timeline={
+                "start": round(tl.start, 3),
+                "end": round(tl.end, 3),
+                "t": round(cur.t, 3),
+                "speed": cur.speed,
+                "playing": cur.playing,
+                "complete": complete,
+                "follow": None if self.live_t is None else round(self.live_t, 3),
+            },
+        )
         return json.dumps(pic, separators=(",", ":"))
 
     def _timeline(self, c: Client, m: P.Timeline) -> None:
@@ -300,8 +322,13 @@ class ViewServer:
         await ws.prepare(request)
         grant = self.access.grant(request.query.get("token"))
         if grant is None:
-            await ws.send_json({"type": "error", "fatal": True,
-                                "error": "unknown or missing token: open an address printed on the console"})
+            await ws.send_json(
+                {
+                    "type": "error",
+                    "fatal": True,
+                    "error": "unknown or missing token: open an address printed on the console",
+                }
+            )
             await ws.close(code=4001, message=b"unknown token")
             return ws
         c = Client(ws, grant)
@@ -312,8 +339,14 @@ class ViewServer:
         self._viewers_changed()
         sender = asyncio.create_task(self._send_loop(c))
         try:
-            hello = dict(self.hello, type="hello", role=grant.role, team=grant.team, status=self.status,
-                         capabilities=self.control.capabilities(grant) if self.control is not None else None)
+            hello = dict(
+                self.hello,
+                type="hello",
+                role=grant.role,
+                team=grant.team,
+                status=self.status,
+                capabilities=self.control.capabilities(grant) if self.control is not None else None,
+            )
             await ws.send_str(json.dumps(hello))
             c.wake.set()
             async for msg in ws:
@@ -367,7 +400,7 @@ class ViewServer:
             await c.ws.send_str(json.dumps({"type": "events", "reset": True, "items": events[start:n]}))
             c.events_sent = n
         elif n > c.events_sent:
-            await c.ws.send_str(json.dumps({"type": "events", "items": events[c.events_sent:n]}))
+            await c.ws.send_str(json.dumps({"type": "events", "items": events[c.events_sent : n]}))
             c.events_sent = n
 
     async def _on_message(self, c: Client, text: str) -> None:
@@ -394,13 +427,14 @@ class ViewServer:
         loop = asyncio.get_running_loop()
         done: asyncio.Future = loop.create_future()
 
-        def reply(error: str | None) -> None:          # called in the simulation's thread
+        def reply(error: str | None) -> None:  # called in the simulation's thread
             def settle() -> None:
                 if not done.done():
                     done.set_result(error)
+
             try:
                 loop.call_soon_threadsafe(settle)
-            except RuntimeError:                        # the server is already gone
+            except RuntimeError:  # the server is already gone
                 pass
 
         self.control.submit(grant, m, reply)

@@ -30,13 +30,26 @@ def port_number(text: str) -> int:
 
 
 def add_view_options(group, default_wait: float | None = None) -> None:
-    group.add_argument("--view-host", default="127.0.0.1", metavar="HOST",
-                       help="address to serve the web UI on (default 127.0.0.1, this machine only)")
-    group.add_argument("--view-port", type=port_number, default=DEFAULT_PORT, metavar="PORT",
-                       help=f"port of the web UI (default {DEFAULT_PORT}; 0: any free port)")
-    group.add_argument("--view-wait", type=float, default=default_wait, metavar="S",
-                       help="wait at most S seconds for a page to open before the run starts "
-                            "(default: until one opens)")
+    group.add_argument(
+        "--view-host",
+        default="127.0.0.1",
+        metavar="HOST",
+        help="address to serve the web UI on (default 127.0.0.1, this machine only)",
+    )
+    group.add_argument(
+        "--view-port",
+        type=port_number,
+        default=DEFAULT_PORT,
+        metavar="PORT",
+        help=f"port of the web UI (default {DEFAULT_PORT}; 0: any free port)",
+    )
+    group.add_argument(
+        "--view-wait",
+        type=float,
+        default=default_wait,
+        metavar="S",
+        help="wait at most S seconds for a page to open before the run starts (default: until one opens)",
+    )
 
 
 def _started(make) -> Hosted:
@@ -77,8 +90,11 @@ def wait_for_page(view: Hosted, wait: float | None, any_page: bool = False) -> N
 
 def linger(view: Hosted, what: str) -> None:
     if view.server.clients:
-        print(f"simatch: {what} has ended; its pages stay up until they are all closed (Ctrl-C to quit)",
-              file=sys.stderr, flush=True)
+        print(
+            f"simatch: {what} has ended; its pages stay up until they are all closed (Ctrl-C to quit)",
+            file=sys.stderr,
+            flush=True,
+        )
     view.finish()
 
 
@@ -87,8 +103,8 @@ class _ViewOption:
 
     group = "web UI"
     help = ""
-    what = "the run"             # what has ended, in the last message
-    any_page = False             # whether a replay page alone is a viewer to wait for
+    what = "the run"  # what has ended, in the last message
+    any_page = False  # whether a replay page alone is a viewer to wait for
 
     def add_arguments(self, parser) -> None:
         group = parser.add_argument_group(self.group)
@@ -114,8 +130,10 @@ class ViewExtension(_ViewOption):
     """Registered in ``simatch.cli.run.EXTENSIONS``: ``simatch run SCENE --view``."""
 
     group = "live view (web UI)"
-    help = ("serve the coach pages, the referee console and the replay page while the scene runs; the run goes "
-            "at real time while a page is open")
+    help = (
+        "serve the coach pages, the referee console and the replay page while the scene runs; the run goes "
+        "at real time while a page is open"
+    )
 
     def start(self, sim, args) -> Hosted:
         return start_view(sim, args.view_host, args.view_port)
@@ -124,8 +142,10 @@ class ViewExtension(_ViewOption):
 class ReplayViewExtension(_ViewOption):
     """Registered in ``simatch.cli.replay.EXTENSIONS``: ``simatch replay FILE.mcap --view``."""
 
-    help = ("serve the web UI while the recording plays: the coach pages and the referee console watch the "
-            "replayed bus, the replay page goes through the whole recording (play, pause, speed, seek)")
+    help = (
+        "serve the web UI while the recording plays: the coach pages and the referee console watch the "
+        "replayed bus, the replay page goes through the whole recording (play, pause, speed, seek)"
+    )
     what = "the playback"
     any_page = True
 

@@ -38,11 +38,14 @@ class EncirclementParams(BaseModel):
     prison: str = Field("prison", description="name of the world area that is the prison")
     time_limit: float = Field(300.0, gt=0.0, le=86400.0, description="the run ends after this long [s]")
     scatter: Optional[tuple[float, float, float, float]] = Field(
-        None, description="x0, y0, x1, y1 (world frame): the targets start at random places in this rectangle, "
-                          "drawn from the run's seed, scatter_spacing or more from the prison (each axis); none: "
-                          "at their start poses")
-    scatter_spacing: float = Field(1.2, gt=0.0, le=20.0,
-                                   description="least distance between a scattered target and any other robot [m]")
+        None,
+        description="x0, y0, x1, y1 (world frame): the targets start at random places in this rectangle, "
+        "drawn from the run's seed, scatter_spacing or more from the prison (each axis); none: "
+        "at their start poses",
+    )
+    scatter_spacing: float = Field(
+        1.2, gt=0.0, le=20.0, description="least distance between a scattered target and any other robot [m]"
+    )
 
     @model_validator(mode="after")
     def _check(self):
@@ -66,8 +69,9 @@ class Encirclement(Judge):
         for key in ("chasers", "targets"):
             team = getattr(params, key)
             if team not in spec.teams:
-                raise SceneError(f"{scene.source}: judge.{key}: the scene has no team {team!r} "
-                                 f"(teams: {', '.join(spec.teams)})")
+                raise SceneError(
+                    f"{scene.source}: judge.{key}: the scene has no team {team!r} (teams: {', '.join(spec.teams)})"
+                )
         geometry = spec.world.geometry()
         try:
             self.prison = geometry.area(params.prison)
@@ -77,8 +81,10 @@ class Encirclement(Judge):
             x0, y0, x1, y1 = params.scatter
             reach_x, reach_y = geometry.half_length + geometry.margin, geometry.half_width + geometry.margin
             if x0 < -reach_x or x1 > reach_x or y0 < -reach_y or y1 > reach_y:
-                raise SceneError(f"{scene.source}: judge.scatter: {list(params.scatter)} is not inside the arena "
-                                 f"(|x| <= {reach_x:g}, |y| <= {reach_y:g})")
+                raise SceneError(
+                    f"{scene.source}: judge.scatter: {list(params.scatter)} is not inside the arena "
+                    f"(|x| <= {reach_x:g}, |y| <= {reach_y:g})"
+                )
         # the judge looks at the world as often as the robots decide (reading the model states at every
         # physics step would cost as much as a third of the physics)
         self.period = spec.control.period
@@ -100,8 +106,9 @@ class Encirclement(Judge):
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
         bus = ctx.bus
-        self.pub_coach = {t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo)
-                          for t in self.teams}
+        self.pub_coach = {
+            t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo) for t in self.teams
+        }
         self.pub_game = bus.publisher(topics.GAME_STATE, msgs.GameState)
         self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
         if self.params.scatter is not None:
@@ -114,19 +121,23 @@ class Encirclement(Judge):
         p = self.prison
         keep_out = Area("", p.x0 - spacing, p.y0 - spacing, p.x1 + spacing, p.y1 + spacing)
         spec = self.scene.spec
-        placed = [(x, y) for team, tspec in spec.teams.items() if team != self.params.targets
-                  for x, y, _ in tspec.start]
+        placed = [
+            (x, y) for team, tspec in spec.teams.items() if team != self.params.targets for x, y, _ in tspec.start
+        ]
         for name in self.target_names:
             for _ in range(10000):
                 x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
                 if not keep_out.contains(x, y) and all(math.hypot(x - px, y - py) >= spacing for px, py in placed):
                     break
             else:
-                raise SceneError(f"{self.scene.source}: judge.scatter: no room for {len(self.target_names)} targets "
-                                 f"{spacing:g} m apart in {list(self.params.scatter)}")
+                raise SceneError(
+                    f"{self.scene.source}: judge.scatter: no room for {len(self.target_names)} targets "
+                    f"{spacing:g} m apart in {list(self.params.scatter)}"
+                )
             placed.append((x, y))
-            self.world.set_model_state(name, x=float(x), y=float(y), yaw=float(rng.uniform(-math.pi, math.pi)),
-                                       vx=0.0, vy=0.0, wz=0.0)
+            self.world.set_model_state(
+                name, x=float(x), y=float(y), yaw=float(rng.uniform(-math.pi, math.pi)), vx=0.0, vy=0.0, wz=0.0
+            )
 
     # --- judging ---------------------------------------------------------------------------------------------
     def tick(self, now: float) -> None:
@@ -161,17 +172,37 @@ class Encirclement(Judge):
         self.captures.append({"robot": name, "t": round(now, 6), "x": round(x, 4), "y": round(y, 4)})
         team, rid = topics.split_robot_name(name)
         n, total = len(self.captured), len(self.target_names)
-        self.pub_events.put(msgs.GameEvent(stamp=now, type="capture", team=team, robot=rid, x=x, y=y,
-                                           value=float(n), limit=float(total),
-                                           detail=f"{name} captured in the {self.prison.name} ({n} of {total})"))
+        self.pub_events.put(
+            msgs.GameEvent(
+                stamp=now,
+                type="capture",
+                team=team,
+                robot=rid,
+                x=x,
+                y=y,
+                value=float(n),
+                limit=float(total),
+                detail=f"{name} captured in the {self.prison.name} ({n} of {total})",
+            )
+        )
         self._dirty = True
 
     def _end(self, now: float) -> None:
         self.done = True
         n = len(self.target_names)
-        self.pub_events.put(msgs.GameEvent(stamp=now, type="all_captured", team=self.params.targets, robot=0, x=0.0,
-                                           y=0.0, value=round(now, 6), limit=self.params.time_limit,
-                                           detail=f"all {n} targets captured in {now:.2f} s"))
+        self.pub_events.put(
+            msgs.GameEvent(
+                stamp=now,
+                type="all_captured",
+                team=self.params.targets,
+                robot=0,
+                x=0.0,
+                y=0.0,
+                value=round(now, 6),
+                limit=self.params.time_limit,
+                detail=f"all {n} targets captured in {now:.2f} s",
+            )
+        )
         self._dirty = True
 
     # --- what the judge tells ---------------------------------------------------------------------------------
@@ -186,20 +217,35 @@ class Encirclement(Judge):
     def _publish_game(self, now: float) -> None:
         n = len(self.captured)
         score = np.array([n if t == self.params.chasers else 0 for t in self.teams], dtype=np.int32)
-        none = np.zeros(len(self.teams), dtype=np.int32)          # no cards, no fouls in this game
-        self.pub_game.put(msgs.new(
-            msgs.GameState, stamp=now, stage="ended" if self.done else "encirclement",
-            phase="ended" if self.done else "play", clock=now,
-            stage_time_left=max(0.0, self.params.time_limit - now), command=int(self._command()),
-            teams=list(self.teams), score=score, yellow_cards=none, red_cards=none, fouls=none,
-            result=json.dumps(self.result())))
+        none = np.zeros(len(self.teams), dtype=np.int32)  # no cards, no fouls in this game
+        self.pub_game.put(
+            msgs.new(
+                msgs.GameState,
+                stamp=now,
+                stage="ended" if self.done else "encirclement",
+                phase="ended" if self.done else "play",
+                clock=now,
+                stage_time_left=max(0.0, self.params.time_limit - now),
+                command=int(self._command()),
+                teams=list(self.teams),
+                score=score,
+                yellow_cards=none,
+                red_cards=none,
+                fouls=none,
+                result=json.dumps(self.result()),
+            )
+        )
         self._published = now
         self._dirty = False
 
     def game(self) -> dict:
-        return {"stage": "ended" if self.done else "encirclement", "command": self._command().name,
-                "captured": len(self.captured), "targets": len(self.target_names),
-                "time_left_s": max(0.0, self.params.time_limit - self.ctx.now()) if hasattr(self, "ctx") else None}
+        return {
+            "stage": "ended" if self.done else "encirclement",
+            "command": self._command().name,
+            "captured": len(self.captured),
+            "targets": len(self.target_names),
+            "time_left_s": max(0.0, self.params.time_limit - self.ctx.now()) if hasattr(self, "ctx") else None,
+        }
 
     def _end_reason(self) -> str | None:
         if self.done:
@@ -223,4 +269,3 @@ class Encirclement(Judge):
             "top_speed_m_s": {team: round(v, 3) for team, v in self.top_speed.items()},
             "end": self._end_reason(),
         }
-

@@ -51,14 +51,14 @@ class LocomotionTest(Judge):
         self.control_steps = round(spec.control.period / self.dt)
         self.period = self.dt
         self.n_samples = int(round(params.duration / self.dt))
-        self.samples: list[tuple[float, float, float, float]] = []   # (t, x, y, yaw)
+        self.samples: list[tuple[float, float, float, float]] = []  # (t, x, y, yaw)
         self._model = model_class(tspec.model)(tspec.model_params)
         self._index = None
         self._latest = None
 
     @property
     def duration(self):
-        return self.n_samples * self.dt   # samples at t = 0, dt, ..., duration - dt
+        return self.n_samples * self.dt  # samples at t = 0, dt, ..., duration - dt
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -74,7 +74,7 @@ class LocomotionTest(Judge):
         if self._index is None:
             self._index = list(msg.name).index(self.robot)
         k = self._index
-        x, y, _, qw, _, _, qz = msg.pose[7 * k: 7 * k + 7]
+        x, y, _, qw, _, _, qz = msg.pose[7 * k : 7 * k + 7]
         self.samples.append((msg.stamp, float(x), float(y), 2.0 * math.atan2(qz, qw)))
         if len(self.samples) >= self.n_samples:
             self.done = True
@@ -107,7 +107,7 @@ class LocomotionTest(Judge):
                 drive.plan(due, V, window, bounds, rate, bias, np.ones((1, 3)))
             V = np.clip(V + rate * self.dt, bounds[:, :, 0], bounds[:, :, 1])
             vx, vy, w = V[0]
-            mid = yaw + 0.5 * w * self.dt          # exact arc of a constant twist, to second order
+            mid = yaw + 0.5 * w * self.dt  # exact arc of a constant twist, to second order
             c, s = math.cos(mid), math.sin(mid)
             x += (c * vx - s * vy) * self.dt
             y += (s * vx + c * vy) * self.dt

@@ -18,20 +18,24 @@ from .observation import Observation
 
 
 class Contact(NamedTuple):
-    pair: int          # index of the pair (stable for the match)
-    i: int             # the robots, i < j
+    pair: int  # index of the pair (stable for the match)
+    i: int  # the robots, i < j
     j: int
-    ux: float          # unit vector from i to j
+    ux: float  # unit vector from i to j
     uy: float
-    new: bool          # the contact began this control period
+    new: bool  # the contact began this control period
 
 
 class RobotContacts:
     def __init__(self, obs: Observation, margin: float):
         self.obs = obs
         t = obs.team_ix
-        self.pairs = [(i, j, obs.radius[i] + obs.radius[j] + margin)
-                      for i in range(obs.n) for j in range(i + 1, obs.n) if t[i] != t[j]]
+        self.pairs = [
+            (i, j, obs.radius[i] + obs.radius[j] + margin)
+            for i in range(obs.n)
+            for j in range(i + 1, obs.n)
+            if t[i] != t[j]
+        ]
         self.touching = [False] * len(self.pairs)
         self.prev_vx = [0.0] * obs.n
         self.prev_vy = [0.0] * obs.n

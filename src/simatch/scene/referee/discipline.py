@@ -23,11 +23,11 @@ class Discipline:
         self.obs = obs
         self.p = params
         self.world = world
-        self.log = log                               # log(type, i, value, limit, detail)
+        self.log = log  # log(type, i, value, limit, detail)
         n = obs.n
         self.yellow = np.zeros(n, dtype=np.int64)
         self.red = np.zeros(n, dtype=np.int64)
-        self.off_until: dict[int, float] = {}        # robot -> time it may return (inf: not by itself)
+        self.off_until: dict[int, float] = {}  # robot -> time it may return (inf: not by itself)
         f = obs.field
         self._team_slot = [obs.members[obs.team_of[i]].index(i) for i in range(n)]
         self._park_y = -(f.half_width + max(0.5 * f.margin, max(obs.radius) + 0.05))
@@ -49,8 +49,7 @@ class Discipline:
             raise ValueError(f"a card is 'yellow' or 'red', not {colour!r}")
 
     # --- off and back ---------------------------------------------------------------------------------------
-    def send_off(self, i: int, now: float, seconds: Optional[float], why: str,
-                 forever: str = "until returned") -> None:
+    def send_off(self, i: int, now: float, seconds: Optional[float], why: str, forever: str = "until returned") -> None:
         """Park robot i outside the field and disable it for ``seconds`` (None: ``forever``)."""
         obs = self.obs
         until = math.inf if seconds is None else now + seconds
@@ -64,8 +63,13 @@ class Discipline:
         self.world.set_enabled(name, False)
         obs.active[i] = False
         length = forever if seconds is None else f"for {seconds:g} s"
-        self.log("send_off", i, 0.0 if seconds is None else seconds, 0.0,
-                 f"{name} sent off {length} ({why}); parked at ({x:.2f}, {y:.2f})")
+        self.log(
+            "send_off",
+            i,
+            0.0 if seconds is None else seconds,
+            0.0,
+            f"{name} sent off {length} ({why}); parked at ({x:.2f}, {y:.2f})",
+        )
 
     def park_spot(self, i: int) -> tuple[float, float]:
         side = self.obs.own_goal_side(self.obs.team_of[i])

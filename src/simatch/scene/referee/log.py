@@ -13,9 +13,24 @@ from typing import Callable
 from ... import msgs
 
 #: event types that are fouls (counted per team in the result); the rules' own types
-FOUL_TYPES = frozenset({"dribble_too_far", "dribble_backward_too_far", "goal_area", "penalty_area_crowded",
-                        "penalty_area_time", "set_piece_distance", "kickoff_half", "dropped_ball_distance",
-                        "double_touch", "charging", "lob", "ball_holding", "pushing", "goalkeeper_contact"})
+FOUL_TYPES = frozenset(
+    {
+        "dribble_too_far",
+        "dribble_backward_too_far",
+        "goal_area",
+        "penalty_area_crowded",
+        "penalty_area_time",
+        "set_piece_distance",
+        "kickoff_half",
+        "dropped_ball_distance",
+        "double_touch",
+        "charging",
+        "lob",
+        "ball_holding",
+        "pushing",
+        "goalkeeper_contact",
+    }
+)
 
 
 class EventLog:
@@ -24,10 +39,29 @@ class EventLog:
         self._publish = publish
         self.fouls: dict[str, int] = {}
 
-    def add(self, stamp: float, type: str, team: str = "", robot: int = 0, x: float = 0.0, y: float = 0.0,
-            value: float = 0.0, limit: float = 0.0, detail: str = ""):
-        ev = msgs.GameEvent(stamp=float(stamp), type=type, team=team, robot=int(robot), x=float(x), y=float(y),
-                            value=float(value), limit=float(limit), detail=detail)
+    def add(
+        self,
+        stamp: float,
+        type: str,
+        team: str = "",
+        robot: int = 0,
+        x: float = 0.0,
+        y: float = 0.0,
+        value: float = 0.0,
+        limit: float = 0.0,
+        detail: str = "",
+    ):
+        ev = msgs.GameEvent(
+            stamp=float(stamp),
+            type=type,
+            team=team,
+            robot=int(robot),
+            x=float(x),
+            y=float(y),
+            value=float(value),
+            limit=float(limit),
+            detail=detail,
+        )
         self._entries.append(ev)
         if type in FOUL_TYPES and team:
             self.fouls[team] = self.fouls.get(team, 0) + 1

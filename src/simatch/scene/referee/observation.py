@@ -21,7 +21,7 @@ class Observation:
     def __init__(self, scene, robot_radius: float):
         spec = scene.spec
         self.teams: list[str] = list(spec.teams)
-        self.sign = {t: spec.team_sign(t) for t in self.teams}       # +1: attacks +x
+        self.sign = {t: spec.team_sign(t) for t in self.teams}  # +1: attacks +x
         self.field = f = spec.world.geometry()
         self.ball_radius = spec.ball.radius
         names = spec.robot_names()
@@ -33,19 +33,18 @@ class Observation:
         self.rid: list[int] = [r for _, r in split]
         self.team_ix: list[int] = [self.teams.index(t) for t in self.team_of]
         self.attack_sign: list[int] = [self.sign[t] for t in self.team_of]
-        self.own_side: list[int] = [-s for s in self.attack_sign]        # side of the goal each robot defends
+        self.own_side: list[int] = [-s for s in self.attack_sign]  # side of the goal each robot defends
         self.is_goalkeeper: list[bool] = [spec.teams[t].goalkeeper == r for t, r in split]
-        self.radius: list[float] = [float(spec.teams[t].model_params.get("radius", robot_radius))
-                                    for t in self.team_of]
+        self.radius: list[float] = [float(spec.teams[t].model_params.get("radius", robot_radius)) for t in self.team_of]
         self.members: dict[str, list[int]] = {t: [i for i in range(n) if self.team_of[i] == t] for t in self.teams}
-        self.active: list[bool] = [True] * n                   # not sent off
+        self.active: list[bool] = [True] * n  # not sent off
         # area bounds: |x| >= *_x and |y| <= *_y (the areas extend behind the goal line)
         self._pen_x = f.half_length - f.penalty_area_depth
         self._pen_y = 0.5 * f.penalty_area_width
         self._goal_x = f.half_length - f.goal_area_depth
         self._goal_y = 0.5 * f.goal_area_width
         self.msg = None
-        self._rows: list[int] | None = None                    # message row of each robot and of the ball
+        self._rows: list[int] | None = None  # message row of each robot and of the ball
         self.stamp = 0.0
         self.step = -1
         self.X = [0.0] * n
@@ -54,7 +53,7 @@ class Observation:
         self.VY = [0.0] * n
         self.bx = self.by = self.bz = 0.0
         self.bvx = self.bvy = self.bvz = 0.0
-        self.penalty_area = [0] * n     # side of the penalty area the robot is in (-1, +1), 0 if none
+        self.penalty_area = [0] * n  # side of the penalty area the robot is in (-1, +1), 0 if none
         self.goal_area = [0] * n
 
     # --- input -------------------------------------------------------------------------------------------

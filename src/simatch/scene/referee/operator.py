@@ -23,7 +23,7 @@ class OperatorError(ValueError):
 class OperatorRequest:
     op: str
     team: str = ""
-    robot: str = ""                  # "team/id"
+    robot: str = ""  # "team/id"
     command: Optional[MatchMode] = None
     x: Optional[float] = None
     y: Optional[float] = None
@@ -100,7 +100,14 @@ def from_message(msg) -> OperatorRequest:
             raise OperatorError(f"no game command numbered {int(msg.command)}") from None
     has_xy = bool(msg.has_position) or op == "place_ball"
     return OperatorRequest(
-        op=op, team=str(msg.team), robot=robot, command=cmd,
-        x=float(msg.x) if has_xy else None, y=float(msg.y) if has_xy else None, card=str(msg.card).lower(),
-        seconds=float(msg.seconds) if op == "send_off" and msg.seconds != 0 else None, on=bool(msg.on),
-        source=str(msg.source) or "bus")
+        op=op,
+        team=str(msg.team),
+        robot=robot,
+        command=cmd,
+        x=float(msg.x) if has_xy else None,
+        y=float(msg.y) if has_xy else None,
+        card=str(msg.card).lower(),
+        seconds=float(msg.seconds) if op == "send_off" and msg.seconds != 0 else None,
+        on=bool(msg.on),
+        source=str(msg.source) or "bus",
+    )

@@ -55,8 +55,9 @@ class Match:
         self.control_dt = self.control_steps * self.dt
         self.obs = Observation(scene, params.robot_radius)
         self.game = Game(teams=list(spec.teams), stages=schedule(spec.match), dt=self.dt)
-        self.touches = Touches(self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt),
-                               params.regain_pass_roll)
+        self.touches = Touches(
+            self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt), params.regain_pass_roll
+        )
         self.contacts = RobotContacts(self.obs, params.contact_margin)
         self.gravity = spec.physics.gravity
         self.spots = Spots(self.obs.field, params, spec.ball.radius)
@@ -75,13 +76,16 @@ class MslReferee(OperatorTakeover, Judge):
         super().__init__(scene, params, world)
         spec = scene.spec
         if len(spec.teams) != 2:
-            raise SceneError(f"{scene.source}: judge.kind: msl_referee judges two teams, the scene has "
-                             f"{len(spec.teams)}")
+            raise SceneError(
+                f"{scene.source}: judge.kind: msl_referee judges two teams, the scene has {len(spec.teams)}"
+            )
         a, b = spec.teams
         if spec.team_sign(a) == spec.team_sign(b):
-            raise SceneError(f"{scene.source}: teams.{b}.attacks: {a} and {b} both attack "
-                             f"{'+x' if spec.team_sign(a) > 0 else '-x'}; a referee needs them to attack "
-                             f"opposite goals")
+            raise SceneError(
+                f"{scene.source}: teams.{b}.attacks: {a} and {b} both attack "
+                f"{'+x' if spec.team_sign(a) > 0 else '-x'}; a referee needs them to attack "
+                f"opposite goals"
+            )
         self.m = m = Match(scene, params)
         self.p = params
         self.dt = m.dt
@@ -104,14 +108,14 @@ class MslReferee(OperatorTakeover, Judge):
         self._ball_row = -1
         self._out_latched = False
         self._ops: deque = deque()
-        self._ticked = -1                             # the step of the last tick
+        self._ticked = -1  # the step of the last tick
         self._begun = False
         self.coach_info: dict[str, object] = {}
-        self._published = (-1, -math.inf)           # (game version, time) of the last GameState
+        self._published = (-1, -math.inf)  # (game version, time) of the last GameState
         self._last_replace = -math.inf
         self._settle_spot = False
-        self._kick_step = 0                           # step of the last START
-        self._cause = ""                              # why play stopped (explains the restart called next)
+        self._kick_step = 0  # step of the last START
+        self._cause = ""  # why play stopped (explains the restart called next)
         self.goals: list[dict] = []
 
     # --- the run ---------------------------------------------------------------------------------------
@@ -128,8 +132,9 @@ class MslReferee(OperatorTakeover, Judge):
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
         bus = ctx.bus
-        self.pub_coach = {t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo)
-                          for t in self.teams}
+        self.pub_coach = {
+            t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo) for t in self.teams
+        }
         self.pub_state = bus.publisher(topics.GAME_STATE, msgs.GameState)
         pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
         self.pub_operator = bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
@@ -212,9 +217,16 @@ class MslReferee(OperatorTakeover, Judge):
             r = g.restart
             moved = math.hypot(obs.bx - r.x, obs.by - r.y)
             if moved >= self.p.in_play_distance:
-                self._log(now, "ball_in_play", team=r.team, x=obs.bx, y=obs.by, value=moved,
-                          limit=self.p.in_play_distance,
-                          detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play")
+                self._log(
+                    now,
+                    "ball_in_play",
+                    team=r.team,
+                    x=obs.bx,
+                    y=obs.by,
+                    value=moved,
+                    limit=self.p.in_play_distance,
+                    detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play",
+                )
                 g.go(_Phase.PLAY)
         if g.phase in (_Phase.TAKING, _Phase.PLAY) and g.stage.kind == "shootout":
             self._shootout_check(now)
@@ -227,7 +239,7 @@ class MslReferee(OperatorTakeover, Judge):
                 calls = rule.check()
                 if calls is None:
                     continue
-                for call in (calls if isinstance(calls, list) else (calls,)):
+                for call in calls if isinstance(calls, list) else (calls,):
                     self._enact(now, call)
                 if g.phase is not phase:
                     break
@@ -247,19 +259,29 @@ class MslReferee(OperatorTakeover, Judge):
         off = math.hypot(bx - r.x, by - r.y)
         if self._settle_spot:
             self._settle_spot = False
-            if 1e-6 < off < 0.6:          # placed against a robot: the simulator moved it out; that is the spot
+            if 1e-6 < off < 0.6:  # placed against a robot: the simulator moved it out; that is the spot
                 g.restart = r = replace(r, x=bx, y=by)
                 off = 0.0
         if off > self.p.replace_distance and now - self._last_replace >= 1.0:
             self._last_replace = now
             self._place_ball(r.x, r.y)
-            self._log(now, "ball_placed", team=r.team, x=r.x, y=r.y, value=off, limit=self.p.replace_distance,
-                      detail=f"the ball had moved {off:.2f} m off the spot of the {NAMES[r.kind]}: put back")
+            self._log(
+                now,
+                "ball_placed",
+                team=r.team,
+                x=r.x,
+                y=r.y,
+                value=off,
+                limit=self.p.replace_distance,
+                detail=f"the ball had moved {off:.2f} m off the spot of the {NAMES[r.kind]}: put back",
+            )
         if not g.auto:
             return
         t = g.phase_time
         longest = self.p.kickoff_prepare_time if r.kind == "kickoff" else self.p.prepare_time
-        if t >= longest - 1e-9 or (t >= self.p.prepare_min_time - 1e-9 and all(rl.ready() for rl in self.position_rules)):
+        if t >= longest - 1e-9 or (
+            t >= self.p.prepare_min_time - 1e-9 and all(rl.ready() for rl in self.position_rules)
+        ):
             self._start(now)
 
     # --- transitions -----------------------------------------------------------------------------------------
@@ -278,8 +300,7 @@ class MslReferee(OperatorTakeover, Judge):
         for rule in self.rules:
             rule.on_restart()
         g.go(_Phase.PREPARE)
-        self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team,
-                   f"{r.describe()} ({reason})")
+        self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team, f"{r.describe()} ({reason})")
 
     def _start(self, now: float) -> None:
         """START: log who is out of position, then the set piece is taken (a dropped ball is in play)."""
@@ -347,7 +368,7 @@ class MslReferee(OperatorTakeover, Judge):
             restart = self.shootout.next_restart()
             reason = "penalty shoot-out"
         else:
-            half = next((s.half for s in g.stages[g.stage_index:] if s.kind == "half"), 1)
+            half = next((s.half for s in g.stages[g.stage_index :] if s.kind == "half"), 1)
             first = self.match_spec.kickoff
             g.kickoff_team = first if half % 2 == 1 else m.obs.other(first)
             restart = m.spots.kickoff(g.kickoff_team)
@@ -365,8 +386,12 @@ class MslReferee(OperatorTakeover, Judge):
         g.stage_index = len(g.stages) - 1
         g.go(_Phase.ENDED)
         g.version += 1
-        self._log(now, "match_end", team=winner or "", detail=f"final score {score}{extra}: "
-                                                             + (f"{winner} wins" if winner else "a draw"))
+        self._log(
+            now,
+            "match_end",
+            team=winner or "",
+            detail=f"final score {score}{extra}: " + (f"{winner} wins" if winner else "a draw"),
+        )
         self.done = True
         self._publish(now, force=True)
 
@@ -377,29 +402,58 @@ class MslReferee(OperatorTakeover, Judge):
         obs = m.obs
         rid = obs.rid[call.robot] if call.robot >= 0 else 0
         if not g.auto:
-            self._log(now, "proposal", team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
-                      limit=call.limit, detail=f"{call.type} (not enforced: manual mode): {call.detail}")
+            self._log(
+                now,
+                "proposal",
+                team=call.team,
+                robot=rid,
+                x=call.x,
+                y=call.y,
+                value=call.value,
+                limit=call.limit,
+                detail=f"{call.type} (not enforced: manual mode): {call.detail}",
+            )
             return
         if g.stage.kind == "shootout" and call.restart is not None and g.restart is not None:
             # in a shoot-out a foul does not restart play: the kicking team's misses the kick, the
             # defending team's has the kick taken again
-            self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value,
-                      limit=call.limit, detail=call.detail)
+            self._log(
+                now,
+                call.type,
+                team=call.team,
+                robot=rid,
+                x=call.x,
+                y=call.y,
+                value=call.value,
+                limit=call.limit,
+                detail=call.detail,
+            )
             if call.card and call.robot >= 0:
                 self.discipline.card(call.robot, call.card, now, call.detail)
             if call.team == g.restart.team:
-                self._shootout_result(now, False, f"{call.type} by {obs.names[call.robot]}" if call.robot >= 0
-                                      else call.type)
+                self._shootout_result(
+                    now, False, f"{call.type} by {obs.names[call.robot]}" if call.robot >= 0 else call.type
+                )
             else:
                 self._stop(now, g.restart, f"{call.type}: the penalty is taken again")
             return
-        self._log(now, call.type, team=call.team, robot=rid, x=call.x, y=call.y, value=call.value, limit=call.limit,
-                  detail=call.detail)
+        self._log(
+            now,
+            call.type,
+            team=call.team,
+            robot=rid,
+            x=call.x,
+            y=call.y,
+            value=call.value,
+            limit=call.limit,
+            detail=call.detail,
+        )
         if call.goal_for:
             g.score[call.goal_for] += 1
             g.version += 1
-            self.goals.append({"t": round(now, 6), "team": call.goal_for,
-                               "robot": obs.names[call.robot] if call.robot >= 0 else ""})
+            self.goals.append(
+                {"t": round(now, 6), "team": call.goal_for, "robot": obs.names[call.robot] if call.robot >= 0 else ""}
+            )
         if call.card and call.robot >= 0:
             self.discipline.card(call.robot, call.card, now, call.detail)
         if call.in_play and g.phase is _Phase.TAKING:
@@ -425,9 +479,17 @@ class MslReferee(OperatorTakeover, Judge):
         taker = m.touches.taker
         rid = m.obs.rid[taker] if taker >= 0 else 0
         tally = ", ".join(f"{t} {so.goals(t)}/{len(so.kicks[t])}" for t in self.teams)
-        self._log(now, "shootout_kick", team=r.team, robot=rid, x=m.obs.bx, y=m.obs.by,
-                  value=1.0 if scored else 0.0, limit=1.0,
-                  detail=f"{r.team}'s penalty {'scored' if scored else 'missed'}: {why} (shoot-out: {tally})")
+        self._log(
+            now,
+            "shootout_kick",
+            team=r.team,
+            robot=rid,
+            x=m.obs.bx,
+            y=m.obs.by,
+            value=1.0 if scored else 0.0,
+            limit=1.0,
+            detail=f"{r.team}'s penalty {'scored' if scored else 'missed'}: {why} (shoot-out: {tally})",
+        )
         m.game.version += 1
         if so.decided():
             self._end_match(now)
@@ -447,12 +509,25 @@ class MslReferee(OperatorTakeover, Judge):
                 g.match_type[t] = mode
             sign = self.m.obs.sign[t]
             bx, by = (sign * r.x, sign * r.y) if r is not None else (0.0, 0.0)
-            info = msgs.new(msgs.CoachInfo, stamp=now, match_mode=int(mode), match_type=int(g.match_type[t]),
-                            max_vel=self.p.max_vel, max_w=self.p.max_w, ball_x=bx, ball_y=by)
+            info = msgs.new(
+                msgs.CoachInfo,
+                stamp=now,
+                match_mode=int(mode),
+                match_type=int(g.match_type[t]),
+                max_vel=self.p.max_vel,
+                max_w=self.p.max_w,
+                ball_x=bx,
+                ball_y=by,
+            )
             self.coach_info[t] = info
-            self.pub_coach[t].put(info)            # at once; and again every control period
-        self._log(now, "command", team=team, value=float(cmd), detail=f"{command_name(cmd)}"
-                  + (f" for {team}" if team else "") + f": {reason}")
+            self.pub_coach[t].put(info)  # at once; and again every control period
+        self._log(
+            now,
+            "command",
+            team=team,
+            value=float(cmd),
+            detail=f"{command_name(cmd)}" + (f" for {team}" if team else "") + f": {reason}",
+        )
 
     def _publish(self, now: float, force: bool = False) -> None:
         for t, pub in self.pub_coach.items():
@@ -468,8 +543,9 @@ class MslReferee(OperatorTakeover, Judge):
 
     # --- ball and log helpers -----------------------------------------------------------------------------------------
     def _place_ball(self, x: float, y: float) -> None:
-        self.world.set_model_state("ball", x=x, y=y, z=self.m.obs.ball_radius, vx=0.0, vy=0.0, vz=0.0, wx=0.0,
-                                   wy=0.0, wz=0.0)
+        self.world.set_model_state(
+            "ball", x=x, y=y, z=self.m.obs.ball_radius, vx=0.0, vy=0.0, vz=0.0, wx=0.0, wy=0.0, wz=0.0
+        )
         self._out_latched = False
 
     def _log(self, now: float, type: str, **fields):
@@ -477,8 +553,17 @@ class MslReferee(OperatorTakeover, Judge):
 
     def _log_robot(self, type: str, i: int, value: float, limit: float, detail: str) -> None:
         obs = self.m.obs
-        self.log.add(self.ctx.now(), type, team=obs.team_of[i], robot=obs.rid[i], x=obs.X[i], y=obs.Y[i],
-                     value=value, limit=limit, detail=detail)
+        self.log.add(
+            self.ctx.now(),
+            type,
+            team=obs.team_of[i],
+            robot=obs.rid[i],
+            x=obs.X[i],
+            y=obs.Y[i],
+            value=value,
+            limit=limit,
+            detail=detail,
+        )
 
     # --- what the referee reports (see report.py) ------------------------------------------------------------
     def winner(self) -> Optional[str]:

@@ -47,8 +47,14 @@ def game(ref: "MslReferee") -> dict:
         "time_left": round(g.time_left, 6),
         **tallies(ref),
         "sent_off": [obs.names[i] for i in ref.discipline.sent_off],
-        "commands": {t: {"match_mode": int(msg.match_mode), "match_type": int(msg.match_type),
-                         "name": command_name(msg.match_mode)} for t, msg in ref.coach_info.items()},
+        "commands": {
+            t: {
+                "match_mode": int(msg.match_mode),
+                "match_type": int(msg.match_type),
+                "name": command_name(msg.match_mode),
+            }
+            for t, msg in ref.coach_info.items()
+        },
         "reason": g.reason,
         "restart": g.restart.describe() if g.restart is not None else None,
         "next_restart": nxt.describe() if nxt is not None else None,
@@ -88,13 +94,26 @@ def game_state(ref: "MslReferee", now: float):
         return np.array([t[key][team] for team in ref.teams], dtype=np.int32)
 
     return msgs.GameState(
-        stamp=now, stage=g.stage.name, phase=g.phase.value, clock=g.clock, stage_time_left=g.time_left,
+        stamp=now,
+        stage=g.stage.name,
+        phase=g.phase.value,
+        clock=g.clock,
+        stage_time_left=g.time_left,
         command=int(for_team(g.command, g.command_team, first) if g.command_team else g.command),
         next_command=int(nxt.command_for(first)) if nxt is not None else 0,
-        command_team=nxt.team if stopped else g.command_team, reason=g.reason, teams=list(ref.teams),
-        score=per_team("score"), yellow_cards=per_team("yellow_cards"), red_cards=per_team("red_cards"),
-        fouls=per_team("fouls"), sent_off=[obs.names[i] for i in ref.discipline.sent_off],
-        last_touch=obs.names[last] if last >= 0 else "", ball_in_play=g.ball_in_play,
-        paused=g.phase is Phase.PAUSED, manual=not g.auto,
-        ball_x=float(spot.x) if spot is not None else 0.0, ball_y=float(spot.y) if spot is not None else 0.0,
-        result=json.dumps(result(ref)))
+        command_team=nxt.team if stopped else g.command_team,
+        reason=g.reason,
+        teams=list(ref.teams),
+        score=per_team("score"),
+        yellow_cards=per_team("yellow_cards"),
+        red_cards=per_team("red_cards"),
+        fouls=per_team("fouls"),
+        sent_off=[obs.names[i] for i in ref.discipline.sent_off],
+        last_touch=obs.names[last] if last >= 0 else "",
+        ball_in_play=g.ball_in_play,
+        paused=g.phase is Phase.PAUSED,
+        manual=not g.auto,
+        ball_x=float(spot.x) if spot is not None else 0.0,
+        ball_y=float(spot.y) if spot is not None else 0.0,
+        result=json.dumps(result(ref)),
+    )

@@ -19,8 +19,15 @@ from ...msgs.game_commands import RESTART_COMMANDS, MatchMode, for_team
 from .params import RefereeParams
 
 KINDS = tuple(RESTART_COMMANDS)
-NAMES = {"kickoff": "kick-off", "throw_in": "throw-in", "penalty": "penalty kick", "goal_kick": "goal kick",
-         "corner_kick": "corner kick", "free_kick": "free kick", "dropped_ball": "dropped ball"}
+NAMES = {
+    "kickoff": "kick-off",
+    "throw_in": "throw-in",
+    "penalty": "penalty kick",
+    "goal_kick": "goal kick",
+    "corner_kick": "corner kick",
+    "free_kick": "free kick",
+    "dropped_ball": "dropped ball",
+}
 
 
 @dataclass(frozen=True)
@@ -65,8 +72,12 @@ class Spots:
 
     def corner(self, team: str, goal_side: int, y_out: float) -> Restart:
         f, inset = self.f, self.p.corner_inset
-        return Restart("corner_kick", team, goal_side * (f.half_length - inset),
-                       math.copysign(f.half_width - inset, y_out if y_out else 1.0))
+        return Restart(
+            "corner_kick",
+            team,
+            goal_side * (f.half_length - inset),
+            math.copysign(f.half_width - inset, y_out if y_out else 1.0),
+        )
 
     def restart_point(self, goal_side: int, y: float) -> tuple[float, float]:
         dx, ay = self.p.restart_spot

@@ -47,7 +47,7 @@ class ShootOut:
         ga, gb = self.goals(a), self.goals(b)
         if ka <= n and kb <= n:
             if ga + (n - ka) < gb or gb + (n - kb) < ga:
-                return True          # one team can no longer catch up
+                return True  # one team can no longer catch up
             if ka < n or kb < n:
                 return False
         if ka != kb:

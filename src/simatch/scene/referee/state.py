@@ -23,11 +23,11 @@ from .restarts import Restart
 
 
 class Phase(str, enum.Enum):
-    STOPPED = "stopped"      # dead ball: robots hold STOP (or PARKING) while the referee places the ball
-    PREPARE = "prepare"      # a restart is called: robots take their positions
-    TAKING = "taking"        # START given; the set piece is being taken, the ball is not in play yet
-    PLAY = "play"            # the ball is in play
-    PAUSED = "paused"        # an operator halted the game; the clock stands still
+    STOPPED = "stopped"  # dead ball: robots hold STOP (or PARKING) while the referee places the ball
+    PREPARE = "prepare"  # a restart is called: robots take their positions
+    TAKING = "taking"  # START given; the set piece is being taken, the ball is not in play yet
+    PLAY = "play"  # the ball is in play
+    PAUSED = "paused"  # an operator halted the game; the clock stands still
     ENDED = "ended"
 
 
@@ -49,9 +49,9 @@ HALF_NAMES = ("first_half", "second_half", "third_half", "fourth_half")
 @dataclass(frozen=True)
 class Stage:
     name: str
-    kind: str                      # "half", "break", "shootout", "ended"
-    duration: Optional[float]      # seconds of clock, None: until decided
-    half: int = 0                  # 1-based half number for halves
+    kind: str  # "half", "break", "shootout", "ended"
+    duration: Optional[float]  # seconds of clock, None: until decided
+    half: int = 0  # 1-based half number for halves
 
 
 def schedule(match) -> list[Stage]:
@@ -79,21 +79,21 @@ class Game:
     stages: list[Stage]
     dt: float
     stage_index: int = 0
-    stage_steps: int = 0                 # clock of the current stage, in physics steps
+    stage_steps: int = 0  # clock of the current stage, in physics steps
     phase: Phase = Phase.STOPPED
-    phase_steps: int = 0                 # time in the current phase (not counting pauses)
+    phase_steps: int = 0  # time in the current phase (not counting pauses)
     paused_phase: Optional[Phase] = None
-    command: MatchMode = MatchMode.STOPROBOT        # current command as given (from `command_team`'s view)
+    command: MatchMode = MatchMode.STOPROBOT  # current command as given (from `command_team`'s view)
     command_team: str = ""
-    match_type: dict[str, MatchMode] = field(default_factory=dict)   # last set piece, per team's view
-    restart: Optional[Restart] = None    # the restart being prepared or taken (or last taken)
-    next_restart: Optional[Restart] = None   # the restart that follows the current stoppage
-    hold: bool = False                   # stopped until an operator acts (operator STOP, PARKING)
-    auto: bool = True                    # the referee enforces its decisions (False: manual mode)
-    reason: str = ""                     # why the current command was given
+    match_type: dict[str, MatchMode] = field(default_factory=dict)  # last set piece, per team's view
+    restart: Optional[Restart] = None  # the restart being prepared or taken (or last taken)
+    next_restart: Optional[Restart] = None  # the restart that follows the current stoppage
+    hold: bool = False  # stopped until an operator acts (operator STOP, PARKING)
+    auto: bool = True  # the referee enforces its decisions (False: manual mode)
+    reason: str = ""  # why the current command was given
     score: dict[str, int] = field(default_factory=dict)
-    kickoff_team: str = ""               # team that kicked off the current half
-    version: int = 0                     # bumped on every change worth publishing
+    kickoff_team: str = ""  # team that kicked off the current half
+    version: int = 0  # bumped on every change worth publishing
 
     def __post_init__(self):
         self.score = {t: 0 for t in self.teams}

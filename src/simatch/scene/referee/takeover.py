@@ -27,8 +27,18 @@ class OperatorTakeover:
     #: the topic on which it takes an operator's requests (RefereeCommand), e.g. from the web referee console
     operator_topic = topics.REFEREE_COMMAND
     #: the methods a recorded operator command may name (``judge.<method>``), for ``simatch replay --verify``
-    operator_calls = ("pause", "resume", "command", "place_ball", "send_off", "return_robot", "card", "award_goal",
-                      "set_auto", "request")
+    operator_calls = (
+        "pause",
+        "resume",
+        "command",
+        "place_ball",
+        "send_off",
+        "return_robot",
+        "card",
+        "award_goal",
+        "set_auto",
+        "request",
+    )
 
     def pause(self, source: str = "api") -> None:
         """Halt the game: robots STOP, the clock stands still, until `resume`."""
@@ -39,8 +49,9 @@ class OperatorTakeover:
         self.operate(OperatorRequest("resume", source=source))
         self._record("resume", source=source)
 
-    def command(self, cmd: int | str, team: str = "", spot: tuple[float, float] | None = None,
-                source: str = "api") -> None:
+    def command(
+        self, cmd: int | str, team: str = "", spot: tuple[float, float] | None = None, source: str = "api"
+    ) -> None:
         """Give any game command, from ``team``'s point of view (``"OUR_FREEKICK"``, 11, ``"opp corner"``).
         A set piece is prepared and, with automatic judging on, started when the robots are in position."""
         mode = parse(cmd) if isinstance(cmd, str) else MatchMode(cmd)
@@ -84,10 +95,13 @@ class OperatorTakeover:
         self._ops.append(msg)
         pub = getattr(self, "pub_operator", None)
         if pub is not None and pub.active:
-            fields = {k: getattr(msg, k) for k in msgs.RefereeCommand.__dataclass_fields__
-                      if k != "stamp" and not k.startswith("__")}
+            fields = {
+                k: getattr(msg, k)
+                for k in msgs.RefereeCommand.__dataclass_fields__
+                if k != "stamp" and not k.startswith("__")
+            }
             step = self.ctx.step()
-            if self._ticked == step:          # after this step's tick: carried out at the next one
+            if self._ticked == step:  # after this step's tick: carried out at the next one
                 step += 1
             self._publish_operator("request", step, _plain(fields))
 
@@ -100,8 +114,16 @@ class OperatorTakeover:
             self._publish_operator(method, step, args, during_step=self._ticked == step)
 
     def _publish_operator(self, method: str, step: int, args: dict, during_step: bool = False) -> None:
-        self.pub_operator.put(msgs.OperatorCommand(stamp=self.ctx.now(), step=step, during_step=during_step,
-                                                   call=f"judge.{method}", target="", args=json.dumps(args)))
+        self.pub_operator.put(
+            msgs.OperatorCommand(
+                stamp=self.ctx.now(),
+                step=step,
+                during_step=during_step,
+                call=f"judge.{method}",
+                target="",
+                args=json.dumps(args),
+            )
+        )
 
     @property
     def auto(self) -> bool:
@@ -118,9 +140,13 @@ class OperatorTakeover:
         if req.op == "return" and m.obs.index[req.robot] not in self.discipline.off_until:
             raise OperatorError(f"{req.robot} is not sent off")
         now = self.ctx.now()
-        self._log(now, "operator", team=req.team or (req.robot.split("/")[0] if req.robot else ""),
-                  value=float(req.command) if req.command is not None else 0.0,
-                  detail=f"{req.describe()} (by {req.source})")
+        self._log(
+            now,
+            "operator",
+            team=req.team or (req.robot.split("/")[0] if req.robot else ""),
+            value=float(req.command) if req.command is not None else 0.0,
+            detail=f"{req.describe()} (by {req.source})",
+        )
         getattr(self, "_op_" + req.op)(now, req)
         self._publish(now, force=True)
 
@@ -155,8 +181,9 @@ class OperatorTakeover:
             self._send(now, MatchMode.STARTROBOT, "", "the operator resumed the game")
         elif back is Phase.PREPARE:
             r = g.restart
-            self._send(now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team,
-                       "the operator resumed the game")
+            self._send(
+                now, r.command_for(r.team) if r.team else MatchMode.DROPBALL, r.team, "the operator resumed the game"
+            )
         else:
             self._send(now, MatchMode.STOPROBOT, "", "the operator resumed the game (the ball is dead)")
 
@@ -170,8 +197,12 @@ class OperatorTakeover:
             g.go(Phase.STOPPED)
             g.hold = True
             g.next_restart = None
-            self._send(now, cmd, "", "the operator stopped the game" if cmd == MatchMode.STOPROBOT
-                       else "the operator parks the robots")
+            self._send(
+                now,
+                cmd,
+                "",
+                "the operator stopped the game" if cmd == MatchMode.STOPROBOT else "the operator parks the robots",
+            )
         elif cmd == MatchMode.STARTROBOT:
             if g.phase is Phase.PREPARE:
                 self._start(now)

@@ -27,28 +27,27 @@ from .observation import Observation
 
 
 class Touches:
-    def __init__(self, obs: Observation, release_distance: float, double_touch_gap_steps: int,
-                 pass_roll: float = 1.0):
+    def __init__(self, obs: Observation, release_distance: float, double_touch_gap_steps: int, pass_roll: float = 1.0):
         self.obs = obs
         n = obs.n
         self.release = release_distance
         self.pass_roll = pass_roll
         self.gap_steps = max(1, double_touch_gap_steps)
-        self.last = -1                       # robot index of the last touch
+        self.last = -1  # robot index of the last touch
         self.last_step = -1
-        self.touch_x = [0.0] * n             # each robot's position at its last touch
+        self.touch_x = [0.0] * n  # each robot's position at its last touch
         self.touch_y = [0.0] * n
-        self.touch_step = [-1] * n           # and the step of it
-        self.since_restart: list[int] = []   # robots that touched since the restart, by first touch
+        self.touch_step = [-1] * n  # and the step of it
+        self.since_restart: list[int] = []  # robots that touched since the restart, by first touch
         self._seen = [False] * n
-        self.contact: tuple[int, ...] = ()   # robots in contact at `contact_step`
+        self.contact: tuple[int, ...] = ()  # robots in contact at `contact_step`
         self.contact_step = -1
         self.holder = -1
         # the set piece's taker (double touch)
         self.armed = False
         self.taker = -1
         self.taker_last_contact = -1
-        self.retouch: tuple[int, float, float, int] | None = None   # (step, x, y, steps let go) of a 2nd touch
+        self.retouch: tuple[int, float, float, int] | None = None  # (step, x, y, steps let go) of a 2nd touch
         self.others_touched = False
         # possession (dribbling)
         self.possessor = -1
@@ -57,13 +56,13 @@ class Touches:
         self.backward = 0.0
         # the team on the ball (RC-10.1.2), per team index
         teams = len(obs.teams)
-        self.team_on_ball = -1                       # team of the last touch since the restart, -1: nobody's
-        self.won_by = [-1] * teams                   # the robot whose touch won the ball for the team
-        self.won_at = [(0.0, 0.0)] * teams           # where the ball was then
+        self.team_on_ball = -1  # team of the last touch since the restart, -1: nobody's
+        self.won_by = [-1] * teams  # the robot whose touch won the ball for the team
+        self.won_at = [(0.0, 0.0)] * teams  # where the ball was then
         self.won_own_half = [False] * teams
-        self.passed = [False] * teams                # a team-mate received it in the opponent half since
-        self.longest_roll = [0.0] * teams            # the longest free roll before a team-mate's touch since
-        self.ball_at_contact = (0.0, 0.0)            # the ball's position at the last step anybody touched it
+        self.passed = [False] * teams  # a team-mate received it in the opponent half since
+        self.longest_roll = [0.0] * teams  # the longest free roll before a team-mate's touch since
+        self.ball_at_contact = (0.0, 0.0)  # the ball's position at the last step anybody touched it
         # the last kick: (robot, step, the robot's x, y), None before any
         self.kick: tuple[int, int, float, float] | None = None
 
@@ -134,9 +133,9 @@ class Touches:
                 self.longest_roll[k] = 0.0
                 continue
             if self.touch_step[i] >= step - 1 or self.last == i or self.last < 0 or obs.team_ix[self.last] != k:
-                continue                             # the same touch going on, or no pass from a team-mate
+                continue  # the same touch going on, or no pass from a team-mate
             if obs.attack_sign[i] * bx <= 0.0:
-                continue                             # received in its own half (or on the line)
+                continue  # received in its own half (or on the line)
             px, py = self.ball_at_contact
             roll = math.hypot(bx - px, by - py)
             self.longest_roll[k] = max(self.longest_roll[k], roll)
@@ -152,8 +151,7 @@ class Touches:
         if self.taker < 0:
             self.taker = i
         elif i == self.taker:
-            if (not self.others_touched and self.retouch is None
-                    and step - self.taker_last_contact >= self.gap_steps):
+            if not self.others_touched and self.retouch is None and step - self.taker_last_contact >= self.gap_steps:
                 x, y = self.obs.xy_now(i)
                 self.retouch = (step, x, y, step - self.taker_last_contact)
         else:

@@ -34,16 +34,19 @@ class ChaserParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     prison: str = Field("prison", description="name of the world area the targets are driven into")
     max_speed: float = Field(3.5, gt=0.0, le=10.0, description="speed cap of a chaser [m/s]")
-    slack: float = Field(1.4, gt=0.0, le=10.0,
-                         description="how far outside the outermost free target the net stays [m]")
+    slack: float = Field(
+        1.4, gt=0.0, le=10.0, description="how far outside the outermost free target the net stays [m]"
+    )
     min_slack: float = Field(0.6, gt=0.0, le=10.0, description="the closest the net comes when squeezing [m]")
-    squeeze_after: float = Field(4.0, ge=0.0, le=600.0,
-                                 description="seconds without progress before the net squeezes [s]")
+    squeeze_after: float = Field(
+        4.0, ge=0.0, le=600.0, description="seconds without progress before the net squeezes [s]"
+    )
     squeeze_rate: float = Field(0.2, ge=0.0, le=10.0, description="how fast the slack shrinks then [m/s]")
     contract_speed: float = Field(0.6, gt=0.0, le=10.0, description="fastest the net closes in [m/s]")
     expand_speed: float = Field(2.0, gt=0.0, le=10.0, description="fastest the net backs off [m/s]")
-    wall_clearance: float = Field(0.3, ge=0.0, le=5.0,
-                                  description="how close to a wall a station may be (centre to wall) [m]")
+    wall_clearance: float = Field(
+        0.3, ge=0.0, le=5.0, description="how close to a wall a station may be (centre to wall) [m]"
+    )
 
 
 class Chaser(RobotStrategy):
@@ -58,11 +61,14 @@ class Chaser(RobotStrategy):
         except KeyError as exc:
             raise SceneError(f"teams.{ctx.team}.strategy_params.prison: {exc.args[0]}") from None
         self.arena = Arena.of(field, p.wall_clearance)
-        self.max_radius = max(prison_distance(self.prison, sx * self.arena.half_x, sy * self.arena.half_y)
-                              for sx in (-1, 1) for sy in (-1, 1))
+        self.max_radius = max(
+            prison_distance(self.prison, sx * self.arena.half_x, sy * self.arena.half_y)
+            for sx in (-1, 1)
+            for sy in (-1, 1)
+        )
         self.captures = Captures()
         self.radius: float | None = None
-        self.progress_mark = math.inf     # outermost free target's distance at the last progress
+        self.progress_mark = math.inf  # outermost free target's distance at the last progress
         self.progress_time = 0.0
         self.captured_seen = 0
 
@@ -74,7 +80,7 @@ class Chaser(RobotStrategy):
         prison = self.prison
         caps = self.captures.update(world)
         free = [d for x, y in caps.free(opponents(world)) if (d := prison_distance(prison, x, y)) > 0.0]
-        if not free:                      # (a target in the prison is captured at the judge's next look)
+        if not free:  # (a target in the prison is captured at the judge's next look)
             return Command(target=(me.x, me.y), max_vel=p.max_speed)
         outermost = max(free)
         slack = self._slack(world.time, outermost, len(caps.names))
@@ -100,8 +106,11 @@ class Chaser(RobotStrategy):
     def _radius(self, world, goal: float) -> float:
         """The team's net radius (median of what the chasers said last tick), moved towards ``goal``."""
         p = self.ctx.params
-        said = [float(s.user[0]) for aid, s in world.strategies.items()
-                if aid != world.id and len(s.user) and math.isfinite(s.user[0])]
+        said = [
+            float(s.user[0])
+            for aid, s in world.strategies.items()
+            if aid != world.id and len(s.user) and math.isfinite(s.user[0])
+        ]
         if self.radius is None and not said:
             r = goal
         else:

@@ -31,7 +31,7 @@ class Captures:
                 names.append(str(c["robot"]))
                 where.append((world.sign * float(c["x"]), world.sign * float(c["y"])))
         except (ValueError, TypeError, KeyError, AttributeError):
-            names, where = [], []       # a malformed summary tells nothing: nobody is known to be captured
+            names, where = [], []  # a malformed summary tells nothing: nobody is known to be captured
         self.names = frozenset(names)
         self.where = where
         return self
@@ -41,5 +41,4 @@ class Captures:
         if not self.where:
             return positions
         t2 = tolerance * tolerance
-        return [(x, y) for x, y in positions
-                if all((x - cx) ** 2 + (y - cy) ** 2 > t2 for cx, cy in self.where)]
+        return [(x, y) for x, y in positions if all((x - cx) ** 2 + (y - cy) ** 2 > t2 for cx, cy in self.where)]

@@ -93,7 +93,7 @@ class LevelSet:
         if left and below:
             a = math.atan2(y - p.y0, x - p.x0)
             return S[7] + r * ((a + 2 * math.pi if a < 0 else a) - math.pi)
-        if not (left or right or below or above):       # inside: the nearest side's outward normal
+        if not (left or right or below or above):  # inside: the nearest side's outward normal
             gaps = (y - p.y0, p.x1 - x, p.y1 - y, x - p.x0)
             side = gaps.index(min(gaps))
             below, right, above, left = (side == 0, side == 1, side == 2, side == 3)
@@ -115,7 +115,7 @@ class LevelSet:
             else:
                 merged.append([a, b])
         if len(merged) > 1 and merged[0][0] <= 1e-7 and self.perimeter - merged[-1][1] <= 1e-7:
-            last = merged.pop()                      # the stretch through s = 0
+            last = merged.pop()  # the stretch through s = 0
             merged[0] = [last[0] - self.perimeter, merged[0][1]]
         return [(a, b) for a, b in merged]
 
@@ -124,8 +124,12 @@ class LevelSet:
         L, s0 = self.lengths[k], self.starts[k]
         if k % 2 == 0:
             # a side: one coordinate fixed, the other linear in u (direction +1 or -1)
-            fixed, lim, start, sign, lim_var = ((p.y0 - r, Y, p.x0, 1.0, X), (p.x1 + r, X, p.y0, 1.0, Y),
-                                                (p.y1 + r, Y, p.x1, -1.0, X), (p.x0 - r, X, p.y1, -1.0, Y))[k // 2]
+            fixed, lim, start, sign, lim_var = (
+                (p.y0 - r, Y, p.x0, 1.0, X),
+                (p.x1 + r, X, p.y0, 1.0, Y),
+                (p.y1 + r, Y, p.x1, -1.0, X),
+                (p.x0 - r, X, p.y1, -1.0, Y),
+            )[k // 2]
             if abs(fixed) > lim + _EPS:
                 return None
             lo, hi = sorted(((-lim_var - start) * sign, (lim_var - start) * sign))
@@ -138,8 +142,8 @@ class LevelSet:
             fx, fy = _ARC_XY[j]
             lo, hi = 0.0, HALF_PI
             for (fn, sign), c, lim in ((fx, cx, X), (fy, cy, Y)):
-                a, b = (-lim - c) / r, (lim - c) / r          # bound on sign * f(t)
-                a, b = (a, b) if sign > 0 else (-b, -a)       # bound on f(t)
+                a, b = (-lim - c) / r, (lim - c) / r  # bound on sign * f(t)
+                a, b = (a, b) if sign > 0 else (-b, -a)  # bound on f(t)
                 t0, t1 = _monotone_interval(fn, a, b)
                 lo, hi = max(lo, t0), min(hi, t1)
             lo, hi = lo * r, hi * r
@@ -149,8 +153,12 @@ class LevelSet:
 
 
 #: per corner piece: x and y as (function of t, sign) of cos(a0 + t) and sin(a0 + t), a0 = -90, 0, 90, 180 deg
-_ARC_XY = ((("sin", 1.0), ("cos", -1.0)), (("cos", 1.0), ("sin", 1.0)),
-           (("sin", -1.0), ("cos", 1.0)), (("cos", -1.0), ("sin", -1.0)))
+_ARC_XY = (
+    (("sin", 1.0), ("cos", -1.0)),
+    (("cos", 1.0), ("sin", 1.0)),
+    (("sin", -1.0), ("cos", 1.0)),
+    (("cos", -1.0), ("sin", -1.0)),
+)
 
 
 def _monotone_interval(fn: str, a: float, b: float) -> tuple[float, float]:
@@ -168,10 +176,10 @@ class Net:
     """The net at one radius: the chasers' stations, in order along the curve."""
 
     curve: LevelSet
-    stations: np.ndarray       # (n, 2) where the chasers stand, in order along the net
-    cut: float                 # arc length where the order starts (a point outside the arena, if any)
-    closed: bool               # the whole ring lies in the arena (no wall closes it)
-    _last: tuple = (None, None)   # (chaser positions, their stations): the latest assignment
+    stations: np.ndarray  # (n, 2) where the chasers stand, in order along the net
+    cut: float  # arc length where the order starts (a point outside the arena, if any)
+    closed: bool  # the whole ring lies in the arena (no wall closes it)
+    _last: tuple = (None, None)  # (chaser positions, their stations): the latest assignment
 
     def station(self, chasers: tuple[tuple[float, float], ...], i: int) -> tuple[float, float]:
         """Where chaser ``i`` of ``chasers`` (positions) stands; remembered for the same positions, which
@@ -199,7 +207,7 @@ class Net:
             out[order] = np.arange(n)
             return out
         ordered = chasers[order]
-        shifts = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n            # (shift, rank)
+        shifts = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (shift, rank)
         cost = ((ordered[None, :, :] - self.stations[shifts]) ** 2).sum(axis=(1, 2))
         out[order] = shifts[int(cost.argmin())]
         return out
@@ -222,7 +230,7 @@ def make_net(prison: Area, arena: Arena, r: float, n: int) -> Net | None:
     if len(spans) == 1 and spans[0][1] - spans[0][0] >= P - 1e-7:
         at = [spans[0][0] + i * P / n for i in range(n)]
         return Net(curve, _points(curve, arena, at), spans[0][0], True)
-    cut = spans[-1][1] + 0.5 * ((spans[0][0] + P) - spans[-1][1])          # middle of a gap
+    cut = spans[-1][1] + 0.5 * ((spans[0][0] + P) - spans[-1][1])  # middle of a gap
     spans.sort(key=lambda ab: (ab[0] - cut) % P)
     counts = _apportion([b - a for a, b in spans], n)
     at: list[float] = []
@@ -236,7 +244,7 @@ def make_net(prison: Area, arena: Arena, r: float, n: int) -> Net | None:
 
 def _points(curve: LevelSet, arena: Arena, at: list[float]) -> np.ndarray:
     out = np.array([arena.clamp(*curve.point(s)) for s in at])
-    out.setflags(write=False)            # shared by every caller of the remembered net
+    out.setflags(write=False)  # shared by every caller of the remembered net
     return out
 
 

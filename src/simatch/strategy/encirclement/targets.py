@@ -42,12 +42,14 @@ class TargetParams(BaseModel):
     wall_weight: float = Field(0.6, ge=0.0, le=100.0, description="strength of the walls' push")
     corner_weight: float = Field(1.5, ge=0.0, le=100.0, description="strength of the corners' push")
     separation_weight: float = Field(0.8, ge=0.0, le=100.0, description="strength of the team-mates' push")
-    idle_speed: float = Field(0.5, ge=0.0, le=10.0,
-                              description="speed for keeping apart and off the walls with no chaser in sight [m/s]")
+    idle_speed: float = Field(
+        0.5, ge=0.0, le=10.0, description="speed for keeping apart and off the walls with no chaser in sight [m/s]"
+    )
     jink: float = Field(0.35, ge=0.0, le=math.pi, description="spread of the random turn while fleeing [rad]")
     jink_period: float = Field(1.0, gt=0.0, le=60.0, description="how often the random turn changes [s]")
-    wall_clearance: float = Field(0.25, ge=0.0, le=5.0,
-                                  description="closest a target's centre comes to a wall (its radius) [m]")
+    wall_clearance: float = Field(
+        0.25, ge=0.0, le=5.0, description="closest a target's centre comes to a wall (its radius) [m]"
+    )
 
 
 class Target(RobotStrategy):
@@ -113,8 +115,12 @@ class Target(RobotStrategy):
         p = self.ctx.params
         m, k = p.wall_margin, p.wall_weight
         fx = fy = 0.0
-        for gap, sign, axis in ((self.half_x - x, -1.0, 0), (self.half_x + x, 1.0, 0),
-                                (self.half_y - y, -1.0, 1), (self.half_y + y, 1.0, 1)):
+        for gap, sign, axis in (
+            (self.half_x - x, -1.0, 0),
+            (self.half_x + x, 1.0, 0),
+            (self.half_y - y, -1.0, 1),
+            (self.half_y + y, 1.0, 1),
+        ):
             if gap < m:
                 f = k * (m - max(gap, 0.0)) / m * (1.0 + 1.0 / max(gap, 0.1))
                 if axis == 0:

@@ -36,29 +36,35 @@ from .picture import Picture
 from .positions import Areas
 
 
-MOUTH = 0.29            # robot centre to a held ball's centre [m]
-PASS_KEEP = 1.5         # a pass being lined up keeps its receiver unless another is this much better
-TASTE = 0.3             # spread of a possession's taste for each receiver (position value units)
-LEAN = 0.15             # weight of a possession's preferred dribbling side
+MOUTH = 0.29  # robot centre to a held ball's centre [m]
+PASS_KEEP = 1.5  # a pass being lined up keeps its receiver unless another is this much better
+TASTE = 0.3  # spread of a possession's taste for each receiver (position value units)
+LEAN = 0.15  # weight of a possession's preferred dribbling side
 #: the open part of the goal (as the shooter sees it, opponents' reach included) that makes a shot worth it,
 #: and that keeps a shot being lined up [rad]
 SHOT_WIDTH = 0.045
 SHOT_KEEP_WIDTH = 0.03
-AIM_SPREAD = 0.25       # a shot aims this fraction of the open width either side of its middle
+AIM_SPREAD = 0.25  # a shot aims this fraction of the open width either side of its middle
 OPEN_GOAL_VALUE = 15.0  # value of a place with an open shot, per radian of open goal (capped at 0.15 rad)
-CONTACT_THREAT = 0.3    # an opponent this close in time is on the ball: kick where the robot faces [s]
-ESCAPE_RANGE = 3.0      # opponents nearer than this push the dribble away from them [m]
+CONTACT_THREAT = 0.3  # an opponent this close in time is on the ball: kick where the robot faces [s]
+ESCAPE_RANGE = 3.0  # opponents nearer than this push the dribble away from them [m]
 CONTACT_DISTANCE = 0.42  # ball centre this close to the robot's centre: touching it [m]
 RELEASE_DISTANCE = 0.75  # a dribble ends once the ball centre is this far from the robot's (referee: 0.6) [m]
-CLEAR_SPEED = 4.0       # a first-time kick into space, at most [m/s] ...
-CLEAR_MIN_SPEED = 1.8   # ... and at least (slower is no clearance: dribble away instead) [m/s]
-PASS_ANNOUNCE = 1.0     # a kicked pass is announced this long beyond its expected travel time [s]
+CLEAR_SPEED = 4.0  # a first-time kick into space, at most [m/s] ...
+CLEAR_MIN_SPEED = 1.8  # ... and at least (slower is no clearance: dribble away instead) [m/s]
+PASS_ANNOUNCE = 1.0  # a kicked pass is announced this long beyond its expected travel time [s]
 DRIBBLE_DIRECTIONS = [(math.cos(k * math.pi / 8), math.sin(k * math.pi / 8)) for k in range(16)]
 
 
 class BallPlayer:
-    def __init__(self, params: NubotParams, motion: Motion, areas: Areas, goal_half: float,
-                 rng: np.random.Generator | None = None):
+    def __init__(
+        self,
+        params: NubotParams,
+        motion: Motion,
+        areas: Areas,
+        goal_half: float,
+        rng: np.random.Generator | None = None,
+    ):
         self.p = params
         # the run's seed varies play: each possession draws a preferred dribbling side, a taste for each
         # receiver and an aim within the open part of the goal (the same seed always draws the same)
@@ -70,12 +76,12 @@ class BallPlayer:
         self.areas = areas
         self.goal_half = goal_half
         self.dribble_from: tuple[float, float] | None = None
-        self.back = 0.0               # backward travel while holding [m]
+        self.back = 0.0  # backward travel while holding [m]
         self._last_pos = (0.0, 0.0)
         self.plan: tuple | None = None
         self.announce: PassIntent | None = None
         self.announce_until = -1.0
-        self.pa_since: float | None = None     # when I entered the opponents' penalty area
+        self.pa_since: float | None = None  # when I entered the opponents' penalty area
         self.dribble_dir: tuple[float, float] | None = None
 
     # --- bookkeeping every tick --------------------------------------------------------------------------
@@ -105,8 +111,9 @@ class BallPlayer:
                 self.pa_since = obs.t
         else:
             self.pa_since = None
-        if self.announce is not None and (obs.t > self.announce_until or
-                                          (not me.holding and any(m.holding for m in obs.mates))):
+        if self.announce is not None and (
+            obs.t > self.announce_until or (not me.holding and any(m.holding for m in obs.mates))
+        ):
             self.announce = None
 
     def new_possession(self) -> None:
@@ -123,7 +130,9 @@ class BallPlayer:
         return self.announce if self.announce is not None and obs.t <= self.announce_until else None
 
     # --- without the ball --------------------------------------------------------------------------------
-    def fetch(self, obs: Observation, pic: Picture, role: int = ROLES.ACTIVE, stay_out_own_area: bool = True) -> Command:
+    def fetch(
+        self, obs: Observation, pic: Picture, role: int = ROLES.ACTIVE, stay_out_own_area: bool = True
+    ) -> Command:
         p, me = self.p, obs.me
         bx, by = obs.bx, obs.by
         vbx, vby = obs.bvx, obs.bvy
@@ -171,11 +180,13 @@ class BallPlayer:
                 ux, uy = math.cos(face), math.sin(face)
                 tx, ty = obs.bx - ux * (RELEASE_DISTANCE + 0.3), obs.by - uy * (RELEASE_DISTANCE + 0.3)
                 vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=False)
-                return Command(vx=vx, vy=vy, w=w, dribble=False, role=role, action=ACTIONS.CATCH_BALL_SLOW,
-                               intent=(tx, ty))
+                return Command(
+                    vx=vx, vy=vy, w=w, dribble=False, role=role, action=ACTIONS.CATCH_BALL_SLOW, intent=(tx, ty)
+                )
         boxes = self.areas.forbidden(self.may_enter_opp_area(obs)) if stay_out_own_area else ()
-        vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed,
-                                   turn_first=dball < 2.5, boxes=boxes)
+        vx, vy, w = self.motion.go(
+            obs, tx, ty, face, vmax, p.max_turn, end_speed=end, feed=feed, turn_first=dball < 2.5, boxes=boxes
+        )
         return Command(vx=vx, vy=vy, w=w, dribble=dball < 2.0, role=role, action=action, intent=(tx, ty))
 
     # --- with the ball -------------------------------------------------------------------------------------
@@ -186,7 +197,7 @@ class BallPlayer:
         left = p.dribble_limit - used
         opps = obs.opps
         bx, by = obs.bx, obs.by
-        can_score = (not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == PHASES.PLAY)
+        can_score = not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == PHASES.PLAY
         threat = self.threat_time(obs)
         prev = self.plan
         plan = None
@@ -213,7 +224,7 @@ class BallPlayer:
                 value, rid, cx, cy, v, keep = best
                 margin = 0.4 if keep else 1.0
                 urgent = left < 0.8 or threat < 1.2
-                forced = flow.pass_pending or (flow.need_pass and cx > 0.3)     # MSL RC-10.1.2
+                forced = flow.pass_pending or (flow.need_pass and cx > 0.3)  # MSL RC-10.1.2
                 if forced or value > mine + margin or (urgent and value > mine - 2.5):
                     plan = ("pass", cx, cy, v, rid)
             if plan is None and threat < CONTACT_THREAT:
@@ -270,8 +281,9 @@ class BallPlayer:
             value = position_value(cx, cy, obs.opps, self.areas.L2) + 0.3 * min(margin, 1.5)
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
-                value += OPEN_GOAL_VALUE * min(shot_window(cx, cy, obs.opps, self.areas.L2, self.goal_half,
-                                                           p.shot_speed)[1], 0.15)
+                value += OPEN_GOAL_VALUE * min(
+                    shot_window(cx, cy, obs.opps, self.areas.L2, self.goal_half, p.shot_speed)[1], 0.15
+                )
             out.append((value, m.id, cx, cy, v))
         return out
 
@@ -298,7 +310,7 @@ class BallPlayer:
         if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
             return None
         if lane_clear(obs.bx, obs.by, tx, ty, obs.opps, CLEAR_SPEED) < 0.0:
-            return None              # straight into an opponent: the ball would only bounce back (dribble away)
+            return None  # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
         # opponents' throw-in (most of these kicks used to go out)
         room = self.room_ahead(obs.bx, obs.by, c, s)
@@ -349,16 +361,16 @@ class BallPlayer:
                 tx, ty = cx + dx / r * radius, cy + dy / r * radius
             if abs(tx) > L2 - 0.8 or abs(ty) > W2 - 0.8:
                 continue
-            if (areas.in_own_penalty_area(tx, ty) or tx > areas.opp_ga[0]
-                    and abs(ty) < areas.opp_ga[2]):
+            if areas.in_own_penalty_area(tx, ty) or tx > areas.opp_ga[0] and abs(ty) < areas.opp_ga[2]:
                 continue
             if areas.in_opp_penalty_area(tx, ty) and (others_in_area or not self.may_enter_opp_area(obs)):
                 continue
             score = position_value(tx, ty, opps, L2)
             score += 0.35 * min(lane_clear(me.x, me.y, tx, ty, opps, 1.5), 0.5)
             if can_score and tx > 0.0 and L2 - tx < self.p.shoot_range:
-                score += OPEN_GOAL_VALUE * min(shot_window(tx, ty, opps, L2, self.goal_half, self.p.shot_speed)[1],
-                                               0.15)
+                score += OPEN_GOAL_VALUE * min(
+                    shot_window(tx, ty, opps, L2, self.goal_half, self.p.shot_speed)[1], 0.15
+                )
             # away from opponents closing in: keep the body between them and the ball
             for ox, oy, _, _ in opps:
                 rx, ry = ox - me.x, oy - me.y
@@ -406,11 +418,17 @@ class BallPlayer:
             face = math.atan2(ty - me.y, tx - me.x) if d > 0.3 else me.yaw
             err = abs(wrap(face - me.yaw))
             vmax = p.dribble_speed * max(0.15, math.cos(min(err, 1.5)))
-            vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.dribble_turn, avoid=True,
-                                       boxes=self.areas.forbidden(self.may_enter_opp_area(obs)) if role != ROLES.GOALIE
-                                       else ())
-            return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=ACTIONS.MOVE_WITH_BALL,
-                           intent=(tx, ty))
+            vx, vy, w = self.motion.go(
+                obs,
+                tx,
+                ty,
+                face,
+                vmax,
+                p.dribble_turn,
+                avoid=True,
+                boxes=self.areas.forbidden(self.may_enter_opp_area(obs)) if role != ROLES.GOALIE else (),
+            )
+            return Command(vx=vx, vy=vy, w=w, dribble=True, role=role, action=ACTIONS.MOVE_WITH_BALL, intent=(tx, ty))
         tx, ty, speed = plan[1], plan[2], plan[3]
         # a shot leans against the robot's drift; a pass does not need it (the receiver gives way along the
         # ball's path), and a target that moves with the robot's own speed would delay the kick
@@ -425,7 +443,7 @@ class BallPlayer:
             action = ACTIONS.TURN_TO_PASS
         vx, vy, w = self.motion.go(obs, me.x, me.y, face, 0.5, p.dribble_turn, avoid=False)
         kick = 0.0
-        spin = 2.5 if kind == "clear" else 1.2     # turning adds the mouth's sideways speed to the kick
+        spin = 2.5 if kind == "clear" else 1.2  # turning adds the mouth's sideways speed to the kick
         if abs(err) < tol and abs(me.w) < spin and me.holding:
             kick = speed
             action = ACTIONS.AT_SHOOT_SITUATION if kind == "shoot" else ACTIONS.STATIC_PASS
@@ -433,11 +451,21 @@ class BallPlayer:
         # for those the dribbler lets go as the kicker fires (the ball must then lie in the mouth); a faster
         # kick fires from the held ball
         dribble = kick == 0.0 or kick > p.catch_speed + 0.6
-        cmd = Command(vx=vx, vy=vy, w=w, dribble=dribble, kick_speed=kick, lob=kind == "lob", role=role,
-                      action=action, intent=(tx, ty))
+        cmd = Command(
+            vx=vx,
+            vy=vy,
+            w=w,
+            dribble=dribble,
+            kick_speed=kick,
+            lob=kind == "lob",
+            role=role,
+            action=action,
+            intent=(tx, ty),
+        )
         if kind == "pass":
-            intent = PassIntent(catch_id=plan[4], pass_x=obs.bx, pass_y=obs.by, catch_x=tx, catch_y=ty,
-                                kicked=kick > 0.0)
+            intent = PassIntent(
+                catch_id=plan[4], pass_x=obs.bx, pass_y=obs.by, catch_x=tx, catch_y=ty, kicked=kick > 0.0
+            )
             cmd.pass_intent = intent
             if kick > 0.0:
                 self.announce = intent

@@ -74,7 +74,7 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
         rx, ry = ox[k] - px, oy[k] - py
         d = math.sqrt(rx * rx + ry * ry)
         if d > length + oc[k] or math.sqrt((ox[k] - tx) ** 2 + (oy[k] - ty) ** 2) < oc[k]:
-            continue                        # beyond the target, or standing at it (the robot must go there)
+            continue  # beyond the target, or standing at it (the robot must go there)
         a = rx * ux + ry * uy
         b = ry * ux - rx * uy
         near[k] = True
@@ -119,7 +119,7 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
             continue
         free = True
         for i in range(m):
-            if (lo[i] < angle < hi[i] or lo[i] < angle - TWO_PI < hi[i] or lo[i] < angle + TWO_PI < hi[i]):
+            if lo[i] < angle < hi[i] or lo[i] < angle - TWO_PI < hi[i] or lo[i] < angle + TWO_PI < hi[i]:
                 free = False
                 break
         if not free:

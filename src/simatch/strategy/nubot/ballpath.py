@@ -19,7 +19,7 @@ import numpy as np
 
 GRAVITY = 9.8
 STEP = 0.1
-SAMPLES = 41                  # 0 to 4 s
+SAMPLES = 41  # 0 to 4 s
 #: a robot is given this much time to line up and take the ball when it arrives [s]
 CATCH_MARGIN = 0.15
 
@@ -27,11 +27,36 @@ CATCH_MARGIN = 0.15
 class BallPath:
     """The ball's predicted path from its current state (team frame)."""
 
-    __slots__ = ("x", "y", "vx", "vy", "speed", "ux", "uy", "stop_t", "stop_x", "stop_y", "land_t", "decel",
-                 "xlim", "ylim")
+    __slots__ = (
+        "x",
+        "y",
+        "vx",
+        "vy",
+        "speed",
+        "ux",
+        "uy",
+        "stop_t",
+        "stop_x",
+        "stop_y",
+        "land_t",
+        "decel",
+        "xlim",
+        "ylim",
+    )
 
-    def __init__(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, decel: float,
-                 radius: float, xlim: float, ylim: float):
+    def __init__(
+        self,
+        x: float,
+        y: float,
+        z: float,
+        vx: float,
+        vy: float,
+        vz: float,
+        decel: float,
+        radius: float,
+        xlim: float,
+        ylim: float,
+    ):
         self.x, self.y, self.vx, self.vy = x, y, vx, vy
         self.decel = decel
         self.xlim, self.ylim = xlim, ylim
@@ -62,8 +87,10 @@ class BallPath:
             return self.stop_x, self.stop_y
         tr = max(0.0, t - self.land_t)
         s = self.speed * (min(t, self.land_t) + tr) - 0.5 * self.decel * tr * tr
-        return (min(max(self.x + self.ux * s, -self.xlim), self.xlim),
-                min(max(self.y + self.uy * s, -self.ylim), self.ylim))
+        return (
+            min(max(self.x + self.ux * s, -self.xlim), self.xlim),
+            min(max(self.y + self.uy * s, -self.ylim), self.ylim),
+        )
 
     def speed_at(self, t: float) -> float:
         if t <= self.land_t:
@@ -111,14 +138,40 @@ def _intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, 
                 break
 
 
-def intercepts(path: BallPath, px: np.ndarray, py: np.ndarray, vx: np.ndarray, vy: np.ndarray, vmax: float,
-               acc: float, extra: np.ndarray | None = None) -> np.ndarray:
+def intercepts(
+    path: BallPath,
+    px: np.ndarray,
+    py: np.ndarray,
+    vx: np.ndarray,
+    vy: np.ndarray,
+    vmax: float,
+    acc: float,
+    extra: np.ndarray | None = None,
+) -> np.ndarray:
     """(R, 3): for each robot, (time, x, y) of the earliest point of the ball's path it reaches no later
     than the ball (plus its ``extra`` delay, e.g. to turn); the last sampled point if it reaches none."""
     n = len(px)
     out = np.empty((n, 3))
     if extra is None:
         extra = np.zeros(n)
-    _intercepts(path.x, path.y, path.speed, path.ux, path.uy, path.land_t, path.stop_t, path.decel, path.xlim,
-                path.ylim, px, py, vx, vy, extra, vmax, acc, out)
+    _intercepts(
+        path.x,
+        path.y,
+        path.speed,
+        path.ux,
+        path.uy,
+        path.land_t,
+        path.stop_t,
+        path.decel,
+        path.xlim,
+        path.ylim,
+        px,
+        py,
+        vx,
+        vy,
+        extra,
+        vmax,
+        acc,
+        out,
+    )
     return out

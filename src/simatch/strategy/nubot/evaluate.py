@@ -10,8 +10,8 @@ import math
 
 BALL_RADIUS = 0.11
 ROBOT_RADIUS = 0.25
-REACT_ACC = 3.0          # how fast an opponent starts moving to block [m/s^2]
-MAX_REACH = 0.9          # an opponent covers at most this much beyond its body during a shot [m]
+REACT_ACC = 3.0  # how fast an opponent starts moving to block [m/s^2]
+MAX_REACH = 0.9  # an opponent covers at most this much beyond its body during a shot [m]
 #: a shot is seen only once it is under way: a defender (a goalkeeper fitting the ball's path) starts to
 #: move this long after the kick [s]
 SHOT_REACTION = 0.15
@@ -21,8 +21,9 @@ def reach(t: float) -> float:
     return min(MAX_REACH, 0.5 * REACT_ACC * t * t)
 
 
-def shot_window(bx: float, by: float, opps: list, goal_x: float, goal_half: float, speed: float,
-                post_margin: float = 0.22) -> tuple[float, float]:
+def shot_window(
+    bx: float, by: float, opps: list, goal_x: float, goal_half: float, speed: float, post_margin: float = 0.22
+) -> tuple[float, float]:
     """(aim y on the goal line, width in radians) of the widest part of the goal mouth that no opponent
     can cover before a shot at ``speed`` from (bx, by) passes it; width 0 if none is open."""
     dx = goal_x - bx
@@ -61,8 +62,9 @@ def shot_window(bx: float, by: float, opps: list, goal_x: float, goal_half: floa
     return by + math.tan(aim) * dx, f1 - f0
 
 
-def lane_clear(bx: float, by: float, cx: float, cy: float, opps: list, speed: float,
-               exclude_near_end: float = 0.0) -> float:
+def lane_clear(
+    bx: float, by: float, cx: float, cy: float, opps: list, speed: float, exclude_near_end: float = 0.0
+) -> float:
     """Smallest margin (m) by which opponents miss the ball on its way from B to C at ``speed`` (negative
     when one can get in the way). Opponents that can reach the lane while the ball passes count."""
     worst = math.inf

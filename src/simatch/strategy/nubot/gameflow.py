@@ -19,22 +19,22 @@ from .observation import Observation
 #: `MatchMode` and `Phase` members as plain attributes (`roles.members`), for every module of the team
 MODES = members(MatchMode)
 
-IN_PLAY_DISTANCE = 0.65       # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
+IN_PLAY_DISTANCE = 0.65  # the ball is in play once it moved 0.5 m from its restart spot (with a margin) [m]
 #: our restart's ball moved this far (beyond perception noise; opponents keep 3 m away): our taker touched
 #: it, and may not touch it again, even if it is not in play yet (a bump, a kick that fizzled) [m]
 TAKEN_DISTANCE = 0.2
-TOUCH_DISTANCE = 0.48         # an opponent's centre this close to the ball's touches it [m]
-TAKER_BLOCK_LIMIT = 10.0      # the taker's double-touch block lapses after this long anyway [s]
-ON_BALL = 0.42                # a team-mate's centre this close to the ball's is on it [m]
-REGAIN_ROLL = 1.3             # a pass into the opponents' half rolls at least 1 m (MSL RC-10.1.2; margin) [m]
-HALF_MARGIN = 0.3             # a pass is received past the half-way line by this much, to be sure [m]
+TOUCH_DISTANCE = 0.48  # an opponent's centre this close to the ball's touches it [m]
+TAKER_BLOCK_LIMIT = 10.0  # the taker's double-touch block lapses after this long anyway [s]
+ON_BALL = 0.42  # a team-mate's centre this close to the ball's is on it [m]
+REGAIN_ROLL = 1.3  # a pass into the opponents' half rolls at least 1 m (MSL RC-10.1.2; margin) [m]
+HALF_MARGIN = 0.3  # a pass is received past the half-way line by this much, to be sure [m]
 
 
 class Phase(enum.IntEnum):
     STOP = 0
-    SETUP = 1          # positioning for a set piece (the command is a set piece)
-    OUR_RESTART = 2    # START given, our set piece not taken yet
-    OPP_RESTART = 3    # START given, the opponents' set piece not taken yet
+    SETUP = 1  # positioning for a set piece (the command is a set piece)
+    OUR_RESTART = 2  # START given, our set piece not taken yet
+    OPP_RESTART = 3  # START given, the opponents' set piece not taken yet
     PLAY = 4
     PARK = 5
     TEST = 6
@@ -47,18 +47,18 @@ class GameFlow:
     def __init__(self, restart_wait: float):
         self.restart_wait = restart_wait
         self.phase = PHASES.STOP
-        self.kind = 0                  # the set piece being set up or taken (MatchMode value)
-        self.t0 = 0.0                  # when START came for the restart
-        self.ball0 = (0.0, 0.0)        # where the ball was then
-        self.taker = 0                 # our robot that took the last restart (blocked), 0 if none
+        self.kind = 0  # the set piece being set up or taken (MatchMode value)
+        self.t0 = 0.0  # when START came for the restart
+        self.ball0 = (0.0, 0.0)  # where the ball was then
+        self.taker = 0  # our robot that took the last restart (blocked), 0 if none
         self.taker_since = 0.0
-        self.pass_pending = False      # a goal would not count yet: a second team-mate must take the ball
+        self.pass_pending = False  # a goal would not count yet: a second team-mate must take the ball
         self.first_holder = 0
         # MSL RC-10.1.2: a ball won in our own half counts for a goal only after a team-mate received it
         # in the opponents' half after a free roll of 1 m
         self.need_pass = False
-        self._ours = 0                 # our robot last on the ball, 0 if the opponents (or nobody) were
-        self._left_at = (0.0, 0.0)     # where the ball was when our robot last had it
+        self._ours = 0  # our robot last on the ball, 0 if the opponents (or nobody) were
+        self._left_at = (0.0, 0.0)  # where the ball was when our robot last had it
         self._last_mode = -1
 
     def key(self) -> tuple:
@@ -129,16 +129,18 @@ class GameFlow:
         holder = _holder(obs)
         touched = _opponent_touching(obs)
         if self.taker:
-            if (touched or (holder is not None and holder.id != self.taker)
-                    or obs.t - self.taker_since > TAKER_BLOCK_LIMIT):
+            if (
+                touched
+                or (holder is not None and holder.id != self.taker)
+                or obs.t - self.taker_since > TAKER_BLOCK_LIMIT
+            ):
                 self.taker = 0
         if self.pass_pending:
             # no direct goal: a second robot of ours must have had the ball (at a dropped ball, any
             # second robot, an opponent too)
             if holder is not None and self.first_holder == 0:
                 self.first_holder = holder.id
-            elif (holder is not None and holder.id != self.first_holder) or (
-                    touched and self.kind == MODES.DROPBALL):
+            elif (holder is not None and holder.id != self.first_holder) or (touched and self.kind == MODES.DROPBALL):
                 self.pass_pending = False
 
     def _regain(self, obs: Observation) -> None:
@@ -159,10 +161,14 @@ class GameFlow:
                 self._ours = 0
             return
         if not self._ours:
-            self.need_pass = bx < 0.0                  # won in our half (the line itself is not)
-        elif (on.id != self._ours and self.need_pass and bx > HALF_MARGIN
-              and math.hypot(bx - self._left_at[0], by - self._left_at[1]) >= REGAIN_ROLL):
-            self.need_pass = False                     # a team-mate received a pass in their half
+            self.need_pass = bx < 0.0  # won in our half (the line itself is not)
+        elif (
+            on.id != self._ours
+            and self.need_pass
+            and bx > HALF_MARGIN
+            and math.hypot(bx - self._left_at[0], by - self._left_at[1]) >= REGAIN_ROLL
+        ):
+            self.need_pass = False  # a team-mate received a pass in their half
         self._ours = on.id
         self._left_at = (bx, by)
 

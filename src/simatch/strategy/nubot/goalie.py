@@ -29,10 +29,10 @@ from .picture import Picture
 from .positions import Areas
 
 
-LOB_MIN, LOB_MAX = 3.0, 9.0   # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
+LOB_MIN, LOB_MAX = 3.0, 9.0  # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
 
-LINE_DEPTH = 0.7          # the keeper's line, in front of the goal line [m]
-KEEPER_HEIGHT = 0.75       # a ball below this height hits the keeper [m]
+LINE_DEPTH = 0.7  # the keeper's line, in front of the goal line [m]
+KEEPER_HEIGHT = 0.75  # a ball below this height hits the keeper [m]
 HISTORY = 6
 
 
@@ -44,7 +44,7 @@ class BallTracker:
 
     def add(self, t: float, x: float, y: float, z: float) -> None:
         if self.samples and t - self.samples[-1][0] > 0.2:
-            self.samples.clear()             # a gap: old samples belong to another flight
+            self.samples.clear()  # a gap: old samples belong to another flight
         self.samples.append((t, x, y, z))
 
     def vertical(self) -> tuple[float, float] | None:
@@ -84,10 +84,18 @@ class Goalkeeper:
         target, urgent = self.block_point(obs)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
         vmax = self.p.max_speed + (1.0 if urgent else 0.0)
-        vx, vy, w = self.motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False,
-                                   brake=6.0 if urgent else None)
-        return Command(vx=vx, vy=vy, w=w, dribble=False, role=ROLES.GOALIE,
-                       action=ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, intent=target)
+        vx, vy, w = self.motion.go(
+            obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None
+        )
+        return Command(
+            vx=vx,
+            vy=vy,
+            w=w,
+            dribble=False,
+            role=ROLES.GOALIE,
+            action=ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED,
+            intent=target,
+        )
 
     # --- where to stand ------------------------------------------------------------------------------------
     def block_point(self, obs: Observation) -> tuple[tuple[float, float], bool]:
@@ -109,7 +117,7 @@ class Goalkeeper:
                     z0, vz = fit
                     z_goal = z0 + vz * t_line - 0.5 * GRAVITY * t_line * t_line
                     if z_goal > self.goal_height + 0.11:
-                        return self.standing_point(bx, by), False       # over the bar
+                        return self.standing_point(bx, by), False  # over the bar
                     t_k = s_keeper / speed
                     z_k = z0 + vz * t_k - 0.5 * GRAVITY * t_k * t_k
                     if z_k > KEEPER_HEIGHT:
@@ -162,8 +170,11 @@ class Goalkeeper:
         ground clearance to that point instead."""
         side = 1.0 if sum(o[1] for o in obs.opps if o[0] < 0.0) < 0.0 else -1.0
         tx, ty = -2.0, side * 4.0
-        reach = [m for m in obs.mates if m.valid and not m.is_goalie
-                 and LOB_MIN < math.hypot(m.x - obs.bx, m.y - obs.by) < LOB_MAX]
+        reach = [
+            m
+            for m in obs.mates
+            if m.valid and not m.is_goalie and LOB_MIN < math.hypot(m.x - obs.bx, m.y - obs.by) < LOB_MAX
+        ]
         if not reach:
             return ("clear", tx, ty, 6.0, 0)
         mate = min(reach, key=lambda m: math.hypot(m.x - tx, m.y - ty))

@@ -44,23 +44,35 @@ class Motion:
         self.areas = areas
         self.period = period
         self.field = field
-        self.side = 0                # side of the last avoidance, for its hysteresis
+        self.side = 0  # side of the last avoidance, for its hysteresis
         self.last = (0.0, 0.0, 0.0)  # the last course: team-frame velocity and turn rate
-        self.clearance = 2.0 * params.robot_radius + 0.3           # robot to robot centres
-        self.ball_clearance = params.robot_radius + 0.11 + 0.12      # robot centre to ball centre
-        self.touch = 2.0 * params.robot_radius + 0.05               # robots closer than this touch
+        self.clearance = 2.0 * params.robot_radius + 0.3  # robot to robot centres
+        self.ball_clearance = params.robot_radius + 0.11 + 0.12  # robot centre to ball centre
+        self.touch = 2.0 * params.robot_radius + 0.05  # robots closer than this touch
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
         self._two_turn_acc = 2.0 * params.turn_acceleration
 
     # -----------------------------------------------------------------------------------------------------
-    def go(self, obs: Observation, tx: float, ty: float, face: float | None, vmax: float, wmax: float,
-           avoid: bool = True, ball_obstacle: bool | float = False, end_speed: float = 0.0,
-           feed: tuple[float, float] = (0.0, 0.0), brake: float | None = None,
-           gentle: bool = True, turn_first: bool = False,
-           boxes: list[tuple[float, float, float]] = (),
-           fence: tuple[float, float, float] | None = None,
-           max_x: float | None = None) -> tuple[float, float, float]:
+    def go(
+        self,
+        obs: Observation,
+        tx: float,
+        ty: float,
+        face: float | None,
+        vmax: float,
+        wmax: float,
+        avoid: bool = True,
+        ball_obstacle: bool | float = False,
+        end_speed: float = 0.0,
+        feed: tuple[float, float] = (0.0, 0.0),
+        brake: float | None = None,
+        gentle: bool = True,
+        turn_first: bool = False,
+        boxes: list[tuple[float, float, float]] = (),
+        fence: tuple[float, float, float] | None = None,
+        max_x: float | None = None,
+    ) -> tuple[float, float, float]:
         """Body-frame (vx, vy, w) towards (tx, ty) and heading ``face`` (None: keep turning as is, w = 0).
         Turning and driving fast at once cost the same wheel acceleration: by default the robot keeps its
         speed and turns slowly; with ``turn_first`` it slows down to turn (to take the ball, the heading
@@ -70,7 +82,7 @@ class Motion:
         me = obs.me
         mx, my = me.x, me.y
         c = obs.coach
-        if c is not None:                       # the speed limits the coach allows (CoachInfo max_vel / max_w)
+        if c is not None:  # the speed limits the coach allows (CoachInfo max_vel / max_w)
             if c.max_vel > 0.0:
                 vmax = min(vmax, c.max_vel)
             if c.max_w > 0.0:
@@ -86,8 +98,21 @@ class Motion:
                 sx, sy = self.areas.route(mx, my, tx, ty, boxes)
             if avoid:
                 ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
-                sx, sy, self.side = sub_target(mx, my, sx, sy, obs.opp_array, obs.mate_array, me.id, obs.bx,
-                                               obs.by, ball, self.clearance, LOOK_AHEAD, self.side)
+                sx, sy, self.side = sub_target(
+                    mx,
+                    my,
+                    sx,
+                    sy,
+                    obs.opp_array,
+                    obs.mate_array,
+                    me.id,
+                    obs.bx,
+                    obs.by,
+                    ball,
+                    self.clearance,
+                    LOOK_AHEAD,
+                    self.side,
+                )
             a = self.p.braking if brake is None else brake
             speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
             ex, ey = sx - mx, sy - my
@@ -100,8 +125,9 @@ class Motion:
         if n > vmax:
             vx, vy = vx / n * vmax, vy / n * vmax
         if gentle and obs.opps:
-            vx, vy = no_charging(mx, my, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed,
-                                 CHARGE_BRAKING)
+            vx, vy = no_charging(
+                mx, my, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed, CHARGE_BRAKING
+            )
         if fence is not None:
             vx, vy = self.keep_out_of_circle(mx, my, vx, vy, fence[0], fence[1], fence[2])
         if max_x is not None:
@@ -109,7 +135,7 @@ class Motion:
         yaw = me.yaw
         if face is None:
             w = 0.0
-        else:                                   # (self.turn_rate(wrap(face - yaw), wmax), inline)
+        else:  # (self.turn_rate(wrap(face - yaw), wmax), inline)
             err = math.remainder(face - yaw, TWO_PI)
             aerr = abs(err)
             w = min(wmax, math.sqrt(self._two_turn_acc * aerr), HEADING_GAIN * aerr)
@@ -125,7 +151,7 @@ class Motion:
             else:
                 w = math.copysign(SPIN_COUPLING / speed, w)
         self.last = (vx, vy, w)
-        h = yaw + 0.5 * w * self.period         # (self.body, inline)
+        h = yaw + 0.5 * w * self.period  # (self.body, inline)
         c, s = math.cos(h), math.sin(h)
         return (c * vx + s * vy, -s * vx + c * vy, w)
 
@@ -135,8 +161,9 @@ class Motion:
         return w if err >= 0.0 else -w
 
     @staticmethod
-    def keep_out_of_circle(x: float, y: float, vx: float, vy: float, cx: float, cy: float,
-                           r: float) -> tuple[float, float]:
+    def keep_out_of_circle(
+        x: float, y: float, vx: float, vy: float, cx: float, cy: float, r: float
+    ) -> tuple[float, float]:
         """The velocity with its part towards the circle's centre capped so that the robot stops at the
         circle (and leaves it at once if it is inside)."""
         dx, dy = cx - x, cy - y

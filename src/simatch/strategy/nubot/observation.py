@@ -22,23 +22,47 @@ _SAME_ROBOT = 0.1
 class Mate:
     """One robot of my team (me included), team frame."""
 
-    __slots__ = ("id", "x", "y", "yaw", "vx", "vy", "w", "holding", "valid", "stuck", "role", "action",
-                 "pass_info", "is_goalie", "attacking", "role_time")
+    __slots__ = (
+        "id",
+        "x",
+        "y",
+        "yaw",
+        "vx",
+        "vy",
+        "w",
+        "holding",
+        "valid",
+        "stuck",
+        "role",
+        "action",
+        "pass_info",
+        "is_goalie",
+        "attacking",
+        "role_time",
+    )
 
-    def __init__(self, info, is_goalie: bool, role: int = -1, action: int = -1, pass_info=None,
-                 attacking: int = -1, role_time: float = 1e9):
+    def __init__(
+        self,
+        info,
+        is_goalie: bool,
+        role: int = -1,
+        action: int = -1,
+        pass_info=None,
+        attacking: int = -1,
+        role_time: float = 1e9,
+    ):
         self.id = info.id
         self.x, self.y, self.yaw = info.x, info.y, info.yaw
         self.vx, self.vy, self.w = info.vx, info.vy, info.w
         self.holding = info.holding_ball
         self.valid = info.valid
         self.stuck = info.stuck
-        self.role = role              # as the robot announced it last (StrategyInfo), -1 if unknown
+        self.role = role  # as the robot announced it last (StrategyInfo), -1 if unknown
         self.action = action
         self.pass_info = pass_info
         self.is_goalie = is_goalie
-        self.attacking = attacking    # whether its team picture said "we attack" last tick (1/0), -1 if unknown
-        self.role_time = role_time    # how long it has had its announced role [s]
+        self.attacking = attacking  # whether its team picture said "we attack" last tick (1/0), -1 if unknown
+        self.role_time = role_time  # how long it has had its announced role [s]
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
@@ -57,8 +81,8 @@ class TeamView:
         self.infos: tuple = ()
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
-        self.array = np.zeros((0, 5))         # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
-        self.spots: set = set()               # where the team-mates are, to tell them among obstacles
+        self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        self.spots: set = set()  # where the team-mates are, to tell them among obstacles
         # the last opponents' array built from this view, reused by a robot that sees the same opponents
         self.opps: list = []
         self.opp_array = _array(self.opps, 4)
@@ -67,8 +91,12 @@ class TeamView:
         robots = world.vision.robots
         strategies = world.strategies
         infos = self.infos
-        if (self.tick == world.tick and self.robots is robots and len(infos) == len(strategies)
-                and all(map(is_, infos, strategies.values()))):
+        if (
+            self.tick == world.tick
+            and self.robots is robots
+            and len(infos) == len(strategies)
+            and all(map(is_, infos, strategies.values()))
+        ):
             return self.mates, self.by_id, self.array
         gk = world.goalkeeper
         mates = []
@@ -81,8 +109,9 @@ class TeamView:
             user = s.user.tolist()
             attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
             pass_cmd = s.pass_cmd
-            mates.append(Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None,
-                              attacking, role_time))
+            mates.append(
+                Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
+            )
         self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
@@ -91,8 +120,29 @@ class TeamView:
 
 
 class Observation:
-    __slots__ = ("t", "tick", "me", "mates", "by_id", "mate_array", "bx", "by", "bz", "bvx", "bvy", "bvz",
-                 "ball_seen", "ball_age", "opps", "_opp_array", "_view", "mode", "mtype", "coach", "goalie_id")
+    __slots__ = (
+        "t",
+        "tick",
+        "me",
+        "mates",
+        "by_id",
+        "mate_array",
+        "bx",
+        "by",
+        "bz",
+        "bvx",
+        "bvy",
+        "bvz",
+        "ball_seen",
+        "ball_age",
+        "opps",
+        "_opp_array",
+        "_view",
+        "mode",
+        "mtype",
+        "coach",
+        "goalie_id",
+    )
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
         v = world.vision
@@ -133,7 +183,7 @@ class Observation:
         if arr is None:
             view, opps = self._view, self.opps
             if view.opps == opps:
-                arr = view.opp_array         # a team-mate in this process saw the same opponents
+                arr = view.opp_array  # a team-mate in this process saw the same opponents
             else:
                 arr = _array(opps, 4)
                 view.opps, view.opp_array = opps, arr
@@ -166,6 +216,5 @@ def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, floa
     rest = [(x[k], y[k], vx[k], vy[k]) for k in range(n) if (x[k], y[k]) not in spots]
     if n - len(rest) < len(mates) - 1:
         # some team-mates are not where the team list says (noisy perception): match by distance
-        rest = [q for q in rest
-                if all(abs(m.x - q[0]) >= _SAME_ROBOT or abs(m.y - q[1]) >= _SAME_ROBOT for m in mates)]
+        rest = [q for q in rest if all(abs(m.x - q[0]) >= _SAME_ROBOT or abs(m.y - q[1]) >= _SAME_ROBOT for m in mates)]
     return rest

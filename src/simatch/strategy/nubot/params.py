@@ -27,42 +27,59 @@ class NubotParams(BaseModel):
 
     # --- the ball -------------------------------------------------------------------------------------
     ball_deceleration: float = Field(0.5, ge=0.0, le=20.0, description="rolling deceleration assumed [m/s^2]")
-    catch_speed: float = Field(3.0, gt=0.0, le=20.0,
-                               description="fastest ball the dribbler is trusted to take (relative) [m/s]")
+    catch_speed: float = Field(
+        3.0, gt=0.0, le=20.0, description="fastest ball the dribbler is trusted to take (relative) [m/s]"
+    )
 
     # --- rules, with margins -------------------------------------------------------------------------
-    dribble_limit: float = Field(2.4, gt=0.0, le=10.0,
-                                 description="distance from where the ball was taken at which a dribble ends "
-                                             "(MSL: 3 m) [m]")
-    dribble_back_limit: float = Field(1.2, ge=0.0, le=10.0,
-                                      description="backward dribbling allowed (MSL: 2 m) [m]")
-    opponent_distance: float = Field(3.35, gt=0.0, le=10.0,
-                                     description="distance kept from the ball at opponents' restarts (MSL: 3 m) [m]")
-    mate_distance: float = Field(2.4, gt=0.0, le=10.0,
-                                 description="distance kept by team-mates of the kicker at our restarts "
-                                             "(MSL: 2 m) [m]")
-    dropball_distance: float = Field(1.35, gt=0.0, le=10.0,
-                                     description="distance kept at a dropped ball (MSL: 1 m) [m]")
-    area_time: float = Field(6.0, gt=0.0, le=60.0,
-                             description="longest stay of a field robot in a penalty area (MSL: 10 s) [s]")
-    restart_wait: float = Field(7.5, gt=0.0, le=60.0,
-                                description="after this long a restart that was not taken is in play for "
-                                            "everybody: the defending team may play it, the kicking team's "
-                                            "other robots may come closer (MSL: 7 s) [s]")
-    contact_speed: float = Field(0.8, gt=0.0, le=10.0,
-                                 description="closing speed allowed when touching an opponent [m/s]")
+    dribble_limit: float = Field(
+        2.4,
+        gt=0.0,
+        le=10.0,
+        description="distance from where the ball was taken at which a dribble ends (MSL: 3 m) [m]",
+    )
+    dribble_back_limit: float = Field(1.2, ge=0.0, le=10.0, description="backward dribbling allowed (MSL: 2 m) [m]")
+    opponent_distance: float = Field(
+        3.35, gt=0.0, le=10.0, description="distance kept from the ball at opponents' restarts (MSL: 3 m) [m]"
+    )
+    mate_distance: float = Field(
+        2.4, gt=0.0, le=10.0, description="distance kept by team-mates of the kicker at our restarts (MSL: 2 m) [m]"
+    )
+    dropball_distance: float = Field(
+        1.35, gt=0.0, le=10.0, description="distance kept at a dropped ball (MSL: 1 m) [m]"
+    )
+    area_time: float = Field(
+        6.0, gt=0.0, le=60.0, description="longest stay of a field robot in a penalty area (MSL: 10 s) [s]"
+    )
+    restart_wait: float = Field(
+        7.5,
+        gt=0.0,
+        le=60.0,
+        description="after this long a restart that was not taken is in play for "
+        "everybody: the defending team may play it, the kicking team's "
+        "other robots may come closer (MSL: 7 s) [s]",
+    )
+    contact_speed: float = Field(
+        0.8, gt=0.0, le=10.0, description="closing speed allowed when touching an opponent [m/s]"
+    )
 
     # --- play -----------------------------------------------------------------------------------------
     shoot_range: float = Field(8.0, gt=0.0, le=30.0, description="longest shot at the goal [m]")
     shot_speed: float = Field(10.0, gt=0.0, le=30.0, description="kick speed of a shot [m/s]")
     pass_arrival_speed: float = Field(2.2, gt=0.0, le=10.0, description="ball speed wanted at the receiver [m/s]")
     max_pass: float = Field(9.0, gt=0.0, le=30.0, description="longest ground pass [m]")
-    role_hysteresis: float = Field(1.5, ge=0.0, le=20.0,
-                                   description="a robot keeps its role unless another assignment saves this "
-                                               "much total distance [m]")
-    active_hysteresis: float = Field(0.35, ge=0.0, le=10.0,
-                                     description="the active robot keeps its role unless another reaches the "
-                                                 "ball this much sooner [s]")
+    role_hysteresis: float = Field(
+        1.5,
+        ge=0.0,
+        le=20.0,
+        description="a robot keeps its role unless another assignment saves this much total distance [m]",
+    )
+    active_hysteresis: float = Field(
+        0.35,
+        ge=0.0,
+        le=10.0,
+        description="the active robot keeps its role unless another reaches the ball this much sooner [s]",
+    )
 
 
 def plain(params: NubotParams) -> SimpleNamespace:

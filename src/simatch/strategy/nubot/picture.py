@@ -51,20 +51,34 @@ PASS_KEPT = 0.3
 
 
 class Picture:
-    __slots__ = ("path", "phase", "holder", "goalie_plays", "opp_holds", "attacking", "catch", "their_t",
-                 "their_xy", "roles", "slots", "receiver", "pass_info", "active")
+    __slots__ = (
+        "path",
+        "phase",
+        "holder",
+        "goalie_plays",
+        "opp_holds",
+        "attacking",
+        "catch",
+        "their_t",
+        "their_xy",
+        "roles",
+        "slots",
+        "receiver",
+        "pass_info",
+        "active",
+    )
 
     def __init__(self):
-        self.holder = 0               # our robot holding the ball (0: none)
-        self.goalie_plays = False     # the ball is our goalkeeper's to play
+        self.holder = 0  # our robot holding the ball (0: none)
+        self.goalie_plays = False  # the ball is our goalkeeper's to play
         self.opp_holds = False
         self.attacking = False
-        self.catch: dict[int, tuple[float, float, float]] = {}   # id -> (time, x, y) interception
+        self.catch: dict[int, tuple[float, float, float]] = {}  # id -> (time, x, y) interception
         self.their_t = math.inf
         self.their_xy = (0.0, 0.0)
         self.roles: dict[int, int] = {}
-        self.slots: dict[int, tuple[float, float, float, float]] = {}   # id -> (x, y, face x, face y)
-        self.receiver = 0             # robot a pass is (to be) played to
+        self.slots: dict[int, tuple[float, float, float, float]] = {}  # id -> (x, y, face x, face y)
+        self.receiver = 0  # robot a pass is (to be) played to
         self.pass_info = None
         self.active = 0
 
@@ -93,8 +107,9 @@ def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
     return (obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype, obs.opps, flow.key())
 
 
-def assign(robots: list, slots: list[tuple], hysteresis: float,
-           around: tuple[float, float, float] | None = None) -> dict[int, int]:
+def assign(
+    robots: list, slots: list[tuple], hysteresis: float, around: tuple[float, float, float] | None = None
+) -> dict[int, int]:
     """Robot id -> slot index, minimising the total distance, each robot's announced role earning
     ``hysteresis`` metres when it keeps it. Slots beyond the number of robots stay empty (they are listed
     by priority). ``around`` = (x, y, r): a circle robots must go round (a set piece's ball), whose detour
@@ -106,8 +121,9 @@ def assign(robots: list, slots: list[tuple], hysteresis: float,
     if not slots:
         return {}
     # a robot that took its role only a moment ago holds on to it harder (roles last a while)
-    r = _rows([(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
-               for m in robots], 4)
+    r = _rows(
+        [(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0)) for m in robots], 4
+    )
     q = _rows([(sl[1], sl[2], sl[0]) for sl in slots], 3)
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
     best = _assign(r, q, cx, cy, cr)
@@ -133,7 +149,7 @@ def _assign(robots, slots, cx, cy, cr):
                 gap = math.sqrt((robots[i, 0] + t * dx - cx) ** 2 + (robots[i, 1] + t * dy - cy) ** 2)
                 d += 2.0 * max(0.0, cr - gap)
             if robots[i, 2] == slots[j, 2]:
-                d -= robots[i, 3]               # the robot's hysteresis for keeping its role
+                d -= robots[i, 3]  # the robot's hysteresis for keeping its role
             cost[i, j] = d
     best = np.zeros(k, dtype=np.int64)
     perm = np.zeros(k, dtype=np.int64)
@@ -180,8 +196,9 @@ class Analyst:
         p = self.p
         pic = Picture()
         pic.phase = flow.phase
-        pic.path = path = BallPath(obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, p.ball_deceleration,
-                                   BALL_RADIUS, self.xlim, self.ylim)
+        pic.path = path = BallPath(
+            obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, p.ball_deceleration, BALL_RADIUS, self.xlim, self.ylim
+        )
         # a robot off the field beyond the margin (it followed the ball) still plays; one not valid within
         # the margin has been taken off (sent off: parked and disabled beside the field)
         xl, yl = self.areas.L2 + 1.0, self.areas.W2 + 1.0
@@ -198,14 +215,15 @@ class Analyst:
                     break
         self._passes(obs, pic)
         if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
-            self._set_piece(obs, flow, pic, mates)      # (nobody plays the ball: no interceptions needed)
+            self._set_piece(obs, flow, pic, mates)  # (nobody plays the ball: no interceptions needed)
             return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         turn = 0.7 / p.max_turn
-        rows = [(m.x, m.y, m.vx, m.vy, turn * abs(math.remainder(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw,
-                                                                     TWO_PI)))
-                for m in mates] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
+        rows = [
+            (m.x, m.y, m.vx, m.vy, turn * abs(math.remainder(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw, TWO_PI)))
+            for m in mates
+        ] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
         if rows:
             a = _rows(rows, 5).T.copy()
             res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
@@ -237,7 +255,7 @@ class Analyst:
                 if d > 1.5 and (obs.bvx * dx + obs.bvy * dy) < heading * d * obs.ball_speed:
                     continue
             elif pic.holder != m.id and not info.is_static_pass:
-                continue                   # announced by a robot that does not have the ball (any more)
+                continue  # announced by a robot that does not have the ball (any more)
             pic.receiver, pic.pass_info = info.catch_id, info
             return
 
@@ -253,20 +271,28 @@ class Analyst:
                 pic.goalie_plays = True
             elif holder is None:
                 gt, gx, gy = pic.catch[goalie.id]
-                pic.goalie_plays = (areas.near_own_penalty_area(gx, gy, -0.1)
-                                    and areas.near_own_penalty_area(obs.bx, obs.by, 0.6))
+                pic.goalie_plays = areas.near_own_penalty_area(gx, gy, -0.1) and areas.near_own_penalty_area(
+                    obs.bx, obs.by, 0.6
+                )
         active = None
         if holder is not None and not holder.is_goalie:
             active = holder
-        elif pic.receiver and pic.pass_info.is_passout and pic.receiver in obs.by_id \
-                and not obs.by_id[pic.receiver].is_goalie and obs.by_id[pic.receiver].valid:
+        elif (
+            pic.receiver
+            and pic.pass_info.is_passout
+            and pic.receiver in obs.by_id
+            and not obs.by_id[pic.receiver].is_goalie
+            and obs.by_id[pic.receiver].valid
+        ):
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
-            fresh = next((m for m in field if m.role == ROLES.ACTIVE and m.role_time < MIN_ACTIVE_TIME
-                          and m.id != flow.taker), None)
+            fresh = next(
+                (m for m in field if m.role == ROLES.ACTIVE and m.role_time < MIN_ACTIVE_TIME and m.id != flow.taker),
+                None,
+            )
             if fresh is not None:
-                best, active = -math.inf, fresh      # a robot that just took the ball on keeps it a moment
+                best, active = -math.inf, fresh  # a robot that just took the ball on keeps it a moment
             for m in field:
                 if m.id == flow.taker:
                     continue
@@ -291,13 +317,16 @@ class Analyst:
             receiver = next((m for m in rest if m.id == pic.receiver), None)
         n_assist = 2 if len(rest) >= 4 else 1
         assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-        order = ([ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD] if pic.attacking
-                 else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT])
+        order = (
+            [ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD]
+            if pic.attacking
+            else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT]
+        )
         if n_assist == 2:
             order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
         slots: list[tuple] = []
         used = 0
-        for role in order[:len(rest)]:
+        for role in order[: len(rest)]:
             if role == ROLES.ASSISTANT:
                 x, y = assist[min(used, len(assist) - 1)]
                 used += 1
@@ -343,8 +372,11 @@ class Analyst:
         prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
         slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
         hyst = SETUP_HYSTERESIS if flow.phase == PHASES.SETUP else RESTART_HYSTERESIS
-        keep = self.p.dropball_distance if flow.kind == 13 else (
-            self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
+        keep = (
+            self.p.dropball_distance
+            if flow.kind == 13
+            else (self.p.mate_distance if flow.kind % 2 == 1 else self.p.opponent_distance)
+        )
         chosen = assign(field, slots, hyst, around=(bx, by, keep))
         for rid, i in chosen.items():
             role, x, y, fx, fy = slots[i]
@@ -352,8 +384,12 @@ class Analyst:
             pic.slots[rid] = (x, y, fx, fy)
             if role == ROLES.ACTIVE:
                 pic.active = rid
-        if flow.phase == PHASES.OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None \
-                and flow.kind != 1:
+        if (
+            flow.phase == PHASES.OUR_RESTART
+            and pic.receiver in pic.slots
+            and pic.pass_info is not None
+            and flow.kind != 1
+        ):
             # the taker aims at the receiver: it waits for the ball where it is announced, facing it
             info = pic.pass_info
             pic.slots[pic.receiver] = (info.catch_x, info.catch_y, bx, by)

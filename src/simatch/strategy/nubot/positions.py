@@ -61,10 +61,11 @@ class Areas:
     def forbidden(self, opp_area: bool) -> tuple[tuple[float, float, float], ...]:
         """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
         goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
-        return self._with_opp_area if opp_area else self._without_opp_area     # (shared: read only)
+        return self._with_opp_area if opp_area else self._without_opp_area  # (shared: read only)
 
-    def route(self, px: float, py: float, tx: float, ty: float,
-              boxes: list[tuple[float, float, float]]) -> tuple[float, float]:
+    def route(
+        self, px: float, py: float, tx: float, ty: float, boxes: list[tuple[float, float, float]]
+    ) -> tuple[float, float]:
         """The next point on the way from P to T that keeps out of ``boxes``: the way out of a box the robot
         is in, or the nearer field-side corner of a box the straight way would cross."""
         for x0, x1, hw in boxes:
@@ -79,13 +80,19 @@ class Areas:
                 ex, ey = push_out_of_box(px, py, x0, x1, hw)
                 return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
         for x0, x1, hw in boxes:
-            if ((px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw)
-                    or (py >= hw and ty >= hw)):
-                continue            # both ends on the same side of the box: the way cannot cross it
+            if (
+                (px <= x0 and tx <= x0)
+                or (px >= x1 and tx >= x1)
+                or (py <= -hw and ty <= -hw)
+                or (py >= hw and ty >= hw)
+            ):
+                continue  # both ends on the same side of the box: the way cannot cross it
             if segment_hits_box(px, py, tx, ty, x0, x1, hw):
-                cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15        # the corners on the field side
-                best = min(((cx, hw + 0.15), (cx, -hw - 0.15)),
-                           key=lambda c: math.hypot(c[0] - px, c[1] - py) + math.hypot(tx - c[0], ty - c[1]))
+                cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15  # the corners on the field side
+                best = min(
+                    ((cx, hw + 0.15), (cx, -hw - 0.15)),
+                    key=lambda c: math.hypot(c[0] - px, c[1] - py) + math.hypot(tx - c[0], ty - c[1]),
+                )
                 return best
         return tx, ty
 
@@ -120,8 +127,9 @@ def passive_point(areas: Areas, bx: float, by: float, attacking: bool) -> tuple[
     return guard_point(areas, bx, by, 0.45, 3.2, 1.8)
 
 
-def midfield_point(areas: Areas, bx: float, by: float, attacking: bool,
-                   opps: list[tuple[float, float, float, float]]) -> tuple[float, float]:
+def midfield_point(
+    areas: Areas, bx: float, by: float, attacking: bool, opps: list[tuple[float, float, float, float]]
+) -> tuple[float, float]:
     """The midfielder: marks the most dangerous opponent away from the ball (between it and the ball)
     when we defend; supports the attack from behind the ball, on the inner side, when we attack."""
     L2, W2 = areas.L2, areas.W2
@@ -160,6 +168,7 @@ def outlet_point(areas: Areas, bx: float, by: float) -> tuple[float, float]:
 
 # --- receiving spots, scored for all candidates at once -----------------------------------------------
 
+
 def spot_grid(areas: Areas) -> tuple[np.ndarray, np.ndarray]:
     """Candidate points a receiver may offer itself at (the whole field, outside the areas)."""
     xs = np.linspace(-areas.L2 + 3.0, areas.L2 - 1.5, 13)
@@ -172,15 +181,37 @@ def spot_grid(areas: Areas) -> tuple[np.ndarray, np.ndarray]:
     return gx[keep].copy(), gy[keep].copy()
 
 
-def score_spots(cx: np.ndarray, cy: np.ndarray, bx: float, by: float, ox: np.ndarray, oy: np.ndarray, L2: float,
-                dmin: float, dmax: float, near: tuple[float, float] | None) -> np.ndarray:
+def score_spots(
+    cx: np.ndarray,
+    cy: np.ndarray,
+    bx: float,
+    by: float,
+    ox: np.ndarray,
+    oy: np.ndarray,
+    L2: float,
+    dmin: float,
+    dmax: float,
+    near: tuple[float, float] | None,
+) -> np.ndarray:
     """Value of each candidate receiving spot: close to the opponents' goal, far from opponents, a pass
     lane from the ball that no opponent covers, within passing range, and (for stability) near where the
     receiver already is."""
     out = np.empty(len(cx))
     nx, ny = near if near is not None else (math.nan, math.nan)
-    _score_spots(cx, cy, bx, by, np.ascontiguousarray(ox, dtype=float), np.ascontiguousarray(oy, dtype=float),
-                 L2, dmin, dmax, nx, ny, out)
+    _score_spots(
+        cx,
+        cy,
+        bx,
+        by,
+        np.ascontiguousarray(ox, dtype=float),
+        np.ascontiguousarray(oy, dtype=float),
+        L2,
+        dmin,
+        dmax,
+        nx,
+        ny,
+        out,
+    )
     return out
 
 
@@ -207,6 +238,6 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
             if lane < 0.85:
                 score -= 4.0
             score -= 1.5 * max(0.0, 1.4 - lane)
-        if nx == nx:                   # not NaN: a place to stay near
+        if nx == nx:  # not NaN: a place to stay near
             score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
         out[i] = score

@@ -22,14 +22,14 @@ from .params import NubotParams
 from .picture import Picture
 
 
-KICKOFF_ARRIVAL = 0.6   # the kick-off pass nearly stops where the receiver takes it [m/s]
-KICKOFF_MAX_X = -0.01   # the kick-off taker's centre stays behind this line (the referee: 0) [m]
-LINE_UP = 0.55          # the taker lines up this far behind the ball [m]
-ALIGNED = 0.08          # heading error allowed before driving through the ball [rad]
+KICKOFF_ARRIVAL = 0.6  # the kick-off pass nearly stops where the receiver takes it [m/s]
+KICKOFF_MAX_X = -0.01  # the kick-off taker's centre stays behind this line (the referee: 0) [m]
+LINE_UP = 0.55  # the taker lines up this far behind the ball [m]
+ALIGNED = 0.08  # heading error allowed before driving through the ball [rad]
 #: going round the ball to the line-up point, the taker's centre stays this far (+ 0.1 m) from the ball's
 #: (touching: 0.36 m): brushing it would be the taker's touch, and its kick a second one [m]
 ROUND_CLEARANCE = 0.42
-ON_LINE = 0.045         # distance off the kick line allowed (the ball must enter the mouth) [m]
+ON_LINE = 0.045  # distance off the kick line allowed (the ball must enter the mouth) [m]
 
 
 class RestartTaker:
@@ -39,14 +39,13 @@ class RestartTaker:
         self.player = player
         self.goal_half = goal_half
         self.L2 = L2
-        self.restart = -1.0           # the restart (its START time) the choice below is for
-        self.choice = 0               # the receiver chosen for it
+        self.restart = -1.0  # the restart (its START time) the choice below is for
+        self.choice = 0  # the receiver chosen for it
 
     def receiver(self, obs: Observation, pic: Picture, flow: GameFlow):
         """The team-mate to pass to: the one set up as receiver (assistant), unless an opponent marks it
         and another one is clearly freer; kept once chosen for this restart unless it gets marked."""
-        designated = next((m for m in obs.mates if pic.roles.get(m.id) == ROLES.ASSISTANT and m is not obs.me),
-                          None)
+        designated = next((m for m in obs.mates if pic.roles.get(m.id) == ROLES.ASSISTANT and m is not obs.me), None)
         if flow.kind == MODES.OUR_KICKOFF:
             return designated
         if self.restart != flow.t0:
@@ -70,7 +69,7 @@ class RestartTaker:
             slot = pic.slots.get(me.id)
             mate = self.receiver(obs, pic, flow)
             if flow.kind == MODES.OUR_KICKOFF and slot is not None:
-                ax, ay = slot[2], slot[3]                  # the point in front of the receiver
+                ax, ay = slot[2], slot[3]  # the point in front of the receiver
                 arrival = KICKOFF_ARRIVAL
             elif mate is not None:
                 ax, ay = mate.x, mate.y
@@ -90,16 +89,26 @@ class RestartTaker:
         err = abs(wrap(face - me.yaw))
         # where the taker stands relative to the kick line through the ball
         rx, ry = me.x - bx, me.y - by
-        behind = -(rx * ux + ry * uy)               # distance behind the ball along the kick line
-        off = abs(rx * uy - ry * ux)                # distance off the kick line
+        behind = -(rx * ux + ry * uy)  # distance behind the ball along the kick line
+        off = abs(rx * uy - ry * ux)  # distance off the kick line
         kick = 0.0
         # at a kick-off the taker stays in its half until the ball is in play, whatever its momentum
         max_x = KICKOFF_MAX_X if flow.kind == MODES.OUR_KICKOFF else None
         if behind < 0.2 or off > 0.5:
             # beside or in front of the ball: go round it to the line-up point
             tx, ty = bx - LINE_UP * ux, by - LINE_UP * uy
-            vx, vy, w = self.motion.go(obs, tx, ty, face, p.max_speed, p.max_turn, avoid=True,
-                                       ball_obstacle=0.45, fence=(bx, by, ROUND_CLEARANCE), max_x=max_x)
+            vx, vy, w = self.motion.go(
+                obs,
+                tx,
+                ty,
+                face,
+                p.max_speed,
+                p.max_turn,
+                avoid=True,
+                ball_obstacle=0.45,
+                fence=(bx, by, ROUND_CLEARANCE),
+                max_x=max_x,
+            )
             action = ACTIONS.POSITIONED_STATIC
         else:
             # behind it: close in along the line, converging onto it; drive through the ball only when lined
@@ -109,20 +118,32 @@ class RestartTaker:
             tx, ty = bx - s_back * ux, by - s_back * uy
             vmax = 0.7 if behind < 1.2 else p.max_speed
             # brake early: touching the ball before the kick would be the taker's touch (then no second one)
-            vx, vy, w = self.motion.go(obs, tx, ty, face, vmax, p.max_turn, avoid=False,
-                                       end_speed=0.4 if armed else 0.0, gentle=False, brake=1.5,
-                                       max_x=max_x)
+            vx, vy, w = self.motion.go(
+                obs,
+                tx,
+                ty,
+                face,
+                vmax,
+                p.max_turn,
+                avoid=False,
+                end_speed=0.4 if armed else 0.0,
+                gentle=False,
+                brake=1.5,
+                max_x=max_x,
+            )
             if armed:
                 kick = speed
                 action = ACTIONS.STATIC_PASS if receiver is not None else ACTIONS.AT_SHOOT_SITUATION
             else:
                 action = ACTIONS.POSITIONED_STATIC
         lx, ly = bx - LINE_UP * ux, by - LINE_UP * uy
-        cmd = Command(vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=ROLES.ACTIVE, action=action,
-                      intent=(lx, ly))
+        cmd = Command(
+            vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=ROLES.ACTIVE, action=action, intent=(lx, ly)
+        )
         if receiver is not None:
-            intent = PassIntent(catch_id=receiver.id, pass_x=bx, pass_y=by, catch_x=ax, catch_y=ay,
-                                kicked=kick > 0.0, static=True)
+            intent = PassIntent(
+                catch_id=receiver.id, pass_x=bx, pass_y=by, catch_x=ax, catch_y=ay, kicked=kick > 0.0, static=True
+            )
             cmd.pass_intent = intent
             if kick > 0.0:
                 self.player.announce = intent

@@ -39,7 +39,7 @@ PARK_OUTSIDE = 0.7
 PARK_SPACING = 1.3
 #: a steady robot decides again at once when the ball, or another robot, is this close [m]
 STEADY_BALL_DISTANCE = 2.0
-STEADY_SET_PIECE_DISTANCE = 4.0         # (at a set piece: near the circle the rules keep clear)
+STEADY_SET_PIECE_DISTANCE = 4.0  # (at a set piece: near the circle the rules keep clear)
 STEADY_ROBOT_DISTANCE = 1.0
 #: at a kick-off, robots in their own half keep this far from the half-way line [m]
 KICKOFF_LINE_MARGIN = 0.15
@@ -65,7 +65,7 @@ class _Shared:
         self.analyst = Analyst(params, self.areas, self.spots)
         self.memo = TeamMemo()
         self.view = TeamView()
-        self.evaluated = 0            # pictures computed (for profiling)
+        self.evaluated = 0  # pictures computed (for profiling)
         self.reused = 0
 
 
@@ -94,7 +94,7 @@ class NubotRobot(RobotStrategy):
         self.park_at = (-areas.L2 + 1.0 + PARK_SPACING * k, -(areas.W2 + PARK_OUTSIDE))
         self.role = ROLES.NOROLE
         self.picture: Picture | None = None
-        self.steady: tuple | None = None      # (tick, game command, command, course) of a steady robot
+        self.steady: tuple | None = None  # (tick, game command, command, course) of a steady robot
         self.picture_tick = -1
         self.role_since = 0.0
 
@@ -159,8 +159,14 @@ class NubotRobot(RobotStrategy):
         self.role = cmd.role
         # told to the team, for the hysteresis of attacking and of the active role
         cmd.user = (1.0 if pic.attacking else 0.0, obs.t - self.role_since)
-        if (not odd and phase in (PHASES.PLAY, PHASES.SETUP) and cmd.action == ACTIONS.POSITIONED
-                and cmd.pass_intent is None and pic.receiver != me.id and not me.holding):
+        if (
+            not odd
+            and phase in (PHASES.PLAY, PHASES.SETUP)
+            and cmd.action == ACTIONS.POSITIONED
+            and cmd.pass_intent is None
+            and pic.receiver != me.id
+            and not me.holding
+        ):
             self.steady = (obs.tick, obs.mode, cmd, self.motion.last)
         return cmd
 
@@ -181,7 +187,7 @@ class NubotRobot(RobotStrategy):
         if (b.x - me.x) ** 2 + (b.y - me.y) ** 2 < near * near:
             return None
         dist = v.obstacles.distance
-        if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:     # (plain floats: a few, every tick)
+        if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
@@ -205,13 +211,22 @@ class NubotRobot(RobotStrategy):
                 fence = (obs.bx, obs.by, keep)
         ball = True
         if self.flow.taker == me.id:
-            ball = TAKER_BALL_CLEARANCE          # the restart's taker must not touch the ball again yet
+            ball = TAKER_BALL_CLEARANCE  # the restart's taker must not touch the ball again yet
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
             x, y = self.out_of_the_way(obs, x, y)
         kickoff = keep is not None and self.flow.kind in (MODES.OUR_KICKOFF, MODES.OPP_KICKOFF)
-        vx, vy, w = self.motion.go(obs, x, y, face, self.p.max_speed, self.p.max_turn, ball_obstacle=ball,
-                                   boxes=self.areas.forbidden(False), fence=fence,
-                                   max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None)
+        vx, vy, w = self.motion.go(
+            obs,
+            x,
+            y,
+            face,
+            self.p.max_speed,
+            self.p.max_turn,
+            ball_obstacle=ball,
+            boxes=self.areas.forbidden(False),
+            fence=fence,
+            max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None,
+        )
         return Command(vx=vx, vy=vy, w=w, role=role, action=ACTIONS.POSITIONED, intent=(x, y))
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
@@ -242,8 +257,9 @@ class NubotRobot(RobotStrategy):
             return p.opponent_distance
         return None
 
-    def round_the_ball(self, obs: Observation, x: float, y: float, keep: float,
-                       taker: bool = False) -> tuple[float, float]:
+    def round_the_ball(
+        self, obs: Observation, x: float, y: float, keep: float, taker: bool = False
+    ) -> tuple[float, float]:
         """The next point on the way to (x, y) that respects the circle of radius ``keep`` round the ball: a
         robot inside it leaves it straight away, a robot whose straight way would cut through it follows the
         circle round."""
@@ -252,7 +268,7 @@ class NubotRobot(RobotStrategy):
         d = math.hypot(me.x - bx, me.y - by)
         if math.hypot(x - bx, y - by) < keep - 0.05:
             if taker:
-                return x, y                            # the taker's slot, behind the ball
+                return x, y  # the taker's slot, behind the ball
             # any other place inside the circle is moved out of it, away from the ball
             ex, ey = x - bx, y - by
             e = math.hypot(ex, ey)

@@ -27,9 +27,9 @@ from .params import NubotParams
 from .positions import Areas, guard_point, outlet_point, passive_point, score_spots
 
 
-SLOT_GAP = 1.3           # robots' slots at least this far apart [m]
-TAKER_GAP = 0.6          # taker's centre behind the ball's centre while waiting [m]
-KICKOFF_LEAD = (0.3, 1.95)    # where the kick-off pass stops (team frame, y to the receiver's side; x > 0
+SLOT_GAP = 1.3  # robots' slots at least this far apart [m]
+TAKER_GAP = 0.6  # taker's centre behind the ball's centre while waiting [m]
+KICKOFF_LEAD = (0.3, 1.95)  # where the kick-off pass stops (team frame, y to the receiver's side; x > 0
 #                               keeps the taker, behind the ball on the kick line, clear of the half-way line) [m]
 #: headings round the ball tried by `_settle` when the pushes undo each other (every 7.5 degrees)
 _ROUND = tuple((math.cos(k * math.pi / 24), math.sin(k * math.pi / 24)) for k in range(48))
@@ -56,8 +56,15 @@ def push_from(x: float, y: float, bx: float, by: float, r: float) -> tuple[float
     return bx + dx / d * r, by + dy / d * r
 
 
-def restart_spot(areas: Areas, bx: float, by: float, opps: list, spots: tuple[np.ndarray, np.ndarray],
-                 p: NubotParams, near: tuple[float, float] | None) -> tuple[float, float]:
+def restart_spot(
+    areas: Areas,
+    bx: float,
+    by: float,
+    opps: list,
+    spots: tuple[np.ndarray, np.ndarray],
+    p: NubotParams,
+    near: tuple[float, float] | None,
+) -> tuple[float, float]:
     """The receiver's spot for a restart of ours: free, in range, 2 m+ from the ball, inside the lines."""
     cx, cy = spots
     ox = np.array([o[0] for o in opps])
@@ -76,8 +83,16 @@ def kickoff_side(opps: list) -> float:
     return -1.0 if s > 0.0 else 1.0
 
 
-def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: NubotParams,
-              spots: tuple[np.ndarray, np.ndarray], receiver_near: tuple[float, float] | None) -> list[tuple]:
+def formation(
+    kind: int,
+    areas: Areas,
+    bx: float,
+    by: float,
+    opps: list,
+    p: NubotParams,
+    spots: tuple[np.ndarray, np.ndarray],
+    receiver_near: tuple[float, float] | None,
+) -> list[tuple]:
     """The four field-robot slots for set piece ``kind`` with the ball at (bx, by)."""
     M = MODES
     slots: list[tuple] = []
@@ -124,7 +139,7 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
         slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
         mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
         slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
-    elif kind % 2 == 1:      # our throw-in, goal kick, corner, free kick
+    elif kind % 2 == 1:  # our throw-in, goal kick, corner, free kick
         rx, ry = restart_spot(areas, bx, by, opps, spots, p, receiver_near)
         ux, uy = unit(rx - bx, ry - by)
         slots.append((ROLES.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, rx, ry))
@@ -133,7 +148,7 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
         slots.append((ROLES.PASSIVE, px, py, bx, by))
         mx, my = clamp(bx - 3.5, -areas.L2 + 4.0, areas.L2 - 4.5), (by - 3.0 if by > 0 else by + 3.0)
         slots.append((ROLES.MIDFIELD, mx, my, bx, by))
-    else:                    # their throw-in, goal kick, corner, free kick
+    else:  # their throw-in, goal kick, corner, free kick
         r = p.opponent_distance + 0.1
         wx, wy = guard_point(areas, bx, by, 1.0, 0.0, r)
         slots.append((ROLES.ACTIVE, wx, wy, bx, by))
@@ -142,8 +157,10 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
         # markers on the opponents most likely to receive: away from the ball, nearest to our goal
         free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
         free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
-        zones = [(clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
-                 outlet_point(areas, bx, by)]
+        zones = [
+            (clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
+            outlet_point(areas, bx, by),
+        ]
         for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
             if k < len(free):
                 o = free[k]
@@ -159,7 +176,7 @@ def formation(kind: int, areas: Areas, bx: float, by: float, opps: list, p: Nubo
     for s, moved in zip(spread(slots, bx, by), slots):
         taken = [(o[1], o[2]) for o in out]
         if s is not moved or any(math.hypot(s[1] - x, s[2] - y) < SLOT_GAP - 1e-6 for x, y in taken):
-            s = _legal(kind, s, areas, bx, by, p, taken=taken)     # spread moved it, or it clashes
+            s = _legal(kind, s, areas, bx, by, p, taken=taken)  # spread moved it, or it clashes
         out.append(s)
     return out
 
@@ -174,25 +191,26 @@ def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> l
             if not math.hypot(x - o[1], y - o[2]) >= gap:
                 break
         else:
-            out.append(slot)                       # unchanged (the same object: callers can tell)
+            out.append(slot)  # unchanged (the same object: callers can tell)
             continue
         for _ in range(3):
             clash = next(((ox, oy) for _, ox, oy, _, _ in out if math.hypot(x - ox, y - oy) < gap), None)
             if clash is None:
                 break
             ux, uy = unit(x - bx, y - by)
-            nx, ny = -uy, ux                      # across the line to the ball
+            nx, ny = -uy, ux  # across the line to the ball
             if (x - clash[0]) * nx + (y - clash[1]) * ny < 0.0:
                 nx, ny = -nx, -ny
-            if abs(y + ny * gap) > 6.0:           # do not slide off the field
+            if abs(y + ny * gap) > 6.0:  # do not slide off the field
                 nx, ny = -nx, -ny
             x, y = clash[0] + nx * gap, clash[1] + ny * gap
         out.append((role, x, y, fx, fy))
     return out
 
 
-def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotParams,
-           taken: list[tuple[float, float]] = ()) -> tuple:
+def _legal(
+    kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotParams, taken: list[tuple[float, float]] = ()
+) -> tuple:
     """Make a slot respect the distances and areas of set piece ``kind`` (and keep ``SLOT_GAP`` from the
     points already ``taken``)."""
     role, x, y, fx, fy = slot
@@ -211,8 +229,17 @@ def _legal(kind: int, slot: tuple, areas: Areas, bx: float, by: float, p: NubotP
     return (role, x, y, fx, fy)
 
 
-def _settle(kind: int, areas: Areas, x: float, y: float, bx: float, by: float, r: float,
-            taker: bool, taken: list[tuple[float, float]] = ()) -> tuple[float, float]:
+def _settle(
+    kind: int,
+    areas: Areas,
+    x: float,
+    y: float,
+    bx: float,
+    by: float,
+    r: float,
+    taker: bool,
+    taken: list[tuple[float, float]] = (),
+) -> tuple[float, float]:
     """The point moved out of the areas, to ``r`` from the ball and (at a kick-off) into our half; where
     those pushes undo each other (near a box), or the point is taken by another slot, the nearest point
     round the ball that satisfies all of them."""

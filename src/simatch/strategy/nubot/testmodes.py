@@ -30,9 +30,9 @@ from .params import NubotParams
 from .picture import Picture
 
 
-ARRIVED = 0.12           # [m]
-ARRIVED_YAW = 0.08       # [rad]
-CIRCLE_SPEED = 1.5       # [m/s]
+ARRIVED = 0.12  # [m]
+ARRIVED_YAW = 0.08  # [rad]
+CIRCLE_SPEED = 1.5  # [m/s]
 
 
 class TestModes:
@@ -40,7 +40,7 @@ class TestModes:
         self.p = params
         self.motion = motion
         self.player = player
-        self.leg = 0                  # LOCATION_TEST: 0 going to A, 1 going to B
+        self.leg = 0  # LOCATION_TEST: 0 going to A, 1 going to B
         self.passed = False
 
     def decide(self, obs: Observation, pic: Picture) -> Command:
@@ -74,8 +74,10 @@ class TestModes:
             return self.give(obs, pic, a, c.id_b, c.kick_force)
         if mode == TestMode.LOCATION_TEST:
             goal, yaw = (a, c.angle_a) if self.leg == 0 else (b, c.angle_b)
-            if (math.hypot(goal[0] - me.x, goal[1] - me.y) < ARRIVED
-                    and abs(math.remainder(yaw - me.yaw, 2 * math.pi)) < ARRIVED_YAW):
+            if (
+                math.hypot(goal[0] - me.x, goal[1] - me.y) < ARRIVED
+                and abs(math.remainder(yaw - me.yaw, 2 * math.pi)) < ARRIVED_YAW
+            ):
                 self.leg = 1 - self.leg
             return self.move(obs, goal, yaw, avoid=True)
         if mode == TestMode.CIRCLE_TEST:
@@ -97,10 +99,9 @@ class TestModes:
         me = obs.me
         mate = obs.by_id.get(to)
         if self.passed and me.holding:
-            self.passed = False           # the kick did not fire: try again
+            self.passed = False  # the kick did not fire: try again
         if self.passed:
-            return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION,
-                           pass_intent=self.player.pass_intent(obs))
+            return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION, pass_intent=self.player.pass_intent(obs))
         if not me.holding:
             return self.player.fetch(obs, pic, ROLES.ACTIVE, stay_out_own_area=False)
         if math.hypot(a[0] - me.x, a[1] - me.y) > 0.3:
@@ -125,8 +126,9 @@ class TestModes:
             return self.player.fetch(obs, pic, ROLES.CATCHOFPASS, stay_out_own_area=False)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
         vx, vy, w = self.motion.go(obs, b[0], b[1], face, self.p.max_speed, self.p.max_turn)
-        return Command(vx=vx, vy=vy, w=w, dribble=True, role=ROLES.CATCHOFPASS, action=ACTIONS.CATCH_POSITIONED,
-                       intent=b)
+        return Command(
+            vx=vx, vy=vy, w=w, dribble=True, role=ROLES.CATCHOFPASS, action=ACTIONS.CATCH_POSITIONED, intent=b
+        )
 
     def circle(self, obs: Observation, a, b) -> Command:
         me = obs.me

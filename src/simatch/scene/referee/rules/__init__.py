@@ -28,9 +28,20 @@ from .restart_timeout import RestartTimeoutRule
 from .set_piece_distance import SetPieceDistanceRule
 
 CONTROL_RULES: tuple[type[Rule], ...] = (
-    DoubleTouchRule, SetPieceDistanceRule, KickoffHalfRule, DroppedBallDistanceRule, RestartTimeoutRule,
-    ChargingRule, PushingRule, GoalkeeperContactRule, LobRule, BallHoldingRule, DribblingRule, GoalAreaRule,
-    PenaltyAreaRule, NoProgressRule,
+    DoubleTouchRule,
+    SetPieceDistanceRule,
+    KickoffHalfRule,
+    DroppedBallDistanceRule,
+    RestartTimeoutRule,
+    ChargingRule,
+    PushingRule,
+    GoalkeeperContactRule,
+    LobRule,
+    BallHoldingRule,
+    DribblingRule,
+    GoalAreaRule,
+    PenaltyAreaRule,
+    NoProgressRule,
 )
 
 __all__ = ["BallOutRule", "CONTROL_RULES", "Call", "GoalRule", "PositionRule", "Rule"]

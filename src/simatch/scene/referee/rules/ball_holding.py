@@ -29,9 +29,9 @@ from typing import Optional
 from ..state import LIVE
 from .base import Call, Rule
 
-ON_GROUND = 0.05      # the ball's centre at most this above its radius: on the ground [m]
+ON_GROUND = 0.05  # the ball's centre at most this above its radius: on the ground [m]
 POST_CLEARANCE = 0.35  # a ball this close to a goal post's centre may be pressed against it [m]
-SETTLE_PERIODS = 2    # a depth beyond the brief limit counts when seen at this many control periods in a row
+SETTLE_PERIODS = 2  # a depth beyond the brief limit counts when seen at this many control periods in a row
 
 
 class BallHoldingRule(Rule):
@@ -41,11 +41,12 @@ class BallHoldingRule(Rule):
     def __init__(self, match):
         super().__init__(match)
         f = match.obs.field
-        self.posts = [(sx * f.half_length, sy * 0.5 * f.goal_width) for sx in (-1, 1) for sy in (-1, 1)] \
-            if f.goals else []
-        self.robot = -1           # the robot being followed
-        self.deep_for = 0         # control periods the ball has been deeper than the limit in it
-        self.deeper_for = 0       # ... and deeper than the brief limit
+        self.posts = (
+            [(sx * f.half_length, sy * 0.5 * f.goal_width) for sx in (-1, 1) for sy in (-1, 1)] if f.goals else []
+        )
+        self.robot = -1  # the robot being followed
+        self.deep_for = 0  # control periods the ball has been deeper than the limit in it
+        self.deeper_for = 0  # ... and deeper than the brief limit
 
     def on_restart(self) -> None:
         self.robot = -1
@@ -55,8 +56,12 @@ class BallHoldingRule(Rule):
         obs, touches = m.obs, m.touches
         r = obs.ball_radius
         i = touches.contact[0] if len(touches.contact) == 1 and touches.contact_step >= obs.step - 1 else -1
-        if (i < 0 or obs.bz > r + ON_GROUND or not obs.active[i]
-                or any(math.hypot(obs.bx - x, obs.by - y) < POST_CLEARANCE for x, y in self.posts)):
+        if (
+            i < 0
+            or obs.bz > r + ON_GROUND
+            or not obs.active[i]
+            or any(math.hypot(obs.bx - x, obs.by - y) < POST_CLEARANCE for x, y in self.posts)
+        ):
             self.robot = -1
             return None
         d = 2.0 * r
@@ -70,11 +75,22 @@ class BallHoldingRule(Rule):
         if self.deeper_for >= SETTLE_PERIODS:
             value, lim, what = depth, brief, f"{depth:.3f} m (limit {brief:.3f} m, 1/2 of the ball's diameter)"
         elif self.deep_for and held >= p.ball_holding_brief_time - 1e-9:
-            value, lim, what = depth, limit, (f"{depth:.3f} m (limit {limit:.3f} m) for {held:.2f} s (up to "
-                                              f"{brief:.3f} m only for less than {p.ball_holding_brief_time:.1f} s)")
+            value, lim, what = (
+                depth,
+                limit,
+                (
+                    f"{depth:.3f} m (limit {limit:.3f} m) for {held:.2f} s (up to "
+                    f"{brief:.3f} m only for less than {p.ball_holding_brief_time:.1f} s)"
+                ),
+            )
         else:
             return None
         self.robot = -1
-        return self.call("ball_holding", i, value, lim,
-                         f"the ball entered {obs.names[i]}'s convex hull by {what}: free kick for "
-                         f"{obs.other(obs.team_of[i])}", restart=self.free_kick_against(i))
+        return self.call(
+            "ball_holding",
+            i,
+            value,
+            lim,
+            f"the ball entered {obs.names[i]}'s convex hull by {what}: free kick for {obs.other(obs.team_of[i])}",
+            restart=self.free_kick_against(i),
+        )

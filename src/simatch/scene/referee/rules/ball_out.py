@@ -24,12 +24,27 @@ class BallOutRule(Rule):
         if last < 0:
             r = spots.throw_in("", x, y)
             restart = spots.at_ball("dropped_ball", "", r.x, r.y)
-            return Call("ball_out", x=x, y=y, value=over, limit=obs.ball_radius,
-                        detail=f"ball out {where}; nobody touched it: dropped ball", restart=restart)
+            return Call(
+                "ball_out",
+                x=x,
+                y=y,
+                value=over,
+                limit=obs.ball_radius,
+                detail=f"ball out {where}; nobody touched it: dropped ball",
+                restart=restart,
+            )
         team = obs.other(obs.team_of[last])
-        return Call("ball_out", team=obs.team_of[last], robot=last, x=x, y=y, value=over, limit=obs.ball_radius,
-                    detail=f"ball out {where}, last touched by {obs.names[last]}: throw-in for {team}",
-                    restart=spots.throw_in(team, x, y))
+        return Call(
+            "ball_out",
+            team=obs.team_of[last],
+            robot=last,
+            x=x,
+            y=y,
+            value=over,
+            limit=obs.ball_radius,
+            detail=f"ball out {where}, last touched by {obs.names[last]}: throw-in for {team}",
+            restart=spots.throw_in(team, x, y),
+        )
 
     def crossed_goal_line(self, side: int, x: float, y: float, z: float) -> Call:
         obs, spots = self.m.obs, self.m.spots
@@ -44,9 +59,15 @@ class BallOutRule(Rule):
             where = f"over {defending}'s goal line at y = {y:.2f} m, outside the posts"
         if last < 0:
             px, py = spots.restart_point(side, y)
-            return Call("ball_out", x=x, y=y, value=over, limit=obs.ball_radius,
-                        detail=f"ball out {where}; nobody touched it: dropped ball",
-                        restart=spots.at_ball("dropped_ball", "", px, py))
+            return Call(
+                "ball_out",
+                x=x,
+                y=y,
+                value=over,
+                limit=obs.ball_radius,
+                detail=f"ball out {where}; nobody touched it: dropped ball",
+                restart=spots.at_ball("dropped_ball", "", px, py),
+            )
         toucher = obs.team_of[last]
         if toucher == attacking:
             restart = spots.goal_kick(defending, side, y)
@@ -54,5 +75,14 @@ class BallOutRule(Rule):
         else:
             restart = spots.corner(attacking, side, y)
             then = f"corner kick for {attacking}"
-        return Call("ball_out", team=toucher, robot=last, x=x, y=y, value=over, limit=obs.ball_radius,
-                    detail=f"ball out {where}, last touched by {obs.names[last]}: {then}", restart=restart)
+        return Call(
+            "ball_out",
+            team=toucher,
+            robot=last,
+            x=x,
+            y=y,
+            value=over,
+            limit=obs.ball_radius,
+            detail=f"ball out {where}, last touched by {obs.names[last]}: {then}",
+            restart=restart,
+        )

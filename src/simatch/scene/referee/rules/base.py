@@ -30,17 +30,17 @@ class Call:
     """A decision: ``type`` is the event type (the rule's name or a finer one)."""
 
     type: str
-    team: str = ""                 # the team concerned (the offender for a foul)
-    robot: int = -1                # robot index, -1 if none
-    x: float = 0.0                 # where (world frame)
+    team: str = ""  # the team concerned (the offender for a foul)
+    robot: int = -1  # robot index, -1 if none
+    x: float = 0.0  # where (world frame)
     y: float = 0.0
-    value: float = 0.0             # the measured value ...
-    limit: float = 0.0             # ... and the limit it was judged against
+    value: float = 0.0  # the measured value ...
+    limit: float = 0.0  # ... and the limit it was judged against
     detail: str = ""
-    restart: Optional["Restart"] = None    # the restart that follows; None: play goes on
-    card: Optional[str] = None             # "yellow" or "red" for the robot
-    goal_for: str = ""                     # a goal that counts, for this team
-    in_play: bool = False                  # the call puts the ball in play (restart timeout)
+    restart: Optional["Restart"] = None  # the restart that follows; None: play goes on
+    card: Optional[str] = None  # "yellow" or "red" for the robot
+    goal_for: str = ""  # a goal that counts, for this team
+    in_play: bool = False  # the call puts the ball in play (restart timeout)
 
 
 class Rule:
@@ -70,8 +70,17 @@ class Rule:
     def call(self, type: str, i: int, value: float, limit: float, detail: str, **kw) -> Call:
         """A call about robot ``i`` (its team, its id, where it stands)."""
         obs = self.m.obs
-        return Call(type=type, team=obs.team_of[i], robot=i, x=obs.X[i], y=obs.Y[i], value=float(value), limit=float(limit),
-                    detail=detail, **kw)
+        return Call(
+            type=type,
+            team=obs.team_of[i],
+            robot=i,
+            x=obs.X[i],
+            y=obs.Y[i],
+            value=float(value),
+            limit=float(limit),
+            detail=detail,
+            **kw,
+        )
 
     def free_kick_against(self, i: int) -> "Restart":
         """A free kick for the opponents of robot ``i``, where the ball is."""

@@ -34,8 +34,8 @@ class ChargingRule(Rule):
     def _judge(self, i: int, j: int, ux: float, uy: float) -> Optional[Call]:
         p = self.p
         approach = self.m.contacts.approach
-        vi = approach(i, ux, uy)          # i towards j
-        vj = approach(j, -ux, -uy)        # j towards i
+        vi = approach(i, ux, uy)  # i towards j
+        vj = approach(j, -ux, -uy)  # j towards i
         if vi >= vj:
             charger, victim, speed, other = i, j, vi, vj
         else:
@@ -47,7 +47,14 @@ class ChargingRule(Rule):
         card = "red" if ramming else p.charging_card
         restart, then = self.foul_restart(charger)
         what = "rammed" if ramming else "charged"
-        return self.call("charging", charger, speed, p.charging_red_speed if ramming else p.charging_speed,
-                         f"{obs.names[charger]} {what} {obs.names[victim]} at {speed:.2f} m/s (the other drove in "
-                         f"at {max(other, 0.0) + 0.0:.2f} m/s; limit {p.charging_speed:.2f} m/s): {then}"
-                         + (f", {card} card" if card else ""), restart=restart, card=card)
+        return self.call(
+            "charging",
+            charger,
+            speed,
+            p.charging_red_speed if ramming else p.charging_speed,
+            f"{obs.names[charger]} {what} {obs.names[victim]} at {speed:.2f} m/s (the other drove in "
+            f"at {max(other, 0.0) + 0.0:.2f} m/s; limit {p.charging_speed:.2f} m/s): {then}"
+            + (f", {card} card" if card else ""),
+            restart=restart,
+            card=card,
+        )

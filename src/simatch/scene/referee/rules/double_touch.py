@@ -25,8 +25,14 @@ class DoubleTouchRule(Rule):
         touches.armed = False
         obs = self.m.obs
         gap = gap_steps * self.m.dt
-        call = self.call("double_touch", i, gap, self.p.double_touch_gap,
-                         f"{obs.names[i]} took the {self.m.restart_name()}, let go of the ball for {gap:.2f} s and "
-                         f"touched it again before any other robot did", restart=self.free_kick_against(i))
+        call = self.call(
+            "double_touch",
+            i,
+            gap,
+            self.p.double_touch_gap,
+            f"{obs.names[i]} took the {self.m.restart_name()}, let go of the ball for {gap:.2f} s and "
+            f"touched it again before any other robot did",
+            restart=self.free_kick_against(i),
+        )
         call.x, call.y = x, y
         return call

@@ -33,13 +33,25 @@ class DribblingRule(Rule):
         d = math.hypot(obs.X[i] - sx, obs.Y[i] - sy)
         if d > self.p.dribble_distance:
             touches.possessor = -1
-            return self.call("dribble_too_far", i, d, self.p.dribble_distance,
-                             f"{obs.names[i]} kept the ball {d:.3f} m from where it took it at ({sx:.2f}, {sy:.2f}) "
-                             f"(limit {self.p.dribble_distance:.2f} m)", restart=self.free_kick_against(i))
+            return self.call(
+                "dribble_too_far",
+                i,
+                d,
+                self.p.dribble_distance,
+                f"{obs.names[i]} kept the ball {d:.3f} m from where it took it at ({sx:.2f}, {sy:.2f}) "
+                f"(limit {self.p.dribble_distance:.2f} m)",
+                restart=self.free_kick_against(i),
+            )
         back = touches.backward
         if back > self.p.dribble_backward_distance:
             touches.possessor = -1
-            return self.call("dribble_backward_too_far", i, back, self.p.dribble_backward_distance,
-                             f"{obs.names[i]} drove {back:.3f} m backwards with the ball "
-                             f"(limit {self.p.dribble_backward_distance:.2f} m)", restart=self.free_kick_against(i))
+            return self.call(
+                "dribble_backward_too_far",
+                i,
+                back,
+                self.p.dribble_backward_distance,
+                f"{obs.names[i]} drove {back:.3f} m backwards with the ball "
+                f"(limit {self.p.dribble_backward_distance:.2f} m)",
+                restart=self.free_kick_against(i),
+            )
         return None

@@ -18,7 +18,13 @@ class DroppedBallDistanceRule(PositionRule):
         out = []
         for i in range(obs.n):
             if d[i] < p.dropped_ball_distance and obs.active[i] and obs.penalty_area[i] != obs.own_side[i]:
-                out.append((i, d[i], p.dropped_ball_distance,
-                            f"{obs.names[i]} is {d[i]:.3f} m from the dropped ball "
-                            f"(at least {p.dropped_ball_distance:.2f} m)"))
+                out.append(
+                    (
+                        i,
+                        d[i],
+                        p.dropped_ball_distance,
+                        f"{obs.names[i]} is {d[i]:.3f} m from the dropped ball "
+                        f"(at least {p.dropped_ball_distance:.2f} m)",
+                    )
+                )
         return out

@@ -56,14 +56,31 @@ class GoalRule(Rule):
         if why is None:
             who = f" by {obs.names[last]}" if last >= 0 else ""
             own = " (own goal)" if last >= 0 and obs.team_of[last] == defending else ""
-            return Call("goal", team=scoring, robot=last, x=x, y=y, value=depth, limit=obs.ball_radius,
-                        detail=f"goal for {scoring}{who}{own}: the whole ball is {depth:.2f} m over {defending}'s "
-                               f"goal line (ball radius {obs.ball_radius:.2f} m), between the posts, under the bar",
-                        restart=self.m.spots.kickoff(defending), goal_for=scoring)
+            return Call(
+                "goal",
+                team=scoring,
+                robot=last,
+                x=x,
+                y=y,
+                value=depth,
+                limit=obs.ball_radius,
+                detail=f"goal for {scoring}{who}{own}: the whole ball is {depth:.2f} m over {defending}'s "
+                f"goal line (ball radius {obs.ball_radius:.2f} m), between the posts, under the bar",
+                restart=self.m.spots.kickoff(defending),
+                goal_for=scoring,
+            )
         value, limit, reason = why
-        return Call("goal_disallowed", team=scoring, robot=shooter if shooter >= 0 else last, x=x, y=y,
-                    value=value, limit=limit, detail=f"no goal for {scoring}: {reason}; goal kick for {defending}",
-                    restart=self.m.spots.goal_kick(defending, side, y))
+        return Call(
+            "goal_disallowed",
+            team=scoring,
+            robot=shooter if shooter >= 0 else last,
+            x=x,
+            y=y,
+            value=value,
+            limit=limit,
+            detail=f"no goal for {scoring}: {reason}; goal kick for {defending}",
+            restart=self.m.spots.goal_kick(defending, side, y),
+        )
 
     def invalid(self, scoring: str) -> Optional[tuple[float, float, str]]:
         """(value, limit, reason) if a goal for ``scoring`` does not count now, else None."""
@@ -78,8 +95,12 @@ class GoalRule(Rule):
                 mates = touches.touched_by(k)
                 if len(mates) < 2:
                     names = ", ".join(obs.names[i] for i in mates) or "no robot"
-                    return (len(mates), 2, f"direct goal from a {what}: since the {what} only {names} of "
-                                           f"{scoring} touched the ball (two robots of the kicking team must)")
+                    return (
+                        len(mates),
+                        2,
+                        f"direct goal from a {what}: since the {what} only {names} of "
+                        f"{scoring} touched the ball (two robots of the kicking team must)",
+                    )
             elif len(since) < 2:
                 return (len(since), 2, f"direct goal from {restart.team}'s {what} into its own goal")
         elif restart is not None and restart.kind == "dropped_ball" and len(since) < 2:
@@ -90,8 +111,11 @@ class GoalRule(Rule):
         if obs.team_of[last] == scoring:
             x = touches.touch_x[last]
             if not obs.in_opponent_half(last, x):
-                return (obs.attack_sign[last] * x, 0.0, f"the shooter {obs.names[last]} kicked from its own half "
-                                                        f"(x = {x:.2f} m)")
+                return (
+                    obs.attack_sign[last] * x,
+                    0.0,
+                    f"the shooter {obs.names[last]} kicked from its own half (x = {x:.2f} m)",
+                )
         if self.regain is not None:
             return self.regain.invalid(scoring)
         return None

@@ -26,7 +26,13 @@ class GoalAreaRule(Rule):
             depth = side * obs.X[i] - (f.half_length - f.goal_area_depth)
             owner = obs.defender_of(side)
             whose = "its own" if obs.team_of[i] == owner else f"{owner}'s"
-            return self.call("goal_area", i, depth, 0.0,
-                             f"{obs.names[i]} is in {whose} goal area ({depth:.2f} m over its line), which only "
-                             f"{owner}'s goalkeeper may enter", restart=self.free_kick_against(i))
+            return self.call(
+                "goal_area",
+                i,
+                depth,
+                0.0,
+                f"{obs.names[i]} is in {whose} goal area ({depth:.2f} m over its line), which only "
+                f"{owner}'s goalkeeper may enter",
+                restart=self.free_kick_against(i),
+            )
         return None

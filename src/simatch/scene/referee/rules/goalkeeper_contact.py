@@ -22,7 +22,7 @@ class GoalkeeperContactRule(Rule):
 
     def __init__(self, match):
         super().__init__(match)
-        self.judged: set[int] = set()          # contact pairs judged while they go on
+        self.judged: set[int] = set()  # contact pairs judged while they go on
 
     def check(self) -> Optional[Call]:
         m = self.m
@@ -37,13 +37,19 @@ class GoalkeeperContactRule(Rule):
                 if not obs.is_goalkeeper[keeper] or obs.goal_area[keeper] != obs.own_side[keeper]:
                     continue
                 judged.add(c.pair)
-                v_att = contacts.approach(attacker, -ux, -uy)      # attacker towards the keeper
-                v_keep = contacts.approach(keeper, ux, uy)         # keeper towards the attacker
+                v_att = contacts.approach(attacker, -ux, -uy)  # attacker towards the keeper
+                v_keep = contacts.approach(keeper, ux, uy)  # keeper towards the attacker
                 if v_keep > v_att or call is not None:
                     continue
-                call = self.call("goalkeeper_contact", attacker, max(v_att, 0.0), max(v_keep, 0.0),
-                                 f"{obs.names[attacker]} touched {obs.names[keeper]}, the goalkeeper, in its goal area "
-                                 f"(driving in at {max(v_att, 0.0):.2f} m/s, the goalkeeper at {max(v_keep, 0.0):.2f} "
-                                 f"m/s): free kick for {obs.team_of[keeper]}", restart=self.free_kick_against(attacker))
+                call = self.call(
+                    "goalkeeper_contact",
+                    attacker,
+                    max(v_att, 0.0),
+                    max(v_keep, 0.0),
+                    f"{obs.names[attacker]} touched {obs.names[keeper]}, the goalkeeper, in its goal area "
+                    f"(driving in at {max(v_att, 0.0):.2f} m/s, the goalkeeper at {max(v_keep, 0.0):.2f} "
+                    f"m/s): free kick for {obs.team_of[keeper]}",
+                    restart=self.free_kick_against(attacker),
+                )
         self.judged = judged
         return call

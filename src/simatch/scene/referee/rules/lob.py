@@ -27,7 +27,7 @@ class LobRule(Rule):
 
     def __init__(self, match):
         super().__init__(match)
-        self.seen_kick = -1          # step of the last kick already followed
+        self.seen_kick = -1  # step of the last kick already followed
         self.flight: Optional[dict] = None
 
     def on_restart(self) -> None:
@@ -42,8 +42,16 @@ class LobRule(Rule):
         if kick is not None and kick[1] > self.seen_kick:
             i, step, x, y = kick
             self.seen_kick = step
-            self.flight = {"kicker": i, "step": step, "x": x, "y": y, "own_half": not obs.in_opponent_half(i, x),
-                           "apex": 0.0, "prev": None, "airborne": False}
+            self.flight = {
+                "kicker": i,
+                "step": step,
+                "x": x,
+                "y": y,
+                "own_half": not obs.in_opponent_half(i, x),
+                "apex": 0.0,
+                "prev": None,
+                "airborne": False,
+            }
         f = self.flight
         if f is None:
             return None
@@ -58,10 +66,10 @@ class LobRule(Rule):
         if height > 0.05:
             f["airborne"] = True
             if prev is None or not (prev[5] < 0.0 and obs.bvz > 0.0):
-                return None                  # still flying (or the bounce happened between two samples: land)
+                return None  # still flying (or the bounce happened between two samples: land)
         elif not f["airborne"]:
             if prev is not None and math.hypot(obs.bx - f["x"], obs.by - f["y"]) > 1.5:
-                self.flight = None           # a ground kick rolling away: no lob
+                self.flight = None  # a ground kick rolling away: no lob
             return None
         self.flight = None
         lx, ly = self._landing(prev) if prev is not None else (obs.bx, obs.by)
@@ -100,10 +108,16 @@ class LobRule(Rule):
         other = obs.other(team)
         restart = m.spots.at_ball("free_kick", other, 0.0, ly)
         nearest = f"the nearest team-mate was {near:.2f} m away" if mates else "it had no team-mate on the field"
-        call = self.call("lob", i, near if mates else 0.0, p.lob_mate_distance,
-                         f"{obs.names[i]} lobbed the ball from its own half (x = {f['x']:.2f} m) {f['apex']:.2f} m "
-                         f"high (limit {p.lob_height:.2f} m); it landed at ({lx:.2f}, {ly:.2f}) where {nearest} "
-                         f"(at most {p.lob_mate_distance:.2f} m for a pass): free kick for {other} on the half-way "
-                         f"line", restart=restart)
+        call = self.call(
+            "lob",
+            i,
+            near if mates else 0.0,
+            p.lob_mate_distance,
+            f"{obs.names[i]} lobbed the ball from its own half (x = {f['x']:.2f} m) {f['apex']:.2f} m "
+            f"high (limit {p.lob_height:.2f} m); it landed at ({lx:.2f}, {ly:.2f}) where {nearest} "
+            f"(at most {p.lob_mate_distance:.2f} m for a pass): free kick for {other} on the half-way "
+            f"line",
+            restart=restart,
+        )
         call.x, call.y = f["x"], f["y"]
         return call

@@ -18,7 +18,7 @@ class NoProgressRule(Rule):
     def __init__(self, match):
         super().__init__(match)
         self.anchor = (math.nan, math.nan)
-        self.ticks = 0           # control periods in play since the ball was last at least the radius away
+        self.ticks = 0  # control periods in play since the ball was last at least the radius away
 
     def on_restart(self) -> None:
         self.anchor = (math.nan, math.nan)
@@ -27,7 +27,7 @@ class NoProgressRule(Rule):
         m = self.m
         bx, by = m.obs.bx, m.obs.by
         ax, ay = self.anchor
-        if not (math.hypot(bx - ax, by - ay) <= self.p.no_progress_radius):     # also true for the NaN anchor
+        if not (math.hypot(bx - ax, by - ay) <= self.p.no_progress_radius):  # also true for the NaN anchor
             self.anchor = (bx, by)
             self.ticks = 0
             return None
@@ -36,6 +36,13 @@ class NoProgressRule(Rule):
         if stuck < self.p.no_progress_time - 1e-9:
             return None
         self.anchor = (math.nan, math.nan)
-        return Call("no_progress", x=bx, y=by, value=stuck, limit=self.p.no_progress_time,
-                    detail=f"the ball stayed within {self.p.no_progress_radius:.2f} m of ({ax:.2f}, {ay:.2f}) for "
-                           f"{stuck:.1f} s: dropped ball", restart=m.spots.at_ball("dropped_ball", "", bx, by))
+        return Call(
+            "no_progress",
+            x=bx,
+            y=by,
+            value=stuck,
+            limit=self.p.no_progress_time,
+            detail=f"the ball stayed within {self.p.no_progress_radius:.2f} m of ({ax:.2f}, {ay:.2f}) for "
+            f"{stuck:.1f} s: dropped ball",
+            restart=m.spots.at_ball("dropped_ball", "", bx, by),
+        )

@@ -36,8 +36,15 @@ class OwnHalfRegainRule(Rule):
         won_by = touches.won_by[k]
         roll = touches.longest_roll[k]
         limit = self.p.regain_pass_roll
-        longest = (f"the longest free roll before a team-mate's touch there was {roll:.2f} m" if roll > 0.0
-                   else "no team-mate touched it there after a pass")
-        return (roll, limit, f"{scoring} won the ball in its own half at ({x:.2f}, {y:.2f}) ({obs.names[won_by]}) "
-                             f"and no team-mate received it in {obs.other(scoring)}'s half after it rolled freely "
-                             f"{limit:.2f} m ({longest}) (RC-10.1.2)")
+        longest = (
+            f"the longest free roll before a team-mate's touch there was {roll:.2f} m"
+            if roll > 0.0
+            else "no team-mate touched it there after a pass"
+        )
+        return (
+            roll,
+            limit,
+            f"{scoring} won the ball in its own half at ({x:.2f}, {y:.2f}) ({obs.names[won_by]}) "
+            f"and no team-mate received it in {obs.other(scoring)}'s half after it rolled freely "
+            f"{limit:.2f} m ({longest}) (RC-10.1.2)",
+        )

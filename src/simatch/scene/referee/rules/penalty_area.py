@@ -23,9 +23,9 @@ class PenaltyAreaRule(Rule):
     def __init__(self, match):
         super().__init__(match)
         n = match.obs.n
-        self.inside = [0] * n          # side of the area each robot is counted in (0: none)
-        self.time_in = [0.0] * n       # seconds inside while the ball was in play
-        self.entered = [0] * n         # step it entered
+        self.inside = [0] * n  # side of the area each robot is counted in (0: none)
+        self.time_in = [0.0] * n  # seconds inside while the ball was in play
+        self.entered = [0] * n  # step it entered
         self.dt = match.control_dt
 
     def check(self) -> Optional[Call]:
@@ -35,7 +35,7 @@ class PenaltyAreaRule(Rule):
         for i in range(obs.n):
             side = area[i] if obs.active[i] else 0
             if side and obs.is_goalkeeper[i] and obs.own_side[i] == side:
-                side = 0                              # the defending goalkeeper is not counted
+                side = 0  # the defending goalkeeper is not counted
             if side != inside[i]:
                 inside[i] = side
                 time_in[i] = 0.0
@@ -57,16 +57,27 @@ class PenaltyAreaRule(Rule):
             where = "its own" if obs.team_of[i] == owner else f"{owner}'s"
             others = ", ".join(obs.names[j] for j in robots if j != i)
             self.time_in[i] = 0.0
-            return self.call("penalty_area_crowded", i, len(robots), p.penalty_area_robots,
-                             f"{obs.names[i]} entered {where} penalty area where {others} already was "
-                             f"({len(robots)} robots of {obs.team_of[i]}, limit {p.penalty_area_robots} besides "
-                             f"the goalkeeper)", restart=self.free_kick_against(i))
+            return self.call(
+                "penalty_area_crowded",
+                i,
+                len(robots),
+                p.penalty_area_robots,
+                f"{obs.names[i]} entered {where} penalty area where {others} already was "
+                f"({len(robots)} robots of {obs.team_of[i]}, limit {p.penalty_area_robots} besides "
+                f"the goalkeeper)",
+                restart=self.free_kick_against(i),
+            )
         for i in robots:
             spent = self.time_in[i]
             if spent > p.penalty_area_time + 1e-9:
                 where = "its own" if obs.team_of[i] == owner else f"{owner}'s"
                 self.time_in[i] = 0.0
-                return self.call("penalty_area_time", i, spent, p.penalty_area_time,
-                                 f"{obs.names[i]} stayed {spent:.2f} s in {where} penalty area "
-                                 f"(limit {p.penalty_area_time:.1f} s)", restart=self.free_kick_against(i))
+                return self.call(
+                    "penalty_area_time",
+                    i,
+                    spent,
+                    p.penalty_area_time,
+                    f"{obs.names[i]} stayed {spent:.2f} s in {where} penalty area (limit {p.penalty_area_time:.1f} s)",
+                    restart=self.free_kick_against(i),
+                )
         return None

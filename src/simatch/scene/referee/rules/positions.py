@@ -76,8 +76,9 @@ class PositionRule(Rule):
             else:
                 then = f"the {self.what()} is taken again"
                 restart = r
-            return self.call(self.name, i, value, limit, f"before the ball was in play: {what}; {then}",
-                             restart=restart)
+            return self.call(
+                self.name, i, value, limit, f"before the ball was in play: {what}; {then}", restart=restart
+            )
         return None
 
     def what(self) -> str:

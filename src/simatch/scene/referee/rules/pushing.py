@@ -36,7 +36,7 @@ class PushingRule(Rule):
 
     def __init__(self, match):
         super().__init__(match)
-        self.pushes: dict[tuple[int, int], list[float]] = {}   # (pusher, pushed) -> [distance, periods]
+        self.pushes: dict[tuple[int, int], list[float]] = {}  # (pusher, pushed) -> [distance, periods]
 
     def check(self) -> Optional[list[Call]]:
         m, p = self.m, self.p
@@ -47,7 +47,7 @@ class PushingRule(Rule):
         calls = None
         for c in contacts.now:
             if obs.ball_distance(c.i) <= on_ball or obs.ball_distance(c.j) <= on_ball:
-                continue                                   # a duel for the ball
+                continue  # a duel for the ball
             for a, b, ux, uy in ((c.i, c.j, c.ux, c.uy), (c.j, c.i, -c.ux, -c.uy)):
                 drive = contacts.speed_along(a, ux, uy)
                 moved = contacts.speed_along(b, ux, uy)
@@ -69,7 +69,14 @@ class PushingRule(Rule):
         restart, then = self.foul_restart(a)
         card = p.pushing_card
         far = distance >= p.pushing_distance
-        return self.call("pushing", a, distance if far else seconds, p.pushing_distance if far else p.pushing_time,
-                         f"{obs.names[a]} kept driving into {obs.names[b]} and pushed it {distance:.2f} m in "
-                         f"{seconds:.2f} s (limits {p.pushing_distance:.2f} m, {p.pushing_time:.1f} s): {then}"
-                         + (f", {card} card" if card else ""), restart=restart, card=card)
+        return self.call(
+            "pushing",
+            a,
+            distance if far else seconds,
+            p.pushing_distance if far else p.pushing_time,
+            f"{obs.names[a]} kept driving into {obs.names[b]} and pushed it {distance:.2f} m in "
+            f"{seconds:.2f} s (limits {p.pushing_distance:.2f} m, {p.pushing_time:.1f} s): {then}"
+            + (f", {card} card" if card else ""),
+            restart=restart,
+            card=card,
+        )

@@ -26,13 +26,28 @@ class RestartTimeoutRule(Rule):
         if waited < limit - 1e-9:
             return None
         from ..restarts import NAMES
+
         what = NAMES[r.kind]
         if penalty:
             defending = m.obs.other(r.team)
             side = m.obs.own_goal_side(defending)
-            return Call("restart_timeout", team=r.team, x=r.x, y=r.y, value=waited, limit=limit,
-                        detail=f"{r.team} did not take the {what} within {limit:.1f} s: goal kick for {defending}",
-                        restart=m.spots.goal_kick(defending, side, r.y))
-        return Call("restart_timeout", team=r.team, x=r.x, y=r.y, value=waited, limit=limit,
-                    detail=f"{r.team} did not take the {what} within {limit:.1f} s: the ball is in play for "
-                           f"everybody", in_play=True)
+            return Call(
+                "restart_timeout",
+                team=r.team,
+                x=r.x,
+                y=r.y,
+                value=waited,
+                limit=limit,
+                detail=f"{r.team} did not take the {what} within {limit:.1f} s: goal kick for {defending}",
+                restart=m.spots.goal_kick(defending, side, r.y),
+            )
+        return Call(
+            "restart_timeout",
+            team=r.team,
+            x=r.x,
+            y=r.y,
+            value=waited,
+            limit=limit,
+            detail=f"{r.team} did not take the {what} within {limit:.1f} s: the ball is in play for everybody",
+            in_play=True,
+        )

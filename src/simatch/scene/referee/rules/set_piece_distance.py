@@ -22,7 +22,7 @@ class SetPieceDistanceRule(PositionRule):
         taker = m.touches.taker if m.touches.armed else -1
         k = obs.teams.index(r.team)
         penalty = r.kind == "penalty"
-        box = obs.own_goal_side(obs.other(r.team))        # the penalty area of the defended goal
+        box = obs.own_goal_side(obs.other(r.team))  # the penalty area of the defended goal
         out = []
         for i in range(obs.n):
             if not obs.active[i] or i == kicker or i == taker:
@@ -33,8 +33,14 @@ class SetPieceDistanceRule(PositionRule):
                 if not mine and obs.is_goalkeeper[i]:
                     continue
                 if d[i] < p.opponent_distance:
-                    out.append((i, d[i], p.opponent_distance,
-                                f"{name} is {d[i]:.3f} m from the penalty mark (at least {p.opponent_distance:.2f} m)"))
+                    out.append(
+                        (
+                            i,
+                            d[i],
+                            p.opponent_distance,
+                            f"{name} is {d[i]:.3f} m from the penalty mark (at least {p.opponent_distance:.2f} m)",
+                        )
+                    )
                 elif obs.penalty_area[i] == box:
                     out.append((i, 0.0, 0.0, f"{name} is in the penalty area during the penalty kick"))
                 continue
