@@ -205,7 +205,8 @@ def print_table(rows: list[dict]) -> None:
     for r in rows:
         print(
             f"| {r['seed']} | {r['nubot_colour']} | {r['goals_for']}-{r['goals_against']} | {r['fouls_nubot']} | "
-            f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {r['foul_loop']} | {'yes' if r['ended'] else 'NO'} | "
+            f"{r['fouls_other']} | {r['no_progress']} | {r['retake_loop']} | {r['foul_loop']} | "
+            f"{'yes' if r['ended'] else 'NO'} | "
             f"{r['rtf']} |"
         )
 

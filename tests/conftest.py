@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 import simatch
-from simatch.config.loader import load_scene
 
 
 def empty_field(**overrides):

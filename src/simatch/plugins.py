@@ -7,7 +7,8 @@ shipped names and calls `load` with it.
 from __future__ import annotations
 
 import importlib
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 
 class PluginError(ValueError):

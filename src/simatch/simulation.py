@@ -17,13 +17,14 @@ import json
 import signal
 import threading
 import time as _time
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from . import msgs
 from .bus import Bus, InProcessBus, LockstepClock, Node, Phase, topics
+from .config.loader import LoadedScene, check_models, load_scene
 from .scene.coach import Coach
 from .scene.judges import make_judge
-from .config.loader import LoadedScene, check_models, load_scene
 from .sim.node import PhysicsNode, SimulatorNode
 from .sim.simulator import CommandError, Simulator
 from .strategy.node import RobotNode
@@ -392,7 +393,7 @@ class Simulation:
         self._sub_events.close()
         self.bus.close()
 
-    def __enter__(self) -> "Simulation":
+    def __enter__(self) -> Simulation:
         return self
 
     def __exit__(self, *exc) -> None:

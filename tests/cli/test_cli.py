@@ -118,8 +118,7 @@ def test_the_hosts_steal_is_read_from_proc_stat():
 
 
 def test_a_benchmark_that_fails_alone_is_reported_with_what_it_said(monkeypatch):
-    from simatch.cli import UsageError
-    from simatch.cli import bench
+    from simatch.cli import UsageError, bench
 
     def failing(cmd, **kwargs):
         return subprocess.CompletedProcess(cmd, 1, stdout="", stderr="Traceback ...\nRuntimeError: no cores")

@@ -11,9 +11,9 @@ import signal
 
 import pytest
 
+from simatch.config.loader import load_scene
 from simatch.distributed.registry import ProcState
 from simatch.distributed.server import Server
-from simatch.config.loader import load_scene
 
 from .cluster import CHASER, chaser_overrides
 

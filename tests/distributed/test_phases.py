@@ -12,10 +12,10 @@ import pytest
 
 from simatch import msgs
 from simatch.bus import InProcessBus, LockstepClock, Node, topics
+from simatch.config.loader import load_scene
 from simatch.distributed import protocol
 from simatch.distributed.registry import ProcState
 from simatch.distributed.server import Server
-from simatch.config.loader import load_scene
 from simatch.simulation import Simulation
 
 from .cluster import CHASER

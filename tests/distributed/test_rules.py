@@ -9,10 +9,10 @@ import stat
 import pytest
 
 from simatch import msgs
+from simatch.config.loader import SceneError, load_scene
 from simatch.distributed import credentials, protocol
 from simatch.distributed.fairplay import FairPlay
 from simatch.distributed.registry import JoinError, Proc, ProcState, Registry
-from simatch.config.loader import SceneError, load_scene
 
 
 @pytest.fixture

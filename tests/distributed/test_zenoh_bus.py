@@ -151,7 +151,7 @@ def test_the_same_node_code_runs_on_both_transports(pair):
                     sent += 1
             if bus is not feed_bus:
                 want = bus.stats.delivered + sent
-                pump_until(bus, lambda: bus.stats.delivered >= want)
+                pump_until(bus, lambda bus=bus, want=want: bus.stats.delivered >= want)
             clock.step_index = step
             clock.step()
         return out

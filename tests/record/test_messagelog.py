@@ -253,8 +253,8 @@ def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(ki
     its template does not take (no template yet, other models, poses that are no float buffer, too few rows)
     goes to the fallback, which sets a new template or says what is wrong. The log's bytes are the scene
     builder's, orientations and snapping included."""
-    from simatch.record.scene3d import GRID, TURN_GRID, SceneBuilder
     from simatch.config.loader import load_scene
+    from simatch.record.scene3d import GRID, TURN_GRID, SceneBuilder
 
     builder = SceneBuilder(load_scene("msl_5v5").spec)
     log = _log(kind, lambda topic, msg: None)

@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 
 import simatch
-from simatch.record import Recorder, Recording, RecordError
-from simatch.record import foxglove_msgs as fg
+from simatch.record import Recorder, RecordError, Recording
 
 from .conftest import NOISY, play_a_little, record_run
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from simatch.record import Player, Recording
 from simatch import msgs
+from simatch.record import Player, Recording
 
 
 def test_every_replayed_message_equals_the_recorded_one(recording):

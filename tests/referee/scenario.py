@@ -93,7 +93,7 @@ class Scenario:
     data: dict = field(repr=False)
 
     @classmethod
-    def load(cls, path: Path) -> "Scenario":
+    def load(cls, path: Path) -> Scenario:
         return cls(path, tomllib.loads(path.read_text()))
 
     @property

@@ -11,9 +11,9 @@ import math
 import pytest
 
 import simatch
-from simatch.scene.referee.params import RefereeParams
 from simatch.robots.omni3 import Omni3
 from simatch.robots.omni4 import Omni4
+from simatch.scene.referee.params import RefereeParams
 
 BALL_RADIUS = 0.11
 LIMIT = RefereeParams().ball_holding_depth * 2 * BALL_RADIUS  # 0.0733 m

@@ -197,7 +197,7 @@ def test_the_ball_never_ends_up_inside_a_robot(field_sim):
         sim.set_model_state(name, x=2.5 * math.cos(a), y=2.5 * math.sin(a), yaw=a + math.pi)
         sim.take_control(name)
     worst = 1.0
-    for t in range(120):
+    for _ in range(120):
         for name in names:
             st = s.model_states()[name]
             b = ball(sim)

@@ -39,7 +39,6 @@ def test_a_second_signal_raises_at_once_and_outside_a_run_the_signal_raises_as_u
         with sim.stopping_on(signal.SIGINT, KeyboardInterrupt):
             with pytest.raises(KeyboardInterrupt):
                 os.kill(os.getpid(), signal.SIGINT)  # no run in progress
-            chunk = round(0.1 / sim.dt)
 
             def twice(msg):
                 if msg.step in (5, 7):  # the impatient user presses twice

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 from simatch.field import FieldGeometry
 from tests.conftest import park_everyone_but
 

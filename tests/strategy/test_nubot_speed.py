@@ -8,12 +8,12 @@ import random
 import numpy as np
 
 import simatch
+from simatch.field import FieldGeometry
 from simatch.strategy.nubot import ballpath, picture, positions
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
 from simatch.strategy.nubot.warm import load_kernels
-from simatch.field import FieldGeometry
 
 
 def test_route_skips_only_boxes_the_way_cannot_cross():

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 import simatch
-from simatch.plugins import PluginError
 from simatch.config.loader import SceneError
+from simatch.plugins import PluginError
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -135,7 +135,8 @@ def start_request(page, message: dict) -> None:
     lands in ``window.answer`` ("ok" or the error's text), read it with `answer`."""
     page.evaluate(
         """m => { window.answer = null;
-        window.simatch.conn.request(m).then(() => { window.answer = "ok"; }, (e) => { window.answer = e.message; }); }""",
+        window.simatch.conn.request(m).then(
+            () => { window.answer = "ok"; }, (e) => { window.answer = e.message; }); }""",
         message,
     )
 

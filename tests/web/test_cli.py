@@ -47,7 +47,7 @@ async def _watch(url: str, seconds: float) -> list[dict]:
             while time.monotonic() < end:
                 try:
                     msg = await ws.receive(timeout=max(0.05, end - time.monotonic()))
-                except asyncio.TimeoutError:
+                except TimeoutError:
                     break
                 if msg.type != aiohttp.WSMsgType.TEXT:
                     break

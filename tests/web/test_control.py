@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import simatch
 from simatch.msgs.game_commands import MatchMode
+from simatch.web import protocol as P
 from simatch.web.access import Grant
 from simatch.web.control import RunControl
-from simatch.web import protocol as P
 
 REFEREE, CYAN = Grant("referee"), Grant("coach", "cyan")
 

@@ -17,7 +17,8 @@ PIXEL_AT = """([x, y, yaw, along]) => {
   const r = 0.25 * v.scale * along;
   const [px, py] = v.toScreen(x, y);
   // beside the centre, across the heading line (the id label is outside the disc)
-  const d = v.ctx.getImageData(Math.round((px + r * Math.sin(yaw)) * dpr), Math.round((py + r * Math.cos(yaw)) * dpr), 1, 1).data;
+  const sx = Math.round((px + r * Math.sin(yaw)) * dpr), sy = Math.round((py + r * Math.cos(yaw)) * dpr);
+  const d = v.ctx.getImageData(sx, sy, 1, 1).data;
   return [d[0], d[1], d[2]];
 }"""
 
@@ -82,7 +83,7 @@ def test_robots_are_drawn_where_the_simulator_says(live, open_page):
             assert near(rgb, TEAM_RGB[team]), f"{name}: the cyan coach shows {rgb} there"
     frame = referee.evaluate("window.simatch.frame")
     drawn = {r["name"]: r for r in frame["robots"]}
-    for name, (x, y, yaw) in spots.items():
+    for name in spots:
         assert drawn[name]["x"] == pytest.approx(truth[name].x, abs=1e-3)
         assert drawn[name]["y"] == pytest.approx(truth[name].y, abs=1e-3)
         assert math.remainder(drawn[name]["yaw"] - truth[name].yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
@@ -144,7 +145,10 @@ def test_a_coach_token_cannot_command_the_other_team(live, open_page):
     wait_frame(page, sim.time)
     before = sim.coaches["magenta"].match_mode
     answer = page.evaluate("""async () => {
-        try { await window.simatch.conn.request({type: 'command', cmd: 'STARTROBOT', team: 'magenta'}); return 'accepted'; }
+        try {
+            await window.simatch.conn.request({type: 'command', cmd: 'STARTROBOT', team: 'magenta'});
+            return 'accepted';
+        }
         catch (e) { return e.message; } }""")
     assert "commands cyan only" in answer
     # the cyan token on magenta's page is still cyan's coach: its buttons command cyan
@@ -202,7 +206,7 @@ def test_replay_plays_pauses_changes_speed_and_seeks(live, open_page):
     page.wait_for_function("!window.simatch.frame.timeline.playing")
     page.select_option("#speed", "4")
     page.wait_for_function("window.simatch.frame.timeline.speed === 4")
-    page.evaluate("window.simatch.conn.request({type: 'timeline', action: 'seek', value: %r})" % at_one[0])
+    page.evaluate(f"window.simatch.conn.request({{type: 'timeline', action: 'seek', value: {at_one[0]!r}}})")
     page.wait_for_function("t => Math.abs(window.simatch.frame.timeline.t - t) < 1e-3", arg=at_one[0])
     drawn = {r["name"]: r for r in page.evaluate("window.simatch.frame.robots")}
     assert drawn["cyan/2"]["x"] == pytest.approx(at_one[1], abs=0.03)

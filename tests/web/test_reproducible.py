@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import math
 
-from simatch.record import Recorder, verify
 from simatch.msgs.game_commands import MatchMode
+from simatch.record import Recorder, verify
 
 from .conftest import drag_ball, run_until, wait_frame
 from .test_referee_console import REFEREED

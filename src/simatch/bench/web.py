@@ -36,7 +36,7 @@ def run(seconds: float | None = None) -> dict:
             while not stop.is_set():
                 try:
                     msg = await ws.receive(timeout=0.5)
-                except asyncio.TimeoutError:
+                except TimeoutError:
                     continue
                 if msg.type != aiohttp.WSMsgType.TEXT:
                     return

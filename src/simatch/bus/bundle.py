@@ -20,7 +20,8 @@ entries are then handled one by one exactly as if each had arrived alone, in the
 from __future__ import annotations
 
 import struct
-from typing import Iterable, NamedTuple
+from collections.abc import Iterable
+from typing import NamedTuple
 
 MAGIC = b"SMB1"
 _U16 = struct.Struct("<H")

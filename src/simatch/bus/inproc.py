@@ -17,7 +17,7 @@ from .base import AnyCallback, BusStats, Callback
 class _Publisher:
     __slots__ = ("topic", "msgtype", "_bus", "_callbacks")
 
-    def __init__(self, bus: "InProcessBus", topic: str, msgtype: Any):
+    def __init__(self, bus: InProcessBus, topic: str, msgtype: Any):
         self.topic = topic
         self.msgtype = msgtype
         self._bus = bus
@@ -35,7 +35,7 @@ class _Publisher:
 class _Subscription:
     __slots__ = ("topic", "msgtype", "callback", "any_type", "_bus", "_bound")
 
-    def __init__(self, bus: "InProcessBus", topic: str, msgtype: Any, callback, any_type: bool):
+    def __init__(self, bus: InProcessBus, topic: str, msgtype: Any, callback, any_type: bool):
         self.topic = topic
         self.msgtype = msgtype
         self.callback = callback
@@ -116,7 +116,7 @@ class InProcessBus:
             sub.close()
         self._pubs.clear()
 
-    def __enter__(self) -> "InProcessBus":
+    def __enter__(self) -> InProcessBus:
         return self
 
     def __exit__(self, *exc) -> None:

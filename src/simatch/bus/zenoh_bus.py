@@ -2,8 +2,8 @@
 
 A `ZenohBus` is an in-process bus for the nodes of this process plus a bridge to the other processes of the
 run, over one Zenoh session. Topics become key expressions ``simatch/<run>/<topic>``; messages travel as CDR
-(the same bytes as rosbag2/ROS 2, written and read by `simatch.msgs`' generated codec), with the type in the Zenoh encoding
-(``application/cdr;<type>``).
+(the same bytes as rosbag2/ROS 2, written and read by `simatch.msgs`' generated codec), with the type in the
+Zenoh encoding (``application/cdr;<type>``).
 
 * Local delivery is exactly the in-process bus: synchronous, in subscription order, no serialisation. A
   message is encoded only when a subscriber in another process matches it.
@@ -32,7 +32,8 @@ import threading
 import time
 import weakref
 from collections import deque
-from typing import Any, Callable, Collection, Iterable, Optional, Sequence
+from collections.abc import Callable, Collection, Iterable, Sequence
+from typing import Any
 
 import zenoh
 from zenoh.handlers import Callback as _ZCallback
@@ -77,11 +78,11 @@ _RUN_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")
 _ENCODING_PREFIX = "application/cdr;"
 
 #: (topic, payload, attachment) -> None if acceptable, else why it is refused
-Verifier = Callable[[str, bytes, Optional[bytes]], Optional[str]]
+Verifier = Callable[[str, bytes, bytes | None], str | None]
 #: (topic, payload) -> attachment that proves who sent it
 Signer = Callable[[str, bytes], bytes]
 #: (attachment of the bundle, entry topic, entry payload) -> None if the entry may be used, else why not
-EntryVerifier = Callable[[Optional[bytes], str, bytes], Optional[str]]
+EntryVerifier = Callable[[bytes | None, str, bytes], str | None]
 
 
 class TransportError(RuntimeError):
@@ -138,7 +139,7 @@ def zenoh_config(
     return conf
 
 
-_SESSIONS: "weakref.WeakSet[ZenohBus]" = weakref.WeakSet()
+_SESSIONS: weakref.WeakSet[ZenohBus] = weakref.WeakSet()
 
 
 @atexit.register
@@ -232,7 +233,7 @@ class _RemoteSub:
 class _Subscription:
     __slots__ = ("topic", "_local", "_remote", "_bus")
 
-    def __init__(self, bus: "ZenohBus", topic: str, local, remote: _RemoteSub):
+    def __init__(self, bus: ZenohBus, topic: str, local, remote: _RemoteSub):
         self.topic = topic
         self._bus = bus
         self._local = local
@@ -298,7 +299,7 @@ class Feed(_Matching):
 class RawPublisher(_Matching):
     """Bytes sent often on one topic (`ZenohBus.raw_publisher`), signed like every sample of the process."""
 
-    def __init__(self, bus: "ZenohBus", topic: str, zpub, always: bool):
+    def __init__(self, bus: ZenohBus, topic: str, zpub, always: bool):
         self.topic = topic
         self._bus = bus
         self.always = always
@@ -328,7 +329,7 @@ class RawPublisher(_Matching):
 class _Publisher(_Matching):
     __slots__ = ("topic", "msgtype", "typename", "feeds", "_local", "_z", "_bus", "matching", "_listener")
 
-    def __init__(self, bus: "ZenohBus", topic: str, msgtype: Any, local, zpub):
+    def __init__(self, bus: ZenohBus, topic: str, msgtype: Any, local, zpub):
         self.topic = topic
         self.msgtype = msgtype
         self.typename = msgs.msgtype_name(msgtype)
@@ -504,7 +505,7 @@ class ZenohBus:
     def subscribe_raw(
         self,
         topic: str,
-        callback: Callable[[str, bytes, Optional[bytes], float], None],
+        callback: Callable[[str, bytes, bytes | None, float], None],
         verify: bool = True,
         wakes: Callable[[str, bytes], bool] | None = None,
     ) -> _Subscription:
@@ -529,7 +530,7 @@ class ZenohBus:
             return
         self._put_signed(topic, payload)
 
-    def raw_publisher(self, topic: str, always: bool = True) -> "RawPublisher":
+    def raw_publisher(self, topic: str, always: bool = True) -> RawPublisher:
         """A declared publisher of bytes on ``topic``, for samples sent often: a put on a declared Zenoh
         publisher costs a few microseconds, a `put_raw` (the session's put) up to hundreds. Receivers must
         subscribe to the exact key (not a pattern), or the server's access control may hide them; until a
@@ -1003,7 +1004,7 @@ class ZenohBus:
                     pass
             _SESSIONS.discard(self)
 
-    def __enter__(self) -> "ZenohBus":
+    def __enter__(self) -> ZenohBus:
         return self
 
     def __exit__(self, *exc) -> None:

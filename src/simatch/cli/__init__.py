@@ -8,9 +8,9 @@ import logging
 import sys
 
 from .. import version
+from ..config.loader import SceneError
 from ..errors import UsageError
 from ..plugins import PluginError
-from ..config.loader import SceneError
 
 __all__ = ["SUBCOMMANDS", "UsageError", "build_parser", "main"]
 

@@ -46,7 +46,7 @@ def run_alone(name: str, seconds: float | None) -> dict:
     cmd = [sys.executable, "-m", "simatch", "bench", "--only", name, "--json"]
     if seconds is not None:
         cmd += ["--seconds", repr(seconds)]
-    out = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         tail = "\n".join(out.stderr.strip().splitlines()[-15:])
         raise UsageError(f"benchmark {name} failed (exit {out.returncode}):\n{tail}")

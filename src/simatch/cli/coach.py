@@ -24,13 +24,14 @@ import json
 import queue
 import sys
 import threading
-from typing import Callable, TextIO
+from collections.abc import Callable
+from typing import TextIO
 
 from .. import msgs
 from ..bus import topics
-from ..msgs import game_commands as commands
 from ..config.loader import load_scene
 from ..config.schema import JudgeSpec
+from ..msgs import game_commands as commands
 from . import UsageError
 from .run import overrides_of, print_summary
 

@@ -23,8 +23,8 @@ def add_parser(sub) -> None:
 
 
 def main(args) -> int:
-    from ..record.tables import ExportError, export
     from ..record.reader import RecordingError
+    from ..record.tables import ExportError, export
 
     try:
         folder, counts, rec = export(args.file, args.format, args.out)

@@ -12,7 +12,8 @@ import importlib
 import json
 import signal
 import sys
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from ..config.loader import load_scene, parse_override
 from . import UsageError

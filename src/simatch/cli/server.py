@@ -73,10 +73,10 @@ def add_parser(sub) -> None:
 
 
 def main(args) -> int:
+    from ..bus.zenoh_bus import TransportError
     from ..distributed import interrupt_on_term
     from ..distributed.credentials import CredentialError
     from ..distributed.server import Server
-    from ..bus.zenoh_bus import TransportError
 
     if args.deadline <= 0 or args.team_timeout < 0:
         raise UsageError("--deadline must be positive and --team-timeout not negative")
@@ -102,6 +102,9 @@ def main(args) -> int:
                 f"run {args.run!r} ({server.mode}) listening on {', '.join(listen)}; "
                 f"team credentials in {server.credentials_dir}"
             )
+            # SIGTERM ends the run at a step boundary, as Ctrl-C does (raised wherever it lands, it could come
+            # out of a compiled kernel's dispatch as a SystemError); a recording attached below takes it over
+            stack.enter_context(server.sim.stopping_on(signal.SIGTERM, KeyboardInterrupt))
             for ext in extensions():
                 stack.enter_context(ext.attach(server.sim, args))
             duration = run_duration(server.sim, args)

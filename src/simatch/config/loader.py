@@ -4,10 +4,11 @@ anything wrong with a message that names the file, the key and what was expected
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
@@ -119,7 +120,7 @@ def format_errors(exc: ValidationError, source: str, prefix: str = "", model: ty
     """One line per problem: ``file: key: what was expected, got what``."""
     lines = []
     for err in exc.errors(include_url=False):
-        loc = tuple(l for l in err["loc"] if not (isinstance(l, str) and l.startswith(("function-", "tuple["))))
+        loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith(("function-", "tuple["))))
         key = (prefix + "." if prefix and loc else prefix) + _loc(loc) if loc else (prefix or "(top level)")
         kind = err["type"]
         msg = err["msg"]

@@ -8,7 +8,7 @@ strategies, judges) check their own parameters with their own models (see ``sima
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, Optional
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -99,8 +99,8 @@ class BallSpec(Strict):
 
 
 class TeamSpec(Strict):
-    color: Optional[str] = Field(None, description="display colour; defaults to the team's name")
-    attacks: Optional[Literal["+x", "-x"]] = Field(
+    color: str | None = Field(None, description="display colour; defaults to the team's name")
+    attacks: Literal["+x", "-x"] | None = Field(
         None, description="direction of this team's team frame +x; default +x, except magenta -x"
     )
     model: str = Field("omni4", min_length=1, description="robot model: a shipped name or package.module:Class")
@@ -109,8 +109,8 @@ class TeamSpec(Strict):
         "none", min_length=1, description="a shipped strategy name, package.module:Class, or 'external'"
     )
     strategy_params: dict[str, Any] = Field(default_factory=dict)
-    goalkeeper: Optional[int] = Field(1, ge=1, description="id of the goalkeeper, if any")
-    ids: Optional[list[int]] = Field(None, description="robot ids; default 1..n in the order of start")
+    goalkeeper: int | None = Field(1, ge=1, description="id of the goalkeeper, if any")
+    ids: list[int] | None = Field(None, description="robot ids; default 1..n in the order of start")
     start: list[Pose] = Field(
         min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
     )
@@ -133,7 +133,7 @@ class ControlSpec(Strict):
     command_timeout: float = Field(
         0.1, gt=0.0, le=10.0, description="a robot with no fresh command for this long is stopped [s]"
     )
-    strategy_pub_period: Optional[float] = Field(
+    strategy_pub_period: float | None = Field(
         None, gt=0.0, le=1.0, description="StrategyPub period [s]; default: the control period"
     )
     strategy_stale_after: float = Field(
@@ -190,7 +190,7 @@ class MatchSpec(Strict):
 class Scene(Strict):
     name: str = Field(min_length=1)
     description: str = ""
-    duration: Optional[float] = Field(None, gt=0.0, description="default run length [s] if the judge sets none")
+    duration: float | None = Field(None, gt=0.0, description="default run length [s] if the judge sets none")
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
     world: WorldSpec = Field(default_factory=WorldSpec)
     ball: BallSpec = Field(default_factory=BallSpec)

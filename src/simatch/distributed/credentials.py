@@ -18,9 +18,9 @@ import hmac
 import os
 import secrets
 import tempfile
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Optional
 
 ADMIN = "admin"
 _MAGIC = b"SIM1"
@@ -113,7 +113,7 @@ def users_file(folder: str | os.PathLike, creds: Iterable[Credential]) -> str:
     return str(path)
 
 
-def claimed_name(attachment: Optional[bytes]) -> Optional[str]:
+def claimed_name(attachment: bytes | None) -> str | None:
     """The name an attachment claims (trust it only once `Verifier.signer_of` accepted the sample)."""
     if not attachment or len(attachment) < 6 or attachment[:4] != _MAGIC:
         return None
@@ -127,7 +127,7 @@ class Verifier:
         self._prefix = run.encode() + b"\0"
         self._keys = {c.name.encode(): c.key for c in creds.values()}
 
-    def signer_of(self, topic: str, payload: bytes, attachment: Optional[bytes]) -> Optional[str]:
+    def signer_of(self, topic: str, payload: bytes, attachment: bytes | None) -> str | None:
         if not attachment or len(attachment) < 6 or attachment[:4] != _MAGIC:
             return None
         n = attachment[4]

@@ -15,7 +15,7 @@ Two layers, both driven by the per-team credentials (`credentials`):
 
 from __future__ import annotations
 
-from typing import Iterable, Mapping, Optional
+from collections.abc import Iterable, Mapping
 
 from .. import msgs
 from ..bus import topics
@@ -50,7 +50,7 @@ class Refusal(str):
     who: str = ""
 
     @classmethod
-    def of(cls, who: str, why: str) -> "Refusal":
+    def of(cls, who: str, why: str) -> Refusal:
         r = cls(why)
         r.who = who
         return r
@@ -65,16 +65,16 @@ class FairPlay:
         self.teams = {t: frozenset(ids) for t, ids in teams.items()}
         #: (sender, topic) -> why refused (None: allowed): every rule but the events' depends on these two
         #: only, and a server judges the same few dozen pairs at every tick
-        self._verdicts: dict[tuple[str, str], Optional[str]] = {}
+        self._verdicts: dict[tuple[str, str], str | None] = {}
 
-    def check(self, topic: str, payload: bytes, attachment: Optional[bytes]) -> Optional[Refusal]:
+    def check(self, topic: str, payload: bytes, attachment: bytes | None) -> Refusal | None:
         """None if the sample may be used, else why not (for `ZenohBus(verifier=...)`)."""
         who = self.verifier.signer_of(topic, payload, attachment)
         if who is None:
             return Refusal.of("", f"unsigned or forged sample on {topic} (no valid credential)")
         return self._judge(who, topic, payload)
 
-    def check_entry(self, attachment: Optional[bytes], topic: str, payload: bytes) -> Optional[Refusal]:
+    def check_entry(self, attachment: bytes | None, topic: str, payload: bytes) -> Refusal | None:
         """None if an entry of a bundle may be used, else why not (for `ZenohBus(entry_verifier=...)`):
         the bundle's signature, already checked by `check`, names the sender; each entry must be one that
         sender may send on its own."""
@@ -83,7 +83,7 @@ class FairPlay:
             return Refusal.of("", f"entry on {topic} of an unsigned bundle")
         return self._judge(who, topic, payload)
 
-    def _judge(self, who: str, topic: str, payload: bytes) -> Optional[Refusal]:
+    def _judge(self, who: str, topic: str, payload: bytes) -> Refusal | None:
         if who == ADMIN:
             return None
         if topic == topics.EVENTS:
@@ -99,10 +99,10 @@ class FairPlay:
                 self._verdicts[key] = why
         return None if why is None else Refusal.of(who, why)
 
-    def identify(self, topic: str, payload: bytes, attachment: Optional[bytes]) -> Optional[str]:
+    def identify(self, topic: str, payload: bytes, attachment: bytes | None) -> str | None:
         return self.verifier.signer_of(topic, payload, attachment)
 
-    def may_send(self, team: str, topic: str, payload: bytes) -> Optional[str]:
+    def may_send(self, team: str, topic: str, payload: bytes) -> str | None:
         parts = topic.split("/")
         if len(parts) == 3 and parts[2] in ROBOT_OUTPUTS:
             owner, rid = parts[0], parts[1]

@@ -23,11 +23,10 @@ from __future__ import annotations
 import json
 import threading
 import time
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from ..bus import Node, NodeContext, Phase
 from . import protocol
-
 
 #: how many of a process's newest unanswered ticks are kept, to time their answers should they come
 OPEN_KEPT = 8

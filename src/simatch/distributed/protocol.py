@@ -44,7 +44,8 @@ import json
 import os
 import socket
 import uuid
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from ..bus import topics
 from ..config.loader import LoadedScene, scene_from_text

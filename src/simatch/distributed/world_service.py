@@ -9,7 +9,8 @@ unknown model, a non-finite value) into a ``bad_request`` event instead of an er
 from __future__ import annotations
 
 import logging
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics

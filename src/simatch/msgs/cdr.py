@@ -43,7 +43,8 @@ from __future__ import annotations
 import os
 import struct
 import sys
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from rosbags.interfaces import Nodetype
@@ -552,7 +553,8 @@ class Codec:
                     lines.append(f"    {convert}")
                     lines += [
                         f"    if len(b) != {length * size}:",
-                        f"        raise Error('{e.partition('.')[2]}: expected {length} elements, got %d' % (len(b) // {size}))",
+                        f"        raise Error('{e.partition('.')[2]}: expected {length} elements, "
+                        f"got %d' % (len(b) // {size}))",
                     ]
                     if size > 1:
                         lines += [f"    p = -pos & {size - 1}", "    app(_ZEROS[p])", "    pos += p"]
@@ -582,7 +584,7 @@ class Codec:
                 f"    if len(v) != {length}:",
                 f"        raise Error('{e.partition('.')[2]}: expected {length} messages, got %d' % len(v))",
             ]
-        body = ["f = {fkey}.get()".format(fkey=fkey), "for it in v:"]
+        body = [f"f = {fkey}.get()", "for it in v:"]
         if reuse:
             body += [
                 "    hit = _objs.get(id(it))",

@@ -8,7 +8,7 @@ type store of their own so that the simatch message store stays what ``simatch.m
 
 from __future__ import annotations
 
-from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 PACKAGE = "foxglove_msgs"
 

@@ -37,7 +37,8 @@ from __future__ import annotations
 import math
 import operator
 import struct
-from typing import Any, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -16,8 +16,8 @@ Hook for viewers: a `Player` offers ``bus``, ``scene`` (the recorded `LoadedScen
 from __future__ import annotations
 
 import time as _time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from .. import msgs
 from ..bus import InProcessBus
@@ -105,7 +105,7 @@ class Player:
             if t_ns >= start_ns:
                 break
             last[topic] = (t_ns, data)
-        for topic, (t_ns, data) in sorted(last.items(), key=lambda item: item[1][0]):
+        for topic, (_t_ns, data) in sorted(last.items(), key=lambda item: item[1][0]):
             msg = rec.decode(self.topics[topic], data, topic)
             if msg is not None:
                 self._publish(topic, msg)

@@ -17,17 +17,17 @@ from __future__ import annotations
 import json
 import struct
 import tempfile
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Iterator
 
 from mcap.exceptions import McapError
 from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from .. import msgs
-from ..msgs.cdr import Codec
 from ..config.loader import LoadedScene, load_scene
+from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
 from . import layout
 

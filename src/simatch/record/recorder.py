@@ -29,13 +29,13 @@ import json
 import logging
 import sys
 from collections import defaultdict
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Iterable
 
 from .. import msgs, version
 from ..bus import topics
-from ..msgs.cdr import Codec
 from ..config.loader import LoadedScene
+from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
 from . import layout
 from .messagelog import CLOCK_STEP, CLOCK_TICK, fill_poses, new_log
@@ -135,7 +135,7 @@ class Recorder:
                 "first_step": str(first_step),
                 "links": json.dumps(bool(links)),
                 "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
-                "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+                "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             },
         )
         self._scene3d = SceneBuilder(scene.spec)
@@ -258,7 +258,7 @@ class Recorder:
             except WriterError as exc:
                 raise RecordError(str(exc)) from None
 
-    def __enter__(self) -> "Recorder":
+    def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
@@ -273,7 +273,7 @@ class Recorder:
     @classmethod
     def for_run(
         cls, sim, path: str | Path, *, command_line: Iterable[str] | None = None, links: bool = False, **options
-    ) -> "RunRecorder":
+    ) -> RunRecorder:
         """A recorder of ``sim`` (a `simatch.Simulation`); attach it before the first step so that the
         recording can be re-simulated. Closing it adds the run's state digest to the metadata."""
         return RunRecorder(sim, path, command_line=command_line, links=links, **options)

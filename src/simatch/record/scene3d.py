@@ -26,8 +26,8 @@ import struct
 
 import numpy as np
 
-from ..msgs.cdr import Codec
 from ..config.schema import Scene
+from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
 from .messagelog import PoseSlot, fill_poses
 

@@ -159,6 +159,7 @@ class FileWriter:
 
 def _summary_imports() -> None:
     import pickle  # noqa: F401
+
     import mcap.records  # noqa: F401
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar, Optional
+from typing import ClassVar
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -41,7 +41,7 @@ class OmniParams(BaseModel):
     )
     max_force: float = Field(350.0, gt=0.0, le=1e5, description="largest traction force of the base [N]")
     max_torque: float = Field(120.0, gt=0.0, le=1e5, description="largest turning torque of the base [N m]")
-    response_time: Optional[float] = Field(
+    response_time: float | None = Field(
         None,
         gt=0.0,
         le=1.0,

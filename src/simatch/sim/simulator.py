@@ -14,16 +14,16 @@ from __future__ import annotations
 import hashlib
 import math
 from collections import Counter
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Callable, Iterable
 
 import mujoco
 import numpy as np
 
 from .. import msgs
 from ..config.schema import Scene
-from .ballhandling import BallHandling
 from ..robots.drive import OmniDrive
+from .ballhandling import BallHandling
 from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world

@@ -14,14 +14,13 @@ Collision groups (contype/conaffinity bits) keep every contact pair meaningful a
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
-from ..field import FieldGeometry
 from ..config.schema import Scene
+from ..field import FieldGeometry
 from ..robots import HULL_HEIGHT, RobotModel, model_class
 
 FLOOR, HULL, BALL, MOUTH, STATIC = 1, 2, 4, 8, 16

@@ -7,8 +7,6 @@ Strategies are plug-ins named in the scene (``teams.<team>.strategy``): a shippe
 
 from __future__ import annotations
 
-from typing import Any
-
 from ..plugins import PluginError, load
 from .base import Command, PassIntent, RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from .worldmodel import WorldModel

@@ -19,7 +19,7 @@ checked against it and handed over as ``ctx.params``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Optional
+from typing import Any, ClassVar
 
 import numpy as np
 from pydantic import BaseModel
@@ -52,8 +52,8 @@ class Command:
     vx: float = 0.0
     vy: float = 0.0
     w: float = 0.0
-    target: Optional[tuple[float, float]] = None
-    target_ori: Optional[float] = None
+    target: tuple[float, float] | None = None
+    target_ori: float | None = None
     target_vel: tuple[float, float] = (0.0, 0.0)
     max_vel: float = 3.0
     max_w: float = 6.0
@@ -63,13 +63,13 @@ class Command:
     # what the robot tells its team (StrategyInfo)
     role: int = 0
     action: int = 0
-    intent: Optional[tuple[float, float]] = None
-    pass_intent: Optional[PassIntent] = None
+    intent: tuple[float, float] | None = None
+    pass_intent: PassIntent | None = None
     target_num: tuple[int, ...] = ()
     user: tuple[float, ...] = ()
 
     @classmethod
-    def stop(cls, **info: Any) -> "Command":
+    def stop(cls, **info: Any) -> Command:
         return cls(**info)
 
 
@@ -79,7 +79,7 @@ class RobotContext:
 
     team: str
     id: int
-    goalkeeper: Optional[int]
+    goalkeeper: int | None
     ids: list[int]  # every robot id of the team
     field: FieldGeometry  # in the team frame
     start: tuple[float, float, float]  # start pose, team frame
@@ -96,7 +96,7 @@ class RobotContext:
 class TeamContext:
     team: str
     ids: list[int]
-    goalkeeper: Optional[int]
+    goalkeeper: int | None
     field: FieldGeometry
     starts: dict[int, tuple[float, float, float]]
     control_period: float
@@ -106,7 +106,7 @@ class TeamContext:
 class RobotStrategy:
     """The Control of one robot. Override `decide`."""
 
-    Params: ClassVar[Optional[type[BaseModel]]] = None
+    Params: ClassVar[type[BaseModel] | None] = None
 
     def __init__(self, ctx: RobotContext):
         self.ctx = ctx
@@ -118,8 +118,8 @@ class RobotStrategy:
 class TeamStrategy:
     """A team: makes its robots' strategies. Override `make_robot` or set ``robot_class``."""
 
-    Params: ClassVar[Optional[type[BaseModel]]] = None
-    robot_class: ClassVar[Optional[type[RobotStrategy]]] = None
+    Params: ClassVar[type[BaseModel] | None] = None
+    robot_class: ClassVar[type[RobotStrategy] | None] = None
 
     def __init__(self, ctx: TeamContext):
         self.ctx = ctx

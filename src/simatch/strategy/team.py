@@ -5,7 +5,10 @@ Used by every process that runs a team: the embedded run, ``simatch team`` and `
 
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
 
 from .. import frames
 from ..bus import Node, stable_seed
@@ -14,8 +17,6 @@ from . import NO_NODES, strategy_class
 from .base import RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from .node import RobotNode, StrategyPub
 from .worldmodel import WorldModel, team_field
-
-import numpy as np
 
 
 def _params(cls: type, raw: dict, scene: LoadedScene, team: str) -> Any:

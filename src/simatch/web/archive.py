@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from typing import Callable
+from collections.abc import Callable
 
 from ..bus import InProcessBus, topics
 from .observer import RunObserver
@@ -45,7 +45,7 @@ class RecordingArchive:
         self._stop = False
         self._thread = threading.Thread(target=self._load, name="simatch-web-archive", daemon=True)
 
-    def start(self) -> "RecordingArchive":
+    def start(self) -> RecordingArchive:
         self._thread.start()
         return self
 

@@ -26,7 +26,8 @@ from __future__ import annotations
 import logging
 import math
 import queue
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from .. import frames, msgs
 from ..bus import Node, Phase, topics
@@ -90,7 +91,7 @@ class ControlNode(Node):
     phase = Phase.JUDGE
     name = "web/control"
 
-    def __init__(self, control: "RunControl", period: float):
+    def __init__(self, control: RunControl, period: float):
         self.control = control
         self.period = period
 

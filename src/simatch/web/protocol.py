@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Annotated, Literal, Optional, Union
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator
 
@@ -28,7 +28,7 @@ class ProtocolError(ValueError):
 
 class _Msg(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-    id: Optional[Union[int, str]] = Field(None, description="echoed in the answer")
+    id: int | str | None = Field(None, description="echoed in the answer")
 
 
 def _command(value) -> MatchMode:
@@ -52,8 +52,8 @@ class Command(_Msg):
     referee console: from ``team``'s point of view (default: the first team), for both teams."""
 
     type: Literal["command"]
-    cmd: Union[int, str]
-    team: Optional[str] = None
+    cmd: int | str
+    team: str | None = None
 
     @field_validator("cmd", mode="before")
     @classmethod
@@ -97,7 +97,7 @@ class SendOff(_Msg):
     type: Literal["send_off"]
     robot: str = Field(min_length=3, max_length=64, description="TEAM/ID, e.g. cyan/3")
     off: bool = True
-    seconds: Optional[float] = Field(None, gt=0.0, le=86400.0)
+    seconds: float | None = Field(None, gt=0.0, le=86400.0)
 
 
 class Pause(_Msg):
@@ -139,7 +139,7 @@ class Timeline(_Msg):
 
 
 ClientMessage = Annotated[
-    Union[Command, Limits, Test, PlaceBall, SendOff, Pause, Resume, Card, AwardGoal, AutoReferee, Timeline],
+    Command | Limits | Test | PlaceBall | SendOff | Pause | Resume | Card | AwardGoal | AutoReferee | Timeline,
     Field(discriminator="type"),
 ]
 _adapter = TypeAdapter(ClientMessage)

@@ -57,7 +57,7 @@ class RecordingView(Hosted):
             read_only=f"this is a recording ({name}): it is shown as it was, nothing can be commanded",
         )
 
-    def start(self) -> "RecordingView":
+    def start(self) -> RecordingView:
         self.archive.start()
         return super().start()
 

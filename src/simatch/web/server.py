@@ -18,9 +18,9 @@ import json
 import logging
 import socket
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import resources
-from typing import Callable
 
 from aiohttp import WSMsgType, web
 
@@ -440,7 +440,7 @@ class ViewServer:
         self.control.submit(grant, m, reply)
         try:
             return await asyncio.wait_for(done, timeout=5.0)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             return "the run did not take the request within 5 s (it is not running)"
 
     async def _send_error(self, c: Client, mid, error: str) -> None:

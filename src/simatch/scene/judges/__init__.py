@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ...plugins import PluginError, load
 from ...config.loader import LoadedScene, SceneError, validate_params
+from ...plugins import PluginError, load
 from .base import Judge, NoJudge, WorldControl
 
 SHIPPED = {

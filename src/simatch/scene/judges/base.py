@@ -8,7 +8,7 @@ target). It publishes game commands (CoachInfo) and events, and it decides when 
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Optional, Protocol
+from typing import Any, ClassVar, Protocol
 
 from pydantic import BaseModel, ConfigDict
 
@@ -44,7 +44,7 @@ class Judge(Node):
         self.done = False
 
     @property
-    def duration(self) -> Optional[float]:
+    def duration(self) -> float | None:
         """How long the run lasts if nothing ends it earlier [s]; None: until the judge says done."""
         return self.scene.spec.duration
 
@@ -52,7 +52,7 @@ class Judge(Node):
         """The judge's summary (the ``result`` of ``simatch run --json``)."""
         return {}
 
-    def game(self) -> Optional[dict]:
+    def game(self) -> dict | None:
         """The game as the judge sees it (score, stage, clock, commands), if it judges a game."""
         return None
 

@@ -15,16 +15,15 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Optional
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ... import msgs
-from ...field import Area
 from ...bus import NodeContext, topics
-from ...msgs.game_commands import MatchMode
 from ...config.loader import SceneError
+from ...field import Area
+from ...msgs.game_commands import MatchMode
 from .base import Judge
 
 #: GameState is re-published at least this often even when nothing changes [s]
@@ -37,7 +36,7 @@ class EncirclementParams(BaseModel):
     targets: str = Field("magenta", description="the team whose robots are captured in the prison")
     prison: str = Field("prison", description="name of the world area that is the prison")
     time_limit: float = Field(300.0, gt=0.0, le=86400.0, description="the run ends after this long [s]")
-    scatter: Optional[tuple[float, float, float, float]] = Field(
+    scatter: tuple[float, float, float, float] | None = Field(
         None,
         description="x0, y0, x1, y1 (world frame): the targets start at random places in this rectangle, "
         "drawn from the run's seed, scatter_spacing or more from the prison (each axis); none: "

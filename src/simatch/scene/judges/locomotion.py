@@ -21,8 +21,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ... import msgs
 from ...bus import NodeContext, topics
-from ...robots.drive import OmniDrive
 from ...robots import model_class
+from ...robots.drive import OmniDrive
 from .base import Judge
 
 PAPER = {"samples": 1704, "position_error_cm": 2.2481, "orientation_error_rad": 0.4401}

@@ -10,7 +10,7 @@ next stoppage (robots may re-enter only when the ball is dead), just inside the 
 from __future__ import annotations
 
 import math
-from typing import Callable, Optional
+from collections.abc import Callable
 
 import numpy as np
 
@@ -49,7 +49,7 @@ class Discipline:
             raise ValueError(f"a card is 'yellow' or 'red', not {colour!r}")
 
     # --- off and back ---------------------------------------------------------------------------------------
-    def send_off(self, i: int, now: float, seconds: Optional[float], why: str, forever: str = "until returned") -> None:
+    def send_off(self, i: int, now: float, seconds: float | None, why: str, forever: str = "until returned") -> None:
         """Park robot i outside the field and disable it for ``seconds`` (None: ``forever``)."""
         obs = self.obs
         until = math.inf if seconds is None else now + seconds

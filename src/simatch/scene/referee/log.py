@@ -8,7 +8,7 @@ decision that is revised (a disallowed goal, an operator's correction) is a new 
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ... import msgs
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 from ...msgs.game_commands import MatchMode
 
@@ -24,11 +23,11 @@ class OperatorRequest:
     op: str
     team: str = ""
     robot: str = ""  # "team/id"
-    command: Optional[MatchMode] = None
-    x: Optional[float] = None
-    y: Optional[float] = None
+    command: MatchMode | None = None
+    x: float | None = None
+    y: float | None = None
     card: str = ""
-    seconds: Optional[float] = None
+    seconds: float | None = None
     on: bool = True
     source: str = "api"
 

@@ -8,7 +8,7 @@ so. Halves, their length, the half-time break, the first kick-off and the shoot-
 
 from __future__ import annotations
 
-from typing import Literal, Optional
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -33,7 +33,7 @@ RULE_NAMES = (
     "goalkeeper_contact",
 )
 
-Card = Optional[Literal["yellow", "red"]]
+Card = Literal["yellow", "red"] | None
 
 
 class RefereeParams(BaseModel):
@@ -209,7 +209,7 @@ class RefereeParams(BaseModel):
         0.3, ge=0.0, le=50.0, description="... and faster than the opponent drives into it by this much [m/s]"
     )
     charging_card: Card = Field("yellow", description="card for charging (null: none)")
-    charging_red_speed: Optional[float] = Field(
+    charging_red_speed: float | None = Field(
         3.0, gt=0.0, le=50.0, description="charging faster than this is ramming: red card [m/s] (null: never)"
     )
     penalty_for_fouls_in_area: bool = Field(
@@ -265,7 +265,7 @@ class RefereeParams(BaseModel):
         le=86400.0,
         description="how long a robot sent off by yellow cards stays off [s] (MSL RefBox: 90 s)",
     )
-    red_send_off_time: Optional[float] = Field(
+    red_send_off_time: float | None = Field(
         None,
         gt=0.0,
         le=86400.0,

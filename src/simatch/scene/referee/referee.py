@@ -19,13 +19,13 @@ import math
 from collections import deque
 from dataclasses import replace
 from types import SimpleNamespace
-from typing import Optional
 
 from ... import msgs
 from ...bus import NodeContext, topics
-from ...msgs.game_commands import SET_PIECES, MatchMode, for_team, name as command_name
-from ..judges.base import Judge
 from ...config.loader import SceneError
+from ...msgs.game_commands import SET_PIECES, MatchMode, for_team
+from ...msgs.game_commands import name as command_name
+from ..judges.base import Judge
 from . import report
 from .contacts import RobotContacts
 from .discipline import Discipline
@@ -100,7 +100,7 @@ class MslReferee(OperatorTakeover, Judge):
         self.out_rule = BallOutRule(m) if "ball_out" not in disabled else None
         self.log = EventLog()
         self.discipline = Discipline(m.obs, params, world, self._log_robot)
-        self.shootout: Optional[ShootOut] = None
+        self.shootout: ShootOut | None = None
         f = m.obs.field
         self._xlim = f.half_length + m.obs.ball_radius
         self._ylim = f.half_width + m.obs.ball_radius
@@ -566,7 +566,7 @@ class MslReferee(OperatorTakeover, Judge):
         )
 
     # --- what the referee reports (see report.py) ------------------------------------------------------------
-    def winner(self) -> Optional[str]:
+    def winner(self) -> str | None:
         return report.winner(self)
 
     def game(self) -> dict:

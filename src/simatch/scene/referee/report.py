@@ -4,19 +4,20 @@
 from __future__ import annotations
 
 import json
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ... import msgs
-from ...msgs.game_commands import for_team, name as command_name
+from ...msgs.game_commands import for_team
+from ...msgs.game_commands import name as command_name
 from .state import Phase
 
 if TYPE_CHECKING:
     from .referee import MslReferee
 
 
-def tallies(ref: "MslReferee") -> dict[str, dict[str, int]]:
+def tallies(ref: MslReferee) -> dict[str, dict[str, int]]:
     """Score, fouls and cards per team."""
     d = ref.discipline
     return {
@@ -27,7 +28,7 @@ def tallies(ref: "MslReferee") -> dict[str, dict[str, int]]:
     }
 
 
-def winner(ref: "MslReferee") -> Optional[str]:
+def winner(ref: MslReferee) -> str | None:
     score = ref.m.game.score
     a, b = ref.teams
     if score[a] != score[b]:
@@ -35,7 +36,7 @@ def winner(ref: "MslReferee") -> Optional[str]:
     return ref.shootout.winner() if ref.shootout is not None else None
 
 
-def game(ref: "MslReferee") -> dict:
+def game(ref: MslReferee) -> dict:
     m = ref.m
     g, obs = m.game, m.obs
     last = m.touches.last
@@ -66,7 +67,7 @@ def game(ref: "MslReferee") -> dict:
     }
 
 
-def result(ref: "MslReferee") -> dict:
+def result(ref: MslReferee) -> dict:
     g = ref.m.game
     return {
         **tallies(ref),
@@ -80,7 +81,7 @@ def result(ref: "MslReferee") -> dict:
     }
 
 
-def game_state(ref: "MslReferee", now: float):
+def game_state(ref: MslReferee, now: float):
     m = ref.m
     g, obs = m.game, m.obs
     first = ref.teams[0]

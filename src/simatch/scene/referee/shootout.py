@@ -10,8 +10,6 @@ goal ``shootout_shot_time`` after START. Shoot-out goals do not change the match
 
 from __future__ import annotations
 
-from typing import Optional
-
 from .observation import Observation
 from .params import RefereeParams
 from .restarts import Restart, Spots
@@ -54,7 +52,7 @@ class ShootOut:
             return False
         return ga != gb or ka >= n + self.p.shootout_max_rounds
 
-    def winner(self) -> Optional[str]:
+    def winner(self) -> str | None:
         a, b = self.order
         ga, gb = self.goals(a), self.goals(b)
         return a if ga > gb else b if gb > ga else None

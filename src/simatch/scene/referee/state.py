@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import Optional
 
 from ...msgs.game_commands import MatchMode
 from .restarts import Restart
@@ -50,7 +49,7 @@ HALF_NAMES = ("first_half", "second_half", "third_half", "fourth_half")
 class Stage:
     name: str
     kind: str  # "half", "break", "shootout", "ended"
-    duration: Optional[float]  # seconds of clock, None: until decided
+    duration: float | None  # seconds of clock, None: until decided
     half: int = 0  # 1-based half number for halves
 
 
@@ -82,12 +81,12 @@ class Game:
     stage_steps: int = 0  # clock of the current stage, in physics steps
     phase: Phase = Phase.STOPPED
     phase_steps: int = 0  # time in the current phase (not counting pauses)
-    paused_phase: Optional[Phase] = None
+    paused_phase: Phase | None = None
     command: MatchMode = MatchMode.STOPROBOT  # current command as given (from `command_team`'s view)
     command_team: str = ""
     match_type: dict[str, MatchMode] = field(default_factory=dict)  # last set piece, per team's view
-    restart: Optional[Restart] = None  # the restart being prepared or taken (or last taken)
-    next_restart: Optional[Restart] = None  # the restart that follows the current stoppage
+    restart: Restart | None = None  # the restart being prepared or taken (or last taken)
+    next_restart: Restart | None = None  # the restart that follows the current stoppage
     hold: bool = False  # stopped until an operator acts (operator STOP, PARKING)
     auto: bool = True  # the referee enforces its decisions (False: manual mode)
     reason: str = ""  # why the current command was given

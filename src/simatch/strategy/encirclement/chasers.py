@@ -22,8 +22,8 @@ import statistics
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ...msgs.game_commands import MatchMode
 from ...config.loader import SceneError
+from ...msgs.game_commands import MatchMode
 from ..base import Command, RobotContext, RobotStrategy
 from .game import Captures
 from .net import Arena, make_net, prison_distance

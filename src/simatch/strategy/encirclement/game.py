@@ -18,7 +18,7 @@ class Captures:
         self.names: frozenset[str] = frozenset()
         self.where: list[tuple[float, float]] = []
 
-    def update(self, world) -> "Captures":
+    def update(self, world) -> Captures:
         """Re-read the judge's latest GameState if it changed (parsing only when it did)."""
         game = world.game
         text = game.result if game is not None else None

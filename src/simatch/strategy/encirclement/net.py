@@ -33,7 +33,7 @@ class Arena:
     half_y: float
 
     @classmethod
-    def of(cls, field: FieldGeometry, clearance: float) -> "Arena":
+    def of(cls, field: FieldGeometry, clearance: float) -> Arena:
         """The reach of a robot's centre inside the walls at the edge of the field's margin."""
         return cls(field.half_length + field.margin - clearance, field.half_width + field.margin - clearance)
 

@@ -26,7 +26,6 @@ from .game import Captures
 from .net import Arena
 from .view import opponents
 
-
 #: with no chaser in sight, pushes weaker than this leave a target at rest (it does not creep for ever)
 RESTFUL = 0.1
 

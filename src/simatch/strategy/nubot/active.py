@@ -27,14 +27,13 @@ import numpy as np
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
 from .evaluate import lane_clear, pass_speed, position_value, shot_window
-from .gameflow import GameFlow, PHASES
+from .gameflow import PHASES, GameFlow
 from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
-
 
 MOUTH = 0.29  # robot centre to a held ball's centre [m]
 PASS_KEEP = 1.5  # a pass being lined up keeps its receiver unless another is this much better
@@ -303,7 +302,7 @@ class BallPlayer:
             y_goal = me.y + s / c * (L2 - me.x)
             if abs(y_goal) < self.goal_half - 0.1 and L2 - me.x < p.shoot_range:
                 return ("shoot", L2 + 0.3, y_goal, p.shot_speed, 0.0)
-        for value, rid, cx, cy, v in self.passes(obs):
+        for _value, rid, cx, cy, v in self.passes(obs):
             if abs(wrap(math.atan2(cy - me.y, cx - me.x) - me.yaw)) < 0.2:
                 return ("pass", cx, cy, v, rid)
         tx, ty = me.x + 4.0 * c, me.y + 4.0 * s

@@ -20,14 +20,13 @@ from ..base import Command
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .ballpath import GRAVITY
-from .gameflow import GameFlow, PHASES
+from .gameflow import PHASES, GameFlow
 from .geometry import clamp
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
-
 
 LOB_MIN, LOB_MAX = 3.0, 9.0  # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
 

@@ -21,13 +21,13 @@ import numpy as np
 
 from ..roles import ROLES
 from .ballpath import BallPath, intercepts
-from .gameflow import GameFlow, PHASES
+from .gameflow import PHASES, GameFlow
 from .geometry import TWO_PI
-from .observation import Observation, _array as _rows
+from .observation import Observation
+from .observation import _array as _rows
 from .params import NubotParams
 from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
 from .setpieces import formation, spread
-
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]

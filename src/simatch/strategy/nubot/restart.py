@@ -14,13 +14,12 @@ from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
 from .active import MOUTH, BallPlayer
 from .evaluate import pass_speed, shot_window
-from .gameflow import GameFlow, MODES
+from .gameflow import MODES, GameFlow
 from .geometry import unit, wrap
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
-
 
 KICKOFF_ARRIVAL = 0.6  # the kick-off pass nearly stops where the receiver takes it [m/s]
 KICKOFF_MAX_X = -0.01  # the kick-off taker's centre stays behind this line (the referee: 0) [m]

@@ -22,7 +22,7 @@ from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrate
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
 from .active import BallPlayer
-from .gameflow import GameFlow, MODES, PHASES
+from .gameflow import MODES, PHASES, GameFlow
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion
@@ -32,7 +32,6 @@ from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
-
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7

@@ -26,7 +26,6 @@ from .geometry import clamp, unit
 from .params import NubotParams
 from .positions import Areas, guard_point, outlet_point, passive_point, score_spots
 
-
 SLOT_GAP = 1.3  # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6  # taker's centre behind the ball's centre while waiting [m]
 KICKOFF_LEAD = (0.3, 1.95)  # where the kick-off pass stops (team frame, y to the receiver's side; x > 0

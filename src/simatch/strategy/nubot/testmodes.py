@@ -29,7 +29,6 @@ from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 
-
 ARRIVED = 0.12  # [m]
 ARRIVED_YAW = 0.08  # [rad]
 CIRCLE_SPEED = 1.5  # [m/s]

@@ -24,7 +24,6 @@ deeper (``teams.<team>.model_params.mouth_depth``).
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from ..state import LIVE
 from .base import Call, Rule
@@ -51,7 +50,7 @@ class BallHoldingRule(Rule):
     def on_restart(self) -> None:
         self.robot = -1
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         m, p = self.m, self.p
         obs, touches = m.obs, m.touches
         r = obs.ball_radius

@@ -16,7 +16,7 @@ Hooks (all optional):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Optional
+from typing import TYPE_CHECKING, ClassVar
 
 from ..state import LIVE, Phase
 
@@ -37,8 +37,8 @@ class Call:
     value: float = 0.0  # the measured value ...
     limit: float = 0.0  # ... and the limit it was judged against
     detail: str = ""
-    restart: Optional["Restart"] = None  # the restart that follows; None: play goes on
-    card: Optional[str] = None  # "yellow" or "red" for the robot
+    restart: Restart | None = None  # the restart that follows; None: play goes on
+    card: str | None = None  # "yellow" or "red" for the robot
     goal_for: str = ""  # a goal that counts, for this team
     in_play: bool = False  # the call puts the ball in play (restart timeout)
 
@@ -47,7 +47,7 @@ class Rule:
     name: ClassVar[str] = "rule"
     phases: ClassVar[frozenset[Phase]] = frozenset()
 
-    def __init__(self, match: "Match"):
+    def __init__(self, match: Match):
         self.m = match
         self.p = match.params
 
@@ -60,7 +60,7 @@ class Rule:
     def at_start(self) -> list[Call]:
         return []
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         return None
 
     # --- helpers ---------------------------------------------------------------------------------------
@@ -82,12 +82,12 @@ class Rule:
             **kw,
         )
 
-    def free_kick_against(self, i: int) -> "Restart":
+    def free_kick_against(self, i: int) -> Restart:
         """A free kick for the opponents of robot ``i``, where the ball is."""
         obs = self.m.obs
         return self.m.spots.at_ball("free_kick", obs.other(obs.team_of[i]), obs.bx, obs.by)
 
-    def foul_restart(self, i: int) -> tuple[Optional["Restart"], str]:
+    def foul_restart(self, i: int) -> tuple[Restart | None, str]:
         """(restart, what it is) after a foul by robot ``i`` against an opponent: a free kick for the opponents
         where the ball is, or a penalty kick when ``i`` is a defender in its own penalty area (and
         ``penalty_for_fouls_in_area``). While the ball is not in play the restart stands (None)."""

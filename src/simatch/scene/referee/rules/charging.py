@@ -12,8 +12,6 @@ restart does not change.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import Phase
 from .base import Call, Rule
 
@@ -22,7 +20,7 @@ class ChargingRule(Rule):
     name = "charging"
     phases = frozenset({Phase.STOPPED, Phase.PREPARE, Phase.TAKING, Phase.PLAY})
 
-    def check(self) -> Optional[list[Call]]:
+    def check(self) -> list[Call] | None:
         calls = None
         for c in self.m.contacts.now:
             if c.new:
@@ -31,7 +29,7 @@ class ChargingRule(Rule):
                     calls = (calls or []) + [call]
         return calls
 
-    def _judge(self, i: int, j: int, ux: float, uy: float) -> Optional[Call]:
+    def _judge(self, i: int, j: int, ux: float, uy: float) -> Call | None:
         p = self.p
         approach = self.m.contacts.approach
         vi = approach(i, ux, uy)  # i towards j

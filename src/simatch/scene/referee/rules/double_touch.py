@@ -5,8 +5,6 @@ happened). Contacts come from the simulator's ball bumper at the physics rate (`
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import LIVE
 from .base import Call, Rule
 
@@ -15,7 +13,7 @@ class DoubleTouchRule(Rule):
     name = "double_touch"
     phases = LIVE
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         touches = self.m.touches
         if touches.retouch is None:
             return None

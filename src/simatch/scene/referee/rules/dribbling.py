@@ -12,7 +12,6 @@ foul gives the opponents a free kick where the ball is.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from ..state import LIVE
 from .base import Call, Rule
@@ -22,7 +21,7 @@ class DribblingRule(Rule):
     name = "dribbling"
     phases = LIVE
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         touches = self.m.touches
         touches.update_possession()
         i = touches.possessor

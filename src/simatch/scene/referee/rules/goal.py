@@ -19,8 +19,6 @@ goal kick for the defending team.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..restarts import NAMES
 from ..state import LIVE
 from .base import Call, Rule
@@ -82,7 +80,7 @@ class GoalRule(Rule):
             restart=self.m.spots.goal_kick(defending, side, y),
         )
 
-    def invalid(self, scoring: str) -> Optional[tuple[float, float, str]]:
+    def invalid(self, scoring: str) -> tuple[float, float, str] | None:
         """(value, limit, reason) if a goal for ``scoring`` does not count now, else None."""
         m = self.m
         obs, touches = m.obs, m.touches

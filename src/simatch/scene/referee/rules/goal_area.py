@@ -5,8 +5,6 @@ goal line, into the goal). Judged while the ball is in play; the opponents get a
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import Phase
 from .base import Call, Rule
 
@@ -15,7 +13,7 @@ class GoalAreaRule(Rule):
     name = "goal_area"
     phases = frozenset({Phase.PLAY})
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         obs = self.m.obs
         area = obs.goal_area
         for i in range(obs.n):

@@ -10,8 +10,6 @@ team gets a free kick (placed at the restart spot of that half, as every free ki
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import LIVE
 from .base import Call, Rule
 
@@ -24,7 +22,7 @@ class GoalkeeperContactRule(Rule):
         super().__init__(match)
         self.judged: set[int] = set()  # contact pairs judged while they go on
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         m = self.m
         obs, contacts = m.obs, m.contacts
         judged: set[int] = set()

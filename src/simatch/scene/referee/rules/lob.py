@@ -15,7 +15,6 @@ kicker does not count as the team-mate near the landing point.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from ..state import LIVE
 from .base import Call, Rule
@@ -28,14 +27,14 @@ class LobRule(Rule):
     def __init__(self, match):
         super().__init__(match)
         self.seen_kick = -1  # step of the last kick already followed
-        self.flight: Optional[dict] = None
+        self.flight: dict | None = None
 
     def on_restart(self) -> None:
         self.flight = None
         k = self.m.touches.kick
         self.seen_kick = k[1] if k is not None else -1
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         m = self.m
         obs, touches = m.obs, m.touches
         kick = touches.kick
@@ -93,7 +92,7 @@ class LobRule(Rule):
         t = (vz + math.sqrt(max(vz * vz + 2.0 * g * h, 0.0))) / g
         return (x + vx * t, y + vy * t)
 
-    def _judge(self, f: dict, lx: float, ly: float) -> Optional[Call]:
+    def _judge(self, f: dict, lx: float, ly: float) -> Call | None:
         m, p = self.m, self.p
         obs = m.obs
         i = f["kicker"]

@@ -5,7 +5,6 @@ it — becomes a dropped ball where it is. Not a foul."""
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from ..state import Phase
 from .base import Call, Rule
@@ -23,7 +22,7 @@ class NoProgressRule(Rule):
     def on_restart(self) -> None:
         self.anchor = (math.nan, math.nan)
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         m = self.m
         bx, by = m.obs.bx, m.obs.by
         ax, ay = self.anchor

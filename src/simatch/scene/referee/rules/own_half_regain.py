@@ -16,8 +16,6 @@ defending team). `GoalRule` asks this rule whether a goal counts.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import LIVE
 from .base import Rule
 
@@ -26,7 +24,7 @@ class OwnHalfRegainRule(Rule):
     name = "own_half_regain"
     phases = LIVE
 
-    def invalid(self, scoring: str) -> Optional[tuple[float, float, str]]:
+    def invalid(self, scoring: str) -> tuple[float, float, str] | None:
         """(value, limit, reason) if a goal for ``scoring`` does not count under RC-10.1.2, else None."""
         obs, touches = self.m.obs, self.m.touches
         k = obs.teams.index(scoring)

@@ -10,8 +10,6 @@ a free kick.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import Phase
 from .base import Call, Rule
 
@@ -28,7 +26,7 @@ class PenaltyAreaRule(Rule):
         self.entered = [0] * n  # step it entered
         self.dt = match.control_dt
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         obs = self.m.obs
         area, inside, time_in = obs.penalty_area, self.inside, self.time_in
         groups: dict[tuple[int, int], list[int]] = {}
@@ -49,7 +47,7 @@ class PenaltyAreaRule(Rule):
                 return call
         return None
 
-    def _judge(self, side: int, robots: list[int]) -> Optional[Call]:
+    def _judge(self, side: int, robots: list[int]) -> Call | None:
         obs, p = self.m.obs, self.p
         owner = obs.defender_of(side)
         if len(robots) > p.penalty_area_robots:

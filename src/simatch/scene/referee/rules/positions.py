@@ -6,7 +6,6 @@ kicking team did)."""
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from ..restarts import NAMES
 from ..state import Phase
@@ -61,7 +60,7 @@ class PositionRule(Rule):
             calls.append(self.call(self.name, i, value, limit, f"at START of the {self.what()}: {what}"))
         return calls
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         if not self.applies():
             return None
         for i, value, limit, what in self.offenders():

@@ -24,8 +24,6 @@ stands, the restart does not change.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import Phase
 from .base import Call, Rule
 
@@ -38,7 +36,7 @@ class PushingRule(Rule):
         super().__init__(match)
         self.pushes: dict[tuple[int, int], list[float]] = {}  # (pusher, pushed) -> [distance, periods]
 
-    def check(self) -> Optional[list[Call]]:
+    def check(self) -> list[Call] | None:
         m, p = self.m, self.p
         contacts = m.contacts
         obs = m.obs

@@ -5,8 +5,6 @@ This is not a foul: the event says what happened, the match goes on."""
 
 from __future__ import annotations
 
-from typing import Optional
-
 from ..state import Phase
 from .base import Call, Rule
 
@@ -15,7 +13,7 @@ class RestartTimeoutRule(Rule):
     name = "restart_timeout"
     phases = frozenset({Phase.TAKING})
 
-    def check(self) -> Optional[Call]:
+    def check(self) -> Call | None:
         m = self.m
         r = m.game.restart
         if r is None:
