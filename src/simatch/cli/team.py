@@ -67,7 +67,7 @@ def main(args, robots: list[int] | None = None) -> int:
         params=params,
         wait=args.wait,
     )
-    with interrupt_on_term():
+    with interrupt_on_term(proc.stop_soon):
         try:
             reason = proc.run()
         except (ClientError, CredentialError, ValueError) as exc:

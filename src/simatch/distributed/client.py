@@ -84,6 +84,8 @@ class TeamProcess:
         self.joined = False
         self._server_alive = False
         self._server_lost_at: float | None = None
+        self._serving = False
+        self._stop: BaseException | None = None  # asked for by a signal handler (`stop_soon`)
         self.bus: ZenohBus | None = None
         self.stats = None  # the bus's counters (kept after it closes)
         self.clock: LockstepClock | None = None
@@ -263,16 +265,34 @@ class TeamProcess:
             if bus is not None:  # None once closing: nothing more is answered
                 bus.deliver(self._latest_tick_only(bus.take(0.0)))
 
+    def stop_soon(self, exc: BaseException) -> bool:
+        """For signal handlers: make `serve` raise ``exc`` between two deliveries (within a quarter of a
+        second), never inside a node's step. False when not serving or a stop is already pending: then the
+        caller raises it at once."""
+        if not self._serving or self._stop is not None:
+            return False
+        self._stop = exc
+        return True
+
     def serve(self) -> str:
         """Answer the server's ticks until it ends the run (returns its reason); ClientError if it vanishes."""
         bus = self.bus
-        while not self.ended:
-            bus.wait(0.25)
-            self._answer()
-            lost = self._server_lost_at
-            if lost is not None and time.monotonic() - lost > self.server_timeout:
-                raise ClientError(f"lost the server at {self.connect} (gone for {self.server_timeout:g} s)")
-        return self.ended
+        self._serving = True
+        try:
+            while not self.ended:
+                bus.wait(0.25)
+                self._answer()
+                if self._stop is not None:
+                    raise self._stop
+                self._check_server()
+            return self.ended
+        finally:
+            self._serving = False
+
+    def _check_server(self) -> None:
+        lost = self._server_lost_at
+        if lost is not None and time.monotonic() - lost > self.server_timeout:
+            raise ClientError(f"lost the server at {self.connect} (gone for {self.server_timeout:g} s)")
 
     def _latest_tick_only(self, items: list) -> list:
         """A process that fell behind (it was stopped, or slow) skips the ticks the server has already
