@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 import math
+import signal
 
 import pytest
 
 import simatch
+
+# A suite started in the background by a non-interactive shell (as CI may start it) inherits SIGINT ignored;
+# Python then installs no KeyboardInterrupt handler, here or in the processes the tests start, and the tests
+# of Ctrl-C see nothing. Give this process Python's handler: the processes it starts then get the default.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def empty_field(**overrides):
