@@ -1,5 +1,6 @@
-"""Reproduction: a recorded run re-simulates bit for bit from its scene, seed and operator commands, and
-a run changed behind the recorder's back is caught at the step where it first differs."""
+"""Reproduction from the strategies (``--verify strategies``): a recorded run re-simulates bit for bit from its
+scene, seed and operator commands, and a run changed behind the recorder's back is caught at the step where
+it first differs. (Reproduction from the recorded world inputs, the default: test_world_inputs.py.)"""
 
 from __future__ import annotations
 
@@ -22,11 +23,11 @@ SIMATCH = [sys.executable, "-m", "simatch"]
 def test_a_recorded_run_reproduces_bit_for_bit(recording):
     path, _ = recording
     proc = subprocess.run(
-        SIMATCH + ["replay", str(path), "--verify", "--json"], capture_output=True, text=True, timeout=300
+        SIMATCH + ["replay", str(path), "--verify", "strategies", "--json"], capture_output=True, text=True, timeout=300
     )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
-    assert out["identical"] and out["complete"] and out["compared"] == 400
+    assert out["identical"] and out["complete"] and out["compared"] == 400 and out["mode"] == "strategies"
     assert out["operator_commands"] == 11 and out["first_difference"] is None
 
 
@@ -46,7 +47,7 @@ def _verify_a_run_changed_behind_the_recorder(path, change):
         overrides={**NOISY, "teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"},
         script=sneaky,
     )
-    verdict = verify(path)
+    verdict = verify(path, mode="strategies")
     assert not verdict.identical
     return verdict.first_difference
 
@@ -58,7 +59,9 @@ def test_the_first_difference_is_named(tmp_path):
     )
     assert (diff.step, diff.model, diff.field) == (100, "magenta/2", "x")
     assert diff.recorded == 3.0 and diff.simulated == pytest.approx(2.0, abs=0.05)  # near its start pose
-    proc = subprocess.run(SIMATCH + ["replay", str(path), "--verify"], capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        SIMATCH + ["replay", str(path), "--verify", "strategies"], capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 1
     assert re.search(
         r"first difference at t=0\.500 s \(physics step 100\): magenta/2 x recorded 3\.0, "
@@ -89,8 +92,9 @@ def test_a_judges_manual_action_is_reproduced(tmp_path):
             sim.run(seconds=0.3)
             sim.judge.drop_ball(2.0, -1.0)
             sim.run(seconds=0.3)
-    verdict = verify(path)
+    verdict = verify(path, mode="strategies")
     assert verdict.identical and verdict.operator_commands == 1
+    assert verify(path).identical  # and from the world inputs (the ball placement among them)
 
 
 def test_a_recording_that_missed_the_start_is_refused(tmp_path):
@@ -99,8 +103,9 @@ def test_a_recording_that_missed_the_start_is_refused(tmp_path):
         sim.run(seconds=0.1)
         with Recorder.for_run(sim, path):
             sim.run(seconds=0.1)
-    with pytest.raises(VerifyError, match="started at t=0.100 s"):
-        verify(path)
+    for mode in ("auto", "inputs", "strategies"):
+        with pytest.raises(VerifyError, match="started at t=0.100 s"):
+            verify(path, mode=mode)
 
 
 class _Console(Node):
@@ -128,5 +133,6 @@ def test_requests_carried_out_inside_a_step_are_reproduced(tmp_path):
             sim.run(seconds=0.3)
             console.queue.append(lambda: sim.coaches["magenta"].send(15, max_vel=2.0))
             sim.run(seconds=0.3)
-    verdict = verify(path)
+    verdict = verify(path, mode="strategies")
     assert verdict.identical and verdict.operator_commands == 3, verdict.describe()
+    assert verify(path).identical

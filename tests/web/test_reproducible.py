@@ -50,6 +50,8 @@ def test_a_coached_run_driven_from_the_pages_is_reproduced(live, open_page, tmp_
     finally:
         recorder.close()
     verdict = verify(path)
+    assert verdict.identical and verdict.mode == "inputs" and verdict.inputs > 0, verdict.describe()
+    verdict = verify(path, mode="strategies")
     assert verdict.identical, verdict.describe()
     # start, limits, test, the ball, take_control + send_vel + set_model_state, set_model_state + release, 2 x stop
     assert verdict.operator_commands >= 11, verdict.describe()
@@ -89,5 +91,7 @@ def test_a_refereed_run_driven_from_the_console_is_reproduced(live, open_page, t
     operator = [e for e in sim.events if e["type"] == "operator"]
     assert len(operator) == 9 and not [e for e in sim.events if e["type"] == "operator_refused"]
     verdict = verify(path)
+    assert verdict.identical and verdict.mode == "inputs", verdict.describe()
+    verdict = verify(path, mode="strategies")
     assert verdict.identical, verdict.describe()
     assert verdict.operator_commands == 9, verdict.describe()

@@ -27,6 +27,7 @@ SET_MODEL_STATE = "set_model_state"
 SET_LINK_STATE = "set_link_state"
 APPLY_WRENCH = "apply_wrench"
 BALL_CONTACTS = "ball_contacts"
+WORLD_INPUTS = "world_inputs"  # WorldInputs: what entered the world from outside the simulator (when listened to)
 
 # scene
 GAME_STATE = "game_state"

@@ -2,7 +2,8 @@
 
 Playback publishes every recorded topic on an in-process bus with the recorded timing (``--speed``
 scales it); viewers attach through `EXTENSIONS` (e.g. a live view adds ``--view``). ``--verify``
-re-simulates the recorded scene, seed and operator commands and compares the model states bit for bit.
+re-simulates the world from the recorded inputs (``--verify strategies``: the recorded scene, seed,
+strategies and operator commands) and compares the model states bit for bit.
 ``--info`` prints what the recording holds. A truncated or damaged file is read up to what is intact, and
 each problem is reported on stderr.
 """
@@ -48,10 +49,11 @@ def add_parser(sub) -> None:
         help="play a recording back on the bus, or check that it reproduces",
         description="Publishes every topic of a recording (simatch run --record) on the bus with "
         "its recorded timing, so that any node or viewer sees the game again. "
-        "--verify re-simulates the recorded scene, seed and operator commands and "
-        "checks that the model states match the recording bit for bit.",
+        "--verify re-simulates the world from the recorded inputs (every robot command as the simulator "
+        "applied it, placements, operator actions) and checks that the model states match the recording "
+        "bit for bit; --verify strategies runs the recorded strategies, judge and coaches again instead.",
     )
-    p.add_argument("file", metavar="FILE.mcap", help="a recording")
+    p.add_argument("file", nargs="?", metavar="FILE.mcap", help="a recording")
     p.add_argument(
         "--speed",
         type=speed,
@@ -69,8 +71,12 @@ def add_parser(sub) -> None:
     )
     p.add_argument(
         "--verify",
-        action="store_true",
-        help="re-simulate the run and compare the model states bit for bit (exit status 1 if they differ)",
+        nargs="?",
+        const="auto",
+        metavar="inputs|strategies",
+        help="re-simulate the run and compare the model states bit for bit (exit status 1 if they differ): "
+        "from the recorded world inputs (the default; any run), or from the recorded strategies, judge and "
+        "coaches ('strategies': embedded and undisturbed lockstep runs only)",
     )
     p.add_argument("--info", action="store_true", help="describe the recording and exit")
     p.add_argument("--json", action="store_true", help="with --verify or --info: print one JSON object")
@@ -88,8 +94,14 @@ def _warn(problems: list[str], already: int = 0) -> int:
 
 def main(args) -> int:
     from ..record.reader import Recording, RecordingError
-    from ..record.reproduce import VerifyError, verify
+    from ..record.reproduce import MODES, VerifyError, verify
 
+    if args.verify is not None and args.verify not in MODES and args.file is None:
+        args.file, args.verify = args.verify, "auto"  # `replay --verify FILE`
+    if args.file is None:
+        raise UsageError("which recording? simatch replay FILE.mcap [--verify | --info | --speed X]")
+    if args.verify is not None and args.verify not in MODES:
+        raise UsageError(f"--verify {args.verify}: expected one of {', '.join(m for m in MODES if m != 'auto')}")
     if args.start < 0:
         raise UsageError("--from must be a time >= 0")
     try:
@@ -98,11 +110,11 @@ def main(args) -> int:
         raise UsageError(str(exc)) from None
     if args.info:
         return _info(rec, args)
-    if args.verify:
+    if args.verify is not None:
         shown = _warn(rec.problems)
         progress = Progress(rec.duration, not args.quiet and not args.json)
         try:
-            verdict = verify(rec.path, progress=progress)
+            verdict = verify(rec.path, progress=progress, mode=args.verify)
         except (VerifyError, RecordingError) as exc:
             raise UsageError(str(exc)) from None
         finally:

@@ -53,6 +53,7 @@ WORLD_TOPICS = (
     topics.EVENTS,
     topics.GAME_STATE,
     topics.OPERATOR,
+    topics.WORLD_INPUTS,
 )
 TEAM_TOPICS = "*/*/**"  # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
@@ -79,7 +80,9 @@ class Recorder:
     ``scene``, ``seed`` and ``dt`` describe the run (they go into the metadata, so that the run can be
     reproduced, and draw the 3D scene); ``first_step`` is the physics step the run is at when recording
     starts (0: from the beginning, which `simatch replay --verify` needs). ``accelerate=False`` uses the
-    pure-Python message log and encoders even where the C extension is built (the same bytes)."""
+    pure-Python message log and encoders even where the C extension is built (the same bytes).
+    ``world_inputs``: the bus carries every input of the world from the start (a `Simulation`'s does: see
+    `simatch.sim.inputs`), so the run can be re-simulated from them (noted in the metadata)."""
 
     def __init__(
         self,
@@ -95,6 +98,7 @@ class Recorder:
         extra_topics: Iterable[str] = (),
         compression_level: int = COMPRESSION_LEVEL,
         accelerate: bool = True,
+        world_inputs: bool = False,
     ):
         self.path = Path(path)
         _check_path(self.path)
@@ -134,6 +138,7 @@ class Recorder:
                 "control_period": repr(float(scene.spec.control.period)),
                 "first_step": str(first_step),
                 "links": json.dumps(bool(links)),
+                "world_inputs": "1" if world_inputs and first_step == 0 else "0",
                 "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
                 "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             },
@@ -283,7 +288,14 @@ class RunRecorder(Recorder):
     def __init__(self, sim, path, **options):
         self.sim = sim
         super().__init__(
-            sim.bus, path, scene=sim.scene, seed=sim.seed, dt=sim.dt, first_step=sim.simulator.step_index, **options
+            sim.bus,
+            path,
+            scene=sim.scene,
+            seed=sim.seed,
+            dt=sim.dt,
+            first_step=sim.simulator.step_index,
+            world_inputs=sim.simulator.inputs is not None,
+            **options,
         )
 
     def close(self, status: str = "complete", summary: dict | None = None) -> None:

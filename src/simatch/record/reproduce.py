@@ -1,5 +1,19 @@
 """Reproduction check (``simatch replay FILE --verify``): re-simulate a recorded run and compare.
 
+Two ways, the first one by default:
+
+* **From the recorded inputs** (``--verify``, ``--verify inputs``): the recording holds, for every physics
+  step, everything that entered the world from outside the simulator (``world_inputs``: each robot's applied
+  commands, placements, forces, robots sent off; see `simatch.sim.inputs`). A fresh simulator of the
+  recorded scene is given those inputs at the same steps in the same order, with no strategy, judge or coach,
+  and its states are compared with the recorded ones as below. This reproduces any run: embedded or
+  distributed, lockstep or real time, with processes killed, late or rejoining, driven by hand from the web
+  UI or the referee console, with plug-ins that use their own randomness.
+* **From the strategies** (``--verify strategies``): the run's nodes are run again, as the next paragraph
+  says. Only a run whose every decision came from deterministic code in the simulator's process reproduces
+  so (an embedded run, a lockstep run where no process failed); where it does, it checks the strategies,
+  the judge and the coaches too.
+
 The recording holds the scene file's text, the overrides and the seed (metadata) and every intervention
 from outside the run's nodes (``operator`` topic: Python API calls, commands given to a coach by hand,
 operator actions on a judge). A new embedded `Simulation` of that scene and seed is stepped in lockstep
@@ -76,12 +90,19 @@ class Verdict:
     operator_commands: int = 0
     problems: list[str] = field(default_factory=list)
     complete: bool = True  # the whole run was recorded and compared (file intact, finalised)
+    mode: str = "strategies"  # how it was re-simulated: "inputs" (the world from its recorded inputs) or "strategies"
+    inputs: int = 0  # world inputs carried out again (mode "inputs")
 
     def describe(self) -> str:
         if self.identical:
+            how = (
+                f"from {self.inputs} recorded world input(s)"
+                if self.mode == "inputs"
+                else f"from the strategies, {self.operator_commands} operator command(s) re-applied"
+            )
             head = (
                 f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
-                f"{self.operator_commands} operator command(s) re-applied"
+                f"re-simulated {how}"
             )
             if not self.complete:
                 head += "; the recording is incomplete, so only what it holds was checked"
@@ -92,6 +113,8 @@ class Verdict:
     def as_dict(self) -> dict:
         out = {
             "identical": self.identical,
+            "mode": self.mode,
+            "inputs": self.inputs,
             "compared": self.compared,
             "until": self.until,
             "operator_commands": self.operator_commands,
@@ -131,10 +154,16 @@ def apply_operator(sim, op) -> None:
         raise VerifyError(f"unknown operator command {call!r} at t={op.stamp:.3f} s")
 
 
-def verify(path: str | Path, progress: Callable[[float], None] | None = None) -> Verdict:
-    """Re-simulate the recording at ``path`` and compare its model states step by step."""
-    from ..simulation import Simulation  # the embedded run: composes every subsystem
+#: the ways of re-simulating (``--verify MODE``); "auto": from the inputs where the recording holds them
+MODES = ("auto", "inputs", "strategies")
 
+
+def verify(path: str | Path, progress: Callable[[float], None] | None = None, mode: str = "auto") -> Verdict:
+    """Re-simulate the recording at ``path`` and compare its model states step by step: from its recorded
+    world inputs (``mode="inputs"``), by running its strategies, judge and coaches again
+    (``"strategies"``), or from the inputs where the recording holds them (``"auto"``)."""
+    if mode not in MODES:
+        raise ValueError(f"unknown verification mode {mode!r}; modes are {', '.join(MODES)}")
     rec = Recording(path)
     meta = rec.metadata
     if not rec.is_simatch:
@@ -151,6 +180,25 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None) ->
             f"a different version may simulate differently"
         )
     scene = rec.scene()
+    has_inputs = rec.metadata.get("world_inputs") == "1"
+    if mode == "inputs" and not has_inputs:
+        raise VerifyError(
+            f"{rec.path} holds no world inputs (recorded by simatch {meta.get('simatch_version')}, before they were "
+            f"recorded, or not from a run's start): try --verify strategies"
+        )
+    if mode != "strategies" and has_inputs:
+        verdict = _verify_inputs(rec, scene, progress)
+        verdict.problems = problems + verdict.problems
+        return verdict
+    if mode == "auto":
+        problems.append("the recording holds no world inputs: re-simulated from its strategies")
+    return _verify_strategies(rec, scene, problems, progress)
+
+
+def _verify_strategies(rec: Recording, scene, problems: list[str], progress) -> Verdict:
+    from ..simulation import Simulation  # the embedded run: composes every subsystem
+
+    meta = rec.metadata
     external = [t for t, spec in scene.spec.teams.items() if spec.strategy == "external"]
     if external:
         raise VerifyError(
@@ -158,7 +206,78 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None) ->
             f"(strategy 'external'): their decisions cannot be re-simulated"
         )
     with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
-        return _compare(rec, sim, problems, progress)
+        verdict = _compare(rec, sim, problems, progress)
+    verdict.mode = "strategies"
+    return verdict
+
+
+def _verify_inputs(rec: Recording, scene, progress) -> Verdict:
+    """Re-simulate the world alone from the recorded inputs and compare (see the module's docstring)."""
+    from ..config.loader import check_models
+    from ..sim.inputs import InputError, WorldReplay
+    from ..sim.node import fingerprint, model_states_message
+    from ..sim.simulator import Simulator
+
+    check_models(scene)
+    sim = Simulator(scene.spec, int(rec.metadata.get("seed", "0")))
+    replay = WorldReplay(sim)
+    encode = Codec(msgs.typestore).encode
+    verdict = Verdict(identical=True, compared=0, until=0.0, mode="inputs")
+    last_report = -1.0
+    dt = sim.dt
+    try:
+        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS}):
+            if topic == topics.WORLD_INPUTS:
+                msg = rec.decode("simatch_msgs/msg/WorldInputs", data, topic)
+                if msg is None:
+                    raise VerifyError(f"{rec.path}: a world-inputs message does not decode: cannot re-simulate")
+                if int(msg.step) < sim.step_index:
+                    raise VerifyError(f"{rec.path}: the inputs of step {msg.step} come after that step")
+                replay.advance_to(int(msg.step))
+                replay.apply(msg)
+                continue
+            if topic == topics.STATE_FINGERPRINT:
+                fp = rec.decode("simatch_msgs/msg/StateFingerprint", data, topic)
+                if fp is None or int(fp.step) < sim.step_index:
+                    continue
+                replay.advance_to(int(fp.step))
+                _, pose, twist = sim.model_state_arrays()
+                if fingerprint(pose, twist) != int(fp.fingerprint):
+                    verdict.identical = False
+                    verdict.first_difference = Difference(
+                        fp.step * dt,
+                        int(fp.step),
+                        "(every model)",
+                        "fingerprint of the exact states",
+                        int(fp.fingerprint),
+                        fingerprint(pose, twist),
+                        1,
+                    )
+                    break
+                continue
+            _, step = _STEP.unpack_from(data)
+            if step < sim.step_index:
+                continue  # (a second recorder's copy, or out of order: compared once)
+            replay.advance_to(step)
+            names, pose, twist = sim.model_state_arrays()
+            mine = model_states_message(step * dt, step, names, pose, twist)
+            verdict.compared += 1
+            verdict.until = step * dt
+            if encode(mine) != data:
+                verdict.identical = False
+                verdict.first_difference = _difference(rec, bytes(data), mine, dt)
+                break
+            if progress is not None and verdict.until - last_report >= 1.0:
+                last_report = verdict.until
+                progress(verdict.until)
+    except InputError as exc:
+        raise VerifyError(f"{rec.path}: {exc}") from None
+    if verdict.compared == 0:
+        raise VerifyError(f"{rec.path} holds no model states to compare")
+    verdict.inputs = replay.applied
+    verdict.problems = list(rec.problems)
+    verdict.complete = rec.finalised and not rec.problems
+    return verdict
 
 
 class _DuringStep(Node):

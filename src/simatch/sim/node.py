@@ -5,7 +5,8 @@ contacts, on every control tick the clock, the fingerprint of the exact states a
 OmniVisionInfo (each only when somebody listens; a robot's perception may be taken at a later step of the
 control period, its phase: see `set_vision_phase`); it takes every robot's VelCmd and ActionCmd.
 `PhysicsNode` (phase ACT) applies the watchdog and advances the physics once every node has handled the
-step.
+step. Both publish the world's inputs (`simatch.sim.inputs`) on ``world_inputs`` while somebody listens:
+the SimulatorNode those made between two steps, the PhysicsNode those made while the step's nodes ran.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
+from .inputs import InputLog
 from .simulator import Simulator
 
 # built positionally (every physics step; see msgs.positional)
@@ -23,6 +25,13 @@ _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
 _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerprint")
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
 _F32 = np.float32  # the states' numbers, as the messages define them
+
+
+def model_states_message(now: float, step: int, names, pose: np.ndarray, twist: np.ndarray):
+    """The ModelStates message of the simulator's exact states (float32 numbers, as recorded)."""
+    return _ModelStates(now, step, names, pose.astype(_F32).ravel(), twist.astype(_F32).ravel())
+
+
 _sha256 = hashlib.sha256
 _from_bytes = int.from_bytes
 
@@ -69,6 +78,7 @@ class SimulatorNode(Node):
         self.pub_links = bus.publisher(topics.LINK_STATES, msgs.LinkStates)
         self.pub_contacts = bus.publisher(topics.BALL_CONTACTS, msgs.BallContacts)
         self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+        self.pub_inputs = bus.publisher(topics.WORLD_INPUTS, msgs.WorldInputs)
         self.pub_vision = []
         self.subs = []
         for i, entry in enumerate(sim.ix.robots):
@@ -108,6 +118,12 @@ class SimulatorNode(Node):
     def tick(self, now: float) -> None:
         sim = self.sim
         k = sim.step_index
+        inputs = sim.inputs
+        if inputs is not None and inputs.kind:  # made between the steps: before this step's states go out
+            if self.pub_inputs.active:
+                self.pub_inputs.put(inputs.take(now, k, True))
+            else:
+                inputs.clear()
         perception = sim.perception
         if perception.delay_steps:
             perception.record(sim.snapshot())
@@ -127,7 +143,7 @@ class SimulatorNode(Node):
         arrays = None
         if self.pub_models.active:
             arrays = names, pose, twist = sim.model_state_arrays()
-            self.pub_models.put(_ModelStates(now, k, names, pose.astype(_F32).ravel(), twist.astype(_F32).ravel()))
+            self.pub_models.put(model_states_message(now, k, names, pose, twist))
         if self.pub_fingerprint.active and k % self.control_steps == 0:
             _, pose, twist = arrays or sim.model_state_arrays()
             self.pub_fingerprint.put(_StateFingerprint(now, k, fingerprint(pose, twist)))
@@ -177,13 +193,29 @@ class PhysicsNode(Node):
         self.sim = sim
         self.sensor = sensor
         self.period = sim.dt
-        self.control_steps = sensor.control_steps
-        self.timeout = sim.scene.control.command_timeout
+        self._log = sim.inputs
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        self.pub_inputs = ctx.bus.publisher(topics.WORLD_INPUTS, msgs.WorldInputs)
 
     def tick(self, now: float) -> None:
         sim = self.sim
-        if sim.step_index % self.control_steps == 0:
-            sim.watchdog(self.timeout, self.control_steps)
-        sim.step()
+        inputs = sim.inputs
+        listened = self.pub_inputs.active
+        if inputs is not None and inputs.kind:
+            if listened:
+                self.pub_inputs.put(inputs.take(now, sim.step_index, False))
+            else:
+                inputs.clear()
+        sim.advance()
         if sim.events:
             self.sensor.flush_events()
+        # the inputs are logged while somebody listens (from the start on: a recorder attached before the
+        # first step has everything)
+        if listened:
+            if inputs is None:
+                sim.inputs = inputs = self._log or InputLog()
+                self._log = inputs
+        elif inputs is not None:
+            self._log, sim.inputs = inputs, None

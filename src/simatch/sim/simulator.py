@@ -5,6 +5,10 @@ model and link states, and offers the Gazebo-like interface: set model/link stat
 for a duration. It knows nothing of soccer rules; the bus adapter (`simatch.sim.node`) connects it to
 the other subsystems.
 
+Everything that enters the world from outside goes through the methods marked `world_input` (commands,
+the Gazebo-like calls, sending off, freezing): while `inputs` is on they are logged there, so that a run
+can be re-simulated from its inputs alone (`simatch.sim.inputs`).
+
 Bad input never reaches the physics: a command with a NaN, an infinity or an absurd value is refused and
 reported as an event (rate-limited per robot, with a count), and the robot keeps its last good command.
 """
@@ -24,6 +28,7 @@ from .. import msgs
 from ..config.schema import Scene
 from ..robots.drive import OmniDrive
 from .ballhandling import BallHandling
+from .inputs import InputLog, action_input, velocity_input, world_input
 from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world
@@ -107,6 +112,9 @@ class Simulator:
             self.dt,
         )
         self._on_event = on_event
+        #: the log of the world's inputs (`simatch.sim.inputs`): on from the start, so that what a judge or a
+        #: script does before the first step is in it; the bus adapter turns it off while nobody listens
+        self.inputs: InputLog | None = InputLog()
         self.events: list = []  # GameEvent messages not yet taken by the bus adapter
         self.mechanics: Counter = Counter()  # kicks, catches, ball losses by reason
         self.ball = BallHandling(self.m, self.d, self.ix, self.robot_models, scene, self._mechanism_event)
@@ -235,6 +243,7 @@ class Simulator:
             self._refused_since_report[i] = 0
         return False
 
+    @velocity_input
     def command_velocity(self, i: int, vx: float, vy: float, w: float) -> bool:
         """Robot i's body-frame velocity command. False (and an event) if refused."""
         try:
@@ -256,6 +265,7 @@ class Simulator:
         self.drive.command(i, *_f32s(vx, vy, w))  # at VelCmd's precision, however the command came
         return True
 
+    @world_input
     def command_all(self, V: np.ndarray, dribble: np.ndarray | None = None) -> None:
         """Every robot's body-frame velocity command at once, V of shape (N, 3) (for scripted drivers), and
         optionally every dribbler; rows with a bad value are refused one by one, like `command_velocity`."""
@@ -285,6 +295,7 @@ class Simulator:
                 for i in np.flatnonzero(changed):
                     self.ball.set_dribbler(int(i), bool(want[i]))
 
+    @action_input
     def command_action(
         self, i: int, dribble: bool, kick_speed: float = 0.0, lob: bool = False, window: float | None = None
     ) -> bool:
@@ -324,7 +335,11 @@ class Simulator:
     def _relive(self, i: int) -> None:
         self._live[i] = bool(self.commanded[i] and not self.watchdog_tripped[i] and self.usable[i])
 
+    @world_input
     def stop_robot(self, i: int) -> None:
+        self._stop_robot(i)
+
+    def _stop_robot(self, i: int) -> None:
         self.drive.stop(i)
         self.ball.set_dribbler(i, False)
         self.ball.kicks.pop(i, None)
@@ -341,7 +356,7 @@ class Simulator:
         for i in np.flatnonzero(stale):
             self.watchdog_tripped[i] = True
             self._live[i] = False
-            self.stop_robot(int(i))
+            self._stop_robot(int(i))
             self.event(
                 "watchdog_stop",
                 int(i),
@@ -351,6 +366,13 @@ class Simulator:
             )
 
     # --- stepping --------------------------------------------------------------------------------------------
+    def advance(self) -> None:
+        """One physics step as a run makes it after its nodes: at a control tick, the watchdog first (robots
+        whose commands stopped coming are stopped within ``control.command_timeout``)."""
+        if self.step_index % self.control_steps == 0:
+            self.watchdog(self.scene.control.command_timeout, self.control_steps)
+        self.step()
+
     def step(self, n: int = 1) -> None:
         step = self._step
         for _ in range(n):
@@ -593,6 +615,7 @@ class Simulator:
         return h.hexdigest()
 
     # --- the Gazebo-like interface ------------------------------------------------------------------------------
+    @world_input
     def set_model_state(self, name: str, **state: float) -> None:
         """Place a model and/or set its velocity, world frame. Keys: x y z yaw qw qx qy qz vx vy vz wx wy wz;
         keys not given keep their current value. Robots are planar: a robot asked to leave the floor or to
@@ -701,6 +724,7 @@ class Simulator:
                 self.event("ball_moved_out", i, detail="the ball was placed inside a robot; moved out to its surface")
         mujoco.mj_forward(self.m, self.d)
 
+    @world_input
     def set_link_state(self, name: str, **state: float) -> None:
         """Links: ``<robot>/base`` is the robot itself and ``ball`` the ball; wheels follow their base."""
         if name == BALL_NAME:
@@ -715,6 +739,7 @@ class Simulator:
             )
         raise CommandError(f"no link named {name!r} (links: <robot>/base, <robot>/wheel_<k>, ball)")
 
+    @world_input
     def apply_wrench(
         self, name: str, force: Iterable[float] = (0, 0, 0), torque: Iterable[float] = (0, 0, 0), duration: float = 0.0
     ) -> None:
@@ -732,6 +757,7 @@ class Simulator:
         steps = max(1, round(duration / self.dt))
         self._wrenches.append((body, np.array(f + t, dtype=float), self.step_index + steps))
 
+    @world_input
     def set_enabled(self, name: str, enabled: bool) -> None:
         """A disabled robot ignores its commands and stands still (e.g. sent off)."""
         i = self.index_of(name)
@@ -739,10 +765,11 @@ class Simulator:
         self.usable[i] = self.enabled[i] and not self.frozen[i]
         self._relive(i)
         if not enabled:
-            self.stop_robot(i)
+            self._stop_robot(i)
             if self.ball.holder == i:
                 self.ball.release("robot_disabled")
 
+    @world_input
     def set_frozen(self, name: str, frozen: bool) -> None:
         """A frozen robot is welded to the floor where it stands: nothing moves it (e.g. a captured target)."""
         i = self.index_of(name)
@@ -751,7 +778,7 @@ class Simulator:
         self._relive(i)
         self._freeze(i, frozen)
         if frozen:
-            self.stop_robot(i)
+            self._stop_robot(i)
             self._reset_drive(i, None)
             self.d.qvel[self._rv[i]] = 0.0
 
