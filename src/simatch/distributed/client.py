@@ -84,6 +84,9 @@ class TeamProcess:
         self.joined = False
         self._server_alive = False
         self._server_lost_at: float | None = None
+        #: the connection to the server came back after it was lost: the server took this process for dead
+        #: (``process_lost``), so it joins again before it answers (`serve`)
+        self._rejoin = False
         self._serving = False
         self._stop: BaseException | None = None  # asked for by a signal handler (`stop_soon`)
         self.bus: ZenohBus | None = None
@@ -254,6 +257,9 @@ class TeamProcess:
             self.ended = "ended"
 
     def _on_server(self, topic: str, alive: bool) -> None:
+        if alive and self.joined and self._server_lost_at is not None:
+            self.joined = False  # no tick is answered until the server knows this process again
+            self._rejoin = True
         self._server_alive = alive
         self._server_lost_at = None if alive else time.monotonic()
 
@@ -285,6 +291,10 @@ class TeamProcess:
                 if self._stop is not None:
                     raise self._stop
                 self._check_server()
+                if self._rejoin and not self.ended:
+                    self._rejoin = False
+                    self.say(f"{self.what}: the connection to the server came back; joining again")
+                    self._join()
             return self.ended
         finally:
             self._serving = False
