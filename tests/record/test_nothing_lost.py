@@ -13,6 +13,7 @@ import textwrap
 import time
 
 import pytest
+from mcap.reader import make_reader
 
 import simatch
 from simatch.record import Recorder, RecordError, Recording, RecordingError, verify
@@ -61,10 +62,12 @@ def _until_no_writer(path, timeout: float = 30.0) -> None:
 
 
 def test_sigkill_leaves_every_chunk_but_the_one_being_filled(tmp_path):
-    """The run's process killed: its writer process still writes every chunk it was handed, then ends by
-    itself; only the half second being filled is lost."""
+    """The run's process killed: its writer process still writes every chunk it was handed, finalises the file
+    (every MCAP reader reads it whole) and ends by itself, quietly; only the half second being filled is lost."""
     path = tmp_path / "killed.mcap"
-    proc = subprocess.Popen([sys.executable, "-c", KILLED_CHILD, str(path)], stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", KILLED_CHILD, str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     try:
         line = proc.stdout.readline()
         assert line.startswith("at "), line
@@ -74,11 +77,16 @@ def test_sigkill_leaves_every_chunk_but_the_one_being_filled(tmp_path):
     finally:
         _stop(proc)
     _until_no_writer(path)
+    assert proc.stderr.read() == ""  # the writer process (which shares it) ended quietly: no BrokenPipeError
     rec = Recording(path)
-    assert not rec.finalised and any("not finalised" in p for p in rec.problems)
+    assert rec.finalised and len(rec.problems) == 1 and "before the run did" in rec.problems[0]
+    assert rec.end["status"].startswith("killed:") and float(rec.end["sim_seconds"]) == pytest.approx(rec.duration)
     steps = [m.step for _, _, m in rec.messages(topics={"model_states"})]
     assert steps == list(range(len(steps)))  # intact from the start, no gap
     assert steps[-1] * 0.005 >= killed_at - 0.5 - 0.005 - 1e-9  # all but the chunk being filled
+    assert json.loads(rec.end["messages"])["model_states"] == len(steps)
+    with open(path, "rb") as f:  # the plain mcap reader reads it whole
+        assert sum(1 for _, ch, _ in make_reader(f).iter_messages() if ch.topic == "/model_states") == len(steps)
     verdict = verify(path)  # what is there re-simulates bit for bit
     assert verdict.identical and not verdict.complete and verdict.compared == len(steps)
 

@@ -21,6 +21,7 @@ SUBCOMMANDS = [
     "simatch.cli.scenes",
     "simatch.cli.replay",
     "simatch.cli.export",
+    "simatch.cli.recover",
     "simatch.cli.coach",
     "simatch.cli.serve",
     "simatch.cli.server",

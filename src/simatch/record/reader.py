@@ -15,6 +15,7 @@ covered), stops at the point where the file breaks off, and keeps a plain-langua
 from __future__ import annotations
 
 import json
+import os
 import struct
 import tempfile
 from collections.abc import Iterable, Iterator
@@ -87,13 +88,23 @@ class Recording:
                     return
                 except (McapError, EOFError, struct.error, ValueError, UnicodeDecodeError, MemoryError) as exc:
                     if offset == 0:
+                        if being_written(self.path):
+                            raise RecordingError(
+                                f"{self.path} is being written right now and holds nothing yet"
+                            ) from None
                         raise RecordingError(f"{self.path} is not an MCAP recording ({_describe(exc)})") from None
+                    if being_written(self.path):
+                        self._problem(
+                            "end",
+                            f"{self.path.name} is being written right now (a recorder is running): it is read up "
+                            f"to where it is written so far",
+                        )
                     self._problem(
                         "end",
                         f"{self.path.name} breaks off at byte {offset} of "
                         f"{self.path.stat().st_size} ({_describe(exc)}): it was not finalised "
-                        f"(the recording process was probably killed); what comes before "
-                        f"is read",
+                        f"(the recording process and its writer process were stopped); what comes before "
+                        f"is read; other tools need it finalised: `simatch recover {self.path}` does that",
                     )
                     return
                 yield offset, record
@@ -115,13 +126,27 @@ class Recording:
                     self.end = dict(record.metadata)
             elif isinstance(record, Footer):
                 self.finalised = True
+        status = (self.end or {}).get("status", "")
+        if status.startswith(("killed", "recovered")):
+            self._problem(
+                "killed",
+                f"{self.path.name} ends at t={_seconds(self.end):.3f} s, before the run did (the recording "
+                f"process was killed; {'its writer process' if status.startswith('killed') else 'simatch recover'} "
+                f"finalised the file)",
+            )
         if not self.finalised:
-            if "end" not in self._reported:
+            if being_written(self.path):
                 self._problem(
                     "end",
-                    f"{self.path.name} was not finalised (the recording process stopped before "
-                    f"closing it): it is read up to where it is intact",
+                    f"{self.path.name} is being written right now (a recorder is running): it is read up to "
+                    f"where it is written so far",
                 )
+            self._problem(
+                "end",
+                f"{self.path.name} was not finalised (the recording process and its writer process stopped "
+                f"before closing it): it is read up to where it is intact; other tools need it finalised: "
+                f"`simatch recover {self.path}` does that",
+            )
             self._scan_chunks()  # no summary: channels are known only from inside the chunks
 
     def _scan_chunks(self) -> None:
@@ -288,6 +313,32 @@ class Recording:
                 f"{typename} ({_describe(exc)}): such messages are skipped",
             )
             return None
+
+
+def being_written(path: str | Path) -> bool:
+    """Whether a recorder's writer process is writing ``path`` right now (it holds a lock on it)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: nobody can tell
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        return False
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+
+
+def _seconds(end: dict) -> float:
+    try:
+        return float(end.get("sim_seconds", "0"))
+    except ValueError:
+        return 0.0
 
 
 def _describe(exc: Exception) -> str:

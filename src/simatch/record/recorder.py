@@ -143,6 +143,13 @@ class Recorder:
                 "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             },
         )
+        self._writer.epitaph(
+            layout.META_END,
+            {
+                "status": "killed: the recording process ended without closing the recording (the writer process "
+                "finalised it)"
+            },
+        )
         self._scene3d = SceneBuilder(scene.spec)
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)

@@ -22,10 +22,12 @@ specification allows). Measured on a 5v5 match: the CRC32 of a megabyte of recor
 cost 0.3 ms, the zstd checksum 0.1 ms; both catch any damaged byte (tests/record/test_nothing_lost.py).
 
 Nothing handed over is lost when the recording process is killed: the writer process writes every chunk it
-was handed, then exits (the file is then not finalised: no summary), so a kill loses only the chunk being
-filled, half a simulated second. At most two chunks are in the writer's hands (it acknowledges each chunk
-once written; a third waits for that), so even a kill of the writer process itself loses at most one
-simulated second more. The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
+was handed, then finalises the file itself (the `epitaph` metadata, the summary and the footer: it is told
+every schema and channel and each chunk's message counts as they come), so a kill loses only the chunk
+being filled, half a simulated second, and every MCAP reader reads the rest whole. At most two chunks are
+in the writer's hands (it acknowledges each chunk once written; a third waits for that), so even a kill of
+the writer process itself loses at most one simulated second more (that file is then not finalised:
+`simatch recover` finalises it). The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
 a Ctrl-C or a kill of the run's process group does not reach it) and ends when the recording process
 closes the pipe or dies.
 
@@ -50,7 +52,21 @@ from mcap.data_stream import RecordBuilder
 from mcap.records import Channel, Header, Metadata, Schema
 
 from . import writer_process
-from .writer_process import ACK, CHUNK, FLUSH, FRAME, MAGIC, METADATA, RAW, SPAN, SUMMARY, write_all
+from .writer_process import (
+    ACK,
+    CHUNK,
+    COUNT,
+    DECLARE,
+    EPITAPH,
+    FLUSH,
+    FRAME,
+    MAGIC,
+    METADATA,
+    RAW,
+    SPAN,
+    SUMMARY,
+    write_all,
+)
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +88,7 @@ class McapWriter:
             fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # never overwrites a file
         except OSError as exc:
             raise WriterError(f"cannot write {path}: {exc.strerror or exc}") from None
+        _lock(fd)  # held by the writer process's copy of the descriptor until it ends (a reader can tell)
         self.path = Path(path)
         self.error: str | None = None
         self._schemas: list[Schema] = []
@@ -118,6 +135,7 @@ class McapWriter:
         """Register a schema: its id and its record, for the chunk of its channels' first message."""
         record = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
         self._schemas.append(record)
+        self._send(DECLARE, pickle.dumps(record))
         record.write(self._records)
         return record.id, self._records.end()
 
@@ -128,6 +146,7 @@ class McapWriter:
         )
         self._channels.append(record)
         self._counts[record.id] = 0
+        self._send(DECLARE, pickle.dumps(record))
         record.write(self._records)
         return record.id, self._records.end()
 
@@ -144,13 +163,19 @@ class McapWriter:
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
         self._acknowledged(MAX_HANDED - 1)
-        if self._send(CHUNK, SPAN.pack(start_ns, end_ns), data):
+        head = SPAN.pack(start_ns, end_ns, len(counts)) + b"".join(COUNT.pack(c, k) for c, k in counts.items())
+        if self._send(CHUNK, head, data):
             self._pending += 1
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
         """A Metadata record, written after everything handed over before it."""
         Metadata(name=name, metadata=data).write(self._records)
         self._send(METADATA, pickle.dumps((name, self._records.end())))
+
+    def epitaph(self, name: str, data: dict[str, str]) -> None:
+        """The Metadata record that ends the file should this process die before `close` (the writer process
+        adds ``sim_seconds`` and ``messages``: the time and message counts of what it wrote)."""
+        self._send(EPITAPH, pickle.dumps((name, dict(data))))
 
     def flush(self) -> None:
         """Wait until everything handed over is on disk (in the operating system's hands)."""
@@ -217,6 +242,17 @@ class McapWriter:
         self.error = why
         self._pending = 0
         log.error("recording: writing %s failed (%s); the rest of the run is not recorded", self.path, why)
+
+
+def _lock(fd: int) -> None:
+    """An exclusive lock on the file for as long as a descriptor of this opening of it lives: the writer
+    process's, once this process closes its own (`simatch.record.reader.being_written`)."""
+    try:
+        import fcntl
+
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except (ImportError, OSError):  # not POSIX, or a file system without locks: readers cannot tell
+        pass
 
 
 def _widen(fd: int) -> None:

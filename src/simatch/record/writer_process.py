@@ -6,6 +6,15 @@ length, payload) from FRAMES_FD until it is closed, writes the file FILE_FD, and
 `ACK` per chunk written or flush done, then, once the frames end, ``ok`` or what went wrong. It is run as
 a file, not as a module of simatch, and imports only the standard library, zstd and (for the summary)
 mcap: it starts in some 30 ms, and the run does not wait for it.
+
+It keeps what the summary needs as the frames come (the schemas and channels declared to it, each chunk's
+message counts), so that when the frames end without a `SUMMARY` — the recording process died, killed or
+crashed — it still **finalises the file**: the `EPITAPH` metadata the recording process gave it at the
+start (with the simulated time and the message counts of what was written), the summary and the footer.
+Every MCAP reader then reads the file whole, and nothing needs recovering. It ends quietly when its parent
+is gone (no acknowledgement can be delivered then: that is expected, not an error). While its descriptor
+of the file lives, the file is locked (``flock``, taken by the recording process before it handed the
+descriptor over), so that a reader can tell a recording being written from one whose writer died.
 """
 
 from __future__ import annotations
@@ -18,8 +27,9 @@ import zlib
 
 MAGIC = b"\x89MCAP0\r\n"
 FRAME = struct.Struct("<BQ")  # a frame's kind and payload length
-RAW, CHUNK, METADATA, SUMMARY, FLUSH = 1, 2, 3, 4, 5
-SPAN = struct.Struct("<QQ")  # a chunk's payload starts with its first and last log time
+RAW, CHUNK, METADATA, SUMMARY, FLUSH, DECLARE, EPITAPH = 1, 2, 3, 4, 5, 6, 7
+SPAN = struct.Struct("<QQI")  # a chunk's payload starts with its first and last log time and its count of counts
+COUNT = struct.Struct("<HI")  # then (channel id, messages) per channel, then the records
 ACK = b"A"
 _CHUNK_HEADER = struct.Struct("<BQQQQI")
 _ZSTD = struct.pack("<I", 4) + b"zstd"
@@ -55,6 +65,15 @@ class FileWriter:
         self._pos = 0
         self._metadata_index: list = []  # (offset, length, name)
         self.error: str | None = None
+        # what the summary needs, kept as the frames come (for a file whose recording process died)
+        self._schemas: list = []
+        self._channels: list = []
+        self._counts: dict[int, int] = {}
+        self._chunks = 0
+        self._span: tuple[int, int] | None = None
+        self._epitaph: tuple[str, dict] | None = None
+        self._finished = False  # the SUMMARY frame came
+        self._parent = True  # acknowledgements can be delivered
 
     def run(self) -> None:
         while (head := self._read(FRAME.size)) is not None:
@@ -68,10 +87,23 @@ class FileWriter:
                 except Exception as exc:  # the disk, mostly: write nothing more, keep acknowledging
                     self.error = f"{type(exc).__name__}: {exc}"
             if kind in (CHUNK, FLUSH):
-                os.write(self._acks, ACK)
+                self._answer(ACK)
                 _summary_imports()  # while the run goes on, not when it waits for the end
+        if not self._finished and self.error is None:
+            try:  # the recording process is gone: what it handed over is written; finalise the file
+                self._finalise()
+            except Exception as exc:
+                self.error = f"{type(exc).__name__}: {exc}"
         os.close(self._fd)
-        os.write(self._acks, b"ok\n" if self.error is None else (self.error + "\n").encode())
+        self._answer(b"ok\n" if self.error is None else (self.error + "\n").encode())
+
+    def _answer(self, data: bytes) -> None:
+        """An acknowledgement to the recording process, if it is still there to read it."""
+        if self._parent:
+            try:
+                os.write(self._acks, data)
+            except OSError:  # its end of the pipe is closed: it died; the file is finished all the same
+                self._parent = False
 
     def _read(self, n: int) -> bytearray | None:
         buf = bytearray(n)
@@ -90,8 +122,15 @@ class FileWriter:
         if kind == RAW:
             self._write(payload)
         elif kind == CHUNK:
-            start_ns, end_ns = SPAN.unpack_from(payload)
-            data = memoryview(payload)[SPAN.size :]
+            start_ns, end_ns, n = SPAN.unpack_from(payload)
+            at = SPAN.size
+            for _ in range(n):
+                cid, count = COUNT.unpack_from(payload, at)
+                self._counts[cid] = self._counts.get(cid, 0) + count
+                at += COUNT.size
+            self._chunks += 1
+            self._span = (start_ns, end_ns) if self._span is None else (self._span[0], end_ns)
+            data = memoryview(payload)[at:]
             packed = self._compressor.compress(data)
             length = 8 + 8 + 8 + 4 + len(_ZSTD) + 8 + len(packed)
             head = _CHUNK_HEADER.pack(_OPCODE_CHUNK, length, start_ns, end_ns, len(data), 0)  # CRC: zstd's
@@ -101,60 +140,106 @@ class FileWriter:
 
             name, record = pickle.loads(payload)
             self._metadata_index.append((self._pos, len(record), name))
+            if self._epitaph is not None and name == self._epitaph[0]:
+                self._epitaph = None  # the real end was written: no epitaph
             self._write(record)
         elif kind == SUMMARY:
             import pickle
 
+            self._finished = True
             self._write(self._summary(pickle.loads(payload)))
+        elif kind == DECLARE:  # a schema or channel record (mcap's record object), for the summary
+            import pickle
+
+            record = pickle.loads(payload)
+            (self._channels if hasattr(record, "topic") else self._schemas).append(record)
+        elif kind == EPITAPH:  # the metadata to end the file with should the recording process die
+            import pickle
+
+            self._epitaph = pickle.loads(payload)
+
+    def _finalise(self) -> None:
+        """End the file whose recording process died: its epitaph, then the summary and the footer."""
+        import json
+        import pickle
+
+        from mcap.data_stream import RecordBuilder
+        from mcap.records import Metadata
+
+        first, last = self._span or (0, 0)
+        if self._epitaph is not None:
+            name, data = self._epitaph
+            topics = {c.id: c.topic.lstrip("/") for c in self._channels}  # channels are "/" + bus topic
+            data = dict(data, sim_seconds=repr(last / 1e9))
+            data["messages"] = json.dumps({topics.get(c, str(c)): n for c, n in sorted(self._counts.items())})
+            builder = RecordBuilder()
+            Metadata(name=name, metadata=data).write(builder)
+            self._do(METADATA, bytearray(pickle.dumps((name, builder.end()))))
+        summary = {
+            "schemas": self._schemas,
+            "channels": self._channels,
+            "counts": dict(self._counts),
+            "messages": sum(self._counts.values()),
+            "chunks": self._chunks,
+            "first": first,
+            "last": last,
+        }
+        self._write(self._summary(summary))
 
     def _summary(self, s: dict) -> bytes:
-        from mcap.data_stream import RecordBuilder
-        from mcap.opcode import Opcode
-        from mcap.records import DataEnd, Footer, MetadataIndex, Statistics, SummaryOffset
+        return summary_section(self._pos, s, self._metadata_index)
 
-        builder = RecordBuilder()
-        DataEnd(data_section_crc=0).write(builder)
-        data_end = builder.end()
-        start = self._pos + len(data_end)
-        offsets: list = []
 
-        def group(opcode, records) -> None:
-            at = builder.count
-            for record in records:
-                record.write(builder)
-            if builder.count > at:
-                offsets.append(
-                    SummaryOffset(group_opcode=opcode, group_start=start + at, group_length=builder.count - at)
-                )
+def summary_section(pos: int, s: dict, metadata_index: list, chunk_indexes: list = ()) -> bytes:
+    """The end of an MCAP file whose data section ends at byte ``pos``: DataEnd, the summary (schemas,
+    channels, statistics from ``s``, the chunk indexes given, the metadata index of ``metadata_index``:
+    (offset, length, name)), the summary offsets, the footer and the closing magic."""
+    from mcap.data_stream import RecordBuilder
+    from mcap.opcode import Opcode
+    from mcap.records import DataEnd, Footer, MetadataIndex, Statistics, SummaryOffset
 
-        index = [MetadataIndex(offset=o, length=n, name=name) for o, n, name in self._metadata_index]
-        group(Opcode.SCHEMA, s["schemas"])
-        group(Opcode.CHANNEL, s["channels"])
-        group(
-            Opcode.STATISTICS,
-            [
-                Statistics(
-                    message_count=s["messages"],
-                    schema_count=len(s["schemas"]),
-                    channel_count=len(s["channels"]),
-                    attachment_count=0,
-                    metadata_count=len(index),
-                    chunk_count=s["chunks"],
-                    message_start_time=s["first"],
-                    message_end_time=s["last"],
-                    channel_message_counts=s["counts"],
-                )
-            ],
-        )
-        group(Opcode.METADATA_INDEX, index)
-        offset_start = start + builder.count
-        for record in offsets:
+    builder = RecordBuilder()
+    DataEnd(data_section_crc=0).write(builder)
+    data_end = builder.end()
+    start = pos + len(data_end)
+    offsets: list = []
+
+    def group(opcode, records) -> None:
+        at = builder.count
+        for record in records:
             record.write(builder)
-        summary = builder.end()
-        crc = zlib.crc32(summary)
-        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, start, offset_start), crc)
-        Footer(summary_start=start, summary_offset_start=offset_start, summary_crc=crc).write(builder)
-        return data_end + summary + builder.end() + MAGIC
+        if builder.count > at:
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + at, group_length=builder.count - at))
+
+    index = [MetadataIndex(offset=o, length=n, name=name) for o, n, name in metadata_index]
+    group(Opcode.SCHEMA, s["schemas"])
+    group(Opcode.CHANNEL, s["channels"])
+    group(Opcode.CHUNK_INDEX, chunk_indexes)
+    group(
+        Opcode.STATISTICS,
+        [
+            Statistics(
+                message_count=s["messages"],
+                schema_count=len(s["schemas"]),
+                channel_count=len(s["channels"]),
+                attachment_count=0,
+                metadata_count=len(index),
+                chunk_count=s["chunks"],
+                message_start_time=s["first"],
+                message_end_time=s["last"],
+                channel_message_counts=s["counts"],
+            )
+        ],
+    )
+    group(Opcode.METADATA_INDEX, index)
+    offset_start = start + builder.count
+    for record in offsets:
+        record.write(builder)
+    summary = builder.end()
+    crc = zlib.crc32(summary)
+    crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, start, offset_start), crc)
+    Footer(summary_start=start, summary_offset_start=offset_start, summary_crc=crc).write(builder)
+    return data_end + summary + builder.end() + MAGIC
 
 
 def _summary_imports() -> None:
