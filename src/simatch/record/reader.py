@@ -27,7 +27,7 @@ from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from .. import msgs
-from ..config.loader import LoadedScene, load_scene
+from ..config.loader import LoadedScene, SceneError, load_scene
 from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
 from . import layout
@@ -206,7 +206,13 @@ class Recording:
         return {c.topic: c.schema for c in self.channels.values()}
 
     def overrides(self) -> dict:
-        return json.loads(self.metadata.get("overrides", "{}"))
+        try:
+            found = json.loads(self.metadata.get("overrides", "{}"))
+        except ValueError as exc:
+            raise RecordingError(f"{self.path}: the recorded overrides do not read: {exc}") from None
+        if not isinstance(found, dict):
+            raise RecordingError(f"{self.path}: the recorded overrides are not a table")
+        return found
 
     def scene(self) -> LoadedScene:
         """The recorded scene: the file's text as it was, with the recorded overrides, validated again."""
@@ -217,7 +223,10 @@ class Recording:
         with tempfile.TemporaryDirectory(prefix="simatch-recorded-scene-") as tmp:
             path = Path(tmp) / f"{meta.get('scene_name') or 'scene'}.toml"
             path.write_text(text, encoding="utf-8")
-            loaded = load_scene(str(path), self.overrides())
+            try:
+                loaded = load_scene(str(path), self.overrides())
+            except SceneError as exc:
+                raise RecordingError(f"{self.path}: the recorded scene does not load: {exc}") from None
         loaded.source = meta.get("scene_source", loaded.source)
         return loaded
 

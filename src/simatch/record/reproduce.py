@@ -166,6 +166,11 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
         raise ValueError(f"unknown verification mode {mode!r}; modes are {', '.join(MODES)}")
     rec = Recording(path)
     meta = rec.metadata
+    for key in ("first_step", "seed"):
+        try:
+            int(meta.get(key, "0"))
+        except ValueError:
+            raise VerifyError(f"{rec.path}: the recorded {key} {meta.get(key)!r} is not a number") from None
     if not rec.is_simatch:
         raise VerifyError(f"{rec.path} is not a simatch recording (no simatch metadata): nothing to re-simulate")
     if int(meta.get("first_step", "0")) != 0:

@@ -39,6 +39,7 @@ _f32s = msgs.f32s
 MAX_COMMAND_SPEED = 50.0  # m/s
 MAX_COMMAND_TURN = 100.0  # rad/s
 MAX_KICK_REQUEST = 100.0  # m/s (requests above the kicker's limit but below this are clamped)
+MAX_KICK_WINDOW = 60.0  # s: how long a kick request may wait for the ball
 MAX_WRENCH = 1e5  # N, N m
 BOUNCE_MIN_SPEED = 0.3  # m/s: slower impacts are absorbed (the ball settles instead of chattering)
 
@@ -307,6 +308,13 @@ class Simulator:
             ok = False
         if not ok:
             return self._refuse(i, f"kick speed {kick_speed!r} is not a number in [0, {MAX_KICK_REQUEST:g}] m/s")
+        if window is not None:
+            try:
+                ok = 0.0 <= window <= MAX_KICK_WINDOW
+            except TypeError:
+                ok = False
+            if not ok:
+                return self._refuse(i, f"kick window {window!r} is not a number of seconds in [0, {MAX_KICK_WINDOW:g}]")
         self.last_command_step[i] = self.step_index
         if self._live[i]:
             usable = True
