@@ -62,7 +62,6 @@ def _targets(names: list[str] | None):
 def _selftest():
     """A target that crashes and hangs on purpose (to check that the campaign finds and saves both)."""
     from hypothesis import strategies as st
-
     from tests.fuzz.targets import Target
 
     def prop(n):
@@ -86,7 +85,6 @@ def campaign(args) -> dict:
     if args.coverage and args.engine == "hypothesis":
         try:
             import coverage
-
             from tests.fuzz.targets import MODULES
 
             src = ROOT / "src"

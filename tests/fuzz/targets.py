@@ -37,8 +37,8 @@ from __future__ import annotations
 import collections
 import functools
 import json
-import random
 import math
+import random
 import tempfile
 from pathlib import Path
 
@@ -315,7 +315,7 @@ def target_bundle(data, payload, topic, attachment, signer):
     from simatch.distributed.fairplay import Refusal
 
     fair, creds = _fairplay()
-    for n, variant in enumerate(variants(data, len(data) + len(payload), 100)):
+    for variant in variants(data, len(data) + len(payload), 100):
         COUNTS["bundle"] += 1
         try:
             for entry in bundle.unpack(variant):
