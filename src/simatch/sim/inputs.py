@@ -78,16 +78,16 @@ class InputLog:
     def vel(self, i: int, vx, vy, w) -> None:
         self.kind.append(VEL)
         self.robot.append(i)
-        self.values += (_number(vx), _number(vy), _number(w))
+        self.values += (vx, vy, w)  # as given: made float64 (exactly) when the message is built
 
     def action(self, i: int, dribble, kick_speed=0.0, lob=False, window=None) -> None:
         self.kind.append(ACTION)
         self.robot.append(i)
         self.values += (
             1.0 if dribble else 0.0,
-            _number(kick_speed),
+            kick_speed,
             1.0 if lob else 0.0,
-            math.nan if window is None else _number(window),
+            math.nan if window is None else window,
         )
 
     def call(self, name: str, args: tuple, kwargs: dict) -> None:
@@ -102,13 +102,17 @@ class InputLog:
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
         if not self.kind:
             return None
+        try:
+            values = np.array(self.values, dtype=np.float64)
+        except (TypeError, ValueError, OverflowError):  # something that is not a number was given (and refused)
+            values = np.array([_number(v) for v in self.values], dtype=np.float64)
         msg = _WorldInputs(
             stamp,
             step,
             before_sense,
             np.array(self.kind, dtype=np.uint8),
             np.array(self.robot, dtype=np.int16),
-            np.array(self.values, dtype=np.float64),
+            values,
             self.calls,
         )
         self.kind, self.robot, self.values, self.calls = [], [], [], []
@@ -123,51 +127,83 @@ def _index(i: Any) -> bool:
     return type(i) is int and 0 <= i < 32768
 
 
-def _log_vel(log: InputLog, name: str, args: tuple, kwargs: dict) -> None:
-    if len(args) == 4 and not kwargs and _index(args[0]):
-        log.vel(*args)
-    else:
-        log.call(name, args, kwargs)
+#: the marked methods: name -> how a call is logged ("call", or the compact "vel" and "action")
+_MARKED: dict[str, str] = {}
 
 
-def _log_action(log: InputLog, name: str, args: tuple, kwargs: dict) -> None:
-    if 2 <= len(args) <= 5 and _index(args[0]) and set(kwargs) <= {"kick_speed", "lob", "window"}:
-        log.action(*args, **kwargs)
-    else:
-        log.call(name, args, kwargs)
-
-
-def _log_call(log: InputLog, name: str, args: tuple, kwargs: dict) -> None:
-    log.call(name, args, kwargs)
-
-
-def world_input(method: Callable | None = None, *, log: Callable = _log_call):
-    """Mark a Simulator method as a way into the world: while the simulator's input log is on, every call of
-    it from outside the simulator is logged before it is carried out (the calls it makes in turn are not)."""
+def world_input(method: Callable | None = None, *, form: str = "call") -> Callable:
+    """Mark a Simulator method as a way into the world. Marking costs nothing: while the simulator's input log
+    is off the method is the plain one; `install` puts a logging twin of each marked method on a simulator
+    whose log is on (every call of it from outside the simulator is then logged before it is carried out, and
+    the calls it makes in turn are not)."""
 
     def mark(method: Callable) -> Callable:
-        name = method.__name__
-        METHODS.add(name)
-
-        @functools.wraps(method)
-        def entry(sim, *args, **kwargs):
-            inputs = sim.inputs
-            if inputs is None or inputs.busy:
-                return method(sim, *args, **kwargs)
-            inputs.busy = True
-            try:
-                log(inputs, name, args, kwargs)
-                return method(sim, *args, **kwargs)
-            finally:
-                inputs.busy = False
-
-        return entry
+        _MARKED[method.__name__] = form
+        METHODS.add(method.__name__)
+        return method
 
     return mark(method) if method is not None else mark
 
 
-velocity_input = world_input(log=_log_vel)
-action_input = world_input(log=_log_action)
+def install(sim, log: InputLog | None) -> None:
+    """Log the inputs of ``sim`` into ``log`` from now on (None: stop logging)."""
+    for name, form in _MARKED.items():
+        if log is None:
+            sim.__dict__.pop(name, None)
+        else:
+            original = getattr(type(sim), name).__get__(sim)
+            sim.__dict__[name] = _LOGGERS[form](original, name, log)
+
+
+def _logged_call(original: Callable, name: str, log: InputLog) -> Callable:
+    @functools.wraps(original)
+    def entry(*args, **kwargs):
+        if log.busy:
+            return original(*args, **kwargs)
+        log.busy = True
+        try:
+            log.call(name, args, kwargs)
+            return original(*args, **kwargs)
+        finally:
+            log.busy = False
+
+    return entry
+
+
+def _logged_vel(original: Callable, name: str, log: InputLog) -> Callable:
+    """``command_velocity(i, vx, vy, w)`` in the compact form (VEL): a match makes hundreds of these calls per
+    simulated second. It calls no other input, so it needs no ``busy`` mark of its own."""
+    general = _logged_call(original, name, log)
+
+    @functools.wraps(original)
+    def entry(*args, **kwargs):
+        if log.busy or kwargs or len(args) != 4 or type(args[0]) is not int or not 0 <= args[0] < 32768:
+            return general(*args, **kwargs)
+        log.kind.append(VEL)  # (InputLog.vel, inline: the hot path)
+        log.robot.append(args[0])
+        log.values += args[1:]
+        return original(*args)
+
+    return entry
+
+
+def _logged_action(original: Callable, name: str, log: InputLog) -> Callable:
+    """``command_action(i, dribble, kick_speed, lob[, window])`` in the compact form (ACTION)."""
+    general = _logged_call(original, name, log)
+
+    @functools.wraps(original)
+    def entry(*args, **kwargs):
+        if log.busy or kwargs or not 2 <= len(args) <= 5 or not _index(args[0]):
+            return general(*args, **kwargs)
+        log.action(*args)
+        return original(*args)
+
+    return entry
+
+
+_LOGGERS = {"call": _logged_call, "vel": _logged_vel, "action": _logged_action}
+velocity_input = world_input(form="vel")
+action_input = world_input(form="action")
 
 
 class WorldReplay:
@@ -178,7 +214,7 @@ class WorldReplay:
 
     def __init__(self, sim):
         self.sim = sim
-        self.sim.inputs = None
+        sim.inputs = None
         self.applied = 0  # inputs carried out
         self.refused = 0  # of which the simulator refused (as it did in the run: an input is logged before)
 

@@ -98,20 +98,22 @@ class SimulatorNode(Node):
                 )
             )
 
+    # (the command methods are looked up at each call: while the world's inputs are logged, they are the
+    # simulator's logging twins)
     def _vel_callback(self, i: int):
-        command = self.sim.command_velocity
+        sim = self.sim
 
         def on_vel(msg) -> None:
-            command(i, msg.vx, msg.vy, msg.w)
+            sim.command_velocity(i, msg.vx, msg.vy, msg.w)
 
         return on_vel
 
     def _action_callback(self, i: int):
-        command = self.sim.command_action
+        sim = self.sim
         lob = msgs.ActionCmd.KICK_LOB
 
         def on_action(msg) -> None:
-            command(i, msg.dribble, msg.kick_speed, msg.kick_type == lob)
+            sim.command_action(i, msg.dribble, msg.kick_speed, msg.kick_type == lob)
 
         return on_action
 

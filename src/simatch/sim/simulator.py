@@ -28,7 +28,7 @@ from .. import msgs
 from ..config.schema import Scene
 from ..robots.drive import OmniDrive
 from .ballhandling import BallHandling
-from .inputs import InputLog, action_input, velocity_input, world_input
+from .inputs import InputLog, action_input, install, velocity_input, world_input
 from .kernels import model_poses, robot_flags
 from .perception import Perception, Snapshot
 from .world import BALL_NAME, build_world
@@ -113,9 +113,10 @@ class Simulator:
             self.dt,
         )
         self._on_event = on_event
-        #: the log of the world's inputs (`simatch.sim.inputs`): on from the start, so that what a judge or a
-        #: script does before the first step is in it; the bus adapter turns it off while nobody listens
-        self.inputs: InputLog | None = InputLog()
+        # the log of the world's inputs: on from the start, so that what a judge or a script does before the
+        # first step is in it; the bus adapter turns it off while nobody listens
+        self._inputs: InputLog | None = None
+        self.inputs = InputLog()
         self.events: list = []  # GameEvent messages not yet taken by the bus adapter
         self.mechanics: Counter = Counter()  # kicks, catches, ball losses by reason
         self.ball = BallHandling(self.m, self.d, self.ix, self.robot_models, scene, self._mechanism_event)
@@ -182,6 +183,18 @@ class Simulator:
             np.random.default_rng([seed & 0xFFFFFFFF, 0x5E45E]),
         )
         self._plan_drive(np.ones(self.n, dtype=bool), self.control_steps)
+
+    # --- inputs -------------------------------------------------------------------------------------------
+    @property
+    def inputs(self) -> InputLog | None:
+        """The log of the world's inputs (`simatch.sim.inputs`), or None while they are not logged."""
+        return self._inputs
+
+    @inputs.setter
+    def inputs(self, log: InputLog | None) -> None:
+        if log is not self._inputs:
+            self._inputs = log
+            install(self, log)  # the marked methods log while on, and are the plain ones while off
 
     # --- time --------------------------------------------------------------------------------------------
     @property
