@@ -198,17 +198,20 @@ def _atheris(args, name: str, budget: float, out: Path) -> dict:
         f"-seed={args.seed or 1}",
         f"-timeout={int(args.hang)}",
     ]
-    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=budget + 600)
-    inputs = 0
+    tally = out / f"atheris-{name}.count"
+    env = dict(os.environ, SIMATCH_FUZZ_TALLY=str(tally))
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=budget + 600, env=env)
+    examples = 0
     for line in proc.stderr.splitlines():
-        if line.startswith("stat::number_executed_units:"):
-            inputs = int(line.split(":")[-1])
+        if line.startswith("stat::number_of_executed_units:"):
+            examples = int(line.split(":")[-1])
+    inputs = int(tally.read_text()) if tally.exists() else 0  # (counted to within the last half second)
     found = []
     if proc.returncode != 0:
         tail = proc.stderr[-2000:]
         found.append({"kind": "atheris", "where": "", "message": tail, "file": str(crashes) + "*"})
         say(args, f"  CRASH under atheris (exit {proc.returncode}): {tail[-300:]}")
-    return {"inputs": inputs, "crashes": found, "seconds": round(budget, 1)}
+    return {"inputs": inputs or examples, "examples": examples, "crashes": found, "seconds": round(budget, 1)}
 
 
 def atheris_worker(name: str, libfuzzer_args: list[str]) -> None:
@@ -217,9 +220,23 @@ def atheris_worker(name: str, libfuzzer_args: list[str]) -> None:
     with atheris.instrument_imports(include=["simatch"]):
         import simatch  # noqa: F401  (its modules instrumented for coverage feedback)
         from simatch.msgs import cdr  # noqa: F401
+    from tests.fuzz.targets import COUNTS
+
     target = _targets([name])[name]
     fuzz = _test(target).hypothesis.fuzz_one_input
-    atheris.Setup([sys.argv[0], *libfuzzer_args], fuzz)
+    tally = Path(os.environ["SIMATCH_FUZZ_TALLY"])
+    last = [0.0]
+
+    def one(buffer: bytes) -> None:
+        try:
+            fuzz(buffer)
+        finally:  # libFuzzer ends the process without Python's exit handlers: the count is kept as it goes
+            now = time.monotonic()
+            if now - last[0] > 0.5:
+                last[0] = now
+                tally.write_text(str(COUNTS[name]))
+
+    atheris.Setup([sys.argv[0], *libfuzzer_args], one)
     atheris.Fuzz()
 
 
