@@ -82,3 +82,35 @@ def test_a_strategy_that_raises_does_not_stop_the_run(tmp_path, monkeypatch):
         assert {e["robot"] for e in errors} == {1, 2, 3, 4, 5}
         assert "ZeroDivisionError: oops" in errors[0]["detail"]
         assert sim.time == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    "name, state, why",
+    [
+        ("magenta/1", {"vx": -1e4}, "faster than anything in the world moves"),
+        ("cyan/2", {"x": 20.0}, "outside the world"),
+        ("ball", {"y": -9.0}, "outside the world"),
+        ("ball", {"z": 60.0}, "outside the world"),
+        ("ball", {"wx": 5000.0}, "faster than anything"),
+        ("cyan/2", {"x": False}, "not a finite value"),
+    ],
+)
+def test_placements_outside_the_world_or_too_fast_are_refused(field_sim, name, state, why):
+    """Found by the fuzzing campaign (docs/reliability.md): a robot set moving at 10 km/s went through the
+    boards in one step and left the world."""
+    sim = field_sim()
+    before = sim.model_states()[name]
+    with pytest.raises(ValueError, match=why):
+        sim.set_model_state(name, **state)
+    assert sim.model_states()[name] == before  # nothing changed
+
+
+def test_wrenches_that_would_throw_a_body_out_of_the_world_are_refused(field_sim):
+    sim = field_sim()
+    with pytest.raises(ValueError, match="more than anything in the world moves"):
+        sim.apply_wrench("cyan/3", force=(1e5, 0.0, 0.0), duration=3.0)  # went through the boards
+    with pytest.raises(ValueError, match="more than anything in the world moves"):
+        sim.apply_wrench("ball", force=(1e3, 0.0, 0.0), duration=3.0)  # flew 10 km
+    sim.apply_wrench("ball", force=(4.0, 0.0, 0.0), duration=0.05)  # a push is fine
+    sim.run(seconds=0.2)
+    assert all(math.isfinite(v) for s in sim.model_states().values() for v in (s.x, s.y, s.vx, s.vy))

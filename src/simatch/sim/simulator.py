@@ -41,6 +41,8 @@ MAX_COMMAND_TURN = 100.0  # rad/s
 MAX_KICK_REQUEST = 100.0  # m/s (requests above the kicker's limit but below this are clamped)
 MAX_KICK_WINDOW = 60.0  # s: how long a kick request may wait for the ball
 MAX_WRENCH = 1e5  # N, N m
+MAX_BALL_SPIN = 2000.0  # rad/s (a ball rolling at 100 m/s turns at some 900)
+MAX_HEIGHT = 50.0  # m: the highest a model may be placed
 BOUNCE_MIN_SPEED = 0.3  # m/s: slower impacts are absorbed (the ball settles instead of chattering)
 
 
@@ -74,7 +76,7 @@ def _yaw_of(qw: float, qx: float, qy: float, qz: float) -> float:
 
 
 def _finite(*values: float) -> bool:
-    return all(isinstance(v, (int, float)) and math.isfinite(v) for v in values)
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values)
 
 
 def _describe_bad_velocity(vx, vy, w) -> str:
@@ -650,12 +652,28 @@ class Simulator:
         for k, v in state.items():
             if not _finite(v) or abs(v) > 1e4:
                 raise CommandError(f"set_model_state({name!r}): {k}={v!r} is not a finite value of sensible size")
+        self._check_placement(name, state)
         if name == BALL_NAME:
             self._set_ball(state)
         else:
             self._set_robot(self.index_of(name), state)
         mujoco.mj_forward(self.m, self.d)
         self._push_ball_out_of_robots()
+
+    def _check_placement(self, name: str, s: dict) -> None:
+        """A model is placed inside the world (within the boards, below `MAX_HEIGHT`) and set moving no faster
+        than anything in it can: a robot at most at `MAX_COMMAND_SPEED` and `MAX_COMMAND_TURN`, the ball at
+        `MAX_KICK_REQUEST` and `MAX_BALL_SPIN` (faster, a body would pass through the boards in one step)."""
+        f = self.field
+        ball = name == BALL_NAME
+        bounds = {"x": f.half_length + f.margin, "y": f.half_width + f.margin, "z": MAX_HEIGHT}
+        speed = MAX_KICK_REQUEST if ball else MAX_COMMAND_SPEED
+        turn = MAX_BALL_SPIN if ball else MAX_COMMAND_TURN
+        bounds.update({"vx": speed, "vy": speed, "vz": speed, "wx": turn, "wy": turn, "wz": turn})
+        for k, limit in bounds.items():
+            if k in s and abs(s[k]) > limit:
+                what = "outside the world" if k in "xyz" else "faster than anything in the world moves"
+                raise CommandError(f"set_model_state({name!r}): {k}={s[k]!r} is {what} (|{k}| <= {limit:g})")
 
     def _set_ball(self, s: dict) -> None:
         q, v = self.d.qpos, self.d.qvel
@@ -774,8 +792,21 @@ class Simulator:
                 f"apply_wrench({name!r}): force {f}, torque {t}, duration {duration!r} must be "
                 f"finite, |value| <= {MAX_WRENCH:g}, duration >= 0"
             )
-        body = self.ix.ball_body if name == BALL_NAME else int(self.ix.robot_body[self.index_of(name)])
+        ball = name == BALL_NAME
+        body = self.ix.ball_body if ball else int(self.ix.robot_body[self.index_of(name)])
         steps = max(1, round(duration / self.dt))
+        # what it can do: a robot moved (or turned) faster than any command, the ball faster than any kick,
+        # would pass through the boards in one step
+        seconds = steps * self.dt
+        mass = float(self.m.body_subtreemass[body])
+        inertia = float(min(self.m.body_inertia[body])) or 1e-9
+        dv = math.hypot(*(f if ball else f[:2])) * seconds / mass
+        dw = (math.hypot(*t) if ball else abs(t[2])) * seconds / inertia
+        if dv > (MAX_KICK_REQUEST if ball else MAX_COMMAND_SPEED) or dw > (MAX_BALL_SPIN if ball else MAX_COMMAND_TURN):
+            raise CommandError(
+                f"apply_wrench({name!r}): force {f}, torque {t} for {seconds:g} s would change its speed by "
+                f"{dv:.3g} m/s and its turn by {dw:.3g} rad/s: more than anything in the world moves"
+            )
         self._wrenches.append((body, np.array(f + t, dtype=float), self.step_index + steps))
 
     @world_input
