@@ -605,6 +605,7 @@ def target_recording(data):
             rec = None
         if rec is not None:
             _cli(["replay", str(path), "--info", "--json"])
+            _cli(["replay", str(path), "--info"])
             kept = sum(1 for _ in rec.raw())
             for _ in rec.messages():
                 pass

@@ -153,3 +153,17 @@ def test_refusals(tmp_path):
     proc = _recover(path, "-o", exists)
     assert proc.returncode == 2 and "already exists" in proc.stderr
     assert Path(path).read_bytes()  # nothing was touched
+
+
+def test_info_on_damaged_metadata(recording, tmp_path):
+    """Found by the fuzzing campaign: `replay --info` on a file whose metadata values were damaged raised a
+    JSONDecodeError traceback. It describes what it can and says what is damaged."""
+    path, _ = recording
+    data = path.read_bytes()
+    assert data.count(b'["pytest"]') == 1
+    bad = tmp_path / "damaged_meta.mcap"
+    bad.write_bytes(data.replace(b'["pytest"]', b'["pytest" '))
+    for extra in ([], ["--json"]):
+        proc = subprocess.run(SIMATCH + ["replay", str(bad), "--info", *extra], capture_output=True, text=True)
+        assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    assert json.loads(proc.stdout)["command_line"] is None

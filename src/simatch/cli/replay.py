@@ -155,19 +155,35 @@ def _play(rec, args) -> int:
     return 0
 
 
+def _recorded(text: str | None, default=None, number: bool = False):
+    """A metadata value as recorded (JSON, or a number), or ``default`` if the file's copy is damaged."""
+    try:
+        return default if text is None else (int(text) if number else json.loads(text))
+    except ValueError:
+        return default
+
+
 def _info(rec, args) -> int:
+    from ..record.reader import RecordingError
+
     meta = rec.metadata
-    counts = json.loads(rec.end["messages"]) if rec.end and "messages" in rec.end else None
+    counts = _recorded((rec.end or {}).get("messages"))
+    counts = counts if isinstance(counts, dict) else None
+    try:
+        overrides = rec.overrides()
+    except RecordingError as exc:
+        rec.problems.append(str(exc))
+        overrides = None
     info = {
         "file": str(rec.path),
         "simatch": rec.is_simatch,
         "finalised": rec.finalised,
         "status": (rec.end or {}).get("status", "not finalised"),
         "scene": meta.get("scene_name"),
-        "seed": int(meta["seed"]) if "seed" in meta else None,
-        "overrides": rec.overrides(),
+        "seed": _recorded(meta.get("seed"), number=True),
+        "overrides": overrides,
         "simatch_version": meta.get("simatch_version"),
-        "command_line": json.loads(meta.get("command_line", "null")),
+        "command_line": _recorded(meta.get("command_line")),
         "start": rec.start_ns / 1e9,
         "end": rec.end_ns / 1e9,
         "chunks": len(rec.chunks),
@@ -188,7 +204,8 @@ def _info(rec, args) -> int:
             f"scene {info['scene']}  seed {info['seed']}  overrides {json.dumps(info['overrides'])}  "
             f"simatch {info['simatch_version']}"
         )
-        print(f"command line: {' '.join(info['command_line'] or [])}")
+        line = info["command_line"]
+        print(f"command line: {' '.join(map(str, line)) if isinstance(line, list) else line or ''}")
     print(f"simulated time {info['start']:.3f} .. {info['end']:.3f} s in {info['chunks']} chunks")
     if info["state_digest"]:
         print(f"final state digest {info['state_digest']}")
