@@ -22,6 +22,8 @@ SUBCOMMANDS = [
     "simatch.cli.replay",
     "simatch.cli.export",
     "simatch.cli.recover",
+    "simatch.cli.report",
+    "simatch.cli.tournament",
     "simatch.cli.coach",
     "simatch.cli.serve",
     "simatch.cli.server",

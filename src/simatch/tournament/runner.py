@@ -1,0 +1,193 @@
+"""Where a tournament's matches run: Ray (`RayPool`), or a plain loop in this process (`PlainLoop`).
+
+Both have ``map(jobs)``, a generator of ``(job, outcome)`` in the order matches finish, so the driver stores
+each result as soon as it comes back.
+
+`RayPool` starts a local Ray instance (every core of this machine, no dashboard, a small object store) or
+joins a running cluster (``address``; inside ``ray job submit`` the job's own cluster). Each match is a task
+(`simatch.tournament.match.play_match`, one CPU). The pool keeps as many matches in flight as there are
+worker slots — the cluster's CPUs, or ``workers`` — and hands out the next one as soon as one finishes, so a
+time limit counts from a match's start, and an interrupted tournament has at most that many matches lost.
+
+* a task whose worker process dies (killed, out of memory) is retried once by Ray; a second death is
+  recorded as ``crashed`` (the next run of the command plays it again);
+* a match past its time limit is stopped in its worker (`match.MatchTimeout`); if its code never gives the
+  worker back (a loop in compiled code), the pool ends that worker after `KILL_GRACE` more seconds and
+  records the match as ``timeout``;
+* Ctrl-C (or SIGTERM) in the driver cancels the matches in flight: they are not recorded, and are played by
+  the next run of the command.
+"""
+
+from __future__ import annotations
+
+import collections
+import datetime
+import logging
+import os
+import sys
+import time
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+from .. import version
+from ..errors import UsageError
+from .match import play_match
+
+log = logging.getLogger(__name__)
+
+KILL_GRACE = 60.0  # [s] after a match's time limit before its worker is ended from outside
+LOCAL_OBJECT_STORE = 128 * 1024 * 1024  # [bytes] results are small: no need for Ray's default (30 % of RAM)
+
+
+class PlainLoop:
+    """The matches one after another in this process (no Ray): for a plug-in's first test, and the measure of
+    what Ray costs (`simatch bench --only tournament`)."""
+
+    slots = 1
+    description = "plain loop in this process"
+
+    def map(self, jobs: Iterable[dict]) -> Iterator[tuple[dict, dict]]:
+        for job in jobs:
+            yield job, play_match(job)
+
+    def close(self) -> None:
+        pass
+
+
+class RayPool:
+    def __init__(self, address: str | None = None, workers: int | None = None, paths: Iterable[str] = ()):
+        try:
+            import ray
+        except ImportError:
+            raise UsageError(
+                "simatch tournament runs its matches on Ray, which is not installed: "
+                "pip install 'simatch[tournament]' (or give --no-ray to play them one by one here)"
+            ) from None
+        self.ray = ray
+        if workers is not None and workers < 1:
+            raise UsageError(f"--workers must be at least 1, got {workers}")
+        _export_paths(paths)
+        self.started = False
+        options = dict(log_to_driver=False, logging_level=logging.WARNING, configure_logging=True)
+        try:
+            if address or os.environ.get("RAY_ADDRESS"):
+                ray.init(address=address or None, **options)
+                where = f"Ray cluster at {address or os.environ['RAY_ADDRESS']}"
+            else:
+                cpus = workers or os.cpu_count() or 1
+                ray.init(
+                    num_cpus=cpus,
+                    include_dashboard=False,
+                    object_store_memory=LOCAL_OBJECT_STORE,
+                    **options,
+                )
+                self.started = True
+                where = f"local Ray instance ({cpus} CPU{'s' if cpus > 1 else ''})"
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            raise UsageError(f"cannot start or join Ray{f' at {address}' if address else ''}: {exc}") from None
+        cluster = int(ray.cluster_resources().get("CPU", 1))
+        self.slots = max(1, min(workers, cluster) if workers else cluster)
+        self.description = f"{where}, {self.slots} match{'es' if self.slots > 1 else ''} at once"
+        self._remote = ray.remote(num_cpus=1, max_retries=1, retry_exceptions=False)(play_match)
+
+    def map(self, jobs: Iterable[dict]) -> Iterator[tuple[dict, dict]]:
+        ray = self.ray
+        pending = collections.deque(jobs)
+        inflight: dict = {}  # ref -> (job, submitted at)
+        try:
+            while pending or inflight:
+                while pending and len(inflight) < self.slots:
+                    job = pending.popleft()
+                    inflight[self._remote.remote(job)] = (job, time.monotonic())
+                ready, _ = ray.wait(list(inflight), num_returns=1, timeout=0.5)
+                for ref in ready:
+                    job, _ = inflight.pop(ref)
+                    outcome = self._get(ref, job)
+                    if outcome is not None:
+                        yield job, outcome
+                now = time.monotonic()
+                for ref, (job, since) in list(inflight.items()):
+                    limit = job.get("timeout")
+                    if limit and now - since > limit + KILL_GRACE:
+                        ray.cancel(ref, force=True)
+                        inflight.pop(ref)
+                        yield (
+                            job,
+                            _failed(
+                                job,
+                                "timeout",
+                                f"the match ran longer than its limit of {limit:g} s of wall time and did not stop; "
+                                f"its worker was ended after {now - since:.0f} s",
+                                now - since,
+                            ),
+                        )
+        finally:
+            for ref in inflight:
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:  # the cluster may be gone already
+                    pass
+
+    def _get(self, ref, job: dict) -> dict | None:
+        ray = self.ray
+        try:
+            return ray.get(ref)
+        except ray.exceptions.TaskCancelledError:
+            return None
+        except ray.exceptions.RayTaskError as exc:
+            cause = getattr(exc, "cause", None)
+            if isinstance(cause, (KeyboardInterrupt, SystemExit)):
+                return None  # the worker was interrupted: not a verdict on the match, play it again
+            return _failed(job, "error", f"{type(cause or exc).__name__}: {cause or exc}")
+        except ray.exceptions.RayError as exc:  # the worker process died (twice: Ray retried once)
+            text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+            return _failed(job, "crashed", f"{type(exc).__name__}: {text}")
+
+    def close(self) -> None:
+        if self.started:
+            self.ray.shutdown()
+            self.started = False
+
+
+def _failed(job: dict, status: str, error: str, wall: float = 0.0) -> dict:
+    home, away = job["colours"]
+    return {
+        "row": {
+            "match_id": job["match_id"],
+            "seed": job["seed"],
+            "home_colour": home,
+            "away_colour": away,
+            "status": status,
+            "error": error,
+            "wall_seconds": round(wall, 3),
+            "worker": "",
+            "simatch_version": version(),
+            "finished_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        },
+        "analysis": None,
+    }
+
+
+def _export_paths(paths: Iterable[str]) -> None:
+    """Put the folders the plug-ins were imported from on the PYTHONPATH of the processes Ray starts here
+    (a local instance inherits the driver's environment), as absolute paths."""
+    extra = [str(Path(p).resolve()) for p in paths if p]
+    current = [str(Path(p).resolve()) for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    merged = list(dict.fromkeys(current + extra))
+    if merged:
+        os.environ["PYTHONPATH"] = os.pathsep.join(merged)
+
+
+def plugin_paths(modules: Iterable[str]) -> list[str]:
+    """The sys.path folders the given modules were imported from (for workers started from here)."""
+    out = []
+    for name in modules:
+        mod = sys.modules.get(name)
+        file = getattr(mod, "__file__", None)
+        if not file:
+            continue
+        depth = len(name.split(".")) - (0 if Path(file).name == "__init__.py" else 1)
+        root = Path(file).resolve().parents[depth]
+        if not any(part in ("site-packages", "dist-packages") for part in root.parts):
+            out.append(str(root))
+    return list(dict.fromkeys(out))
