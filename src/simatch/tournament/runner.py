@@ -55,7 +55,16 @@ class PlainLoop:
 
 
 class RayPool:
-    def __init__(self, address: str | None = None, workers: int | None = None, paths: Iterable[str] = ()):
+    def __init__(
+        self,
+        address: str | None = None,
+        workers: int | None = None,
+        paths: Iterable[str] = (),
+        kill_grace: float = KILL_GRACE,
+    ):
+        joining = bool(address or os.environ.get("RAY_ADDRESS"))
+        if joining:
+            _token_auth_if_configured()
         try:
             import ray
         except ImportError:
@@ -64,13 +73,14 @@ class RayPool:
                 "pip install 'simatch[tournament]' (or give --no-ray to play them one by one here)"
             ) from None
         self.ray = ray
+        self.kill_grace = kill_grace
         if workers is not None and workers < 1:
             raise UsageError(f"--workers must be at least 1, got {workers}")
         _export_paths(paths)
         self.started = False
         options = dict(log_to_driver=False, logging_level=logging.WARNING, configure_logging=True)
         try:
-            if address or os.environ.get("RAY_ADDRESS"):
+            if joining:
                 ray.init(address=address or None, **options)
                 where = f"Ray cluster at {address or os.environ['RAY_ADDRESS']}"
             else:
@@ -108,7 +118,7 @@ class RayPool:
                 now = time.monotonic()
                 for ref, (job, since) in list(inflight.items()):
                     limit = job.get("timeout")
-                    if limit and now - since > limit + KILL_GRACE:
+                    if limit and now - since > limit + self.kill_grace:
                         ray.cancel(ref, force=True)
                         inflight.pop(ref)
                         yield (
@@ -166,6 +176,20 @@ def _failed(job: dict, status: str, error: str, wall: float = 0.0) -> dict:
         },
         "analysis": None,
     }
+
+
+def _token_auth_if_configured() -> None:
+    """Send this machine's Ray token to a cluster, as ``ray start`` and a local ``ray.init`` use it when one is
+    there (``ray.init(address=...)`` does not by itself): RAY_AUTH_MODE, when set, decides."""
+    if "RAY_AUTH_MODE" in os.environ:
+        return
+    if os.environ.get("RAY_AUTH_TOKEN") or (Path.home() / ".ray" / "auth_token").is_file():
+        os.environ["RAY_AUTH_MODE"] = "token"
+        if "ray" in sys.modules:  # Ray reads its settings when imported: read them again
+            try:
+                sys.modules["ray"]._raylet.Config.initialize("")
+            except AttributeError:
+                pass
 
 
 def _export_paths(paths: Iterable[str]) -> None:

@@ -154,7 +154,9 @@ class Tournament:
                     self._match_report(m, row, outcome["analysis"])
                 if on_result is not None:
                     on_result(row, self.played(done), self.format.expected(done))
-        return self.finish(done)
+        summary = self.finish(done)
+        summary["executor"] = getattr(executor, "description", type(executor).__name__)
+        return summary
 
     def played(self, done: dict) -> int:
         return sum(1 for m in self.format.scheduled(done) if m.match_id in done)
