@@ -251,7 +251,7 @@ def matches_table(rows: list[dict]) -> str:
                 (r.get("state_digest") or "")[:12],
             ]
         )
-    return table(header, body, left=3)
+    return table(header, body, left=len(header))
 
 
 def failed_table(summary: dict) -> str:

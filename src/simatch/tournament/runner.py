@@ -86,6 +86,7 @@ class RayPool:
             else:
                 cpus = workers or os.cpu_count() or 1
                 ray.init(
+                    address="local",  # a new instance, never one that `ray start` left on this machine
                     num_cpus=cpus,
                     include_dashboard=False,
                     object_store_memory=LOCAL_OBJECT_STORE,
