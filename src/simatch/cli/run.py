@@ -32,14 +32,7 @@ def add_run_options(p, with_extensions: bool = True) -> None:
         "--duration", type=float, metavar="S", help="simulated seconds to run (default: until the judge ends the run)"
     )
     p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene value (dotted path into the TOML), e.g. teams.magenta.strategy=simple",
-    )
+    add_overrides_option(p, "override a scene value (dotted path into the TOML), e.g. teams.magenta.strategy=simple")
     p.add_argument("--realtime", action="store_true", help="pace the simulation at wall-clock speed")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object with the run's results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -53,6 +46,11 @@ def add_run_options(p, with_extensions: bool = True) -> None:
     )
     for ext in extensions() if with_extensions else ():
         ext.add_arguments(p)
+
+
+def add_overrides_option(p, help: str) -> None:
+    """``--set KEY=VALUE`` (repeatable) into ``args.overrides``; `overrides_of` reads them."""
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
 
 
 def _event_count(text: str) -> int | None:

@@ -13,7 +13,7 @@ import signal
 import sys
 
 from . import UsageError
-from .run import overrides_of
+from .run import add_overrides_option, overrides_of
 
 
 def add_parser(sub) -> None:
@@ -37,14 +37,7 @@ def add_parser(sub) -> None:
     p.add_argument("--seeds", type=int, default=10, metavar="N", help="seeds per pairing and colour (default 10)")
     p.add_argument("--first-seed", type=int, default=0, metavar="K", help="seeds K .. K+N-1 (default 0)")
     p.add_argument("--scene", default="msl_5v5", help="the scene the matches are played in (default msl_5v5)")
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene value for every match, e.g. match.half_duration=300",
-    )
+    add_overrides_option(p, "override a scene value for every match, e.g. match.half_duration=300")
     p.add_argument("--format", default="round-robin", choices=("round-robin", "league", "knockout"))
     p.add_argument(
         "--out",

@@ -225,6 +225,14 @@ class MatchAnalysis:
         if signs != self._sides[-1][1]:
             self._sides.append((float(t), dict(signs)))
 
+    def game_state_message(self, m) -> None:
+        """A GameState message: stage, phase and score, and each team's side where the referee says it
+        (``attacks``: "+x"/"-x" per team; a producer that predates the field leaves it empty)."""
+        self.game_state(m.stamp, m.stage, m.phase, m.score)
+        attacks = list(getattr(m, "attacks", None) or ())
+        if attacks and len(attacks) == len(m.teams):
+            self.sides(m.stamp, {team: (1 if side == "+x" else -1) for team, side in zip(m.teams, attacks)})
+
     def strategy(self, t: float, robot: str, role: int) -> None:
         """A robot's StrategyInfo: its role from ``t`` on."""
         name = role_name(int(role))

@@ -44,15 +44,12 @@ class LiveAnalysis(Node):
         self._subs = [
             bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
             bus.subscribe(topics.EVENTS, msgs.GameEvent, a.event),
-            bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_state),
+            bus.subscribe(topics.GAME_STATE, msgs.GameState, a.game_state_message),
             bus.subscribe_all(f"*/*/{topics.STRATEGY_INFO}", self._on_strategy),
         ]
 
     def _on_contacts(self, m) -> None:
         self.analysis.contacts(m.stamp, m.step, m.touching, m.holder, m.kicker, m.kick_speed, m.lob)
-
-    def _on_state(self, m) -> None:
-        self.analysis.game_state(m.stamp, m.stage, m.phase, m.score)
 
     def _on_strategy(self, topic: str, m) -> None:
         self.analysis.strategy(m.stamp, topic.rsplit("/", 1)[0], m.role)

@@ -32,7 +32,7 @@ def analyse_recording(path, labels: dict[str, str] | None = None) -> tuple[dict,
         elif topic == topics.EVENTS:
             analysis.event(m)
         elif topic == topics.GAME_STATE:
-            analysis.game_state(m.stamp, m.stage, m.phase, m.score)
+            analysis.game_state_message(m)
             last_result = m.result
         else:
             analysis.strategy(m.stamp, topic.rsplit("/", 1)[0], m.role)

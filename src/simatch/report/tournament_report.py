@@ -150,67 +150,28 @@ def progression_figure(summary: dict) -> go.Figure | None:
     return _base(fig, 360, "place after each matchday")
 
 
+#: the standing's columns: (header, key of the cell for tests and scripts, the cell from a team's row)
+STANDING = [
+    ("team", "", lambda t: t["team"]),
+    ("played", "played", lambda t: t["played"]),
+    ("won", "won", lambda t: t["won"]),
+    ("drawn", "drawn", lambda t: t["drawn"]),
+    ("lost", "lost", lambda t: t["lost"]),
+    ("goals", "goals", lambda t: f"{t['goals_for']}:{t['goals_against']}"),
+    ("diff", "diff", lambda t: f"{t['goal_difference']:+d}"),
+    ("points", "points", lambda t: t["points"]),
+    ("Elo", "elo", lambda t: f"{t['elo']:.0f}"),
+    ("95 % interval", "interval", lambda t: f"{t['elo_low']:.0f} to {t['elo_high']:.0f}"),
+    ("possession", "possession", lambda t: "-" if t["possession"] is None else f"{t['possession'] * 100:.1f} %"),
+    ("shots (on target)", "shots", lambda t: f"{t['shots']} ({t['on_target']})"),
+    ("failed", "failed", lambda t: Raw(f'<span class="failed">{t["failed"]}</span>') if t["failed"] else 0),
+]
+
+
 def standing_table(summary: dict) -> str:
-    header = [
-        "#",
-        "team",
-        "played",
-        "won",
-        "drawn",
-        "lost",
-        "goals",
-        "diff",
-        "points",
-        "Elo",
-        "95 % interval",
-        "possession",
-        "shots (on target)",
-        "failed",
-    ]
-    rows, keys = [], []
-    for t in summary["standing"]:
-        rows.append(
-            [
-                t["rank"],
-                t["team"],
-                t["played"],
-                t["won"],
-                t["drawn"],
-                t["lost"],
-                f"{t['goals_for']}:{t['goals_against']}",
-                f"{t['goal_difference']:+d}",
-                t["points"],
-                f"{t['elo']:.0f}",
-                f"{t['elo_low']:.0f} to {t['elo_high']:.0f}",
-                "-" if t["possession"] is None else f"{t['possession'] * 100:.1f} %",
-                f"{t['shots']} ({t['on_target']})",
-                Raw(f'<span class="failed">{t["failed"]}</span>') if t["failed"] else 0,
-            ]
-        )
-        keys.append(
-            [
-                "",
-                "",
-                *(
-                    f"{t['team']}.{k}"
-                    for k in (
-                        "played",
-                        "won",
-                        "drawn",
-                        "lost",
-                        "goals",
-                        "diff",
-                        "points",
-                        "elo",
-                        "interval",
-                        "possession",
-                        "shots",
-                        "failed",
-                    )
-                ),
-            ]
-        )
-    return table(header, rows, left=2, keys=keys)
+    rows = [[t["rank"]] + [cell(t) for _, _, cell in STANDING] for t in summary["standing"]]
+    keys = [[""] + [f"{t['team']}.{key}" if key else "" for _, key, _ in STANDING] for t in summary["standing"]]
+    return table(["#"] + [h for h, _, _ in STANDING], rows, left=2, keys=keys)
 
 
 def bracket_html(summary: dict) -> str:
