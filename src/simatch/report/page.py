@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import html
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import plotly
 import plotly.graph_objects as go
 import plotly.offline
+
+from .files import write_atomic
 
 PLOTLY_FILE = "plotly.min.js"
 
@@ -96,7 +96,7 @@ class Page:
     def write(self, path: str | Path, data: dict | None = None, plotly_js: str = "inline") -> Path:
         """Write the page at ``path`` (atomically: a reader never sees half a page)."""
         path = Path(path)
-        write_text_atomic(path, self.render(data, plotly_js))
+        write_atomic(path, self.render(data, plotly_js))
         return path
 
 
@@ -143,21 +143,9 @@ def _plain(value):
     return str(value)
 
 
-def write_text_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_plotly_js(folder: Path) -> Path:
     """Plotly's JavaScript beside the pages of a folder (written once)."""
     path = folder / PLOTLY_FILE
     if not path.exists():
-        write_text_atomic(path, plotly.offline.get_plotlyjs())
+        write_atomic(path, plotly.offline.get_plotlyjs())
     return path

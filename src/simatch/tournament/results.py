@@ -17,14 +17,13 @@ from __future__ import annotations
 import gzip
 import json
 import logging
-import os
-import tempfile
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..errors import UsageError
+from ..report.files import write_atomic
 
 log = logging.getLogger(__name__)
 
@@ -115,7 +114,7 @@ class ResultStore:
         """Keep a finished match: its analysis first, then its row (the row marks the match as played)."""
         if analysis is not None:
             data = gzip.compress(json.dumps(analysis, separators=(",", ":")).encode(), compresslevel=6)
-            _atomic_bytes(self.rows_dir / f"{row['match_id']}.analysis.json.gz", data)
+            write_atomic(self.rows_dir / f"{row['match_id']}.analysis.json.gz", data)
         table = pa.Table.from_pylist([{c: row.get(c) for c in COLUMNS}], schema=SCHEMA)
         _atomic_table(self.rows_dir / f"{row['match_id']}.parquet", table)
 
@@ -138,39 +137,11 @@ class ResultStore:
 
     def write_json(self, name: str, data: dict) -> Path:
         path = self.folder / name
-        _atomic_bytes(path, (json.dumps(data, indent=1, default=str) + "\n").encode())
+        write_atomic(path, (json.dumps(data, indent=1, default=str) + "\n").encode())
         return path
 
 
 def _atomic_table(path: Path, table: pa.Table) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        pq.write_table(table, tmp)
-        _fsync(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _atomic_bytes(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _fsync(path: str) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink)
+    write_atomic(path, sink.getvalue().to_pybytes())
