@@ -184,7 +184,7 @@ def test_interrupted_killed_worker_killed_driver_then_resumed_gives_the_same_tab
 def test_failing_plug_ins_are_recorded_and_the_tournament_goes_on(tmp_path):
     out = tmp_path / "results"
     teams = f"simple,{PLUGINS}:Crashing,{PLUGINS}:Hanging"
-    proc = start(out, "--timeout", "20", "--json", teams=teams)
+    proc = start(out, "--timeout", "20", "--json", "--report", str(tmp_path / "report"), teams=teams)
     try:
         stdout, stderr = proc.communicate(timeout=600)
     finally:
@@ -207,6 +207,10 @@ def test_failing_plug_ins_are_recorded_and_the_tournament_goes_on(tmp_path):
     summary = json.loads(stdout)
     assert summary["complete"] and summary["matches"]["failed"] == 6
     assert {t["failed"] for t in summary["standing"]} == {4}
+    # the report lists them with their errors, and links no match report for them
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert 'id="failed"' in page and "this team does not build" in page and "timeout" in page
+    assert not list((tmp_path / "report" / "matches").glob("*.html"))
     # failed matches are not played again by the same command; --retry-failed plays them again
     again = subprocess.run(command(out, "--json", teams=teams), capture_output=True, text=True, env=env(), timeout=300)
     assert again.returncode == 0 and "starting Ray" not in again.stderr
