@@ -206,3 +206,21 @@ def test_live_and_recorded_analyses_agree_and_the_run_is_unchanged(tmp_path):
     assert b["state_digest"] == digest
     assert a["play_seconds"] > 5 and a["possession"]["share"]["cyan"] is not None
     assert sum(r["distance"] for r in a["robots"] if r["team"] == "cyan") > 10
+
+
+def test_the_side_each_team_attacks_comes_from_the_referees_game_state():
+    """GameState.attacks ("+x"/"-x" per team) moves the analysis to the other end after the change of ends; a
+    GameState without it (a producer that predates the field) leaves the scene's sides."""
+    from types import SimpleNamespace
+
+    f = Feed()
+    state = {"stage": "first_half", "phase": "play", "teams": ["cyan", "magenta"], "score": [0, 0]}
+    f.a.game_state_message(SimpleNamespace(stamp=0.0, **state))  # no attacks field at all
+    f.a.game_state_message(SimpleNamespace(stamp=0.5, attacks=["+x", "-x"], **state))
+    f.tick(40)
+    f.a.game_state_message(SimpleNamespace(stamp=f.t, attacks=["-x", "+x"], **{**state, "stage": "second_half"}))
+    f.tick(10)
+    out = f.a.finish()
+    assert [s["signs"] for s in out["sides"]] == [{"cyan": 1, "magenta": -1}, {"cyan": -1, "magenta": 1}]
+    assert out["sides"][1]["t"] == pytest.approx(1.0)
+    assert [s["stage"] for s in out["stages"]] == ["first_half", "second_half"]
