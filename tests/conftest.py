@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+import shutil
 import signal
+from pathlib import Path
 
 import pytest
 
@@ -49,3 +51,32 @@ def park_everyone_but(sim, keep: list[str]):
 
 def heading(vx: float, vy: float) -> float:
     return math.atan2(vy, vx)
+
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """One headless chromium for the whole session (Playwright's sync API allows one per process; each launch
+    gets a fresh, empty profile): the web UI's pages and the reports are opened in it."""
+    from playwright import sync_api
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail("Debian's chromium is missing: run scripts/install-system-deps.sh")
+    with sync_api.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, timeout=60_000)
+        try:
+            yield b
+        finally:
+            b.close()

@@ -17,8 +17,6 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from ..web.conftest import browser  # noqa: F401  (the session's headless Chromium)
-
 REPO = Path(__file__).resolve().parents[2]
 ARTIFACTS = REPO / "test-artifacts" / "report"
 MATCH = [
@@ -67,7 +65,7 @@ def recorded(tmp_path_factory):
 
 
 @pytest.fixture
-def open_file(browser):  # noqa: F811
+def open_file(browser):
     """``open_file(path)``: the page in a fresh context that refuses (and counts) every request off this disk."""
     made = []
 

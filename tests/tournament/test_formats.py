@@ -7,7 +7,7 @@ import pytest
 
 from simatch.tournament import PlainLoop, Tournament, parse_entries
 
-from ..report.conftest import browser, open_file, plot  # noqa: F401  (fixtures and helpers)
+from ..report.conftest import open_file, plot  # noqa: F401  (a fixture and a helper)
 
 pytestmark = pytest.mark.slow
 

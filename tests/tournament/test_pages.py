@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from ..report.conftest import browser, open_file, plot, report_data, shot  # noqa: F401  (fixtures and helpers)
+from ..report.conftest import open_file, plot, report_data, shot  # noqa: F401  (a fixture and helpers)
 
 pytestmark = pytest.mark.slow
 

@@ -228,6 +228,8 @@ def test_a_match_that_ends_its_process_or_ignores_its_time_limit(tmp_path):
     )
     wanted = {(1, 0), (2, 0)}  # Exiting and Stubborn, each against simple
     jobs = [t.job(m) for m in t.format.matches if (m.home, m.away) in wanted]
+    # Exiting's worker dies twice (Ray plays a task again once): a long limit, not to stop its second try
+    jobs[0]["timeout"] = 600
     saved = os.environ.get("PYTHONPATH")
     before = shm()
     pool = RayPool(workers=2, paths=plugin_paths([PLUGINS]), kill_grace=5)

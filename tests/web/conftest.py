@@ -1,12 +1,12 @@
 """Browser tests of the web UI: real runs, a real server, Debian's chromium driven by Playwright.
 
 The run stays in the test's thread: a test acts in the page, then advances the simulation until the
-effect shows (`run_until`), so nothing races. Screenshots go to test-artifacts/web/ (ignored by git).
+effect shows (`run_until`), so nothing races. Screenshots go to test-artifacts/web/ (ignored by git). The browser
+(``browser``) is the session's one, in tests/conftest.py.
 """
 
 from __future__ import annotations
 
-import shutil
 import time
 from pathlib import Path
 
@@ -15,33 +15,7 @@ import pytest
 import simatch
 from simatch.web import LiveView
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "web"
-
-
-@pytest.fixture(scope="session")
-def browser():
-    """One headless chromium for the session (Playwright gives each launch a fresh, empty profile)."""
-    from playwright import sync_api
-
-    if not Path(CHROMIUM).exists():
-        pytest.fail("Debian's chromium is missing: run scripts/install-system-deps.sh")
-    with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, timeout=60_000)
-        try:
-            yield b
-        finally:
-            b.close()
 
 
 @pytest.fixture
