@@ -27,6 +27,7 @@ SUBCOMMANDS = [
     "simatch.cli.server",
     "simatch.cli.team",
     "simatch.cli.robot",
+    "simatch.cli.ros1",
 ]
 
 

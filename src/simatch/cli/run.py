@@ -22,6 +22,7 @@ from . import UsageError
 EXTENSIONS: list[str] = [
     "simatch.record.extension:RecordExtension",
     "simatch.web.view:ViewExtension",
+    "simatch.ros1.embedded:Ros1Extension",
 ]
 
 
