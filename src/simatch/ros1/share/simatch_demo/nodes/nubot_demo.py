@@ -12,8 +12,9 @@ team, it plays as NuBot's own code did instead: it dribbles towards the opponent
 the fixed point, at most 2.5 m from where it took the ball (NuBot's DribbleState keeps dribble targets
 within 3 m), and shoots when there, or when a robot stands within 1.2 m ahead; it aims at the most open of
 five points of the goal mouth (NuBot's evaluateKick looks for the open angle); it slows down near
-other robots so as to meet them at no more than 1.2 m/s (MSL's charging rule); at the opponents' restarts it keeps 3.5 m from the ball (the original's 3.2 m with its 20 cm arrival threshold broke the 3 m rule)
-and waits until the ball is in play; at its own restarts robot 3 waits 2.5 m beside the ball and the taker
+other robots so as to meet them at no more than 1.2 m/s (MSL's charging rule); at the opponents'
+restarts it keeps 3.5 m from the ball (the original's 3.2 m with its 20 cm arrival threshold broke the
+3 m rule) and waits until the ball is in play; at its own restarts robot 3 waits 2.5 m beside the ball and the taker
 passes to the nearest team-mate first (NuBot's StaticPass): a goal straight from a restart does not count.
 """
 
