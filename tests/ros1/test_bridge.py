@@ -163,7 +163,7 @@ def test_bad_messages_are_refused_and_counted(run):
         ros.run("rostopic", "pub", "-1", "/NuBot4/nubotcontrol/velcmd", "nubot_common/VelCmd", value)
     ros.run("rostopic", "pub", "-1", "/NuBot9/nubotcontrol/velcmd", "nubot_common/VelCmd", "{Vx: 100.0}")
     place(ros, "NuBot7", 0.0, 0.0)
-    time.sleep(3.0)  # the bridge reads the master's topics every 2 s
+    time.sleep(3.0)  # the bridge reads the master's topics every second
     p.err.flush()
     p.err.seek(0)
     err = p.err.read()

@@ -20,6 +20,10 @@ does not answer within ``answer_timeout`` is *late*: not waited for until it ans
 then stopped by the simulator's watchdog if nothing comes). So a ROS team whose nodes answer every control
 tick from that tick's messages plays deterministically: the same scene and seed give the same match.
 
+A robot whose ``velcmd`` stops (its low-level controller died) gets none of its ``actioncmd`` through
+either once ``control.command_timeout`` has passed: the simulator's watchdog then stops it, as any robot
+whose process died.
+
 **Real time.** Nothing is waited for; what ROS sends goes on at the next physics step (embedded) or at
 once (a team process).
 """
@@ -73,6 +77,7 @@ class Link:
     streak: dict = field(default_factory=lambda: {VEL: 0, ACTION: 0, STRATEGY: 0})
     late: bool = False
     answers: int = 0  # windows answered (velcmd)
+    last_vel: float = -1e9  # simulated time of its newest velcmd
 
     def expected(self) -> set:
         return {VEL} | {k for k in (ACTION, STRATEGY) if self.streak[k] >= LEARN}
@@ -86,12 +91,15 @@ class Stats:
     forwarded: dict = field(default_factory=lambda: {VEL: 0, ACTION: 0, STRATEGY: 0})
     late: int = 0  # times a robot missed its answer deadline (lockstep)
     refused: int = 0  # requests the bridge could not turn into simatch ones (e.g. an unknown model)
+    dropped: int = 0  # actioncmds of robots whose velcmd stopped (so that the simulator's watchdog stops them)
     unknown_robots: set = field(default_factory=set)  # ROS topics naming robots this bridge does not serve
     waited: list = field(default_factory=list)  # lockstep: seconds waited for the answers, per tick
 
     def as_dict(self) -> dict:
         out = {f"forwarded_{k}": v for k, v in self.forwarded.items()}
-        out.update(late=self.late, refused=self.refused, unknown_robots=sorted(self.unknown_robots))
+        out.update(
+            late=self.late, refused=self.refused, dropped=self.dropped, unknown_robots=sorted(self.unknown_robots)
+        )
         return out
 
 
@@ -117,6 +125,10 @@ class RosBridge(Node):
         self.period = spec.physics.timestep
         self.control_steps = round(spec.control.period / spec.physics.timestep)
         self.phase_step = phase_step
+        #: a robot whose velcmd stopped this long ago [s] gets none of its actioncmds through either: its
+        #: low-level controller died, and the simulator's watchdog must stop it (an actioncmd alone would
+        #: keep it commanded, driving on at its last velocity)
+        self.command_timeout = spec.control.command_timeout
         self.set_model_state_fn = set_model_state
         self.say = say
         driven = set(options.teams)
@@ -288,7 +300,11 @@ class RosBridge(Node):
         forwarded = self.stats.forwarded
         for name, pending in items:
             pubs = self.pubs[name]
+            silent = self.stamp - self.links[name].last_vel > self.command_timeout
             for kind, msg in pending:
+                if kind == ACTION and silent:
+                    self.stats.dropped += 1
+                    continue
                 pubs[kind].put(msg)
                 forwarded[kind] += 1
         for msg in requests:
@@ -301,6 +317,7 @@ class RosBridge(Node):
             stamp, tick = self.stamp, self.tick_index
             if kind == VEL:
                 msg = convert.velcmd_in(ros_msg, stamp, tick)
+                link.last_vel = stamp
             elif kind == ACTION:
                 msg = convert.actioncmd_in(ros_msg, stamp, tick)
             else:

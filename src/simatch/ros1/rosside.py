@@ -18,7 +18,7 @@ from .rosenv import RosUnavailable, use_rospy
 log = logging.getLogger(__name__)
 
 QUEUE = 100  # rospy's queue per publisher connection and subscription (no message of a tick is dropped)
-WATCH_EVERY = 2.0  # [s] how often the master's topic list is read (unknown robots, a team's own relay)
+WATCH_EVERY = 1.0  # [s] how often the master's topic list is read (unknown robots, a team's own relay)
 
 
 class GenpyKit:
