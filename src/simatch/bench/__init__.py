@@ -19,4 +19,5 @@ BENCHMARKS: dict[str, str] = {
     "distributed_lockstep": "simatch.bench.distributed:lockstep",
     "distributed_realtime": "simatch.bench.distributed:realtime",
     "distributed_realtime_bus": "simatch.bench.distributed:realtime_bus",
+    "ros1": "simatch.bench.ros1:run",
 }

@@ -6,7 +6,9 @@ run (`simatch ros1 --connect ...`, `simatch.ros1.client`). It adapts the existin
 simulates nothing: perception, game commands and the world come from the simulator and the referee, and
 what ROS sends goes to the simulator as any team's commands (checked and counted there).
 
-At every control tick, for every robot it serves, it publishes on ROS (in this order) ``/clock``, each
+At every control tick, for every robot it serves, it publishes on ROS (in this order) ``/clock`` (so
+simulated time on ROS advances a control period at a time: every node subscribes to it, and at the
+physics rate its 200 messages a second to each node cost more than all the rest), each
 team's ``receive_from_coach`` (CoachInfo, every tick, stamped with the tick's simulated time), the relayed
 ``nubotcontrol/strategy`` (simulation_strategy), ``redcard/chatter`` when a robot is sent off or back,
 then per robot ``ballisholding/BallIsHolding`` and ``omnivision/OmniVisionInfo`` (stamped likewise).
@@ -223,11 +225,11 @@ class RosBridge(Node):
         ros = self.ros
         if ros is None:
             return
-        if self.opt.clock and now != self._last_clock:
-            ros.clock(now)
-            self._last_clock = now
         step = self.ctx.step()
         if step % self.control_steps == self.phase_step % self.control_steps:
+            if self.opt.clock and now != self._last_clock:
+                ros.clock(now)
+                self._last_clock = now
             self.exchange(now, step // self.control_steps)
         else:
             self.hand_over()

@@ -52,7 +52,7 @@ class Ros1Extension:
         teams = getattr(args, "ros1", None)
         if teams is None:
             return contextlib.nullcontext()
-        return _bridged(sim, args, teams)
+        return bridged(sim, args, teams)
 
 
 def driven_teams(spec, text: str) -> list[str]:
@@ -67,7 +67,7 @@ def driven_teams(spec, text: str) -> list[str]:
 
 
 @contextlib.contextmanager
-def _bridged(sim, args, text: str):
+def bridged(sim, args, text: str):
     import os
 
     from .bridge import Options, RosBridge

@@ -231,7 +231,12 @@ class RosSide:
                     bridge.say(f"{topic} is published by the team's own strategy relay ({others}): not relaying it")
 
     def shutdown(self) -> None:
+        """Leave the master (rospy's node itself ends with the process: another bridge may follow in it)."""
         self._closing.set()
         for sub in self.subs:
             sub.unregister()
-        self.rospy.signal_shutdown("simatch bridge stopped")
+        pubs = [self.pub_clock, self.pub_models, *self.pub_coach.values(), *self.pub_redcard.values()]
+        pubs += [*self.pub_relay.values(), *self.pub_vision.values(), *self.pub_holding.values()]
+        for pub in pubs:
+            if pub is not None:
+                pub.unregister()
