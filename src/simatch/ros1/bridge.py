@@ -23,7 +23,7 @@ then stopped by the simulator's watchdog if nothing comes). So a ROS team whose 
 tick from that tick's messages plays deterministically: the same scene and seed give the same match.
 
 A robot whose ``velcmd`` stops (its low-level controller died) gets none of its ``actioncmd`` through
-either once ``control.command_timeout`` has passed: the simulator's watchdog then stops it, as any robot
+either once `VEL_SILENT` (half a second) has passed: the simulator's watchdog then stops it, as any robot
 whose process died.
 
 **Real time.** Nothing is waited for; what ROS sends goes on at the next physics step (embedded) or at
@@ -52,6 +52,8 @@ LEARN = 3
 #: the original strategy relay dropped team-mates' StrategyInfo older than this [s]
 RELAY_STALE = 0.10
 VEL, ACTION, STRATEGY = "velcmd", "actioncmd", "strategy"
+#: no velcmd of a robot for this long [s, simulated]: its actioncmds are held back too (see `RosBridge`)
+VEL_SILENT = 0.5
 
 
 @dataclass
@@ -129,8 +131,8 @@ class RosBridge(Node):
         self.phase_step = phase_step
         #: a robot whose velcmd stopped this long ago [s] gets none of its actioncmds through either: its
         #: low-level controller died, and the simulator's watchdog must stop it (an actioncmd alone would
-        #: keep it commanded, driving on at its last velocity)
-        self.command_timeout = spec.control.command_timeout
+        #: keep it commanded, driving on at its last velocity); a controller that is only slow keeps it
+        self.command_timeout = max(VEL_SILENT, spec.control.command_timeout)
         self.set_model_state_fn = set_model_state
         self.say = say
         driven = set(options.teams)

@@ -96,6 +96,9 @@ def bridged(sim, args, text: str):
         for node in sim.team_nodes.pop(team, []):
             sim.clock.remove(node)
             sim.robot_nodes.pop(getattr(node, "name", ""), None)
+        # and the run says so (a recording of it names them external: its decisions cannot be re-simulated)
+        spec.teams[team].strategy = "external"
+        sim.scene.overrides[f"teams.{team}.strategy"] = "external"
 
     def say(text: str) -> None:
         print(f"simatch ros1: {text}", file=sys.stderr, flush=True)
