@@ -20,4 +20,5 @@ BENCHMARKS: dict[str, str] = {
     "distributed_realtime": "simatch.bench.distributed:realtime",
     "distributed_realtime_bus": "simatch.bench.distributed:realtime_bus",
     "tournament": "simatch.bench.tournament:run",
+    "ros1": "simatch.bench.ros1:run",
 }

@@ -29,6 +29,7 @@ SUBCOMMANDS = [
     "simatch.cli.server",
     "simatch.cli.team",
     "simatch.cli.robot",
+    "simatch.cli.ros1",
 ]
 
 

@@ -1,5 +1,6 @@
 """``simatch export FILE.mcap --format parquet|csv [--out DIR]``: a recording as tidy tables for pandas,
-polars or any tool that reads Parquet or CSV (see `simatch.record.tables` for the tables)."""
+polars or any tool that reads Parquet or CSV (see `simatch.record.tables` for the tables); ``--format
+rosbag1 [--out FILE.bag]``: as a ROS 1 bag with the original Simatch's topics (`simatch.ros1.bag`)."""
 
 from __future__ import annotations
 
@@ -17,12 +18,24 @@ def add_parser(sub) -> None:
         "commands and states, plus metadata.json.",
     )
     p.add_argument("file", metavar="FILE.mcap", help="a recording (simatch run --record)")
-    p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="table format (default parquet)")
-    p.add_argument("--out", metavar="DIR", help="folder for the tables (default: FILE_tables next to the recording)")
+    p.add_argument(
+        "--format",
+        choices=("parquet", "csv", "rosbag1"),
+        default="parquet",
+        help="table format (default parquet), or rosbag1: a ROS 1 bag with the original Simatch's topics",
+    )
+    p.add_argument(
+        "--out",
+        metavar="DIR|FILE",
+        help="folder for the tables (default: FILE_tables next to the recording); for rosbag1 the bag's path "
+        "(default: FILE.bag next to the recording)",
+    )
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
+    if args.format == "rosbag1":
+        return _rosbag1(args)
     from ..record.reader import RecordingError
     from ..record.tables import ExportError, export
 
@@ -35,4 +48,18 @@ def main(args) -> int:
     print(f"wrote {len(counts)} tables to {folder}/ (and metadata.json):")
     for name, rows in sorted(counts.items()):
         print(f"  {name}.{args.format:8s} {rows} rows")
+    return 0
+
+
+def _rosbag1(args) -> int:
+    from ..record.reader import RecordingError
+    from ..ros1.bag import BagError, export_rosbag1
+
+    try:
+        bag, counts, rec = export_rosbag1(args.file, args.out)
+    except (BagError, RecordingError) as exc:
+        raise UsageError(str(exc)) from None
+    for text in rec.problems:
+        print(f"simatch: warning: {text}", file=sys.stderr)
+    print(f"wrote {bag}: {sum(counts.values())} messages on {len(counts)} topics (rosbag info {bag.name})")
     return 0

@@ -20,6 +20,7 @@ from . import UsageError
 
 #: run extensions: "module:Class" with add_arguments(parser) and attach(sim, args) -> context manager
 EXTENSIONS: list[str] = [
+    "simatch.ros1.embedded:Ros1Extension",  # first: the teams it hands to ROS are 'external' in a recording
     "simatch.record.extension:RecordExtension",
     "simatch.web.view:ViewExtension",
     "simatch.report.extension:ReportExtension",

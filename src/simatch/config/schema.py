@@ -111,6 +111,12 @@ class TeamSpec(Strict):
     strategy_params: dict[str, Any] = Field(default_factory=dict)
     goalkeeper: int | None = Field(1, ge=1, description="id of the goalkeeper, if any")
     ids: list[int] | None = Field(None, description="robot ids; default 1..n in the order of start")
+    ros_prefix: str | None = Field(
+        None,
+        pattern=r"^[A-Za-z][A-Za-z0-9_]*$",
+        description="its robots' names on ROS are <ros_prefix><id>; default NuBot for cyan, rival for "
+        "magenta (the original's), else the team's name",
+    )
     start: list[Pose] = Field(
         min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
     )

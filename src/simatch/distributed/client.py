@@ -146,11 +146,6 @@ class TeamProcess:
         spec = scene.spec
         if self.team not in spec.teams:
             raise ClientError(f"the server's scene has no team {self.team!r} (teams: {', '.join(spec.teams)})")
-        if spec.teams[self.team].strategy in NO_NODES:
-            raise ClientError(
-                f"the server's scene does not say which strategy {self.team} plays "
-                f"(teams.{self.team}.strategy = {spec.teams[self.team].strategy!r}): give --strategy"
-            )
         self.scene = scene
         self.seed = int(offer["seed"])
         self.mode = offer.get("mode", protocol.LOCKSTEP)
@@ -165,9 +160,7 @@ class TeamProcess:
             bus.take_feed(
                 protocol.feed_topic(self.team, self.phase), protocol.feed_covers(self.team, self.phase), self._answer
             )
-        nodes = build_team(scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None)
-        strategy = str(spec.teams[self.team].strategy)
-        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))  # not at the kick-off
+        nodes = self.nodes()
         self.clock = LockstepClock(bus, spec.physics.timestep, self.seed, offset=self.phase)
         for node in nodes:
             self.clock.add(node)
@@ -178,6 +171,22 @@ class TeamProcess:
         if self.bundles:  # declared before the join, so that it knows the server listens when ticks come
             bus.raw_publisher(protocol.bundle_topic(self.team))
         self._join()
+
+    def nodes(self) -> list:
+        """The nodes this process runs for its robots (a subclass may bring others, e.g. a bridge): the very
+        nodes the embedded run builds for them."""
+        spec = self.scene.spec
+        strategy = str(spec.teams[self.team].strategy)
+        if strategy in NO_NODES:
+            raise ClientError(
+                f"the server's scene does not say which strategy {self.team} plays "
+                f"(teams.{self.team}.strategy = {strategy!r}): give --strategy"
+            )
+        nodes = build_team(
+            self.scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None
+        )
+        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))  # not at the kick-off
+        return nodes
 
     def _ask_scene(self) -> dict:
         deadline = time.monotonic() + self.wait
