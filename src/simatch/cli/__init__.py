@@ -30,6 +30,7 @@ SUBCOMMANDS = [
     "simatch.cli.team",
     "simatch.cli.robot",
     "simatch.cli.ros1",
+    "simatch.cli.ros2",
 ]
 
 

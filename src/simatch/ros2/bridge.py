@@ -1,0 +1,389 @@
+"""The bridge process (``simatch ros2``): a run's robots, world and game on the ROS 2 graph.
+
+It joins a run as simatch's own processes do (docs/distributed.md), so the server treats it like any other:
+
+* **driving** robots (``team`` and, optionally, ``robots``): it is that team's (or those robots') process,
+  a `TeamProcess` whose nodes are `RosRobotNode` instead of a strategy. At each control tick a robot's
+  perception goes to ROS (odom, ball, obstacles, team-mates, omni_vision) and the newest ``cmd_vel`` /
+  dribble / kick from ROS goes to the simulator as VelCmd / ActionCmd, signed with the team's credential:
+  the server's fair play, the simulator's checks (a NaN command is refused and counted) and its watchdog
+  apply as to any process. In lockstep, ``wait_answers`` makes each tick wait (up to that many wall seconds)
+  for a new ``cmd_vel`` of every driven robot: a ROS team whose nodes answer every odom with one cmd_vel then
+  plays a deterministic match;
+* **observing** (the organiser's ``admin`` credential): the ground truth (``/tf`` of every robot and the
+  ball, markers, model states, odom of the robots it does not drive), the game state, every team's game
+  commands, the events, and the privileged ``set_model_state`` topic;
+* always ``/clock`` (simulated time) and its team's game commands.
+
+rclpy runs in this process only (`graph.RosGraph`, its executor in a thread of its own); the simulation's
+process never loads it.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import queue
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from .. import msgs
+from ..bus import Node, NodeContext, Phase, topics
+from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_session, zenoh_config
+from ..distributed import credentials, protocol
+from ..distributed.client import ClientError, TeamProcess
+from ..sim.simulator import MAX_COMMAND_SPEED, MAX_COMMAND_TURN
+from . import names
+from .convert import model_poses, robot_pose
+
+log = logging.getLogger(__name__)
+
+#: how long a driven robot keeps its last cmd_vel without a new one [simulated s] (then the simulator's
+#: watchdog stops it, as ROS base controllers stop on a cmd_vel timeout)
+COMMAND_TIMEOUT = 0.5
+
+
+def _stderr(text: str) -> None:
+    print(f"simatch ros2: {text}", file=sys.stderr, flush=True)
+
+
+def _f32s(*values: float) -> list[float]:
+    return [msgs.f32(v) for v in values]
+
+
+class RosRobotNode(Node):
+    """A robot driven from ROS: perception out to ROS, the newest ROS commands in, every control tick."""
+
+    phase = Phase.ROBOT
+
+    def __init__(self, bridge: Bridge, team: str, rid: int, sign: int, period: float):
+        self.bridge = bridge
+        self.team, self.rid, self.sign = team, rid, sign
+        self.name = f"{team}/{rid}/ros2"
+        self.period = period
+        self.ports = bridge.graph.add_robot(team, rid, driven=True)
+        self.tick_no = 0
+        self.seen = 0  # the cmd_vel version the last tick saw
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        bus = ctx.bus
+        self.sub = bus.subscribe(
+            topics.robot_topic(self.team, self.rid, topics.OMNI_VISION), msgs.OmniVisionInfo, self._on_vision
+        )
+        self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
+        self.pub_action = bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
+
+    def _on_vision(self, info) -> None:
+        self.tick_no = int(info.tick)
+        graph = self.bridge.graph
+        graph.set_time(info.stamp)
+        graph.publish_perception(self.ports, self.sign, info, msgs.encode(info) if self.ports.vision else None)
+        me = next((r for r in info.robots if r.id == self.rid), None)
+        if me is not None and me.valid:
+            self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(self.sign, me)
+
+    def tick(self, now: float) -> None:
+        bridge, graph, slot = self.bridge, self.bridge.graph, self.ports.command
+        bridge.before_robot_ticks(now)
+        vel, dribble, kick, lob = graph.take(slot, now, bridge.command_timeout)
+        self.seen = slot.version
+        if vel is None:  # no command: nothing is sent, the simulator's watchdog stops the robot
+            return
+        vx, vy, w = _f32s(*vel)
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w))
+        self.pub_action.put(
+            msgs.new(
+                msgs.ActionCmd,
+                stamp=now,
+                tick=self.tick_no,
+                dribble=bool(dribble),
+                kick_speed=msgs.f32(kick),
+                kick_type=msgs.ActionCmd.KICK_LOB if lob else msgs.ActionCmd.KICK_GROUND,
+            )
+        )
+
+    def stop(self) -> None:
+        sub = getattr(self, "sub", None)
+        if sub is not None:
+            sub.close()
+
+
+class RosTeamProcess(TeamProcess):
+    """The bridge's team (or robot) process: `TeamProcess` with ROS-driven nodes in place of a strategy."""
+
+    def __init__(self, bridge: Bridge, team: str, robots: Sequence[int] | None, **kwargs):
+        super().__init__(team, robots, **kwargs)
+        self.bridge = bridge
+
+    def nodes(self) -> list:
+        scene = self.scene
+        if self.bridge.graph is None:  # the ROS side first: the nodes create their topics on it
+            self.bridge._graph(scene)
+        spec = scene.spec
+        ids = self.robots if self.robots is not None else spec.teams[self.team].robot_ids()
+        sign = spec.team_sign(self.team)
+        nodes = [RosRobotNode(self.bridge, self.team, rid, sign, spec.control.period) for rid in ids]
+        self.bridge.ros_nodes = nodes
+        return nodes
+
+    def _answer(self) -> None:
+        super()._answer()
+        self.bridge.flush_requests()
+
+
+class Bridge:
+    """``simatch ros2``: see the module's text. ``team``/``robots``: what it drives (None: nothing, an
+    observer); ``key``: the credential (default: the admin's for an observer, the team's otherwise, from the
+    run's credentials folder on this machine); ``world``: publish the ground truth (needs admin; default: when
+    the credential is admin)."""
+
+    def __init__(
+        self,
+        *,
+        connect: str = DEFAULT_ENDPOINT,
+        run: str = "default",
+        key: str | Path | None = None,
+        team: str | None = None,
+        robots: Sequence[int] | None = None,
+        world: bool | None = None,
+        wait_answers: float = 0.0,
+        command_timeout: float = COMMAND_TIMEOUT,
+        markers_period: float = 0.05,
+        wait: float = 30.0,
+        say: Callable[[str], None] = _stderr,
+    ):
+        if robots is not None and team is None:
+            raise ValueError("robots are given with their team")
+        self.connect, self.run_name = connect, run
+        self.team, self.robots = team, list(robots) if robots is not None else None
+        default_key = credentials.ADMIN if team is None else team
+        self.key = Path(key) if key else credentials.default_dir(run) / f"{default_key}.key"
+        if team is None and key is None:
+            self.key = credentials.default_dir(run) / f"{credentials.ADMIN}.key"
+        self.world = world
+        self.wait_answers = float(wait_answers)
+        self.command_timeout = float(command_timeout)
+        self.markers_period = markers_period
+        self.wait = wait
+        self.say = say
+        self.graph = None
+        self.proc: RosTeamProcess | None = None
+        self.bus: ZenohBus | None = None
+        self.own_poses: dict = {}
+        self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        self._pub_set_model = None
+        self.ros_nodes: list[RosRobotNode] = []
+        self.observing = False
+        self.mode = protocol.LOCKSTEP
+        self._waited_at: float | None = None
+        self.ended: str | None = None
+        self._server_lost_at: float | None = None
+        self._stop: BaseException | None = None
+
+    # --- what the robot nodes call --------------------------------------------------------------------------------
+    def before_robot_ticks(self, now: float) -> None:
+        """Once per tick, before the driven robots take their commands: in lockstep with ``wait_answers``, wait
+        for a new cmd_vel of every driven robot (the perception of this tick went out when it was delivered)."""
+        if self._waited_at == now:
+            return
+        self._waited_at = now
+        if self.wait_answers > 0 and self.proc is not None and self.proc.mode == protocol.LOCKSTEP:
+            self.graph.wait_for_commands([(n.ports.command, n.seen) for n in self.ros_nodes], self.wait_answers)
+        if self.own_poses and not self.observing:
+            self.graph.publish_own_frames(now, self.own_poses)
+
+    def flush_requests(self) -> None:
+        """Send what ROS asked for meanwhile (set_model_state), from the thread that owns the bus."""
+        bus = self.proc.bus if self.proc is not None else self.bus
+        while True:
+            try:
+                req = self._requests.get_nowait()
+            except queue.Empty:
+                return
+            if bus is not None and self._pub_set_model is not None:
+                self._pub_set_model.put(req)
+
+    # --- running -----------------------------------------------------------------------------------------------------
+    def run(self) -> str:
+        """Join the run, bridge it until it ends (returns the server's reason); ClientError if it cannot."""
+        self.open()
+        try:
+            return self.serve()
+        finally:
+            self.close()
+
+    def open(self) -> None:
+        cred = self._credential()
+        admin = cred.name == credentials.ADMIN
+        if self.world and not admin:
+            raise ClientError(
+                f"the ground truth (--world) needs the organiser's {credentials.ADMIN} credential, not {cred.name}'s"
+            )
+        self.observing = admin if self.world is None else bool(self.world)
+        if self.team is not None:
+            names.check_team(self.team)
+            self.proc = RosTeamProcess(
+                self,
+                self.team,
+                self.robots,
+                connect=self.connect,
+                run=self.run_name,
+                key=self.key,
+                wait=self.wait,
+                say=self.say,
+            )
+            self.proc.open()  # builds the ROS side (`RosTeamProcess.nodes`)
+            self.mode = self.proc.mode
+            bus = self.proc.bus
+        else:
+            bus = self.bus = self._observer_bus(cred)
+            self._graph(self._ask_scene(bus))
+        self._subscribe(bus)
+
+    def _credential(self) -> credentials.Credential:
+        deadline = time.monotonic() + self.wait
+        while True:
+            try:
+                return credentials.read(self.key)
+            except credentials.CredentialError as exc:
+                if self.key.exists() or time.monotonic() >= deadline:
+                    raise ClientError(str(exc)) from None
+            time.sleep(0.2)
+
+    def _ask_scene(self, bus: ZenohBus):
+        deadline = time.monotonic() + self.wait
+        while True:
+            for ok, payload in bus.query(protocol.SCENE, b"{}", timeout=2.0):
+                if ok:
+                    offer = protocol.loads(payload, "scene", "seed")
+                    self.mode = offer.get("mode", protocol.LOCKSTEP)
+                    return protocol.scene_from_offer(offer)
+            if time.monotonic() >= deadline:
+                raise ClientError(f"no simatch server for run {self.run_name!r} answers at {self.connect}")
+            time.sleep(0.2)
+
+    def _observer_bus(self, cred) -> ZenohBus:
+        conf = zenoh_config("client", connect=[self.connect], user=cred.name, password=cred.secret)
+        try:
+            session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
+        except TransportError as exc:
+            raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
+        return ZenohBus(session, self.run_name, signer=cred.signer(self.run_name))
+
+    def _graph(self, scene):
+        from .graph import RosGraph  # rclpy: in this process only
+
+        self.scene = scene
+        spec = scene.spec
+        for team in spec.teams:
+            names.check_team(team)
+        what = self.team if self.team is not None else "observer"
+        if self.robots is not None:
+            what += "_" + "_".join(map(str, self.robots))
+        graph = RosGraph(
+            what, spec, max_speed=MAX_COMMAND_SPEED, max_turn=MAX_COMMAND_TURN, markers_period=self.markers_period
+        )
+        self.graph = graph
+        return graph
+
+    def _subscribe(self, bus: ZenohBus) -> None:
+        spec, graph = self.scene.spec, self.graph
+        bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: graph.publish_clock(m.stamp))
+        graph.add_game_state()
+        bus.subscribe(topics.GAME_STATE, msgs.GameState, lambda m: graph.publish_game_state(msgs.encode(m)))
+        teams = list(spec.teams) if self.observing else [self.team]
+        for team in teams:
+            graph.add_team(team)
+            bus.subscribe(
+                topics.team_topic(team, topics.RECEIVE_FROM_COACH),
+                msgs.CoachInfo,
+                lambda m, team=team: graph.publish_coach(team, m, msgs.encode(m)),
+            )
+        if self.observing:
+            admin = credentials.read(self.key).name == credentials.ADMIN
+            self._pub_set_model = bus.publisher(topics.SET_MODEL_STATE, msgs.ModelState) if admin else None
+            graph.add_world(self._requests.put if admin else None)
+            for name in spec.robot_names():
+                team, rid = topics.split_robot_name(name)
+                graph.add_robot(team, rid, driven=False)
+            bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_models)
+            bus.subscribe(topics.EVENTS, msgs.GameEvent, lambda m: graph.publish_event(msgs.encode(m)))
+        if self.proc is None:
+            bus.subscribe_raw(protocol.END, self._on_end, verify=False)
+            bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
+        self.say(self._summary())
+
+    def _summary(self) -> str:
+        driven = (
+            f"drives {self.team}" + (f" robots {','.join(map(str, self.robots))}" if self.robots else "")
+            if self.team
+            else "drives nothing"
+        )
+        world = "publishes the ground truth" if self.observing else "publishes its team's view"
+        domain = os.environ.get("ROS_DOMAIN_ID", "0")
+        return f"bridge of run {self.run_name!r} at {self.connect} on ROS 2 domain {domain}: {driven}, {world}"
+
+    def _on_models(self, m) -> None:
+        poses = model_poses(m.name, m.pose, m.twist)
+        heights = {}
+        if names.BALL in poses:
+            k = list(m.name).index(names.BALL)
+            heights[names.BALL] = float(m.pose[7 * k + 2])
+        self.graph.set_time(m.stamp)
+        self.graph.publish_ground_truth(m.stamp, poses, heights)
+        self.graph.publish_models(msgs.encode(m))
+
+    def _on_end(self, topic, payload, attachment, arrival) -> None:
+        try:
+            self.ended = str(protocol.loads(payload, "reason")["reason"])
+        except protocol.ProtocolError:
+            self.ended = "ended"
+
+    def _on_server(self, topic: str, alive: bool) -> None:
+        self._server_lost_at = None if alive else time.monotonic()
+
+    def stop_soon(self, exc: BaseException) -> bool:
+        if self.proc is not None:
+            return self.proc.stop_soon(exc)
+        if self._stop is not None:
+            return False
+        self._stop = exc
+        return True
+
+    def serve(self) -> str:
+        if self.proc is not None:
+            return self.proc.serve()
+        bus = self.bus
+        while not self.ended:
+            bus.pump(0.1)
+            self.flush_requests()
+            if self._stop is not None:
+                raise self._stop
+            lost = self._server_lost_at
+            if lost is not None and time.monotonic() - lost > 5.0:
+                raise ClientError(f"lost the server at {self.connect}")
+        return self.ended
+
+    def stats(self) -> dict:
+        """Commands received from ROS, refused (bad) and malformed, per driven robot."""
+        out = {}
+        if self.graph is not None:
+            for name, ports in self.graph.robots.items():
+                if ports.driven:
+                    c = ports.command
+                    out[name] = {"received": c.received, "bad": c.bad, "malformed": c.malformed}
+        return out
+
+    def close(self) -> None:
+        try:
+            if self.proc is not None:
+                self.proc.close()
+            if self.bus is not None:
+                self.bus.close()
+                self.bus = None
+        finally:
+            if self.graph is not None:
+                self.graph.close()

@@ -1,0 +1,527 @@
+"""The ROS 2 side of the bridge: one rclpy node, its publishers and subscriptions, spun in a thread of its own.
+
+Imported only in the bridge's process (`simatch ros2`): it imports rclpy, whose shared libraries the ``ros2``
+extra's wheels put on ``LD_LIBRARY_PATH`` when this Python starts (their ``ros_wheels_bootstrapper``).
+
+Quality of service, as ROS 2 simulators and drivers choose it:
+
+* commands in (``cmd_vel``, ``dribble``, ``kick``, ``lob``, ``action_cmd``, ``set_model_state``): reliable,
+  keep last 10 (ROS 2's default: what ``ros2 topic pub`` and a plain publisher offer);
+* game state and commands (``match_mode``, ``match_type``, ``coach``, ``game_state``): reliable and
+  transient local, keep last 1: a node that starts late still gets the current command;
+* high-rate state (``odom``, the perception, ``model_states``): best effort, keep last 5 (ROS 2's sensor-data
+  profile: subscribe with ``rclpy.qos.qos_profile_sensor_data``); ``/clock`` best effort, keep last 1 (what
+  the time source of a ``use_sim_time`` node subscribes with);
+* ``/tf`` reliable, keep last 100 and ``/tf_static`` reliable transient local (tf2's own profiles), markers
+  reliable keep last 1 (RViz's default subscription).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import rclpy
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Pose, PoseArray, TransformStamped, Twist
+from nav_msgs.msg import Odometry
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Bool, ColorRGBA, Float32, UInt8
+from visualization_msgs.msg import Marker, MarkerArray
+
+from .. import msgs
+from . import names
+from .convert import Pose2D, quaternion_of_yaw, robot_pose, stamp_of, world_pose
+
+log = logging.getLogger(__name__)
+
+try:  # built by `simatch ros2 --build-interfaces` (simatch.ros2.interfaces)
+    import simatch_msgs.msg as _smsg
+except ImportError:  # the standard types alone
+    _smsg = None
+try:
+    from tf2_msgs.msg import TFMessage
+except ImportError:
+    TFMessage = None
+
+COMMANDS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+LATCHED = QoSProfile(
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    history=HistoryPolicy.KEEP_LAST,
+)
+SENSOR = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST)
+CLOCK = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST)
+TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+MARKERS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+
+ROBOT_RADIUS = 0.25  # [m] the drawn footprint (the shipped models')
+ROBOT_HEIGHT = 0.8
+BALL_RADIUS = 0.11
+
+_COLORS = {
+    "cyan": (0.0, 0.8, 0.9),
+    "magenta": (0.9, 0.1, 0.7),
+    "blue": (0.1, 0.3, 0.9),
+    "yellow": (0.95, 0.85, 0.1),
+    "red": (0.9, 0.1, 0.1),
+    "green": (0.1, 0.8, 0.2),
+}
+
+
+def has_simatch_msgs() -> bool:
+    return _smsg is not None
+
+
+def _time(seconds: float) -> Time:
+    sec, nsec = stamp_of(seconds)
+    return Time(sec=sec, nanosec=nsec)
+
+
+def _color(rgb: tuple[float, float, float], a: float = 1.0) -> ColorRGBA:
+    return ColorRGBA(r=float(rgb[0]), g=float(rgb[1]), b=float(rgb[2]), a=float(a))
+
+
+@dataclass
+class CommandSlot:
+    """What ROS said last for one robot, written by the executor's thread and read at the run's ticks."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    w: float = 0.0
+    vel_at: float | None = None  # simulated time of the bridge when the last cmd_vel arrived (None: none yet)
+    vel_bad: bool = False  # the last cmd_vel is one the simulator refuses: passed on once, then not repeated
+    vel_sent: bool = False
+    version: int = 0  # cmd_vel messages so far
+    dribble: bool = False
+    kick: float = 0.0  # a kick request waiting for the next tick [m/s]
+    lob: bool = False
+    received: int = 0
+    bad: int = 0
+    malformed: int = 0
+
+
+@dataclass
+class RobotPorts:
+    team: str
+    rid: int
+    driven: bool
+    odom: object = None
+    ball: object = None
+    obstacles: object = None
+    teammates: object = None
+    holding: object = None
+    vision: object = None
+    command: CommandSlot = field(default_factory=CommandSlot)
+
+
+class RosGraph:
+    """One rclpy node in its own context, spun by a thread of its own."""
+
+    def __init__(self, what: str, spec, *, max_speed: float, max_turn: float, markers_period: float = 0.05):
+        self.spec = spec
+        self.max_speed, self.max_turn = max_speed, max_turn
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, args=[])
+        self.node = rclpy.create_node(names.node_name(what), context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.now = 0.0  # simulated time of the newest clock or tick
+        self._cond = threading.Condition()
+        self.robots: dict[str, RobotPorts] = {}
+        self.markers_period = markers_period
+        self._markers_at = -math.inf
+        self._field_markers = self._field()
+        n = self.node
+        self.pub_clock = n.create_publisher(Clock, names.CLOCK, CLOCK)
+        self.pub_tf = n.create_publisher(TFMessage, names.TF, TF) if TFMessage is not None else None
+        self.pub_tf_static = n.create_publisher(TFMessage, names.TF_STATIC, LATCHED) if TFMessage is not None else None
+        self.pub_markers = None
+        self.pub_models = None
+        self.pub_game = None
+        self.pub_events = None
+        self.team_pubs: dict[str, tuple] = {}
+        self.malformed = 0
+        self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
+        self._thread.start()
+        self._static_frames()
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except (ExternalShutdownException, rclpy.executors.ShutdownException):
+            pass
+        except Exception:  # keep the bridge's own thread informed through the log
+            log.exception("the ROS 2 executor stopped")
+
+    # --- set-up ------------------------------------------------------------------------------------------------
+    def add_world(self, set_model_state: Callable[[object], None] | None) -> None:
+        """The observer's topics: markers, model states, the game's state and events; with
+        ``set_model_state`` (the organiser's credential), the privileged request topic."""
+        n = self.node
+        self.pub_markers = n.create_publisher(MarkerArray, names.MARKERS, MARKERS)
+        if _smsg is not None:
+            self.pub_models = n.create_publisher(_smsg.ModelStates, names.MODEL_STATES, SENSOR)
+            self.pub_events = n.create_publisher(_smsg.GameEvent, names.EVENTS, COMMANDS)
+            if set_model_state is not None:
+
+                def on_set(raw: bytes) -> None:
+                    try:
+                        req = msgs.decode(msgs.ModelState, raw)
+                    except msgs.MessageError as exc:
+                        self.malformed += 1
+                        log.warning("dropped a malformed set_model_state request: %s", exc)
+                        return
+                    set_model_state(req)
+
+                n.create_subscription(_smsg.ModelState, names.SET_MODEL_STATE, on_set, COMMANDS, raw=True)
+        self.add_game_state()
+
+    def add_game_state(self) -> None:
+        if self.pub_game is None and _smsg is not None:
+            self.pub_game = self.node.create_publisher(_smsg.GameState, names.GAME_STATE, LATCHED)
+
+    def add_team(self, team: str) -> None:
+        if team in self.team_pubs:
+            return
+        n = self.node
+        self.team_pubs[team] = (
+            n.create_publisher(UInt8, names.team_topic(team, names.MATCH_MODE), LATCHED),
+            n.create_publisher(UInt8, names.team_topic(team, names.MATCH_TYPE), LATCHED),
+            n.create_publisher(_smsg.CoachInfo, names.team_topic(team, names.COACH), LATCHED) if _smsg else None,
+        )
+
+    def add_robot(self, team: str, rid: int, driven: bool) -> RobotPorts:
+        """A robot's topics; a ``driven`` robot also takes commands (cmd_vel, dribble, kick, lob, action_cmd)."""
+        name = f"{team}/{rid}"
+        ports = self.robots.get(name)
+        if ports is not None:
+            return ports
+        n = self.node
+        topic = lambda leaf: names.robot_topic(team, rid, leaf)  # noqa: E731
+        ports = RobotPorts(team, rid, driven)
+        ports.odom = n.create_publisher(Odometry, topic(names.ODOM), SENSOR)
+        if driven:
+            ports.ball = n.create_publisher(Odometry, topic(names.BALL_SEEN), SENSOR)
+            ports.obstacles = n.create_publisher(PoseArray, topic(names.OBSTACLES), SENSOR)
+            ports.teammates = n.create_publisher(PoseArray, topic(names.TEAMMATES), SENSOR)
+            ports.holding = n.create_publisher(Bool, topic(names.HOLDING_BALL), SENSOR)
+            if _smsg is not None:
+                ports.vision = n.create_publisher(_smsg.OmniVisionInfo, topic(names.OMNI_VISION), SENSOR)
+            slot = ports.command
+            n.create_subscription(Twist, topic(names.CMD_VEL), lambda m: self._on_cmd_vel(slot, m), COMMANDS)
+            n.create_subscription(Bool, topic(names.DRIBBLE), lambda m: self._on_dribble(slot, m), COMMANDS)
+            n.create_subscription(Float32, topic(names.KICK), lambda m: self._on_kick(slot, m, False), COMMANDS)
+            n.create_subscription(Float32, topic(names.LOB), lambda m: self._on_kick(slot, m, True), COMMANDS)
+            if _smsg is not None:
+                n.create_subscription(
+                    _smsg.ActionCmd, topic(names.ACTION_CMD), lambda raw: self._on_action(slot, raw), COMMANDS, raw=True
+                )
+        self.robots[name] = ports
+        return ports
+
+    def _static_frames(self) -> None:
+        """``map`` -> ``<team>/field`` for every team: each team's own frame, turned by pi for a team attacking -x."""
+        if self.pub_tf_static is None:
+            return
+        out = []
+        for team in self.spec.teams:
+            t = TransformStamped()
+            t.header.stamp = _time(0.0)
+            t.header.frame_id = names.MAP
+            t.child_frame_id = names.team_frame(team)
+            qx, qy, qz, qw = quaternion_of_yaw(0.0 if self.spec.team_sign(team) > 0 else math.pi)
+            t.transform.rotation.x, t.transform.rotation.y = qx, qy
+            t.transform.rotation.z, t.transform.rotation.w = qz, qw
+            out.append(t)
+        self.pub_tf_static.publish(TFMessage(transforms=out))
+
+    # --- commands from ROS (the executor's thread) ---------------------------------------------------------------
+    def _on_cmd_vel(self, slot: CommandSlot, m) -> None:
+        vx, vy, w = float(m.linear.x), float(m.linear.y), float(m.angular.z)
+        bad = not (abs(vx) <= self.max_speed and abs(vy) <= self.max_speed and abs(w) <= self.max_turn)
+        with self._cond:
+            slot.vx, slot.vy, slot.w = vx, vy, w
+            slot.vel_at = self.now
+            slot.vel_bad, slot.vel_sent = bad, False
+            slot.version += 1
+            slot.received += 1
+            if bad:
+                slot.bad += 1
+            self._cond.notify_all()
+
+    def _on_dribble(self, slot: CommandSlot, m) -> None:
+        with self._cond:
+            slot.dribble = bool(m.data)
+
+    def _on_kick(self, slot: CommandSlot, m, lob: bool) -> None:
+        with self._cond:
+            slot.kick, slot.lob = float(m.data), lob  # the simulator refuses a bad speed (and counts it)
+
+    def _on_action(self, slot: CommandSlot, raw: bytes) -> None:
+        try:
+            a = msgs.decode(msgs.ActionCmd, raw)
+        except msgs.MessageError as exc:
+            with self._cond:
+                slot.malformed += 1
+            log.warning("dropped a malformed action_cmd: %s", exc)
+            return
+        with self._cond:
+            slot.dribble = bool(a.dribble)
+            if a.kick_speed != 0.0:
+                slot.kick, slot.lob = float(a.kick_speed), a.kick_type == msgs.ActionCmd.KICK_LOB
+
+    def wait_for_commands(self, slots: list[tuple[CommandSlot, int]], timeout: float) -> bool:
+        """Wait up to ``timeout`` wall seconds until every slot has a cmd_vel newer than its given version."""
+        with self._cond:
+            return self._cond.wait_for(lambda: all(s.version > v for s, v in slots), timeout)
+
+    def take(self, slot: CommandSlot, now: float, timeout: float):
+        """The command to send at simulated time ``now``: ((vx, vy, w) or None, dribble, kick, lob), the kick
+        request consumed. No velocity when none came within ``timeout`` simulated seconds (the simulator's
+        watchdog then stops the robot) or when the last one was refused already."""
+        with self._cond:
+            vel = None
+            if slot.vel_at is not None and now - slot.vel_at <= timeout and not (slot.vel_bad and slot.vel_sent):
+                vel = (slot.vx, slot.vy, slot.w)
+                slot.vel_sent = True
+            kick, lob = slot.kick, slot.lob
+            slot.kick = 0.0
+            return vel, slot.dribble, kick, lob
+
+    # --- state to ROS (the bridge's thread) ----------------------------------------------------------------------
+    def set_time(self, t: float) -> None:
+        with self._cond:
+            self.now = max(self.now, float(t))
+
+    def publish_clock(self, t: float) -> None:
+        self.set_time(t)
+        self.pub_clock.publish(Clock(clock=_time(t)))
+
+    def publish_perception(self, ports: RobotPorts, sign: int, info, raw: bytes | None) -> None:
+        """A robot's OmniVisionInfo (team frame) as odom, ball, obstacles, team-mates (``map``), holding_ball
+        and, when simatch_msgs is built, the message itself (``omni_vision``, team frame as on the bus)."""
+        stamp = _time(info.stamp)
+        me = next((r for r in info.robots if r.id == ports.rid), None)
+        if me is not None and me.valid:
+            self._odom(ports.odom, stamp, names.base_link(ports.team, ports.rid), robot_pose(sign, me))
+        if ports.holding is not None and me is not None:
+            ports.holding.publish(Bool(data=bool(me.holding_ball)))
+        ball = info.ball
+        if ports.ball is not None and ball.pos_known:
+            p = world_pose(sign, ball.x, ball.y, 0.0, ball.vx, ball.vy, 0.0)
+            self._odom(ports.ball, stamp, names.BALL, p, z=float(ball.z), body=False)
+        if ports.obstacles is not None:
+            obs = info.obstacles
+            ports.obstacles.publish(self._poses(stamp, [world_pose(sign, x, y, 0.0) for x, y in zip(obs.x, obs.y)]))
+        if ports.teammates is not None:
+            mates = [robot_pose(sign, r) for r in info.robots if r.id != ports.rid and r.valid]
+            ports.teammates.publish(self._poses(stamp, mates))
+        if ports.vision is not None and raw is not None:
+            ports.vision.publish(raw)
+
+    def publish_ground_truth(self, t: float, poses: dict[str, Pose2D], heights: dict[str, float]) -> None:
+        """Every model's true pose: /tf (map -> each base_link, map -> ball), the odom of robots nobody drives
+        here, and the markers (at most every ``markers_period`` simulated seconds)."""
+        stamp = _time(t)
+        tfs = []
+        for name, p in poses.items():
+            if name == names.BALL:
+                child, z = names.BALL, heights.get(name, BALL_RADIUS)
+            else:
+                team, _, rid = name.partition("/")
+                child, z = names.base_link(team, int(rid)), 0.0
+                ports = self.robots.get(name)
+                if ports is not None and not ports.driven:
+                    self._odom(ports.odom, stamp, child, p)
+            tfs.append(self._transform(stamp, child, p, z))
+        if self.pub_tf is not None:
+            self.pub_tf.publish(TFMessage(transforms=tfs))
+        if self.pub_markers is not None and t - self._markers_at >= self.markers_period - 1e-9:
+            self._markers_at = t
+            self.pub_markers.publish(self._markers(stamp, poses, heights))
+
+    def publish_own_frames(self, t: float, poses: dict[str, Pose2D]) -> None:
+        """/tf of the robots a team bridge perceives itself (no ground truth for a team's credential)."""
+        if self.pub_tf is None or not poses:
+            return
+        stamp = _time(t)
+        tfs = []
+        for name, p in poses.items():
+            team, _, rid = name.partition("/")
+            tfs.append(self._transform(stamp, names.base_link(team, int(rid)), p, 0.0))
+        self.pub_tf.publish(TFMessage(transforms=tfs))
+
+    def publish_models(self, raw: bytes) -> None:
+        if self.pub_models is not None:
+            self.pub_models.publish(raw)
+
+    def publish_coach(self, team: str, info, raw: bytes) -> None:
+        pubs = self.team_pubs.get(team)
+        if pubs is None:
+            return
+        mode, mtype, coach = pubs
+        mode.publish(UInt8(data=int(info.match_mode)))
+        mtype.publish(UInt8(data=int(info.match_type)))
+        if coach is not None:
+            coach.publish(raw)
+
+    def publish_game_state(self, raw: bytes) -> None:
+        if self.pub_game is not None:
+            self.pub_game.publish(raw)
+
+    def publish_event(self, raw: bytes) -> None:
+        if self.pub_events is not None:
+            self.pub_events.publish(raw)
+
+    # --- building messages ---------------------------------------------------------------------------------------
+    @staticmethod
+    def _odom(pub, stamp, child: str, p: Pose2D, z: float = 0.0, body: bool = True) -> None:
+        m = Odometry()
+        m.header.stamp = stamp
+        m.header.frame_id = names.MAP
+        m.child_frame_id = child
+        pose = m.pose.pose
+        pose.position.x, pose.position.y, pose.position.z = p.x, p.y, z
+        qx, qy, qz, qw = quaternion_of_yaw(p.yaw)
+        pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = qx, qy, qz, qw
+        vx, vy, w = p.body_twist() if body else (p.vx, p.vy, p.w)
+        m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.angular.z = vx, vy, w
+        pub.publish(m)
+
+    @staticmethod
+    def _transform(stamp, child: str, p: Pose2D, z: float) -> TransformStamped:
+        t = TransformStamped()
+        t.header.stamp = stamp
+        t.header.frame_id = names.MAP
+        t.child_frame_id = child
+        tr = t.transform
+        tr.translation.x, tr.translation.y, tr.translation.z = p.x, p.y, z
+        tr.rotation.x, tr.rotation.y, tr.rotation.z, tr.rotation.w = quaternion_of_yaw(p.yaw)
+        return t
+
+    @staticmethod
+    def _poses(stamp, poses: list[Pose2D]) -> PoseArray:
+        out = PoseArray()
+        out.header.stamp = stamp
+        out.header.frame_id = names.MAP
+        for p in poses:
+            q = Pose()
+            q.position.x, q.position.y = p.x, p.y
+            q.orientation.x, q.orientation.y, q.orientation.z, q.orientation.w = quaternion_of_yaw(p.yaw)
+            out.poses.append(q)
+        return out
+
+    def _field(self) -> list:
+        """The field's markings (one LINE_LIST) and the goals, in ``map``: drawn with every MarkerArray."""
+        geo = self.spec.world.geometry()
+        lines = Marker()
+        lines.header.frame_id = names.MAP
+        lines.ns, lines.id, lines.type, lines.action = "field", 0, Marker.LINE_LIST, Marker.ADD
+        lines.scale.x = float(geo.line_width)
+        lines.color = _color((1.0, 1.0, 1.0))
+        lines.pose.orientation.w = 1.0
+        for item in geo.lines():
+            if item["kind"] == "polyline":
+                pts = item["points"]
+                segs = zip(pts[:-1], pts[1:])
+            elif item["kind"] == "arc":
+                (cx, cy), r = item["center"], item["radius"]
+                a0, a1 = item["start"], item["end"]
+                k = max(4, int(abs(a1 - a0) / (2 * math.pi) * 48))
+                arc = [
+                    (cx + r * math.cos(a0 + (a1 - a0) * i / k), cy + r * math.sin(a0 + (a1 - a0) * i / k))
+                    for i in range(k + 1)
+                ]
+                segs = zip(arc[:-1], arc[1:])
+            else:
+                continue
+            for (x0, y0), (x1, y1) in segs:
+                lines.points.append(Point(x=float(x0), y=float(y0), z=0.01))
+                lines.points.append(Point(x=float(x1), y=float(y1), z=0.01))
+        out = [lines]
+        spec_world = self.spec.world
+        L = geo.half_length
+        for k, side in enumerate((-1, 1)):
+            goal = Marker()
+            goal.header.frame_id = names.MAP
+            goal.ns, goal.id, goal.type, goal.action = "goals", k, Marker.CUBE, Marker.ADD
+            depth = float(getattr(spec_world, "goal_depth", 0.6))
+            goal.pose.position.x = side * (L + depth / 2)
+            goal.pose.position.z = 0.5
+            goal.pose.orientation.w = 1.0
+            goal.scale.x, goal.scale.y, goal.scale.z = depth, float(getattr(spec_world, "goal_width", 2.4)), 1.0
+            goal.color = _color((0.9, 0.9, 0.9), 0.4)
+            out.append(goal)
+        return out
+
+    def _markers(self, stamp, poses: dict[str, Pose2D], heights: dict[str, float]) -> MarkerArray:
+        out = MarkerArray()
+        for m in self._field_markers:
+            m.header.stamp = stamp
+            out.markers.append(m)
+        for name, p in sorted(poses.items()):
+            m = Marker()
+            m.header.stamp = stamp
+            m.header.frame_id = names.MAP
+            m.action = Marker.ADD
+            m.pose.orientation.w = 1.0
+            if name == names.BALL:
+                m.ns, m.id, m.type = "ball", 0, Marker.SPHERE
+                m.pose.position.x, m.pose.position.y = p.x, p.y
+                m.pose.position.z = heights.get(name, BALL_RADIUS)
+                m.scale.x = m.scale.y = m.scale.z = 2 * BALL_RADIUS
+                m.color = _color((1.0, 0.5, 0.0))
+                out.markers.append(m)
+                continue
+            team, _, rid = name.partition("/")
+            rgb = _COLORS.get(self.spec.team_color(team), (0.7, 0.7, 0.7))
+            m.ns, m.id, m.type = f"robots/{team}", int(rid), Marker.CYLINDER
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = p.x, p.y, ROBOT_HEIGHT / 2
+            qx, qy, qz, qw = quaternion_of_yaw(p.yaw)
+            m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = qx, qy, qz, qw
+            m.scale.x = m.scale.y = 2 * ROBOT_RADIUS
+            m.scale.z = ROBOT_HEIGHT
+            m.color = _color(rgb)
+            out.markers.append(m)
+            head = Marker()  # the kicker's side
+            head.header = m.header
+            head.ns, head.id, head.type, head.action = f"heading/{team}", int(rid), Marker.ARROW, Marker.ADD
+            head.pose = m.pose
+            head.scale.x, head.scale.y, head.scale.z = ROBOT_RADIUS * 1.6, 0.08, 0.08
+            head.color = _color((1.0, 1.0, 1.0))
+            out.markers.append(head)
+            label = Marker()
+            label.header = m.header
+            label.ns, label.id, label.type, label.action = (
+                f"labels/{team}",
+                int(rid),
+                Marker.TEXT_VIEW_FACING,
+                Marker.ADD,
+            )
+            label.pose.position.x, label.pose.position.y, label.pose.position.z = p.x, p.y, ROBOT_HEIGHT + 0.3
+            label.pose.orientation.w = 1.0
+            label.scale.z = 0.4
+            label.color = _color((1.0, 1.0, 1.0))
+            label.text = name
+            out.markers.append(label)
+        return out
+
+    # --- closing -------------------------------------------------------------------------------------------------
+    def close(self) -> None:
+        try:
+            self.executor.shutdown(timeout_sec=1.0)
+        except Exception:  # shutting down twice, or a context already gone
+            pass
+        try:
+            self.node.destroy_node()
+        finally:
+            if self.context.ok():
+                rclpy.shutdown(context=self.context)
+        self._thread.join(timeout=2.0)
