@@ -62,6 +62,12 @@ def add_parser(sub) -> None:
     )
     world.add_argument("--no-world", dest="world", action="store_false", help="do not publish the ground truth")
     p.add_argument(
+        "--no-clock",
+        dest="clock",
+        action="store_false",
+        help="do not publish /clock (when another bridge on the same ROS 2 domain does: one clock per domain)",
+    )
+    p.add_argument(
         "--wait-answers",
         type=float,
         default=0.0,
@@ -156,6 +162,7 @@ def main(args) -> int:
         world=args.world,
         wait_answers=args.wait_answers,
         command_timeout=COMMAND_TIMEOUT if args.command_timeout is None else args.command_timeout,
+        clock=args.clock,
         wait=args.wait,
     )
     with interrupt_on_term(bridge.stop_soon):

@@ -152,6 +152,7 @@ class Bridge:
         wait_answers: float = 0.0,
         command_timeout: float = COMMAND_TIMEOUT,
         markers_period: float = 0.05,
+        clock: bool = True,
         wait: float = 30.0,
         say: Callable[[str], None] = _stderr,
     ):
@@ -167,6 +168,7 @@ class Bridge:
         self.wait_answers = float(wait_answers)
         self.command_timeout = float(command_timeout)
         self.markers_period = markers_period
+        self.clock = clock
         self.wait = wait
         self.say = say
         self.graph = None
@@ -176,6 +178,7 @@ class Bridge:
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
         self._pub_set_model = None
         self.ros_nodes: list[RosRobotNode] = []
+        self._models_at = -1.0
         self.observing = False
         self.mode = protocol.LOCKSTEP
         self._waited_at: float | None = None
@@ -284,7 +287,12 @@ class Bridge:
         if self.robots is not None:
             what += "_" + "_".join(map(str, self.robots))
         graph = RosGraph(
-            what, spec, max_speed=MAX_COMMAND_SPEED, max_turn=MAX_COMMAND_TURN, markers_period=self.markers_period
+            what,
+            spec,
+            max_speed=MAX_COMMAND_SPEED,
+            max_turn=MAX_COMMAND_TURN,
+            markers_period=self.markers_period,
+            clock=self.clock,
         )
         self.graph = graph
         return graph
@@ -327,6 +335,10 @@ class Bridge:
         return f"bridge of run {self.run_name!r} at {self.connect} on ROS 2 domain {domain}: {driven}, {world}"
 
     def _on_models(self, m) -> None:
+        # the server sends them every physics step; ROS gets them once per control period
+        if m.stamp - self._models_at < self.scene.spec.control.period - 1e-9:
+            return
+        self._models_at = m.stamp
         poses = model_poses(m.name, m.pose, m.twist)
         heights = {}
         if names.BALL in poses:

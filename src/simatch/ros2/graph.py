@@ -124,7 +124,11 @@ class RobotPorts:
 class RosGraph:
     """One rclpy node in its own context, spun by a thread of its own."""
 
-    def __init__(self, what: str, spec, *, max_speed: float, max_turn: float, markers_period: float = 0.05):
+    def __init__(
+        self, what: str, spec, *, max_speed: float, max_turn: float, markers_period: float = 0.05, clock: bool = True
+    ):
+        """``clock``: publish /clock (one publisher per ROS domain: a second bridge on the same graph leaves it
+        to the first, see docs/ros.md)."""
         self.spec = spec
         self.max_speed, self.max_turn = max_speed, max_turn
         self.context = rclpy.Context()
@@ -139,7 +143,7 @@ class RosGraph:
         self._markers_at = -math.inf
         self._field_markers = self._field()
         n = self.node
-        self.pub_clock = n.create_publisher(Clock, names.CLOCK, CLOCK)
+        self.pub_clock = n.create_publisher(Clock, names.CLOCK, CLOCK) if clock else None
         self.pub_tf = n.create_publisher(TFMessage, names.TF, TF) if TFMessage is not None else None
         self.pub_tf_static = n.create_publisher(TFMessage, names.TF_STATIC, LATCHED) if TFMessage is not None else None
         self.pub_markers = None
@@ -206,7 +210,8 @@ class RosGraph:
         n = self.node
         topic = lambda leaf: names.robot_topic(team, rid, leaf)  # noqa: E731
         ports = RobotPorts(team, rid, driven)
-        ports.odom = n.create_publisher(Odometry, topic(names.ODOM), SENSOR)
+        # a driven robot's odom is its perception; the observer's is the ground truth, on a topic of its own
+        ports.odom = n.create_publisher(Odometry, topic(names.ODOM if driven else names.GROUND_TRUTH), SENSOR)
         if driven:
             ports.ball = n.create_publisher(Odometry, topic(names.BALL_SEEN), SENSOR)
             ports.obstacles = n.create_publisher(PoseArray, topic(names.OBSTACLES), SENSOR)
@@ -302,7 +307,8 @@ class RosGraph:
 
     def publish_clock(self, t: float) -> None:
         self.set_time(t)
-        self.pub_clock.publish(Clock(clock=_time(t)))
+        if self.pub_clock is not None:
+            self.pub_clock.publish(Clock(clock=_time(t)))
 
     def publish_perception(self, ports: RobotPorts, sign: int, info, raw: bytes | None) -> None:
         """A robot's OmniVisionInfo (team frame) as odom, ball, obstacles, team-mates (``map``), holding_ball
@@ -327,8 +333,8 @@ class RosGraph:
             ports.vision.publish(raw)
 
     def publish_ground_truth(self, t: float, poses: dict[str, Pose2D], heights: dict[str, float]) -> None:
-        """Every model's true pose: /tf (map -> each base_link, map -> ball), the odom of robots nobody drives
-        here, and the markers (at most every ``markers_period`` simulated seconds)."""
+        """Every model's true pose: /tf (map -> each base_link, map -> ball), each robot's ``ground_truth``
+        odometry, and the markers (at most every ``markers_period`` simulated seconds)."""
         stamp = _time(t)
         tfs = []
         for name, p in poses.items():
