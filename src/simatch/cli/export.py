@@ -1,6 +1,7 @@
 """``simatch export FILE.mcap --format parquet|csv [--out DIR]``: a recording as tidy tables for pandas,
 polars or any tool that reads Parquet or CSV (see `simatch.record.tables` for the tables); ``--format
-rosbag1 [--out FILE.bag]``: as a ROS 1 bag with the original Simatch's topics (`simatch.ros1.bag`)."""
+rosbag1 [--out FILE.bag]``: as a ROS 1 bag with the original Simatch's topics (`simatch.ros1.bag`); ``--format
+rosbag2 [--out DIR]``: as a rosbag2 folder for ROS 2's bag tools (`simatch.record.rosbag2`)."""
 
 from __future__ import annotations
 
@@ -20,15 +21,16 @@ def add_parser(sub) -> None:
     p.add_argument("file", metavar="FILE.mcap", help="a recording (simatch run --record)")
     p.add_argument(
         "--format",
-        choices=("parquet", "csv", "rosbag1"),
+        choices=("parquet", "csv", "rosbag1", "rosbag2"),
         default="parquet",
-        help="table format (default parquet), or rosbag1: a ROS 1 bag with the original Simatch's topics",
+        help="table format (default parquet); rosbag1: a ROS 1 bag with the original Simatch's topics; "
+        "rosbag2: a folder with the MCAP file and metadata.yaml",
     )
     p.add_argument(
         "--out",
         metavar="DIR|FILE",
         help="folder for the tables (default: FILE_tables next to the recording); for rosbag1 the bag's path "
-        "(default: FILE.bag next to the recording)",
+        "(default: FILE.bag next to the recording); for rosbag2 the folder (default: FILE without .mcap)",
     )
     p.set_defaults(func=main)
 
@@ -36,6 +38,8 @@ def add_parser(sub) -> None:
 def main(args) -> int:
     if args.format == "rosbag1":
         return _rosbag1(args)
+    if args.format == "rosbag2":
+        return rosbag2_folder(args)
     from ..record.reader import RecordingError
     from ..record.tables import ExportError, export
 
@@ -62,4 +66,15 @@ def _rosbag1(args) -> int:
     for text in rec.problems:
         print(f"simatch: warning: {text}", file=sys.stderr)
     print(f"wrote {bag}: {sum(counts.values())} messages on {len(counts)} topics (rosbag info {bag.name})")
+    return 0
+
+
+def rosbag2_folder(args) -> int:
+    from ..record.rosbag2 import METADATA, Rosbag2Error, export
+
+    try:
+        folder = export(args.file, args.out)
+    except Rosbag2Error as exc:
+        raise UsageError(str(exc)) from None
+    print(f"wrote the rosbag2 folder {folder}/ ({METADATA} and the recording)")
     return 0

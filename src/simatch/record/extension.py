@@ -20,9 +20,10 @@ class RecordExtension:
         group = parser.add_argument_group("recording")
         group.add_argument(
             "--record",
-            metavar="FILE.mcap",
+            metavar="FILE.mcap|DIR/",
             help="record every topic of the run, the 3D scene and the metadata needed to reproduce "
-            "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`)",
+            "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`); "
+            "DIR/ (a trailing slash): a rosbag2 folder, DIR/DIR_0.mcap and its metadata.yaml",
         )
         group.add_argument(
             "--record-links",
@@ -44,11 +45,16 @@ class _Terminated(BaseException):
 
 @contextlib.contextmanager
 def _recording(sim, path: str, links: bool):
+    from . import rosbag2
     from .recorder import Recorder, RecordError
 
     try:
-        recorder = Recorder.for_run(sim, path, links=links, command_line=["simatch"] + sys.argv[1:])
-    except RecordError as exc:
+        folder = rosbag2.is_folder(path)
+        file = rosbag2.prepare(path) if folder else path
+        recorder = Recorder.for_run(
+            sim, file, links=links, command_line=["simatch"] + sys.argv[1:], rosbag2_folder=folder
+        )
+    except (RecordError, rosbag2.Rosbag2Error) as exc:
         raise UsageError(str(exc)) from None
     try:
         with sim.stopping_on(signal.SIGTERM, _Terminated):

@@ -3,8 +3,11 @@
 * MCAP profile ``ros2``: every channel has a ``ros2msg`` schema (the ``.msg`` text with its dependencies,
   as rosbag2 writes it) and CDR messages, so ``rosbags``, the ``mcap`` readers, ROS 2 tools and Foxglove
   read it without simatch.
-* One channel per bus topic, named ``/`` + the topic (``cyan/2/VelCmd`` -> ``/cyan/2/VelCmd``); the 3D
-  scene channels ``/scene/field`` and ``/scene/game`` are not bus topics.
+* One channel per bus topic, named ``/`` + the topic (``cyan/2/VelCmd`` -> ``/cyan/2/VelCmd``), except the
+  run's clock (``simatch_msgs/msg/Clock``: time, step, tick), on ``/simatch/clock``: ``/clock`` is the
+  simulated time as ROS 2's standard ``rosgraph_msgs/msg/Clock``, which ROS 2 tools play back for nodes on
+  ``use_sim_time`` (recordings made before had the simatch clock on ``/clock``; a reader tells them apart by
+  the type). The 3D scene channels ``/scene/field`` and ``/scene/game`` and ``/clock`` are not bus topics.
 * Message log time = simulated time of the physics step during which the message was published, in
   nanoseconds (a recording starts at 0, not at the Unix epoch).
 * Metadata records: ``simatch`` (written first: format, version, scene text, overrides, seed, command
@@ -30,13 +33,33 @@ NS = 1_000_000_000
 CHUNK_NS = NS // 2  # simulated time per chunk
 
 
+#: the channel of the bus's clock, and ROS 2's standard clock channel and type
+SIMATCH_CLOCK = "/simatch/clock"
+ROS_CLOCK = "/clock"
+ROS_CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
+#: what a channel that is for ROS 2 tools only is called among the bus topics (no node publishes there)
+ROS_ONLY = "ros/"
+
+
 def channel_topic(bus_topic: str) -> str:
     """The MCAP channel (ROS-style, absolute) of a bus topic."""
-    return "/" + bus_topic.lstrip("/")
+    topic = bus_topic.lstrip("/")
+    return SIMATCH_CLOCK if topic == "clock" else "/" + topic
 
 
-def bus_topic(channel: str) -> str:
+def bus_topic(channel: str, schema: str = "") -> str:
+    """The bus topic of a channel (its type tells ROS 2's ``/clock`` from the simatch clock of older files)."""
+    if channel == SIMATCH_CLOCK:
+        return "clock"
+    if channel == ROS_CLOCK and schema == ROS_CLOCK_TYPE:
+        return ROS_ONLY + "clock"
     return channel.lstrip("/")
+
+
+def ros_clock(seconds_ns: int) -> bytes:
+    """A rosgraph_msgs/msg/Clock in CDR (little-endian encapsulation, then builtin_interfaces/Time)."""
+    sec, nsec = divmod(int(seconds_ns), NS)
+    return b"\x00\x01\x00\x00" + sec.to_bytes(4, "little", signed=True) + nsec.to_bytes(4, "little")
 
 
 def ns(seconds: float) -> int:

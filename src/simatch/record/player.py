@@ -39,7 +39,11 @@ class Player:
         self._stop = False
         self._pubs: dict[str, object] = {}
         self._scene: LoadedScene | None = None
-        self.topics = {t: ty for t, ty in rec.topics().items() if ty in msgs.typestore.fielddefs}
+        self.topics = {
+            t: ty
+            for t, ty in rec.topics().items()
+            if ty in msgs.typestore.fielddefs and not t.startswith(layout.ROS_ONLY)  # /clock: for ROS 2 tools
+        }
 
     @property
     def duration(self) -> float:

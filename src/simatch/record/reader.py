@@ -175,7 +175,7 @@ class Recording:
         if record.id not in self.channels:
             name, data = self._schemas.get(record.schema_id, ("", b""))
             self.channels[record.id] = ChannelInfo(
-                record.id, layout.bus_topic(record.topic), name, record.message_encoding, data
+                record.id, layout.bus_topic(record.topic, name), name, record.message_encoding, data
             )
 
     def _problem(self, key: str, text: str) -> None:

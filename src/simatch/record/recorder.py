@@ -13,7 +13,9 @@ cost a visible share of a match's time. Bus deliveries come from the thread that
 bus calls synchronously; the Zenoh bus delivers from its owner's thread), so the hot path takes no lock.
 
 What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics
-step), ball contacts, events, game state and operator commands, plus the two 3D-scene channels. Link
+step), ball contacts, events, game state and operator commands, plus the two 3D-scene channels and the
+simulated time as ROS 2's ``/clock`` (`layout.ros_clock`). Given a folder (`rosbag2`), the recording is a
+rosbag2 folder: the MCAP file and the ``metadata.yaml`` that ``ros2 bag`` writes beside it. Link
 states are recorded only on request (``links=True``): a listener makes the simulator compute every
 wheel's pose each physics step, which costs several times a whole physics step, and base and ball links are
 the model states anyway.
@@ -37,7 +39,7 @@ from ..bus import topics
 from ..config.loader import LoadedScene
 from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
-from . import layout
+from . import layout, rosbag2
 from .messagelog import CLOCK_STEP, CLOCK_TICK, fill_poses, new_log
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, GRID, TURN_GRID, SceneBuilder
 from .writer import McapWriter, WriterError
@@ -99,9 +101,12 @@ class Recorder:
         compression_level: int = COMPRESSION_LEVEL,
         accelerate: bool = True,
         world_inputs: bool = False,
+        rosbag2_folder: bool = False,
     ):
         self.path = Path(path)
         _check_path(self.path)
+        #: write the rosbag2 ``metadata.yaml`` beside the file when it is finalised (`rosbag2`)
+        self.rosbag2_folder = rosbag2_folder
         self.bus = bus
         self.scene = scene
         self.dt_ns = layout.ns(dt)
@@ -115,6 +120,7 @@ class Recorder:
         self._log = new_log(self._fallback, accelerate=accelerate)
         self._codec = Codec(msgs.typestore, accelerate=accelerate)  # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
+        self._channel_info: dict[int, tuple[str, str, object]] = {}  # channel id -> (channel, type, store)
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
         self._totals: dict[int, int] = defaultdict(int)  # messages per channel id in chunks handed over
@@ -158,6 +164,11 @@ class Recorder:
         self._log.poses(topics.MODEL_STATES, self._game, self._game_every, self._scene_update)
         wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
         self._subs = [bus.subscribe_all(pattern, self._log) for pattern in wanted]
+        # after the log's own subscription: the log has set the time of the clock's step when this runs
+        ros_clock, log_ = self._raw_channel(layout.ROS_CLOCK, msgs.typestore, layout.ROS_CLOCK_TYPE), self._log
+        self._subs.append(
+            bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: log_.record(ros_clock, layout.ros_clock(log_.now)))
+        )
 
     # --- channels --------------------------------------------------------------------------------------------
     def _raw_channel(self, channel_topic: str, typestore, typename: str) -> int:
@@ -171,6 +182,7 @@ class Recorder:
             self._log.append(record)
         cid, record = self._writer.channel(channel_topic, sid, layout.MESSAGE_ENCODING)
         self._log.append(record)
+        self._channel_info[cid] = (channel_topic, typename, typestore)
         return cid
 
     def _open(self, topic: str, msg) -> _Channel | None:
@@ -239,6 +251,13 @@ class Recorder:
     def sim_seconds(self) -> float:
         return self._log.now / layout.NS
 
+    def channel_counts(self) -> list[tuple[str, str, str, int]]:
+        """(channel, type, RIHS01 hash, messages) of every channel, in the chunks handed to the writer."""
+        return [
+            (topic, typename, store.hash_rihs01(typename), self._totals.get(cid, 0))
+            for cid, (topic, typename, store) in sorted(self._channel_info.items())
+        ]
+
     def counts(self) -> dict[str, int]:
         """Messages recorded per bus topic, in the chunks handed to the writer (all of them once closed)."""
         return {t: self._totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
@@ -269,6 +288,9 @@ class Recorder:
                 self._writer.close()
             except WriterError as exc:
                 raise RecordError(str(exc)) from None
+        if self.rosbag2_folder:
+            first = self.first_step * self.dt_ns
+            rosbag2.write_metadata(self.path.parent, self.path.name, self.channel_counts(), first, self._log.now)
 
     def __enter__(self) -> Recorder:
         return self

@@ -1,0 +1,81 @@
+"""Recordings as rosbag2 folders, read by rosbags' AnyReader as ROS 2 users would (no simatch code reads them)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import Stores, get_typestore
+
+from simatch.record import rosbag2
+
+SIMATCH = [sys.executable, "-m", "simatch"]
+
+
+def _read(folder: Path):
+    with AnyReader([folder]) as reader:
+        by_topic = {c.topic: c for c in reader.connections}
+        clock = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=[by_topic["/clock"]])]
+        return by_topic, clock, reader.message_count
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("rosbag2")
+    subprocess.run([*SIMATCH, "run", "msl_5v5", "--duration", "1", "--quiet", "--record", f"{tmp}/match/"], check=True)
+    subprocess.run(
+        [*SIMATCH, "run", "msl_5v5", "--duration", "1", "--quiet", "--record", str(tmp / "plain.mcap")], check=True
+    )
+    return tmp
+
+
+def test_record_into_a_folder_reads_with_anyreader(recorded):
+    folder = recorded / "match"
+    assert sorted(p.name for p in folder.iterdir()) == ["match_0.mcap", "metadata.yaml"]
+    topics, clock, count = _read(folder)
+    assert topics["/clock"].msgtype == "rosgraph_msgs/msg/Clock"
+    assert topics["/simatch/clock"].msgtype == "simatch_msgs/msg/Clock"
+    assert topics["/cyan/2/VelCmd"].msgtype == "simatch_msgs/msg/VelCmd"
+    # one ROS clock per control period (25 ms), simulated time from 0
+    times = [c.clock.sec + c.clock.nanosec * 1e-9 for c in clock]
+    assert len(times) == 40 and times[0] == 0.0 and abs(times[-1] - 0.975) < 1e-9
+    assert count > 1000
+
+
+def test_a_folder_of_the_mcap_alone_fails_and_export_makes_it_readable(recorded, tmp_path):
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    (bare / "plain.mcap").write_bytes((recorded / "plain.mcap").read_bytes())
+    with pytest.raises(Exception, match="metadata"):
+        _read(bare)
+    out = subprocess.run(
+        [*SIMATCH, "export", str(recorded / "plain.mcap"), "--format", "rosbag2", "--out", str(tmp_path / "bag")],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    assert "rosbag2 folder" in out.stdout
+    topics, clock, count = _read(tmp_path / "bag")
+    assert topics["/clock"].msgtype == "rosgraph_msgs/msg/Clock" and len(clock) == 40
+    # the metadata's counts are the file's, and the hashes ROS 2's (a hash rosbags computes the same way)
+    ref_topics, _, ref_count = _read(recorded / "match")
+    assert count == ref_count and set(topics) == set(ref_topics)
+    kilted = get_typestore(Stores.ROS2_KILTED)
+    assert topics["/clock"].digest == kilted.hash_rihs01("rosgraph_msgs/msg/Clock")
+
+
+def test_refuses_a_folder_that_is_not_empty(tmp_path):
+    (tmp_path / "busy").mkdir()
+    (tmp_path / "busy" / "x").write_text("keep me")
+    with pytest.raises(rosbag2.Rosbag2Error, match="not an empty folder"):
+        rosbag2.prepare(tmp_path / "busy")
+    assert (tmp_path / "busy" / "x").read_text() == "keep me"
+    bad = subprocess.run(
+        [*SIMATCH, "run", "msl_5v5", "--duration", "0.1", "--quiet", "--record", f"{tmp_path}/busy/"],
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode == 2 and "not an empty folder" in bad.stderr and bad.stderr.count("\n") == 1
