@@ -24,6 +24,7 @@ EXTENSIONS: list[str] = [
     "simatch.record.extension:RecordExtension",
     "simatch.web.view:ViewExtension",
     "simatch.report.extension:ReportExtension",
+    "simatch.ros2.extension:Ros2Extension",
 ]
 
 

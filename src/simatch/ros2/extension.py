@@ -1,0 +1,202 @@
+"""``simatch run SCENE --ros2``: an embedded run on the ROS 2 graph, watched by a bridge in its own process.
+
+rclpy never runs in the simulation's process. The extension opens a *tap* on the run instead: a Zenoh
+endpoint on loopback (a fresh port, the organiser's credential written to a private folder) that offers the
+scene as a server does and forwards what an observer needs from the in-process bus — the clock and the game
+commands as they are published, the game state, the events, and the model states once per control period —
+and it starts ``simatch ros2`` as an observer connected to it (ground truth, /clock, markers, /tf, game
+state; `simatch.ros2.bridge`). ``set_model_state`` requests from ROS are applied between two steps.
+
+What the run's process pays: encoding and one Zenoh put per forwarded message, once the bridge subscribes
+(`simatch bench --only ros2` measures it). To drive robots from ROS 2, use a server: the ROS team is a team
+process there, with the lockstep, the fair play and the watchdog of every team (docs/ros.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from .. import msgs
+from ..bus import Node, NodeContext, Phase, topics
+from ..bus.zenoh_bus import ZenohBus, open_session, zenoh_config
+from ..distributed import credentials, protocol
+from ..errors import UsageError
+
+#: what the tap forwards as it is published (model states: once per control period, by `Tap`)
+FORWARDED = {
+    topics.CLOCK: msgs.Clock,
+    topics.GAME_STATE: msgs.GameState,
+    topics.EVENTS: msgs.GameEvent,
+}
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Tap(Node):
+    """The embedded run's side of the tap: forwards to Zenoh, and applies requests from it between steps."""
+
+    phase = Phase.JUDGE
+    name = "ros2_tap"
+
+    def __init__(self, sim, zbus: ZenohBus, period: float):
+        self.sim = sim
+        self.zbus = zbus
+        self.period = period
+        self.applied = 0
+        self.refused = 0
+
+    def start(self, ctx: NodeContext) -> None:
+        super().start(ctx)
+        bus, z = ctx.bus, self.zbus
+        self.subs = []
+        for topic, msgtype in FORWARDED.items():
+            self.subs.append(bus.subscribe(topic, msgtype, z.publisher(topic, msgtype).put))
+        self._coach_pubs: dict[str, object] = {}
+        self.subs.append(bus.subscribe_all(topics.team_topic("*", topics.RECEIVE_FROM_COACH), self._coach))
+        self._models = z.publisher(topics.MODEL_STATES, msgs.ModelStates)
+        self.subs.append(bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._model_states))
+        self._steps = max(1, round(self.period / ctx.dt))
+        self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
+        self.world_topic = z.subscribe(topics.SET_MODEL_STATE, msgs.ModelState, self._set_model_state)
+
+    def _coach(self, topic: str, msg) -> None:
+        pub = self._coach_pubs.get(topic)
+        if pub is None:
+            pub = self._coach_pubs[topic] = self.zbus.publisher(topic, msgs.CoachInfo)
+        pub.put(msg)
+
+    def _model_states(self, msg) -> None:
+        if msg.step % self._steps == 0 and self._models.active:
+            self._models.put(msg)
+
+    def _set_model_state(self, msg) -> None:
+        from ..distributed.world_service import state_of
+
+        try:
+            self.sim.set_model_state(msg.name, **state_of(msg))
+            self.applied += 1
+        except ValueError as exc:  # an unknown model, a bad value: refused as on a server
+            self.refused += 1
+            self.pub_events.put(
+                msgs.new(
+                    msgs.GameEvent,
+                    stamp=self.sim.time,
+                    type="bad_request",
+                    detail=f"set_model_state({msg.name!r}): {exc}",
+                )
+            )
+
+    def tick(self, now: float) -> None:
+        self.zbus.pump(0.0)  # requests from ROS, applied here: between two physics steps
+
+    def stop(self) -> None:
+        for sub in getattr(self, "subs", []):
+            sub.close()
+
+
+class Ros2Extension:
+    def add_arguments(self, parser) -> None:
+        group = parser.add_argument_group("ROS 2")
+        group.add_argument(
+            "--ros2",
+            action="store_true",
+            help="put the run on the ROS 2 graph: a `simatch ros2` observer in its own process publishes "
+            "/clock, /tf, markers, model states, game state and commands (needs the ros2 extra; see docs/ros.md)",
+        )
+        group.add_argument(
+            "--ros2-domain-id",
+            type=int,
+            default=None,
+            metavar="N",
+            help="the bridge's ROS_DOMAIN_ID (default: the environment's)",
+        )
+        group.add_argument(
+            "--ros2-open-discovery",
+            action="store_true",
+            help="let the bridge's ROS 2 discovery reach the local network (default: this machine only)",
+        )
+
+    def attach(self, sim, args):
+        if not getattr(args, "ros2", False):
+            return contextlib.nullcontext()
+        return attached(sim, domain_id=args.ros2_domain_id, open_discovery=args.ros2_open_discovery)
+
+
+@contextlib.contextmanager
+def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False, wait: float = 60.0, say=None):
+    """The tap on ``sim`` and its bridge process, for the ``with`` block; the bridge is told the run ended and
+    stopped on the way out (killed if it does not leave within a few seconds)."""
+    say = say or (lambda text: print(f"simatch: {text}", file=sys.stderr, flush=True))
+    with tempfile.TemporaryDirectory(prefix="simatch-ros2-") as tmp:
+        run = f"embedded-{os.getpid()}"
+        creds = credentials.ensure(tmp, [credentials.ADMIN])
+        admin = creds[credentials.ADMIN]
+        endpoint = f"tcp/127.0.0.1:{_free_port()}"
+        conf = zenoh_config(
+            "router",
+            listen=[endpoint],
+            user=admin.name,
+            password=admin.secret,
+            users_file=credentials.users_file(tmp, creds.values()),
+        )
+        zbus = ZenohBus(open_session(conf, what=f"listening on {endpoint}"), run, signer=admin.signer(run))
+        proc = None
+        tap = None
+        try:
+            offer = protocol.dumps(protocol.scene_offer(sim.scene, sim.seed, run, protocol.LOCKSTEP))
+            zbus.serve(protocol.SCENE, lambda q: q.reply(q.key_expr, offer))
+            zbus.declare_token(protocol.SERVER_ALIVE)
+            tap = sim.clock.add(Tap(sim, zbus, sim.scene.spec.control.period))
+            cmd = [sys.executable, "-m", "simatch", "ros2", "--connect", endpoint, "--run", run]
+            cmd += ["--key", str(Path(tmp) / f"{credentials.ADMIN}.key"), "--wait", str(wait)]
+            if domain_id is not None:
+                cmd += ["--domain-id", str(domain_id)]
+            if open_discovery:
+                cmd += ["--open-discovery"]
+            proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL)
+            _wait_for_bridge(zbus, proc, wait, say)
+            yield tap
+        finally:
+            if tap is not None:
+                sim.clock.remove(tap)
+            _stop_bridge(zbus, proc)
+            zbus.close()
+
+
+def _wait_for_bridge(zbus: ZenohBus, proc: subprocess.Popen, wait: float, say) -> None:
+    """Until the bridge listens to the clock (its ROS side is up): the run starts with it watching."""
+    clock = zbus.publisher(topics.CLOCK, msgs.Clock)
+    deadline = time.monotonic() + wait
+    said = False
+    while not clock.active:
+        zbus.pump(0.05)
+        if proc.poll() is not None:
+            raise UsageError(f"the ROS 2 bridge exited at start (code {proc.returncode}): see its message above")
+        if time.monotonic() > deadline:
+            raise UsageError(f"the ROS 2 bridge did not start within {wait:g} s")
+        if not said and time.monotonic() > deadline - wait + 2.0:
+            say("waiting for the ROS 2 bridge to start...")
+            said = True
+
+
+def _stop_bridge(zbus: ZenohBus, proc: subprocess.Popen | None) -> None:
+    if proc is None:
+        return
+    with contextlib.suppress(Exception):
+        zbus.put_raw(protocol.END, protocol.dumps({"reason": "the run is over"}))
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(5)
