@@ -7,12 +7,12 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test setup system-deps bench clean
+.PHONY: run test setup system-deps ros2-interfaces bench clean
 
 run: setup
 	$(BIN)/simatch run msl_5v5 --events all
 
-test: setup system-deps
+test: setup system-deps ros2-interfaces
 	$(BIN)/python -m pytest
 
 bench: setup
@@ -24,7 +24,15 @@ setup: $(VENV)/.installed
 $(VENV)/.installed: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(BIN)/pip install --quiet -e '.[test,ros2]'
+	touch $@
+
+# simatch_msgs and tf2_msgs as ROS 2 interface packages, built into .venv with the ros2 extra's rosidl tools
+# (cmake and the C compiler of the system; a few minutes the first time, nothing when up to date)
+ros2-interfaces: $(VENV)/.ros2-interfaces
+
+$(VENV)/.ros2-interfaces: $(VENV)/.installed $(wildcard src/simatch/msgs/simatch_msgs/msg/*.msg)
+	$(BIN)/simatch ros2 --build-interfaces
 	touch $@
 
 system-deps:

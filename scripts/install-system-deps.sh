@@ -3,7 +3,8 @@
 # - Chromium, which the browser tests drive through Playwright (a browser download by Playwright is
 #   impossible on the target machines);
 # - ROS 1 (roscore, rospy, rostopic, rosmsg, rosbag, the standard messages and genpy), which the ROS tests
-#   run for real against simatch's bridge (docs/ros.md).
+#   run for real against simatch's bridge (docs/ros.md);
+# - cmake and a C++ compiler, with which the ros2 extra's rosidl tools build simatch_msgs for ROS 2.
 set -euo pipefail
 ROS1_PACKAGES=(ros-core python3-rospy python3-rostopic python3-rosbag python3-rosmsg python3-roslaunch rosbash
     ros-std-msgs python3-std-msgs libstd-msgs-dev ros-geometry-msgs python3-geometry-msgs libgeometry-msgs-dev
@@ -11,6 +12,8 @@ ROS1_PACKAGES=(ros-core python3-rospy python3-rostopic python3-rosbag python3-ro
 
 missing=()
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+command -v cmake >/dev/null 2>&1 || missing+=(cmake)
+command -v c++ >/dev/null 2>&1 || missing+=(g++)
 if ! { command -v roscore && command -v rostopic && command -v rosbag && command -v rosmsg \
         && [ -f /usr/share/std_msgs/package.xml ] && [ -f /usr/share/geometry_msgs/package.xml ] \
         && /usr/bin/python3 -c "import rospy, genpy, message_filters" ; } >/dev/null 2>&1; then
@@ -33,3 +36,5 @@ $SUDO apt-get "${APT[@]}" update -qq
 $SUDO apt-get "${APT[@]}" install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 command -v chromium >/dev/null
 command -v roscore >/dev/null
+command -v cmake >/dev/null
+command -v c++ >/dev/null
