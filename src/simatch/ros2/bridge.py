@@ -66,6 +66,7 @@ class RosRobotNode(Node):
         self.ports = bridge.graph.add_robot(team, rid, driven=True)
         self.tick_no = 0
         self.seen = 0  # the cmd_vel version the last tick saw
+        self.expects_answer = False
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -82,7 +83,9 @@ class RosRobotNode(Node):
         graph.set_time(info.stamp)
         graph.publish_perception(self.ports, self.sign, info, msgs.encode(info) if self.ports.vision else None)
         me = next((r for r in info.robots if r.id == self.rid), None)
-        if me is not None and me.valid:
+        #: an odom went out this tick: with --wait-answers, a cmd_vel is waited for (not from a robot sent off)
+        self.expects_answer = me is not None and me.valid
+        if self.expects_answer:
             self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(self.sign, me)
 
     def tick(self, now: float) -> None:
@@ -194,7 +197,8 @@ class Bridge:
             return
         self._waited_at = now
         if self.wait_answers > 0 and self.proc is not None and self.proc.mode == protocol.LOCKSTEP:
-            self.graph.wait_for_commands([(n.ports.command, n.seen) for n in self.ros_nodes], self.wait_answers)
+            waiting = [(n.ports.command, n.seen) for n in self.ros_nodes if n.expects_answer]
+            self.graph.wait_for_commands(waiting, self.wait_answers)
         if self.own_poses and not self.observing:
             self.graph.publish_own_frames(now, self.own_poses)
 
