@@ -123,3 +123,10 @@ def test_a_nan_cmd_vel_is_refused_and_counted(match):
         for e in match["result"]["events"]
     )
     assert "1 refused as bad" in match["team_err"], match["team_err"]
+
+
+def test_perceived_obstacles_are_where_the_robots_stand(match):
+    seen = np.array(match["drive"]["obstacles"])
+    assert len(seen) == 9  # every other robot
+    for x, y in ((10.5, 0.0), (2.0, -1.0), (2.0, 1.0), (5.0, -2.0), (5.0, 2.0)):  # magenta stands at its start
+        assert np.min(np.hypot(seen[:, 0] - x, seen[:, 1] - y)) < 0.05, (x, y, seen)

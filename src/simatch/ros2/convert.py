@@ -40,10 +40,12 @@ def yaw_of_quaternion(qw: float, qx: float, qy: float, qz: float) -> float:
 
 
 def world_pose(sign: int, x: float, y: float, yaw: float, vx: float = 0.0, vy: float = 0.0, w: float = 0.0) -> Pose2D:
-    """A pose and velocity given in a team frame (``sign``: +1 attacking +x, -1 attacking -x), in the world."""
-    wx, wy = frames.point(sign, x, y)
-    wvx, wvy = frames.point(sign, vx, vy)
-    return Pose2D(wx, wy, frames.yaw(sign, yaw), wvx, wvy, w)
+    """A pose and velocity given in a team frame (``sign``: +1 attacking +x, -1 attacking -x), in the world.
+    Python floats: rclpy takes a numpy float32 (an element of a message's array) for a float64 field without
+    converting it, and serialises garbage."""
+    wx, wy = frames.point(sign, float(x), float(y))
+    wvx, wvy = frames.point(sign, float(vx), float(vy))
+    return Pose2D(wx, wy, frames.yaw(sign, float(yaw)), wvx, wvy, float(w))
 
 
 def robot_pose(sign: int, robot) -> Pose2D:

@@ -13,7 +13,7 @@ import sys
 import time
 
 import rclpy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseArray, Twist
 from nav_msgs.msg import Odometry
 from rclpy.qos import qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
@@ -47,6 +47,13 @@ def main() -> None:
     node.create_subscription(Odometry, f"{ns}/odom", on_odom, qos_profile_sensor_data)
     node.create_subscription(
         Clock, "/clock", lambda m: clock.append(m.clock.sec + m.clock.nanosec * 1e-9), qos_profile_sensor_data
+    )
+    obstacles = []
+    node.create_subscription(
+        PoseArray,
+        f"{ns}/obstacles",
+        lambda m: obstacles.append([[p.position.x, p.position.y] for p in m.poses]),
+        qos_profile_sensor_data,
     )
     pub = node.create_publisher(Twist, f"{ns}/cmd_vel", 10)
     t0 = time.monotonic()
@@ -89,6 +96,7 @@ def main() -> None:
                 "first_sent": first_sent,
                 "last_sent": sent[-1] if sent else None,
                 "nan_at": nan_at,
+                "obstacles": obstacles[-1] if obstacles else [],
             },
             f,
         )
