@@ -17,6 +17,7 @@ from simatch.ros2 import interfaces  # noqa: E402
 from ..distributed.cluster import Processes  # noqa: E402
 
 CLIENTS = Path(__file__).resolve().parent / "clients"
+ROOT_EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "ros2_team"
 
 #: one DDS domain per test session (0..232 are valid; 0 is everybody's default)
 DOMAIN_ID = 100 + os.getpid() % 120
