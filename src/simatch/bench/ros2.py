@@ -1,0 +1,161 @@
+"""ROS 2 benchmark (``simatch bench --only ros2``; needs the ``ros2`` extra).
+
+* ``ros2_latency_*``: the command latency from ``cmd_vel`` published by an rclpy process to the simulator
+  applying it, with ten robots driven over ROS 2 in real time: ``msl_5v5 --realtime`` served in this process,
+  both teams played through a bridge each (``simatch ros2 --team``), and a probe (`simatch.ros2.probe`, plain
+  rclpy) publishing a new speed for every robot at 40 Hz and noting when (the monotonic clock is one for every
+  process of the machine). The simulator's ``command_velocity`` notes when each new speed arrives. p50, p99
+  and max [ms], and how many of the published commands were applied (later ones replace earlier ones that
+  had not been applied yet: at most one command per robot and control tick is applied).
+* ``ros2_observer_*``: the real-time factor of an embedded ``msl_5v5`` (as shipped) without and with the
+  observer bridge attached (``simatch run --ros2``), and what it costs (``ros2_observer_cost_pct``; goal
+  < 10 %). Both after a warm-up past the kick-off.
+
+The bridges, the probe and the run share the machine's cores: the figures say so with ``ros2_load``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from ..config.loader import load_scene
+from .distributed import WARM_UP, _port
+
+SCENE = "msl_5v5"
+LATENCY_SECONDS = 20.0  # wall seconds of probing
+OBSERVER_SECONDS = 60.0  # simulated seconds of each embedded run
+
+
+def _ros_env() -> None:
+    os.environ.setdefault("ROS_DOMAIN_ID", str(150 + os.getpid() % 80))
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+
+def run(seconds: float | None = None) -> dict:
+    _ros_env()
+    out = {"ros2_load": round(os.getloadavg()[0], 2), "ros2_domain_id": int(os.environ["ROS_DOMAIN_ID"])}
+    out.update(observer(seconds or OBSERVER_SECONDS))
+    out.update(latency(min(seconds or LATENCY_SECONDS, LATENCY_SECONDS)))
+    return out
+
+
+def _embedded_rtf(seconds: float, with_bridge: bool) -> float:
+    from ..ros2.extension import attached
+    from ..simulation import Simulation
+
+    with Simulation(SCENE, seed=0) as sim:
+        stack = contextlib.ExitStack()
+        with stack:
+            if with_bridge:
+                stack.enter_context(attached(sim, say=lambda text: None))
+            sim.run(seconds=WARM_UP)
+            t0 = time.perf_counter()
+            sim.run(seconds=seconds)
+            return seconds / (time.perf_counter() - t0)
+
+
+def observer(seconds: float) -> dict:
+    """Embedded real-time factor without, with, and again without the observer bridge (the mean of the two
+    runs without is the reference: the machine's load moves during a benchmark)."""
+    a = _embedded_rtf(seconds, False)
+    b = _embedded_rtf(seconds, True)
+    c = _embedded_rtf(seconds, False)
+    ref = (a + c) / 2
+    return {
+        "ros2_observer_rtf_without": round(ref, 2),
+        "ros2_observer_rtf_with": round(b, 2),
+        "ros2_observer_cost_pct": round(100.0 * (1.0 - b / ref), 1),
+    }
+
+
+def latency(seconds: float) -> dict:
+    from ..distributed.server import Server
+
+    overrides = {"teams.cyan.strategy": "external", "teams.magenta.strategy": "external", "judge.kind": "none"}
+    folder = tempfile.TemporaryDirectory(prefix="simatch-bench-ros2-")
+    endpoint = f"tcp/127.0.0.1:{_port()}"
+    run_name = f"benchros2{os.getpid()}"
+    server = Server(
+        load_scene(SCENE, overrides),
+        listen=[endpoint],
+        run=run_name,
+        realtime=True,
+        team_timeout=120,
+        credentials_dir=folder.name,
+        say=lambda text: None,
+    )
+    sim = server.sim
+    names = sim.simulator.robot_names
+    applied: list[tuple[float, int, float]] = []
+    command = sim.simulator.command_velocity
+
+    def noting(i, vx, vy, w):
+        applied.append((time.monotonic(), i, float(vx)))
+        return command(i, vx, vy, w)
+
+    sim.simulator.command_velocity = noting
+    procs = []
+    probe_out = os.path.join(folder.name, "sent.json")
+    try:
+        for k, team in enumerate(("cyan", "magenta")):
+            procs.append(
+                subprocess.Popen(
+                    [sys.executable, "-m", "simatch", "ros2", "--team", team, "--connect", endpoint, "--run", run_name]
+                    + ["--key", os.path.join(folder.name, f"{team}.key"), "--wait", "120"]
+                    + (["--no-clock"] if k else []),
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
+            )
+        probe = subprocess.Popen(
+            [sys.executable, "-m", "simatch.ros2.probe", probe_out, str(seconds), *names],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        procs.append(probe)
+        server.wait_for_teams(timeout=120)
+        stats_at = None
+        while probe.poll() is None:
+            sim.run(seconds=0.5, until_done=False)
+            if stats_at is None and sim.time > WARM_UP:
+                server.reset_stats()
+                stats_at = sim.time
+        sim.run(seconds=0.5, until_done=False)  # the last commands arrive
+        stats = server.stats()
+    finally:
+        server.finish()
+        for p in procs:
+            if p.poll() is None:
+                p.terminate()
+        for p in procs:
+            try:
+                p.wait(15)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        server.close()
+    with open(probe_out) as f:
+        sent = json.load(f)
+    folder.cleanup()
+    first = {}
+    for t, i, vx in applied:
+        first.setdefault((names[i], round((vx - 0.5) / 1e-4)), t)
+    lat = [first[(name, seq)] - t for name, seq, t in sent if (name, seq) in first and first[(name, seq)] >= t]
+    ms = np.array(lat) * 1e3
+    return {
+        "ros2_latency_robots": len(names),
+        "ros2_latency_published": len(sent),
+        "ros2_latency_applied": len(lat),
+        "ros2_latency_p50_ms": round(float(np.percentile(ms, 50)), 2) if ms.size else None,
+        "ros2_latency_p99_ms": round(float(np.percentile(ms, 99)), 2) if ms.size else None,
+        "ros2_latency_max_ms": round(float(ms.max()), 2) if ms.size else None,
+        "ros2_realtime_missed": stats.get("missed"),
+        "ros2_server_latency_p50_ms": stats.get("latency_p50_ms"),
+    }
