@@ -4,8 +4,9 @@
   applying it, with ten robots driven over ROS 2 in real time: ``msl_5v5 --realtime`` served in this process,
   both teams played through a bridge each (``simatch ros2 --team``), and a probe (`simatch.ros2.probe`, plain
   rclpy) publishing a new speed for every robot at 40 Hz and noting when (the monotonic clock is one for every
-  process of the machine). The simulator's ``command_velocity`` notes when each new speed arrives. p50, p99
-  and max [ms], and how many of the published commands were applied (later ones replace earlier ones that
+  process of the machine). A subscription of the server's bus beside the simulator's notes when each new
+  speed is delivered to it (in the gate's order, before the physics step that applies it). p50, p99 and max
+  [ms], and how many of the published commands were applied (later ones replace earlier ones that
   had not been applied yet: at most one command per robot and control tick is applied).
 * ``ros2_observer_*``: the real-time factor of an embedded ``msl_5v5`` (as shipped) without and with the
   observer bridge attached (``simatch run --ros2``), and what it costs (``ros2_observer_cost_pct``; goal
@@ -26,6 +27,8 @@ import time
 
 import numpy as np
 
+from .. import msgs
+from ..bus import topics
 from ..config.loader import load_scene
 from .distributed import WARM_UP, _port
 
@@ -95,13 +98,14 @@ def latency(seconds: float) -> dict:
     sim = server.sim
     names = sim.simulator.robot_names
     applied: list[tuple[float, int, float]] = []
-    command = sim.simulator.command_velocity
-
-    def noting(i, vx, vy, w):
-        applied.append((time.monotonic(), i, float(vx)))
-        return command(i, vx, vy, w)
-
-    sim.simulator.command_velocity = noting
+    # delivered to the simulator here, in the gate's order, just before the physics step that applies them
+    for i, name in enumerate(names):
+        team, rid = topics.split_robot_name(name)
+        server.bus.subscribe(
+            topics.robot_topic(team, rid, topics.VEL_CMD),
+            msgs.VelCmd,
+            lambda m, i=i: applied.append((time.monotonic(), i, float(m.vx))),
+        )
     procs = []
     probe_out = os.path.join(folder.name, "sent.json")
     try:
