@@ -60,8 +60,9 @@ class Tap(Node):
         super().start(ctx)
         bus, z = ctx.bus, self.zbus
         self.subs = []
+        self.forwarders = {topic: z.publisher(topic, msgtype) for topic, msgtype in FORWARDED.items()}
         for topic, msgtype in FORWARDED.items():
-            self.subs.append(bus.subscribe(topic, msgtype, z.publisher(topic, msgtype).put))
+            self.subs.append(bus.subscribe(topic, msgtype, self.forwarders[topic].put))
         self._coach_pubs: dict[str, object] = {}
         self.subs.append(bus.subscribe_all(topics.team_topic("*", topics.RECEIVE_FROM_COACH), self._coach))
         self._models = z.publisher(topics.MODEL_STATES, msgs.ModelStates)
@@ -165,7 +166,7 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             if open_discovery:
                 cmd += ["--open-discovery"]
             proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL)
-            _wait_for_bridge(zbus, proc, wait, say)
+            _wait_for_bridge(zbus, tap, proc, wait, say)
             yield tap
         finally:
             if tap is not None:
@@ -174,12 +175,12 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             zbus.close()
 
 
-def _wait_for_bridge(zbus: ZenohBus, proc: subprocess.Popen, wait: float, say) -> None:
-    """Until the bridge listens to the clock (its ROS side is up): the run starts with it watching."""
-    clock = zbus.publisher(topics.CLOCK, msgs.Clock)
+def _wait_for_bridge(zbus: ZenohBus, tap: Tap, proc: subprocess.Popen, wait: float, say) -> None:
+    """Until the bridge listens to the model states and the events, its last subscriptions (its ROS side is
+    up, and the clock, game commands and state are listened to): the run starts with it watching."""
     deadline = time.monotonic() + wait
     said = False
-    while not clock.active:
+    while not (tap._models.active and tap.forwarders[topics.EVENTS].active):
         zbus.pump(0.05)
         if proc.poll() is not None:
             raise UsageError(f"the ROS 2 bridge exited at start (code {proc.returncode}): see its message above")

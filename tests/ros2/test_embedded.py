@@ -1,0 +1,37 @@
+"""``simatch run SCENE --realtime --ros2``: an embedded run watched from ROS 2 by the observer bridge, which
+runs in a process of its own; checked from plain rclpy processes (markers, /tf, game commands, and a ball
+placed through the privileged set_model_state topic)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from .conftest import RosProcesses
+
+pytestmark = pytest.mark.slow
+
+
+def test_an_embedded_run_on_the_ros2_graph(rosprocs: RosProcesses):
+    ps = rosprocs
+    watch = ps.client("watch.py", "60", str(ps.tmp / "watch.json"), "cyan", "magenta")
+    place = ps.client("place.py", "3.0", "2.0", str(ps.tmp / "place.json"))
+    run = ps.start(
+        "run", "msl_5v5", "--realtime", "--duration", "8", "--ros2", "--quiet", "--json", name="run",
+    )  # fmt: skip
+    assert ps.wait(run, 180) == 0, ps.stderr(run)
+    out = json.loads(ps.stdout(run))
+    assert ps.wait(place, 60) == 0, ps.stderr(place)
+    ps.wait(watch, 90)
+    w = json.loads((ps.tmp / "watch.json").read_text())
+    robots = {f"robots/{t}:{i}" for t in ("cyan", "magenta") for i in range(1, 6)}
+    assert robots <= {m.rsplit(":", 1)[0] for m in w["markers"]}
+    assert {f"map->{t}/robot{i}/base_link" for t in ("cyan", "magenta") for i in range(1, 6)} <= set(w["tf"])
+    assert [m for _, m in w["modes"]["cyan"]][:3] == [0, 1, 15]  # STOPROBOT, OUR_KICKOFF, STARTROBOT
+    assert [m for _, m in w["modes"]["magenta"]][:3] == [0, 2, 15]  # mirrored: OPP_KICKOFF
+    assert abs(w["clock"][-1] - 8.0) < 0.1 and out["sim_seconds"] == pytest.approx(8.0)
+    p = json.loads((ps.tmp / "place.json").read_text())
+    assert any(abs(x - 3.0) < 0.05 and abs(y - 2.0) < 0.05 for _, x, y in p["after"]), p
+    # the bridge left with the run
+    assert "the run is over" in ps.stderr(run)
