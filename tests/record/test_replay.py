@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from simatch import msgs
-from simatch.record import Player, Recording
+from simatch.record import Player, Recording, layout
+
+#: channels that are no bus topics: the 3D scene, and ROS 2's /clock
+NOT_BUS = ("scene/", layout.ROS_ONLY)
 
 
 def test_every_replayed_message_equals_the_recorded_one(recording):
     path, _ = recording
     rec = Recording(path)
-    recorded = [(topic, data) for topic, _, data in rec.raw() if not topic.startswith("scene/")]
+    recorded = [(topic, data) for topic, _, data in rec.raw() if not topic.startswith(NOT_BUS)]
     player = Player(path, pace=None)
     encode = msgs.encode
     seen = []
@@ -36,7 +39,7 @@ def test_from_a_time_with_the_latest_state_of_every_topic_first(recording):
     # the coach command in force at 1 s reaches a late viewer even though it was given at 0 s
     assert first["cyan/receive_from_coach"].match_mode == 15
     assert first["operator"].call == "apply_wrench"  # the latest operator command before 1 s
-    assert set(first) == {t for t in topics if not t.startswith("scene/")}
+    assert set(first) == {t for t in topics if not t.startswith(NOT_BUS)}
     states = [m for t, m in seen if t == "model_states"]
     assert states[0].step == 199 and states[1].step == 200 and states[-1].step == 399
 

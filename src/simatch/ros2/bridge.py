@@ -81,7 +81,8 @@ class RosRobotNode(Node):
         self.tick_no = int(info.tick)
         graph = self.bridge.graph
         graph.set_time(info.stamp)
-        graph.publish_perception(self.ports, self.sign, info, msgs.encode(info) if self.ports.vision else None)
+        vision = self.ports.vision
+        graph.publish_perception(self.ports, self.sign, info, msgs.encode(info) if graph.heard(vision) else None)
         me = next((r for r in info.robots if r.id == self.rid), None)
         #: an odom went out this tick: with --wait-answers, a cmd_vel is waited for (not from a robot sent off)
         self.expects_answer = me is not None and me.valid
@@ -348,9 +349,11 @@ class Bridge:
         if names.BALL in poses:
             k = list(m.name).index(names.BALL)
             heights[names.BALL] = float(m.pose[7 * k + 2])
-        self.graph.set_time(m.stamp)
-        self.graph.publish_ground_truth(m.stamp, poses, heights)
-        self.graph.publish_models(msgs.encode(m))
+        graph = self.graph
+        graph.set_time(m.stamp)
+        graph.publish_ground_truth(m.stamp, poses, heights)
+        if graph.heard(graph.pub_models):
+            graph.publish_models(msgs.encode(m))
 
     def _on_end(self, topic, payload, attachment, arrival) -> None:
         try:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -140,6 +141,7 @@ class RosGraph:
         self._cond = threading.Condition()
         self.robots: dict[str, RobotPorts] = {}
         self.markers_period = markers_period
+        self._listeners: dict = {}  # publisher -> (when looked up, anybody subscribed)
         self._markers_at = -math.inf
         self._field_markers = self._field()
         n = self.node
@@ -314,23 +316,35 @@ class RosGraph:
         """A robot's OmniVisionInfo (team frame) as odom, ball, obstacles, team-mates (``map``), holding_ball
         and, when simatch_msgs is built, the message itself (``omni_vision``, team frame as on the bus)."""
         stamp = _time(info.stamp)
+        heard = self.heard
         me = next((r for r in info.robots if r.id == ports.rid), None)
-        if me is not None and me.valid:
+        if me is not None and me.valid and heard(ports.odom):
             self._odom(ports.odom, stamp, names.base_link(ports.team, ports.rid), robot_pose(sign, me))
-        if ports.holding is not None and me is not None:
+        if me is not None and heard(ports.holding):
             ports.holding.publish(Bool(data=bool(me.holding_ball)))
         ball = info.ball
-        if ports.ball is not None and ball.pos_known:
+        if ball.pos_known and heard(ports.ball):
             p = world_pose(sign, ball.x, ball.y, 0.0, ball.vx, ball.vy, 0.0)
             self._odom(ports.ball, stamp, names.BALL, p, z=float(ball.z), body=False)
-        if ports.obstacles is not None:
+        if heard(ports.obstacles):
             obs = info.obstacles
             ports.obstacles.publish(self._poses(stamp, [world_pose(sign, x, y, 0.0) for x, y in zip(obs.x, obs.y)]))
-        if ports.teammates is not None:
+        if heard(ports.teammates):
             mates = [robot_pose(sign, r) for r in info.robots if r.id != ports.rid and r.valid]
             ports.teammates.publish(self._poses(stamp, mates))
-        if ports.vision is not None and raw is not None:
+        if raw is not None and heard(ports.vision):
             ports.vision.publish(raw)
+
+    def heard(self, pub) -> bool:
+        """Somebody subscribes to ``pub`` (looked up at most twice a second of wall time per publisher): what
+        nobody listens to is not built (an rclpy message costs tens of microseconds to make and send)."""
+        if pub is None:
+            return False
+        now = time.monotonic()
+        known = self._listeners.get(pub)
+        if known is None or now - known[0] >= 0.5:
+            known = self._listeners[pub] = (now, pub.get_subscription_count() > 0)
+        return known[1]
 
     def publish_ground_truth(self, t: float, poses: dict[str, Pose2D], heights: dict[str, float]) -> None:
         """Every model's true pose: /tf (map -> each base_link, map -> ball), each robot's ``ground_truth``
@@ -344,18 +358,18 @@ class RosGraph:
                 team, _, rid = name.partition("/")
                 child, z = names.base_link(team, int(rid)), 0.0
                 ports = self.robots.get(name)
-                if ports is not None and not ports.driven:
+                if ports is not None and not ports.driven and self.heard(ports.odom):
                     self._odom(ports.odom, stamp, child, p)
             tfs.append(self._transform(stamp, child, p, z))
-        if self.pub_tf is not None:
+        if self.heard(self.pub_tf):
             self.pub_tf.publish(TFMessage(transforms=tfs))
-        if self.pub_markers is not None and t - self._markers_at >= self.markers_period - 1e-9:
+        if self.heard(self.pub_markers) and t - self._markers_at >= self.markers_period - 1e-9:
             self._markers_at = t
             self.pub_markers.publish(self._markers(stamp, poses, heights))
 
     def publish_own_frames(self, t: float, poses: dict[str, Pose2D]) -> None:
         """/tf of the robots a team bridge perceives itself (no ground truth for a team's credential)."""
-        if self.pub_tf is None or not poses:
+        if not poses or not self.heard(self.pub_tf):
             return
         stamp = _time(t)
         tfs = []
@@ -365,7 +379,7 @@ class RosGraph:
         self.pub_tf.publish(TFMessage(transforms=tfs))
 
     def publish_models(self, raw: bytes) -> None:
-        if self.pub_models is not None:
+        if self.heard(self.pub_models):
             self.pub_models.publish(raw)
 
     def publish_coach(self, team: str, info, raw: bytes) -> None:
