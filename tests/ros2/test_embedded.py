@@ -35,3 +35,13 @@ def test_an_embedded_run_on_the_ros2_graph(rosprocs: RosProcesses):
     assert any(abs(x - 3.0) < 0.05 and abs(y - 2.0) < 0.05 for _, x, y in p["after"]), p
     # the bridge left with the run
     assert "the run is over" in ps.stderr(run)
+
+
+def test_the_observer_does_not_change_the_run(rosprocs: RosProcesses):
+    ps = rosprocs
+    digests = []
+    for extra in ((), ("--ros2",)):
+        p = ps.start("run", "msl_5v5", "--duration", "3", "--quiet", "--json", *extra, name="run")
+        assert ps.wait(p, 180) == 0, ps.stderr(p)
+        digests.append(json.loads(ps.stdout(p))["state_digest"])
+    assert digests[0] == digests[1]

@@ -23,6 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from ..bus.zenoh_bus import ZenohBus, open_session, zenoh_config
@@ -65,9 +67,9 @@ class Tap(Node):
             self.subs.append(bus.subscribe(topic, msgtype, self.forwarders[topic].put))
         self._coach_pubs: dict[str, object] = {}
         self.subs.append(bus.subscribe_all(topics.team_topic("*", topics.RECEIVE_FROM_COACH), self._coach))
+        # taken from the simulator at this node's ticks (once per control period), not subscribed to: a
+        # subscriber would make the simulator build them at every physics step
         self._models = z.publisher(topics.MODEL_STATES, msgs.ModelStates)
-        self.subs.append(bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._model_states))
-        self._steps = max(1, round(self.period / ctx.dt))
         self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
         self.world_topic = z.subscribe(topics.SET_MODEL_STATE, msgs.ModelState, self._set_model_state)
 
@@ -77,9 +79,19 @@ class Tap(Node):
             pub = self._coach_pubs[topic] = self.zbus.publisher(topic, msgs.CoachInfo)
         pub.put(msg)
 
-    def _model_states(self, msg) -> None:
-        if msg.step % self._steps == 0 and self._models.active:
-            self._models.put(msg)
+    def _model_states(self, now: float) -> None:
+        simulator = self.sim.simulator
+        names, pose, twist = simulator.model_state_arrays()
+        self._models.put(
+            msgs.new(
+                msgs.ModelStates,
+                stamp=now,
+                step=simulator.step_index,
+                name=list(names),
+                pose=pose.astype(np.float32).ravel(),
+                twist=twist.astype(np.float32).ravel(),
+            )
+        )
 
     def _set_model_state(self, msg) -> None:
         from ..distributed.world_service import state_of
@@ -100,6 +112,8 @@ class Tap(Node):
 
     def tick(self, now: float) -> None:
         self.zbus.pump(0.0)  # requests from ROS, applied here: between two physics steps
+        if self._models.active:
+            self._model_states(now)
 
     def stop(self) -> None:
         for sub in getattr(self, "subs", []):
