@@ -28,8 +28,10 @@ def test_an_embedded_run_on_the_ros2_graph(rosprocs: RosProcesses):
     robots = {f"robots/{t}:{i}" for t in ("cyan", "magenta") for i in range(1, 6)}
     assert robots <= {m.rsplit(":", 1)[0] for m in w["markers"]}
     assert {f"map->{t}/robot{i}/base_link" for t in ("cyan", "magenta") for i in range(1, 6)} <= set(w["tf"])
-    assert [m for _, m in w["modes"]["cyan"]][:3] == [0, 1, 15]  # STOPROBOT, OUR_KICKOFF, STARTROBOT
-    assert [m for _, m in w["modes"]["magenta"]][:3] == [0, 2, 15]  # mirrored: OPP_KICKOFF
+    # STOPROBOT, OUR_KICKOFF at 2 s, STARTROBOT at 3 s (the first may come before this client found the bridge)
+    cyan, magenta = ([m for _, m in w["modes"][t]] for t in ("cyan", "magenta"))
+    assert cyan[cyan.index(1) :][:2] == [1, 15] and set(cyan[: cyan.index(1)]) <= {0}, cyan
+    assert magenta[magenta.index(2) :][:2] == [2, 15] and set(magenta[: magenta.index(2)]) <= {0}, magenta  # mirrored
     assert abs(w["clock"][-1] - 8.0) < 0.1 and out["sim_seconds"] == pytest.approx(8.0)
     p = json.loads((ps.tmp / "place.json").read_text())
     assert any(abs(x - 3.0) < 0.05 and abs(y - 2.0) < 0.05 for _, x, y in p["after"]), p
