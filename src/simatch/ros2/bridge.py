@@ -185,6 +185,7 @@ class Bridge:
         self._models_at = -1.0
         self.observing = False
         self.mode = protocol.LOCKSTEP
+        self.offer: dict = {}
         self._waited_at: float | None = None
         self.ended: str | None = None
         self._server_lost_at: float | None = None
@@ -268,6 +269,7 @@ class Bridge:
                 if ok:
                     offer = protocol.loads(payload, "scene", "seed")
                     self.mode = offer.get("mode", protocol.LOCKSTEP)
+                    self.offer = offer
                     return protocol.scene_from_offer(offer)
             if time.monotonic() >= deadline:
                 raise ClientError(f"no simatch server for run {self.run_name!r} answers at {self.connect}")
@@ -304,6 +306,10 @@ class Bridge:
 
     def _subscribe(self, bus: ZenohBus) -> None:
         spec, graph = self.scene.spec, self.graph
+        # an embedded run's tap (`simatch.ros2.extension`) sends what an observer hears as one feed per tick
+        feed = self.offer.get("ros2_feed") if self.proc is None else None
+        if feed:
+            bus.take_feed(feed["topic"], feed["covers"])
         bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: graph.publish_clock(m.stamp))
         graph.add_game_state()
         bus.subscribe(topics.GAME_STATE, msgs.GameState, lambda m: graph.publish_game_state(msgs.encode(m)))
@@ -327,6 +333,8 @@ class Bridge:
         if self.proc is None:
             bus.subscribe_raw(protocol.END, self._on_end, verify=False)
             bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
+        if feed:
+            bus.declare_token(feed["ready"])
         self.say(self._summary())
 
     def _summary(self) -> str:

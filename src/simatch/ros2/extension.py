@@ -3,13 +3,14 @@
 rclpy never runs in the simulation's process. The extension opens a *tap* on the run instead: a Zenoh
 endpoint on loopback (a fresh port, the organiser's credential written to a private folder) that offers the
 scene as a server does and forwards what an observer needs from the in-process bus — the clock and the game
-commands as they are published, the game state, the events, and the model states once per control period —
-and it starts ``simatch ros2`` as an observer connected to it (ground truth, /clock, markers, /tf, game
-state; `simatch.ros2.bridge`). ``set_model_state`` requests from ROS are applied between two steps.
+commands, the game state, the events, and the model states once per control period, in one sample per
+control tick (a feed: `simatch.bus.bundle`) — and it starts ``simatch ros2`` as an observer connected to it
+(ground truth, /clock, markers, /tf, game state; `simatch.ros2.bridge`). ``set_model_state`` requests from
+ROS are applied between two steps.
 
-What the run's process pays: encoding and one Zenoh put per forwarded message, once the bridge subscribes
-(`simatch bench --only ros2` measures it). To drive robots from ROS 2, use a server: the ROS team is a team
-process there, with the lockstep, the fair play and the watchdog of every team (docs/ros.md).
+What the run's process pays: encoding the forwarded messages and one Zenoh put per control tick, once the
+bridge listens (`simatch bench --only ros2` measures it). To drive robots from ROS 2, use a server: the ROS
+team is a team process there, with the lockstep, the fair play and the watchdog of every team (docs/ros.md).
 """
 
 from __future__ import annotations
@@ -30,6 +31,18 @@ from ..bus import Node, NodeContext, Phase, topics
 from ..bus.zenoh_bus import ZenohBus, open_session, zenoh_config
 from ..distributed import credentials, protocol
 from ..errors import UsageError
+
+#: the tap's one sample per control tick: a bundle (`simatch.bus.bundle`) of what it forwards, and the token the
+#: bridge declares once it listens (its subscriptions made); both named in the scene offer (``ros2_feed``)
+FEED = "ros2/feed"
+READY = "ros2/ready"
+COVERS = [
+    topics.CLOCK,
+    topics.GAME_STATE,
+    topics.EVENTS,
+    topics.MODEL_STATES,
+    topics.team_topic("*", topics.RECEIVE_FROM_COACH),
+]
 
 #: what the tap forwards as it is published (model states: once per control period, by `Tap`)
 FORWARDED = {
@@ -114,6 +127,7 @@ class Tap(Node):
         self.zbus.pump(0.0)  # requests from ROS, applied here: between two physics steps
         if self._models.active:
             self._model_states(now)
+        self.zbus.flush_feeds()  # what was forwarded since the last tick, in one sample
 
     def stop(self) -> None:
         for sub in getattr(self, "subs", []):
@@ -168,10 +182,15 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
         zbus = ZenohBus(open_session(conf, what=f"listening on {endpoint}"), run, signer=admin.signer(run))
         proc = None
         tap = None
+        ready = []
         try:
-            offer = protocol.dumps(protocol.scene_offer(sim.scene, sim.seed, run, protocol.LOCKSTEP))
+            offer = protocol.scene_offer(sim.scene, sim.seed, run, protocol.LOCKSTEP)
+            offer["ros2_feed"] = {"topic": FEED, "covers": COVERS, "ready": READY}
+            offer = protocol.dumps(offer)
             zbus.serve(protocol.SCENE, lambda q: q.reply(q.key_expr, offer))
             zbus.declare_token(protocol.SERVER_ALIVE)
+            zbus.declare_feed(FEED, COVERS)
+            zbus.watch_liveliness(READY, lambda topic, alive: ready.append(alive))
             tap = sim.clock.add(Tap(sim, zbus, sim.scene.spec.control.period))
             cmd = [sys.executable, "-m", "simatch", "ros2", "--connect", endpoint, "--run", run]
             cmd += ["--key", str(Path(tmp) / f"{credentials.ADMIN}.key"), "--wait", str(wait)]
@@ -180,7 +199,7 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             if open_discovery:
                 cmd += ["--open-discovery"]
             proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL)
-            _wait_for_bridge(zbus, tap, proc, wait, say)
+            _wait_for_bridge(zbus, ready, proc, wait, say)
             yield tap
         finally:
             if tap is not None:
@@ -189,12 +208,12 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             zbus.close()
 
 
-def _wait_for_bridge(zbus: ZenohBus, tap: Tap, proc: subprocess.Popen, wait: float, say) -> None:
-    """Until the bridge listens to the model states and the events, its last subscriptions (its ROS side is
-    up, and the clock, game commands and state are listened to): the run starts with it watching."""
+def _wait_for_bridge(zbus: ZenohBus, ready: list, proc: subprocess.Popen, wait: float, say) -> None:
+    """Until the bridge says it listens (its ``ready`` token: its ROS side is up and it has subscribed to
+    everything the tap forwards): the run starts with it watching."""
     deadline = time.monotonic() + wait
     said = False
-    while not (tap._models.active and tap.forwarders[topics.EVENTS].active):
+    while not any(ready):
         zbus.pump(0.05)
         if proc.poll() is not None:
             raise UsageError(f"the ROS 2 bridge exited at start (code {proc.returncode}): see its message above")
