@@ -10,7 +10,9 @@
   had not been applied yet: at most one command per robot and control tick is applied).
 * ``ros2_observer_*``: the real-time factor of an embedded ``msl_5v5`` (as shipped) without and with the
   observer bridge attached (``simatch run --ros2``), and what it costs (``ros2_observer_cost_pct``; goal
-  < 10 %). Both after a warm-up past the kick-off.
+  < 10 %), alternated in pairs, after a warm-up past the kick-off; and, since on a shared machine the wall
+  time moves with everybody's load, the CPU time of the run's process per simulated second without and with
+  (``ros2_observer_cpu_cost_pct``).
 
 The bridges, the probe and the run share the machine's cores: the figures say so with ``ros2_load``.
 """
@@ -50,7 +52,8 @@ def run(seconds: float | None = None) -> dict:
     return out
 
 
-def _embedded_rtf(seconds: float, with_bridge: bool) -> float:
+def _embedded(seconds: float, with_bridge: bool) -> tuple[float, float]:
+    """(real-time factor, CPU seconds of this process per simulated second) of ``seconds`` of an embedded run."""
     from ..ros2.extension import attached
     from ..simulation import Simulation
 
@@ -60,22 +63,29 @@ def _embedded_rtf(seconds: float, with_bridge: bool) -> float:
             if with_bridge:
                 stack.enter_context(attached(sim, say=lambda text: None))
             sim.run(seconds=WARM_UP)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             sim.run(seconds=seconds)
-            return seconds / (time.perf_counter() - t0)
+            return seconds / (time.perf_counter() - t0), (time.process_time() - c0) / seconds
 
 
-def observer(seconds: float) -> dict:
-    """Embedded real-time factor without, with, and again without the observer bridge (the mean of the two
-    runs without is the reference: the machine's load moves during a benchmark)."""
-    a = _embedded_rtf(seconds, False)
-    b = _embedded_rtf(seconds, True)
-    c = _embedded_rtf(seconds, False)
-    ref = (a + c) / 2
+def observer(seconds: float, pairs: int = 2) -> dict:
+    """Embedded runs without and with the observer bridge, alternated (the machine's load moves during a
+    benchmark): the real-time factors (medians) and the CPU time of the run's process per simulated second
+    (what the bridge costs the simulation whatever else the machine runs; the bridge's own process not
+    counted: it has a core's share of its own)."""
+    runs = {False: [], True: []}
+    for _ in range(pairs):
+        for with_bridge in (False, True):
+            runs[with_bridge].append(_embedded(seconds, with_bridge))
+    rtf = {k: float(np.median([r for r, _ in v])) for k, v in runs.items()}
+    cpu = {k: float(np.median([c for _, c in v])) for k, v in runs.items()}
     return {
-        "ros2_observer_rtf_without": round(ref, 2),
-        "ros2_observer_rtf_with": round(b, 2),
-        "ros2_observer_cost_pct": round(100.0 * (1.0 - b / ref), 1),
+        "ros2_observer_rtf_without": round(rtf[False], 2),
+        "ros2_observer_rtf_with": round(rtf[True], 2),
+        "ros2_observer_cost_pct": round(100.0 * (1.0 - rtf[True] / rtf[False]), 1),
+        "ros2_observer_cpu_ms_per_sim_s_without": round(1e3 * cpu[False], 1),
+        "ros2_observer_cpu_ms_per_sim_s_with": round(1e3 * cpu[True], 1),
+        "ros2_observer_cpu_cost_pct": round(100.0 * (cpu[True] / cpu[False] - 1.0), 1),
     }
 
 

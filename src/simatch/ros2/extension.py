@@ -44,6 +44,11 @@ COVERS = [
     topics.team_topic("*", topics.RECEIVE_FROM_COACH),
 ]
 
+#: the shortest wall time between two of the tap's samples [s]: a run faster than real time (lockstep) is
+#: sampled for ROS (the newest of each topic, every event) rather than sent whole to a bridge that cannot
+#: follow it; in real time every control tick goes
+MIN_INTERVAL = 0.02
+
 #: what the tap forwards as it is published (model states: once per control period, by `Tap`)
 FORWARDED = {
     topics.CLOCK: msgs.Clock,
@@ -64,9 +69,11 @@ class Tap(Node):
     phase = Phase.JUDGE
     name = "ros2_tap"
 
-    def __init__(self, sim, zbus: ZenohBus, period: float):
+    def __init__(self, sim, zbus: ZenohBus, feed, period: float):
         self.sim = sim
         self.zbus = zbus
+        self.feed = feed
+        self._flushed = -1.0
         self.period = period
         self.applied = 0
         self.refused = 0
@@ -125,9 +132,18 @@ class Tap(Node):
 
     def tick(self, now: float) -> None:
         self.zbus.pump(0.0)  # requests from ROS, applied here: between two physics steps
+        wall = time.perf_counter()
+        if wall - self._flushed < MIN_INTERVAL:  # a run faster than real time: ROS gets a sample of it
+            return
+        self._flushed = wall
         if self._models.active:
             self._model_states(now)
-        self.zbus.flush_feeds()  # what was forwarded since the last tick, in one sample
+        feed = self.feed
+        if len(feed.entries) > len(COVERS):  # after skipped ticks: the newest of each topic, every event
+            newest = {topic: (topic, *rest) for topic, *rest in feed.entries if topic != topics.EVENTS}
+            events = [e for e in feed.entries if e[0] == topics.EVENTS]
+            feed.entries = events + sorted(newest.values(), key=feed.entries.index)
+        self.zbus.flush_feeds()  # what was forwarded since the last flush, in one sample
 
     def stop(self) -> None:
         for sub in getattr(self, "subs", []):
@@ -179,7 +195,14 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             password=admin.secret,
             users_file=credentials.users_file(tmp, creds.values()),
         )
-        zbus = ZenohBus(open_session(conf, what=f"listening on {endpoint}"), run, signer=admin.signer(run))
+        # a bridge that falls behind (a run many times faster than real time) loses samples; it never slows
+        # the run down (a blocked put would)
+        zbus = ZenohBus(
+            open_session(conf, what=f"listening on {endpoint}"),
+            run,
+            signer=admin.signer(run),
+            drop_when_congested=True,
+        )
         proc = None
         tap = None
         ready = []
@@ -189,9 +212,9 @@ def attached(sim, *, domain_id: int | None = None, open_discovery: bool = False,
             offer = protocol.dumps(offer)
             zbus.serve(protocol.SCENE, lambda q: q.reply(q.key_expr, offer))
             zbus.declare_token(protocol.SERVER_ALIVE)
-            zbus.declare_feed(FEED, COVERS)
+            feed = zbus.declare_feed(FEED, COVERS)
             zbus.watch_liveliness(READY, lambda topic, alive: ready.append(alive))
-            tap = sim.clock.add(Tap(sim, zbus, sim.scene.spec.control.period))
+            tap = sim.clock.add(Tap(sim, zbus, feed, sim.scene.spec.control.period))
             cmd = [sys.executable, "-m", "simatch", "ros2", "--connect", endpoint, "--run", run]
             cmd += ["--key", str(Path(tmp) / f"{credentials.ADMIN}.key"), "--wait", str(wait)]
             if domain_id is not None:
