@@ -8,7 +8,10 @@ Debian's few C extensions (roslz4, netifaces, Cryptodome) load in the venv's int
 therefore *appends* Debian's folder to ``sys.path``, after the venv's site-packages, and only in the process
 that bridges (``simatch ros1``, or ``simatch run --ros1``): the venv's own packages keep precedence, and
 Debian's fill in only what the venv lacks (rospy, genpy, rosgraph, yaml...). Nothing is installed into the
-venv, and no other simatch process sees Debian's packages.
+venv, and no other simatch process sees Debian's packages. One exception: ROS *message* packages. ROS 2's
+wheels (the ``ros2`` extra) put packages of the same names into the venv (``std_msgs``, ``geometry_msgs``,
+``rosgraph_msgs``: ROS 2's, without ROS 1's ``rosgraph_msgs/Log`` that rospy imports), so Debian's message
+packages are put *before* the venv's, through a folder of links to them alone (`_ros1_messages_first`).
 
 **Message packages.** ``share/`` holds the ROS packages simatch speaks (``nubot_common``, ``gazebo_msgs``:
 ``package.xml`` and ``.msg`` files) and the example team (``simatch_demo``). `workspace` copies them into a
@@ -61,6 +64,7 @@ def use_rospy() -> None:
             raise RosUnavailable(f"rospy is not installed. {INSTALL_HINT}") from None
         if str(DIST_PACKAGES) not in sys.path:
             sys.path.append(str(DIST_PACKAGES))
+        _ros1_messages_first()
     python = str(workspace() / "python")
     if python not in sys.path:
         sys.path.append(python)  # after any nubot_common of the user's own workspace (the same md5sums)
@@ -68,6 +72,30 @@ def use_rospy() -> None:
         import rospy  # noqa: F401,F811
     except ImportError as exc:
         raise RosUnavailable(f"rospy does not import ({exc}). {INSTALL_HINT}") from None
+
+
+def _ros1_messages_first() -> None:
+    """Debian's ROS 1 message packages (``*_msgs``, ``*_srvs``) ahead of ROS 2's packages of the same names in
+    the venv: a folder of links to them alone goes first on ``sys.path`` (not Debian's whole folder, whose
+    numpy and yaml would shadow the venv's)."""
+    names = sorted(p.name for p in DIST_PACKAGES.iterdir() if p.is_dir() and p.name.endswith(("_msgs", "_srvs")))
+    if not names:
+        return
+    folder = cache_root() / ("ros1-messages-" + hashlib.sha256("\0".join(names).encode()).hexdigest()[:12])
+    if not folder.is_dir():
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".ros1-messages-", dir=folder.parent))
+        for name in names:
+            (tmp / name).symlink_to(DIST_PACKAGES / name)
+        try:
+            tmp.rename(folder)
+        except OSError:  # another process made it meanwhile
+            shutil.rmtree(tmp, ignore_errors=True)
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+    for name in names:  # a ROS 2 package of that name imported already would stay in the way
+        for mod in [m for m in sys.modules if m == name or m.startswith(name + ".")]:
+            del sys.modules[mod]
 
 
 def _digest() -> str:
