@@ -13,6 +13,7 @@ import simatch
 from simatch import msgs
 from simatch.bus import topics
 from simatch.config.loader import SceneError
+from simatch.scene.referee.log import FOUL_TYPES
 
 SHORT = {"match.half_duration": 6.0, "match.half_time": 1.0, "judge.stop_time": 0.5, "judge.kickoff_prepare_time": 3.0}
 
@@ -25,7 +26,9 @@ def test_msl_5v5_is_refereed_and_lasts_a_full_match():
 
 
 def test_run_json_carries_score_fouls_and_every_event():
-    # robots that stay at the original start poses (the default teams would take legal positions)
+    # robots that stay at their start poses (the default teams would take legal positions): both halves begin
+    # without a foul (the start poses keep the kick-off distances for the kicking and the defending team alike,
+    # docs/referee.md "Kick-off positions"), and the teams change ends at half time
     still = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"}
     args = ["run", "msl_5v5", "--json", "--seed", "3"] + [f"--set={k}={v}" for k, v in {**SHORT, **still}.items()]
     proc = subprocess.run([sys.executable, "-m", "simatch", *args], capture_output=True, text=True, timeout=300)
@@ -38,12 +41,11 @@ def test_run_json_carries_score_fouls_and_every_event():
     assert out["sim_seconds"] == pytest.approx(13.0, abs=0.01)  # 6 + 1 + 6: the referee ended it
     kinds = [e["type"] for e in out["events"]]
     assert kinds[0] == "stage" and kinds[-1] == "match_end"
-    assert {"command", "ball_placed", "set_piece_distance"} <= set(kinds)  # the original start poses are too close
-    # the fouls in the result are the foul events of the log, per team
-    for team in ("cyan", "magenta"):
-        assert r["fouls"][team] == sum(
-            1 for e in out["events"] if e["type"] == "set_piece_distance" and e["team"] == team
-        )
+    assert {"command", "ball_placed", "ends_changed"} <= set(kinds)
+    assert r["fouls"] == {"cyan": 0, "magenta": 0}
+    assert not [e for e in out["events"] if e["type"] in FOUL_TYPES]
+    kickoffs = [e for e in out["events"] if e["type"] == "command" and e.get("value") == 1.0]
+    assert [e["team"] for e in kickoffs] == ["cyan", "magenta"]  # the second half: the other team kicks off
     first = out["events"][0]
     assert first == {"t": 0.0, "type": "stage", "value": 6.0, "limit": 0.0, "detail": "first_half begins"}
 

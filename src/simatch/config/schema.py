@@ -160,6 +160,21 @@ class DribblerSpec(Strict):
     settle_time: float = Field(
         0.1, ge=0.0, le=2.0, description="after taking the ball, time before the grip limit applies [s]"
     )
+    roller_torque: float = Field(
+        1.0,
+        ge=0.0,
+        le=100.0,
+        description="largest torque the rollers put on a held ball to keep it turning [N m] (0: no rollers, "
+        "the ball turns only as the floor makes it)",
+    )
+    roller_spin: float = Field(
+        1.0,
+        ge=-2.0,
+        le=2.0,
+        description="the spin the rollers keep a held ball at, as a fraction of rolling with its motion over the "
+        "floor: 1 turns it as a free ball rolls (its natural rotation, MSL RC-12.3.1), 0 clamps it without "
+        "turning (against its rotation: a foul), below 0 turns it against its motion",
+    )
 
 
 class KickerSpec(Strict):
@@ -191,6 +206,11 @@ class MatchSpec(Strict):
     half_time: float = Field(10.0, ge=0.0, le=3600.0, description="break between halves [s]")
     kickoff: str = Field("cyan", description="team that kicks off the first half")
     penalty_shootout: bool = Field(False, description="a shoot-out decides a draw")
+    change_ends: bool = Field(
+        True,
+        description="the teams change ends at half time, and again before extra time and a shoot-out "
+        "(every team frame, start pose and side the referee judges follows)",
+    )
 
 
 class Scene(Strict):

@@ -3,7 +3,8 @@
 A judge is a node of phase JUDGE. It observes the world through the simulation interface (model states
 and the simulator's events on the bus) and may act on it through the Gazebo-like calls of the
 `WorldControl` it is given (placing the ball for a restart, parking a sent-off robot, freezing a captured
-target). It publishes game commands (CoachInfo) and events, and it decides when the run is over.
+target, turning a team's frame when the teams change ends). It publishes game commands (CoachInfo) and
+events, and it decides when the run is over.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ class WorldControl(Protocol):
     def apply_wrench(self, name: str, force=(0, 0, 0), torque=(0, 0, 0), duration: float = 0.0) -> None: ...
     def set_enabled(self, name: str, enabled: bool) -> None: ...
     def set_frozen(self, name: str, frozen: bool) -> None: ...
+    def set_team_sign(self, team: str, sign: int) -> None: ...  # the team's frame from now on (ends changed)
 
 
 class NoParams(BaseModel):
