@@ -211,6 +211,17 @@ class MatchSpec(Strict):
         description="the teams change ends at half time, and again before extra time and a shoot-out "
         "(every team frame, start pose and side the referee judges follows)",
     )
+    start: Literal[
+        "kickoff", "play", "throw_in", "goal_kick", "corner_kick", "free_kick", "penalty", "dropped_ball"
+    ] = Field(
+        "kickoff",
+        description="how the referee begins the match: the kick-off, the ball in play at once, or a restart "
+        "(to look at a situation again: scripts/referee_audit.py writes such scenes)",
+    )
+    start_team: str | None = Field(None, description="the team whose restart `start` is (default: kickoff)")
+    start_spot: tuple[float, float] | None = Field(
+        None, description="the spot of the `start` restart, world frame [m] (default: where the ball starts)"
+    )
 
 
 class Scene(Strict):
@@ -253,6 +264,8 @@ class Scene(Strict):
                 raise ValueError("control.strategy_pub_period must be a multiple of control.period")
         if self.match.kickoff not in self.teams:
             raise ValueError(f"match.kickoff names team {self.match.kickoff!r}, which the scene does not have")
+        if self.match.start_team is not None and self.match.start_team not in self.teams:
+            raise ValueError(f"match.start_team names team {self.match.start_team!r}, which the scene does not have")
         return self
 
     # --- derived --------------------------------------------------------------------------------------

@@ -192,12 +192,27 @@ class MslReferee(OperatorTakeover, Judge):
 
     def _begin(self, now: float) -> None:
         self._begun = True
-        self._ball_row = 7 * self.m.obs.ball_row()
-        self.m.obs.refresh()
-        g = self.m.game
-        g.kickoff_team = self.match_spec.kickoff
+        m = self.m
+        obs = m.obs
+        self._ball_row = 7 * obs.ball_row()
+        obs.refresh()
+        g = m.game
+        spec = self.match_spec
+        g.kickoff_team = spec.kickoff
         self._log(now, "stage", detail=f"{g.stage.name} begins", value=g.stage.duration or 0.0)
-        self._stop(now, self.m.spots.kickoff(g.kickoff_team), "the match begins")
+        if spec.start == "kickoff":
+            self._stop(now, m.spots.kickoff(g.kickoff_team), "the match begins")
+        elif spec.start == "play":  # a situation looked at again: the ball is in play from the first step
+            g.go(_Phase.PLAY)
+            self._send(now, MatchMode.STARTROBOT, "", "the match begins with the ball in play (match.start)")
+        else:  # ... or a restart
+            team = "" if spec.start == "dropped_ball" else (spec.start_team or spec.kickoff)
+            x, y = spec.start_spot if spec.start_spot is not None else (obs.bx, obs.by)
+            if spec.start == "penalty":
+                restart = m.spots.penalty(team, obs.own_goal_side(obs.other(team)))
+            else:
+                restart = Restart(spec.start, team, float(x), float(y))
+            self._stop(now, restart, f"the match begins with a {NAMES[spec.start]} (match.start)")
 
     # --- every control period ------------------------------------------------------------------------------
     def _control(self, now: float) -> None:
