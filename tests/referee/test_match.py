@@ -126,3 +126,20 @@ def test_referee_benchmark_reports_its_figures():
     out = run(1.0)
     assert set(out) >= {"referee_us_per_step", "referee_overhead_us_per_step", "referee_decisions"}
     assert out["referee_us_per_step"] > 0 and out["referee_sim_seconds"] == 1.0
+
+
+def test_a_match_may_begin_in_play_or_with_a_restart():
+    """match.start sets up a situation (the audit's sample scenes use it): the ball in play from the first step,
+    or a restart for a team at a spot; a team that the scene does not have is refused."""
+    with simatch.Simulation("msl_5v5", overrides={**SHORT, "match.start": "play"}) as sim:
+        sim.step()
+        assert sim.game["phase"] == "play" and sim.game["commands"]["cyan"]["name"] == "STARTROBOT"
+    settings = {**SHORT, "match.start": "corner_kick", "match.start_team": "magenta", "match.start_spot": [-10.7, 6.7]}
+    with simatch.Simulation("msl_5v5", overrides=settings) as sim:
+        sim.run(seconds=1.0)
+        assert sim.game["next_restart"] is None and sim.game["restart"] == "corner kick for magenta at (-10.70, 6.70)"
+        assert sim.game["commands"]["magenta"]["name"] == "OUR_CORNERKICK"
+        b = sim.model_states()["ball"]
+        assert (b.x, b.y) == pytest.approx((-10.7, 6.7))
+    with pytest.raises(SceneError, match="match.start_team names team 'yellow'"):
+        simatch.Simulation("msl_5v5", overrides={"match.start": "free_kick", "match.start_team": "yellow"})
