@@ -378,7 +378,8 @@ class MslReferee(OperatorTakeover, Judge):
         if nxt.kind == "ended":
             self._end_match(now)
             return
-        if ended.kind == "half" and self.match_spec.change_ends:
+        change = ended.kind == "half" and self.match_spec.change_ends
+        if change:
             self._change_ends(now, "before the penalty shoot-out" if nxt.kind == "shootout" else "at half time")
         self._log(now, "stage", value=nxt.duration or 0.0, detail=f"{nxt.name} begins")
         if nxt.kind == "shootout":
@@ -392,6 +393,8 @@ class MslReferee(OperatorTakeover, Judge):
             restart = m.spots.kickoff(g.kickoff_team)
             reason = "half time" if nxt.kind == "break" else f"{nxt.name}"
         self._stop(now, restart, reason)
+        if change:  # at once, whatever the step: the perception turns from the next observation on
+            self._publish(now, force=True)
 
     def _change_ends(self, now: float, when: str) -> None:
         """The teams change ends: every team's frame turns (the simulator's perception, the commands' points,
