@@ -39,11 +39,16 @@ def parse_args(argv=None):
     return p.parse_args(argv)
 
 
+#: the action's velocity scale: within the omni4 model's limits (7.1 m/s, 24.6 rad/s), at the speeds a striker
+#: can still take the ball with its dribbler (which takes a ball arriving at up to 3.5 m/s)
+MAX_VEL, MAX_W = 3.5, 6.0
+
+
 def make_env(scene: str):
     def thunk():
         import simatch.envs
 
-        return simatch.envs.SimatchEnv(scene)
+        return simatch.envs.SimatchEnv(scene, max_vel=MAX_VEL, max_w=MAX_W)
 
     return thunk
 
@@ -51,22 +56,19 @@ def make_env(scene: str):
 class Curve:
     """SB3 callback: records every finished episode and stops training when the budget is spent."""
 
-    def __new__(cls, *args, **kwargs):
+    def __new__(cls, *args, **kwargs):  # SB3 is imported only when training starts
         from stable_baselines3.common.callbacks import BaseCallback
 
         class _Curve(BaseCallback):
-            def __init__(self, seconds: float, progress):
+            def __init__(self, seconds: float, progress, out: Path):
                 super().__init__()
-                self.seconds, self.progress = seconds, progress
+                self.seconds, self.progress, self.out = seconds, progress, out
                 self.rows: list[dict] = []
-                self.returns = None
 
             def _on_training_start(self) -> None:
                 self.t0 = time.perf_counter()
-                self.returns = np.zeros(self.training_env.num_envs)
 
             def _on_step(self) -> bool:
-                self.returns += self.locals["rewards"]
                 for i, done in enumerate(self.locals["dones"]):
                     if done:
                         info = self.locals["infos"][i]
@@ -74,12 +76,13 @@ class Curve:
                             {
                                 "step": self.num_timesteps,
                                 "wall_s": round(time.perf_counter() - self.t0, 2),
-                                "return": round(float(self.returns[i]), 3),
+                                "return": round(float(info["episode"]["r"]), 3),  # VecMonitor's, unscaled
                                 "end": info.get("end", ""),
                                 "goal": int(info.get("end") == "goal"),
                             }
                         )
-                        self.returns[i] = 0.0
+                        if len(self.rows) % 100 == 0:
+                            write_curve(self.rows, self.out)
                 elapsed = time.perf_counter() - self.t0
                 if self.progress is not None:
                     self.progress.n = min(int(elapsed), self.progress.total)
@@ -94,17 +97,23 @@ class Curve:
         return _Curve(*args, **kwargs)
 
 
-def evaluate(model, scene: str, episodes: int) -> dict:
-    import simatch.envs
+def write_curve(rows: list[dict], out: Path) -> None:
+    with open(out / "curve.csv", "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=["step", "wall_s", "return", "end", "goal"])
+        w.writeheader()
+        w.writerows(rows)
 
-    env = simatch.envs.SimatchEnv(scene)
+
+def evaluate(model, normalize, scene: str, episodes: int) -> dict:
+    """The deterministic policy on seeds never trained on, observations scaled as in training."""
+    env = make_env(scene)()
     goals, returns, lengths = 0, [], []
     try:
         for k in range(episodes):
             obs, _ = env.reset(seed=EVAL_SEED + k)
             total, steps, done = 0.0, 0, False
             while not done:
-                action, _ = model.predict(obs, deterministic=True)
+                action, _ = model.predict(normalize.normalize_obs(obs), deterministic=True)
                 obs, r, terminated, truncated, info = env.step(action)
                 total, steps, done = total + r, steps + 1, terminated or truncated
             goals += info.get("end") == "goal"
@@ -153,7 +162,7 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor, VecNormalize
     from tqdm import tqdm
 
     from simatch.envs.policy import save_policy
@@ -162,37 +171,36 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     factory = SubprocVecEnv if args.subproc else DummyVecEnv
-    venv = VecMonitor(factory([make_env(args.scene) for _ in range(args.envs)]))
-    venv.seed(args.seed)
+    monitor = VecMonitor(factory([make_env(args.scene) for _ in range(args.envs)]))
+    monitor.seed(args.seed)
+    # observations scaled by their running mean and deviation (kept with the policy), returns by theirs
+    venv = VecNormalize(monitor, norm_obs=True, norm_reward=True, gamma=0.99)
     model = PPO(
         "MlpPolicy",
         venv,
-        n_steps=512,
-        batch_size=512,
-        n_epochs=5,
+        n_steps=256,
+        batch_size=256,
+        n_epochs=10,
         learning_rate=3e-4,
         gamma=0.99,
         gae_lambda=0.95,
         ent_coef=0.0,
-        policy_kwargs={"net_arch": [128, 128]},
+        policy_kwargs={"net_arch": [128, 128], "log_std_init": -0.5},
         seed=args.seed,
         device="cpu",
         verbose=0,
     )
     seconds = args.minutes * 60.0
     bar = tqdm(total=int(seconds), unit="s", desc="training", disable=not sys.stderr.isatty() or args.json)
-    curve = Curve(seconds, bar)
+    curve = Curve(seconds, bar, out)
     t0 = time.perf_counter()
     model.learn(total_timesteps=10**10, callback=curve)
     train_s = time.perf_counter() - t0
     bar.close()
     venv.close()
-    policy = save_policy(model, out / "striker.zip", make_env(args.scene)())
+    policy = save_policy(model, out / "striker.zip", make_env(args.scene)(), normalize=venv)
     rows = curve.rows
-    with open(out / "curve.csv", "w", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=["step", "wall_s", "return", "end", "goal"])
-        w.writeheader()
-        w.writerows(rows)
+    write_curve(rows, out)
     last = rows[-200:]
     summary = {
         "scene": args.scene,
@@ -204,7 +212,7 @@ def main(argv=None) -> int:
         "train_goal_rate_last_200": round(float(np.mean([r["goal"] for r in last])), 3) if last else None,
         "policy": str(policy),
     }
-    summary.update(evaluate(model, args.scene, args.eval_episodes))
+    summary.update(evaluate(model, venv, args.scene, args.eval_episodes))
     plot(rows, out / "curve.png", f"PPO on {args.scene}: {summary['train_steps']:,} steps in {train_s / 60:.1f} min")
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     if args.json:

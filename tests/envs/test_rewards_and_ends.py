@@ -76,7 +76,7 @@ def test_shaping_terms_follow_the_ball_and_the_robot():
     try:
         env.reset(seed=0)
         parts = step(0.0, 2.0)["cyan/1"]["rewards"]  # the ball rolls 5 cm towards the goal, away from the robot
-        assert parts["ball_progress"] == pytest.approx(0.05, abs=0.005)
+        assert parts["ball_progress"] == pytest.approx(0.1, abs=0.01)  # weight 2
         assert parts["ball_approach"] == pytest.approx(-0.025, abs=0.003)  # weight 0.5
         parts = step(2.0, 0.0)["cyan/1"]["rewards"]  # the robot drives 5 cm towards the resting ball
         assert parts["ball_progress"] == pytest.approx(0.0, abs=1e-3)
@@ -90,11 +90,23 @@ def test_terms_count_the_events_of_the_right_team():
         return msgs.GameEvent(stamp=0.0, type=kind, team=team, robot=1, x=0.0, y=0.0, value=0.0, limit=0.0, detail="")
 
     snap = R.Snapshot((0.0, 0.0, 0.11), {"cyan/1": (0.0, 0.0)}, "cyan")
-    events = [event("goal", "magenta"), event("charging", "cyan"), event("pushing", "cyan"), event("capture", "magenta")]
+    events = [
+        event("goal", "magenta"),
+        event("charging", "cyan"),
+        event("pushing", "cyan"),
+        event("capture", "magenta"),
+    ]
     step = R.Step(snap, snap, events, 0.025)
     cyan = R.Agent("cyan/1", "cyan", 1, 11.0)
     terms = R.make_terms(
-        {"goal": 1, "conceded": -1, "foul": -0.5, "capture": 2, "possession": 4, "event": {"type": "goal", "team": "any"}},
+        {
+            "goal": 1,
+            "conceded": -1,
+            "foul": -0.5,
+            "capture": 2,
+            "possession": 4,
+            "event": {"type": "goal", "team": "any"},
+        },
         "test",
     )
     total, parts = R.reward(terms, step, cyan)

@@ -101,6 +101,10 @@ def test_the_observation_is_the_robots_own_perception_in_its_team_frame():
         assert parts["self"][0] == np.float32(me.x) and parts["self"][1] == np.float32(me.y)
         ball = world.vision.ball
         assert parts["ball"][3] == np.float32(ball.x) and parts["ball"][9] == np.float32(ball.distance)
+        # the goal it attacks (cyan's, world (-11, 0)) is at (11, 0) in its team frame: 13 m ahead, 1 m to the right
+        a, d = math.atan2(-1, 13), math.atan2(-1, -9)
+        expected = [math.hypot(13, 1), math.cos(a), math.sin(a), math.hypot(9, 1), math.cos(d), math.sin(d)]
+        assert parts["goals"].tolist() == pytest.approx(expected, abs=1e-5)
         assert parts["teammates"].shape == (4, 11) and parts["teammates"][:, 0].tolist() == [1, 1, 1, 1]
         distances = parts["obstacles"][:, 5]
         assert parts["obstacles"].shape == (9, 9) and (np.diff(distances) >= 0).all()  # nearest first
@@ -136,7 +140,7 @@ def test_realism_knobs_apply_to_learners_as_to_any_robot():
 
 
 def test_a_policy_trained_on_few_slots_reads_a_larger_scene():
-    small = Layout(teammates=1, obstacles=2)
+    small = Layout(teammates=1, obstacles=2, half_length=11.0)
     env = simatch.envs.parallel_env("msl_5v5")
     try:
         env.reset(seed=0)
@@ -157,5 +161,18 @@ def test_self_play_both_teams_learn():
         env.reset(seed=0)
         assert len(env.agents) == 10
         env.step(zeros(env))
+    finally:
+        env.close()
+
+
+def test_the_state_is_the_true_world_in_the_world_frame():
+    env = simatch.envs.parallel_env("striker_1v1")
+    try:
+        env.reset(seed=2)
+        s = env.state()
+        states = env.run.sim.model_states()
+        assert env.state_space.contains(s) and s.shape == (3 * 2 + 6,)
+        assert s[:3].tolist() == pytest.approx([states["cyan/1"].x, states["cyan/1"].y, states["cyan/1"].yaw], abs=1e-5)
+        assert s[6:9].tolist() == pytest.approx([states["ball"].x, states["ball"].y, states["ball"].z], abs=1e-5)
     finally:
         env.close()

@@ -110,7 +110,7 @@ class LearningRun:
             self.teammate_ids[name] = [r for r in tspec.robot_ids() if r != int(rid)]
             t = len(tspec.robot_ids()) - 1 if teammates is None else teammates
             k = n_robots - 1 if obstacles is None else obstacles
-            self.layouts[name] = Layout(t, k)
+            self.layouts[name] = Layout(t, k, geo.half_length)
         self.sim: Simulation | None = None
         self.closed = False
         self.over = True  # no episode in progress

@@ -14,6 +14,9 @@ game       36      one-hot of CoachInfo.match_mode over the 17 commands (`COMMAN
 self       10      x, y [m], cos yaw, sin yaw, vx, vy [m/s, team frame], w [rad/s], valid, stuck, holding_ball
 ball       12      seen by me (state == SEEBALLBYOWN), pos_known, velocity_known, x, y, z [m], vx, vy, vz [m/s],
                    distance [m], cos angle, sin angle (bearing from my kicker axis)
+goals      6       the centre of the goal my team attacks (team frame (+L, 0), L half the field's length):
+                   distance [m], cos and sin of its bearing from my kicker axis; the same for my own goal (-L, 0)
+                   (from my perceived pose and the field's geometry, as the ball's bearing is from the ball's)
 teammates  11 x T  per teammate, in the team's id order: present, then as self
 obstacles  9 x K   per robot I see (either team), nearest first: present, x, y, vx, vy, distance, cos angle,
                    sin angle, radius
@@ -55,6 +58,14 @@ BALL = (
     "sin_angle",
 )
 TEAMMATE = ("present", *SELF)
+GOALS = (
+    "attack_distance",
+    "attack_cos_angle",
+    "attack_sin_angle",
+    "defend_distance",
+    "defend_cos_angle",
+    "defend_sin_angle",
+)
 OBSTACLE = ("present", "x", "y", "vx", "vy", "distance", "cos_angle", "sin_angle", "radius")
 GAME_SIZE = 2 * len(COMMANDS) + 2
 
@@ -68,12 +79,18 @@ _SEEBALLBYOWN = BallInfo.SEEBALLBYOWN
 class Layout:
     """The observation of one agent: sizes, names of every entry, bounds, and the encoder."""
 
-    def __init__(self, teammates: int, obstacles: int):
+    def __init__(self, teammates: int, obstacles: int, half_length: float):
         if teammates < 0 or obstacles < 0:
             raise ValueError("teammate and obstacle slots must be >= 0")
         self.teammates = int(teammates)
         self.obstacles = int(obstacles)
-        self.parts: dict[str, tuple[int, ...]] = {"game": (GAME_SIZE,), "self": (len(SELF),), "ball": (len(BALL),)}
+        self.half_length = float(half_length)
+        self.parts: dict[str, tuple[int, ...]] = {
+            "game": (GAME_SIZE,),
+            "self": (len(SELF),),
+            "ball": (len(BALL),),
+            "goals": (len(GOALS),),
+        }
         if self.teammates:
             self.parts["teammates"] = (self.teammates, len(TEAMMATE))
         if self.obstacles:
@@ -93,7 +110,7 @@ class Layout:
         out = [f"game.match_mode.{MatchMode(c).name}" for c in COMMANDS]
         out += [f"game.match_type.{MatchMode(c).name}" for c in COMMANDS]
         out += ["game.ball_x", "game.ball_y"]
-        out += [f"self.{n}" for n in SELF] + [f"ball.{n}" for n in BALL]
+        out += [f"self.{n}" for n in SELF] + [f"ball.{n}" for n in BALL] + [f"goals.{n}" for n in GOALS]
         out += [f"teammates[{i}].{n}" for i in range(self.teammates) for n in TEAMMATE]
         out += [f"obstacles[{i}].{n}" for i in range(self.obstacles) for n in OBSTACLE]
         return out
@@ -118,7 +135,9 @@ class Layout:
             leaf = name.rsplit(".", 1)[-1]
             if leaf in kinds:
                 high[i], low[i] = kinds[leaf], -kinds[leaf]
-            elif leaf.startswith(("cos_", "sin_")):
+            elif leaf.endswith("distance"):
+                high[i] = BOUND_POSITION
+            elif "cos_" in leaf or "sin_" in leaf:
                 low[i] = -1.0
         low[[i for i, n in enumerate(self.names()) if n.endswith((".distance", ".radius"))]] = 0.0
         return low, high
@@ -153,6 +172,12 @@ class Layout:
         at = GAME_SIZE
         if me is not None:
             out[at : at + len(SELF)] = _robot(me)
+            g = self.offsets["goals"].start
+            for side in (1.0, -1.0):
+                dx, dy = side * self.half_length - me.x, -me.y
+                bearing = math.atan2(dy, dx) - me.yaw
+                out[g : g + 3] = (math.hypot(dx, dy), math.cos(bearing), math.sin(bearing))
+                g += 3
         at += len(SELF)
         b = vision.ball
         if b.pos_known:
@@ -170,7 +195,7 @@ class Layout:
                 math.cos(b.angle),
                 math.sin(b.angle),
             )
-        at += len(BALL)
+        at += len(BALL) + len(GOALS)
         for rid in teammate_ids[: self.teammates]:
             r = mates.get(rid)
             if r is not None:

@@ -15,9 +15,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from .core import LearningRun
+from .observation import BOUND_POSITION as BOUND
 from .spaces import action_space, check_form, observation_space
 
 
@@ -39,6 +41,8 @@ class SimatchParallelEnv(ParallelEnv):
         self.render_mode = None
         self._obs_spaces = {a: observation_space(self.run.layouts[a], self.form) for a in self.possible_agents}
         self._act_spaces = {a: action_space(self.run.action_type) for a in self.possible_agents}
+        n = 3 * len(self.run.team_of_robot) + 6
+        self.state_space = spaces.Box(-BOUND, BOUND, shape=(n,), dtype=np.float32)
         self._seeds: np.random.Generator | None = None
 
     @property
@@ -84,7 +88,8 @@ class SimatchParallelEnv(ParallelEnv):
         if sim is None:
             raise RuntimeError("call reset() first")
         robots = sim.simulator.robot_array()[:, :3].ravel()
-        return np.concatenate((robots, sim.simulator.ball_array())).astype(np.float32)
+        state = np.concatenate((robots, sim.simulator.ball_array())).astype(np.float32)
+        return np.clip(state, -BOUND, BOUND, out=state)
 
     def render(self):
         return None

@@ -36,9 +36,11 @@ def _meta_path(file: Path) -> Path:
     return file.with_suffix(".json")
 
 
-def save_policy(model: Any, file: str | Path, env: Any, agent: str | None = None) -> Path:
+def save_policy(model: Any, file: str | Path, env: Any, agent: str | None = None, normalize: Any = None) -> Path:
     """Save an SB3 ``model`` trained on ``env`` (a SimatchEnv, SimatchParallelEnv or LearningRun, or a
-    gymnasium wrapper of one) to ``file`` (.zip) and what it needs to play beside it (.json)."""
+    gymnasium wrapper of one) to ``file`` (.zip) and what it needs to play beside it (.json): with
+    ``normalize``, the SB3 `VecNormalize` it was trained behind (its observation statistics are kept, so the
+    policy sees observations scaled as in training)."""
     file = Path(file).with_suffix(".zip")
     run = getattr(getattr(env, "unwrapped", env), "run", env)
     agent = agent or getattr(getattr(env, "unwrapped", env), "agent", None) or run.agents[0]
@@ -52,6 +54,14 @@ def save_policy(model: Any, file: str | Path, env: Any, agent: str | None = None
         "observation": {"teammates": layout.teammates, "obstacles": layout.obstacles, "size": layout.size},
         "action": {"type": run.action_type, **limits.__dict__},
     }
+    if normalize is not None and getattr(normalize, "norm_obs", False):
+        rms = normalize.obs_rms
+        meta["normalize"] = {
+            "mean": [float(v) for v in rms.mean],
+            "var": [float(v) for v in rms.var],
+            "epsilon": float(normalize.epsilon),
+            "clip": float(normalize.clip_obs),
+        }
     _meta_path(file).write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
     return file
 
@@ -96,14 +106,24 @@ class Policy(RobotStrategy):
             self._cache[key] = (_load_model(file, meta["algorithm"]), meta)
         self.model, meta = self._cache[key]
         obs, act = meta["observation"], dict(meta["action"])
-        self.layout = Layout(obs["teammates"], obs["obstacles"])
+        self.layout = Layout(obs["teammates"], obs["obstacles"], ctx.field.half_length)
         self.discrete = act.pop("type") == "discrete"
         self.limits = actions.Limits(**act)
         self.mates = [rid for rid in ctx.ids if rid != ctx.id]
+        norm = meta.get("normalize")
+        self.norm = None
+        if norm is not None:
+            mean, var = np.asarray(norm["mean"], np.float64), np.asarray(norm["var"], np.float64)
+            if mean.shape != (self.layout.size,) or var.shape != mean.shape:
+                raise SceneError(f"{meta_file}: normalize: expected {self.layout.size} means and variances")
+            self.norm = (mean, np.sqrt(var + norm["epsilon"]), norm["clip"])
         self.name = f"{ctx.team}/{ctx.id}"
 
     def decide(self, world) -> Command:
         obs = self.layout.encode(world.vision, world.coach, self.mates)
+        if self.norm is not None:
+            mean, std, clip = self.norm
+            obs = np.clip((obs - mean) / std, -clip, clip).astype(np.float32)
         a, _ = self.model.predict(obs, deterministic=self.ctx.params.deterministic)
         if self.discrete:
             return self.limits.discrete(actions.check_discrete(self.name, a))
