@@ -132,6 +132,8 @@ def test_bad_options_and_scenes_are_refused_clearly():
         simatch.envs.parallel_env("striker_1v0", action_type="joystick")
     with pytest.raises(ValueError, match="observation form"):
         simatch.envs.parallel_env("striker_1v0", observation="pixels")
+    with pytest.raises(ValueError, match="do not render"):
+        simatch.envs.parallel_env("striker_1v0", render_mode="human")
     with pytest.raises(SceneError, match="needs one"):
         simatch.envs.SimatchEnv("keepaway_3v2")
     with pytest.raises(SceneError, match=r"learning.rewards.scored: unknown reward term 'scored'"):

@@ -89,7 +89,7 @@ def test_terms_count_the_events_of_the_right_team():
     def event(kind, team):
         return msgs.GameEvent(stamp=0.0, type=kind, team=team, robot=1, x=0.0, y=0.0, value=0.0, limit=0.0, detail="")
 
-    snap = R.Snapshot((0.0, 0.0, 0.11), {"cyan/1": (0.0, 0.0)}, "cyan")
+    snap = R.Snapshot((0.0, 0.0, 0.11), {"cyan/1": (0.0, 0.0)}, "cyan", {"cyan": 1, "magenta": -1})
     events = [
         event("goal", "magenta"),
         event("charging", "cyan"),
@@ -97,7 +97,7 @@ def test_terms_count_the_events_of_the_right_team():
         event("capture", "magenta"),
     ]
     step = R.Step(snap, snap, events, 0.025)
-    cyan = R.Agent("cyan/1", "cyan", 1, 11.0)
+    cyan = R.Agent("cyan/1", "cyan", 11.0)
     terms = R.make_terms(
         {
             "goal": 1,

@@ -100,11 +100,11 @@ class LearningRun:
         self.layouts: dict[str, Layout] = {}
         self.teammate_ids: dict[str, list[int]] = {}
         self.team_of_robot = {name: name.partition("/")[0] for name in spec.robot_names()}
+        self.attacks = {team: spec.team_sign(team) for team in spec.teams}
         for name in self.agents:
             team, _, rid = name.partition("/")
             tspec = spec.teams[team]
-            sign = spec.team_sign(team)
-            self.info[name] = Agent(name, team, sign, sign * geo.half_length)
+            self.info[name] = Agent(name, team, geo.half_length)
             model = model_class(tspec.model)(tspec.model_params)
             self.limits[name] = actions.Limits.of(model, spec.kicker, max_vel, max_w)
             self.teammate_ids[name] = [r for r in tspec.robot_ids() if r != int(rid)]
@@ -217,7 +217,7 @@ class LearningRun:
         b = pose[-1]
         holder = sim.ball.holder
         team = self.team_of_robot[sim.robot_names[holder]] if holder >= 0 else ""
-        return Snapshot((float(b[0]), float(b[1]), float(b[2])), robots, team)
+        return Snapshot((float(b[0]), float(b[1]), float(b[2])), robots, team, self.attacks)
 
     def close(self) -> None:
         if self.sim is not None:

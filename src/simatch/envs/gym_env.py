@@ -14,7 +14,7 @@ import numpy as np
 
 from ..config.loader import LoadedScene, SceneError, load_scene
 from .core import LearningRun
-from .spaces import action_space, check_form, observation_space
+from .spaces import action_space, check_form, check_render, observation_space
 
 
 def default_agent(scene: LoadedScene) -> str:
@@ -46,8 +46,10 @@ class SimatchEnv(gymnasium.Env):
         agent: str | None = None,
         observation: str = "vector",
         overrides: dict | None = None,
+        render_mode: str | None = None,
         **options: Any,
     ):
+        check_render(render_mode)
         self.form = check_form(observation)
         if agent is None:
             agent = default_agent(scene if isinstance(scene, LoadedScene) else load_scene(scene, overrides))

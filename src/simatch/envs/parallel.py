@@ -20,7 +20,7 @@ from pettingzoo import ParallelEnv
 
 from .core import LearningRun
 from .observation import BOUND_POSITION as BOUND
-from .spaces import action_space, check_form, observation_space
+from .spaces import action_space, check_form, check_render, observation_space
 
 
 class SimatchParallelEnv(ParallelEnv):
@@ -33,7 +33,8 @@ class SimatchParallelEnv(ParallelEnv):
 
     metadata = {"name": "simatch_v0", "render_modes": [], "is_parallelizable": True}
 
-    def __init__(self, scene: Any = "msl_5v5", observation: str = "vector", **options: Any):
+    def __init__(self, scene: Any = "msl_5v5", observation: str = "vector", render_mode: str | None = None, **options):
+        check_render(render_mode)
         self.form = check_form(observation)
         self.run = LearningRun(scene, **options)
         self.possible_agents = list(self.run.agents)

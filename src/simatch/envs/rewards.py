@@ -42,6 +42,7 @@ class Snapshot:
     ball: tuple[float, float, float]
     robots: dict[str, tuple[float, float]]
     holder_team: str  # team of the robot whose dribbler holds the ball, "" if none
+    attacks: dict[str, int]  # team -> +1 if it attacks +x now, -1 if -x (teams change ends at half time)
 
 
 @dataclass
@@ -60,8 +61,7 @@ class Agent:
 
     name: str  # "cyan/2"
     team: str
-    sign: int  # +1: the team attacks +x (world), -1: it attacks -x
-    goal_x: float  # x (world) of the goal line the team attacks
+    half_length: float  # of the field: the goals' centres are at x = +-half_length (world)
 
 
 class TermParams(BaseModel):
@@ -99,13 +99,14 @@ class Conceded(RewardTerm):
         return float(_count(step.events, ("goal",), other_than=agent.team))
 
 
-def _to_goal(ball: tuple[float, float, float], agent: Agent) -> float:
-    return math.hypot(ball[0] - agent.goal_x, ball[1])
-
-
 class BallProgress(RewardTerm):
     def value(self, step: Step, agent: Agent) -> float:
-        return _to_goal(step.before.ball, agent) - _to_goal(step.after.ball, agent)
+        goal_x = step.after.attacks[agent.team] * agent.half_length  # the goal it attacks now
+
+        def to_goal(ball: tuple[float, float, float]) -> float:
+            return math.hypot(ball[0] - goal_x, ball[1])
+
+        return to_goal(step.before.ball) - to_goal(step.after.ball)
 
 
 class BallApproach(RewardTerm):

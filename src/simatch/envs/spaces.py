@@ -29,3 +29,13 @@ def check_form(form: str) -> str:
     if form not in OBSERVATION_FORMS:
         raise ValueError(f"observation form must be one of {', '.join(OBSERVATION_FORMS)}, got {form!r}")
     return form
+
+
+def check_render(mode: str | None) -> None:
+    """The environments draw nothing themselves: a run is watched in the web UI (``simatch run --view``) or
+    recorded (``--record``) and replayed."""
+    if mode is not None:
+        raise ValueError(
+            f"render_mode {mode!r}: simatch environments do not render; watch a run with simatch run --view, "
+            f"or record it (--record) and open it with simatch serve"
+        )
