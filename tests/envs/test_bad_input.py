@@ -132,6 +132,8 @@ def test_bad_options_and_scenes_are_refused_clearly():
         simatch.envs.parallel_env("striker_1v0", action_type="joystick")
     with pytest.raises(ValueError, match="observation form"):
         simatch.envs.parallel_env("striker_1v0", observation="pixels")
+    with pytest.raises(ValueError, match="max_vel must be a positive number"):
+        simatch.envs.parallel_env("striker_1v0", max_vel=-1.0)
     with pytest.raises(ValueError, match="do not render"):
         simatch.envs.parallel_env("striker_1v0", render_mode="human")
     with pytest.raises(SceneError, match="needs one"):

@@ -17,13 +17,22 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.mark.slow
 def test_the_striker_example_trains_saves_and_its_policy_plays_in_a_run(tmp_path):
     out = tmp_path / "ppo"
-    cmd = [sys.executable, str(ROOT / "examples/learn/train_striker.py"), "--minutes", "0.15", "--envs", "2"]
+    cmd = [
+        sys.executable,
+        str(ROOT / "examples/learn/train_striker.py"),
+        "--minutes",
+        "0.1",
+        "--clock",
+        "cpu",
+        "--envs",
+        "2",
+    ]
     proc = subprocess.run(
         [*cmd, "--eval-episodes", "2", "--out", str(out), "--json"], capture_output=True, text=True, timeout=600
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     summary = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert summary["train_steps"] >= 1024 and summary["eval_episodes"] == 2
+    assert summary["train_steps"] >= 512 and summary["eval_episodes"] == 2
     for name in ("striker.zip", "striker.json", "curve.png", "curve.csv", "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert (out / "curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -56,6 +65,14 @@ def test_the_striker_example_trains_saves_and_its_policy_plays_in_a_run(tmp_path
     assert json.loads(again.stdout)["state_digest"] == result["state_digest"]  # deterministic
     idle = subprocess.run(play[:8], capture_output=True, text=True, timeout=600)
     assert json.loads(idle.stdout)["state_digest"] != result["state_digest"]  # the policy drove the robot
+
+    # and in a refereed match, as a whole team: it sees there what its observation slots hold
+    match = [*play[:4], "msl_5v5", "--duration", "4", "--json", *play[8:]]
+    run = subprocess.run(match, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    events = json.loads(run.stdout)["events"]
+    assert not [e for e in events if e["type"] == "strategy_error"]
+    assert [e for e in events if e["type"] == "command" and "kick-off for cyan" in e.get("detail", "")]
 
 
 def test_a_missing_policy_file_is_a_clear_error(tmp_path):

@@ -25,6 +25,7 @@ Discrete action: an index into `DISCRETE` (velocities as fractions of the limits
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +66,9 @@ class Limits:
     def of(cls, model, kicker, max_vel: float | None = None, max_w: float | None = None) -> Limits:
         """From a robot model (its wheel matrix and rim speed limit) and the scene's kicker, optionally
         capped at ``max_vel`` [m/s] and ``max_w`` [rad/s]."""
+        for name, cap in (("max_vel", max_vel), ("max_w", max_w)):
+            if cap is not None and not (isinstance(cap, int | float) and math.isfinite(cap) and cap > 0):
+                raise ValueError(f"{name} must be a positive number, got {cap!r}")
         m = np.abs(model.rim_matrix())
         top = model.params.max_wheel_speed
         vx, vy, w = (top / float(m[:, j].max()) for j in range(3))
