@@ -60,7 +60,7 @@ PEERS = {
         """,
     ),
     "dm_control": (
-        ["dm_control"],
+        ["dm_control", "pillow"],  # soccer's pitch texture needs PIL, which dm_control does not declare
         """
         import json, sys, time
         import numpy as np

@@ -15,6 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)  # a few CPU seconds of training, but a shared machine may give it little wall time
 def test_the_striker_example_trains_saves_and_its_policy_plays_in_a_run(tmp_path):
     out = tmp_path / "ppo"
     cmd = [
