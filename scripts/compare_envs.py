@@ -13,9 +13,9 @@ Peers, each in a venv of its own under ``--peers-dir`` (default ``.venv-peers/``
   32 envs batched in one process (VMAS's vectorisation: env steps count every batched env);
 * ``dm_control`` soccer (2 v 2 BOXHEAD walkers, MuJoCo).
 
-Why separate venvs: dm_control needs the ``mujoco`` meta-package, whose latest release pins ``mujoco-core`` 4.0.0
-and adds the studio viewer (glfw, PyOpenGL): installed beside simatch it would replace the project's
-``mujoco-core`` 4.0.1 (both are the ``mujoco`` module). VMAS pulls the retired ``gym`` and ``pyglet<=1.5.27``.
+Why separate venvs: dm_control needs the ``mujoco`` package at 3.x (it fails on 4.0), while simatch runs on
+``mujoco-core`` 4 — both are the ``mujoco`` module, so they cannot share a venv. VMAS pulls the retired ``gym``
+and ``pyglet<=1.5.27``, which have no place in simatch's venv either.
 
 simatch's rows run in this interpreter (the project's venv, with the ``learn`` extra).
 """
@@ -60,7 +60,9 @@ PEERS = {
         """,
     ),
     "dm_control": (
-        ["dm_control", "pillow"],  # soccer's pitch texture needs PIL, which dm_control does not declare
+        # dm_control 1.0.50 accepts mujoco>=3.17 but fails on 4.0 (MjModel.flex_vertedge is gone): 3.17 it is;
+        # its soccer pitch texture needs PIL, which it does not declare
+        ["dm_control", "mujoco==3.17.0", "pillow"],
         """
         import json, sys, time
         import numpy as np
