@@ -169,3 +169,23 @@ def test_drill_settings_are_checked():
         simatch.Simulation("striker_1v0", overrides={"judge.keepers": "blue"})
     with pytest.raises(SceneError, match="judge.area"):
         simatch.Simulation("striker_1v0", overrides={"judge.area": "nowhere"})
+
+
+def test_ball_progress_follows_the_side_a_team_attacks_when_ends_change():
+    """The observation is the perception, in the team frame, which turns when the teams change ends; the
+    rewards read each team's side from the simulator at every step."""
+    env = simatch.envs.parallel_env("msl_5v5", learners=["cyan/2"], overrides={"judge.kind": "none"})
+    try:
+        env.reset(seed=0)
+        sim = env.run.sim
+        sim.set_model_state("ball", x=0.0, y=0.0, z=0.11, vx=2.0, vy=0.0, vz=0.0)
+        env.run._snapshot = env.run.snapshot()
+        forward = env.step({"cyan/2": STILL})[4]["cyan/2"]["rewards"]["ball_progress"]
+        sim.simulator.signs[:] *= -1  # the frames as a referee turns them at half time
+        sim.set_model_state("ball", x=0.0, y=0.0, z=0.11, vx=2.0, vy=0.0, vz=0.0)
+        env.run._snapshot = env.run.snapshot()
+        backward = env.step({"cyan/2": STILL})[4]["cyan/2"]["rewards"]["ball_progress"]
+        assert forward == pytest.approx(0.05 * 0.05, rel=0.1)  # 5 cm at weight 0.05
+        assert backward == pytest.approx(-forward, rel=0.05)
+    finally:
+        env.close()

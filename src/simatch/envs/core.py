@@ -100,7 +100,6 @@ class LearningRun:
         self.layouts: dict[str, Layout] = {}
         self.teammate_ids: dict[str, list[int]] = {}
         self.team_of_robot = {name: name.partition("/")[0] for name in spec.robot_names()}
-        self.attacks = {team: spec.team_sign(team) for team in spec.teams}
         for name in self.agents:
             team, _, rid = name.partition("/")
             tspec = spec.teams[team]
@@ -133,6 +132,8 @@ class LearningRun:
         self._events = []
         sim.bus.subscribe(topics.EVENTS, msgs.GameEvent, self._events.append)
         self._learners = {}
+        # a robot of each team, whose frame tells the side the team attacks now (it turns when ends change)
+        self._team_rows = {team: sim.simulator.team_of.index(team) for team in self.scene.spec.teams}
         for name in self.agents:
             node = sim.robot_nodes.get(name)
             if node is None or not isinstance(node.strategy, Learner):
@@ -217,7 +218,8 @@ class LearningRun:
         b = pose[-1]
         holder = sim.ball.holder
         team = self.team_of_robot[sim.robot_names[holder]] if holder >= 0 else ""
-        return Snapshot((float(b[0]), float(b[1]), float(b[2])), robots, team, self.attacks)
+        attacks = {t: int(sim.signs[i]) for t, i in self._team_rows.items()}
+        return Snapshot((float(b[0]), float(b[1]), float(b[2])), robots, team, attacks)
 
     def close(self) -> None:
         if self.sim is not None:
