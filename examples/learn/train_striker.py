@@ -17,6 +17,7 @@ import argparse
 import csv
 import json
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -25,6 +26,8 @@ import numpy as np
 
 #: evaluation seeds start here; training seeds are drawn below it
 EVAL_SEED = 1_000_000_000
+#: set by Ctrl-C or SIGTERM: the training ends at its next step, the policy is saved and evaluated as usual
+STOP: list = []
 
 
 def parse_args(argv=None):
@@ -93,6 +96,8 @@ class Curve:
                         )
                         if len(self.rows) % 100 == 0:
                             write_curve(self.rows, self.out)
+                if STOP:
+                    return False  # Ctrl-C or SIGTERM: end the training here, then save and evaluate
                 elapsed = self.clock() - self.c0
                 if self.progress is not None:
                     self.progress.n = min(int(elapsed), self.progress.total)
@@ -202,6 +207,14 @@ def main(argv=None) -> int:
     )
     seconds = args.minutes * 60.0
     bar = tqdm(total=int(seconds), unit="s", desc="training", disable=not sys.stderr.isatty() or args.json)
+
+    def stop(signum, frame):
+        if STOP:
+            raise KeyboardInterrupt
+        STOP.append(signum)  # a second signal stops at once
+
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
     clock = time.process_time if args.clock == "cpu" else time.perf_counter
     curve = Curve(seconds, clock, bar, out)
     t0, c0 = time.perf_counter(), time.process_time()
@@ -217,6 +230,7 @@ def main(argv=None) -> int:
         "scene": args.scene,
         "minutes": args.minutes,
         "clock": args.clock,
+        "stopped_early": bool(STOP),
         "train_seconds": round(train_s, 1),
         "train_cpu_seconds": round(train_cpu, 1),
         "load_average": [round(v, 2) for v in os.getloadavg()],
