@@ -7,12 +7,12 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test setup system-deps bench clean
+.PHONY: run test setup learn system-deps bench clean
 
 run: setup
 	$(BIN)/simatch run msl_5v5 --events all
 
-test: setup system-deps
+test: setup system-deps learn
 	$(BIN)/python -m pytest
 
 bench: setup
@@ -25,6 +25,15 @@ $(VENV)/.installed: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[test]'
+	touch $@
+
+# The learning extra (docs/learning.md), for the tests, not for `make run`: torch's CPU build first (2.13.0 lies on
+# the development machines' disk; an unpinned torch would pull a CUDA build of several GB), then the extra.
+learn: $(VENV)/.learn
+
+$(VENV)/.learn: $(VENV)/.installed
+	$(BIN)/pip install --quiet 'torch==2.13.0'
+	$(BIN)/pip install --quiet -e '.[test,learn]'
 	touch $@
 
 system-deps:

@@ -21,4 +21,5 @@ BENCHMARKS: dict[str, str] = {
     "distributed_realtime_bus": "simatch.bench.distributed:realtime_bus",
     "tournament": "simatch.bench.tournament:run",
     "ros1": "simatch.bench.ros1:run",
+    "envs": "simatch.bench.envs:run",
 }
