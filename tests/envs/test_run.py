@@ -96,14 +96,14 @@ def test_the_observation_is_the_robots_own_perception_in_its_team_frame():
         parts = layout.split(obs["magenta/2"])
         world = env.run.sim.robot_nodes["magenta/2"].world
         me = world.me
-        # magenta/2 starts at world (2, -1) facing -x: in its team frame (turned by pi) at (-2, 1) facing +x
-        assert parts["self"][:4].tolist() == pytest.approx([-2.0, 1.0, 1.0, 0.0], abs=1e-6)
+        # magenta/2 starts at world (3.5, -1) facing -x: in its team frame (turned by pi) at (-3.5, 1) facing +x
+        assert parts["self"][:4].tolist() == pytest.approx([-3.5, 1.0, 1.0, 0.0], abs=1e-6)
         assert parts["self"][0] == np.float32(me.x) and parts["self"][1] == np.float32(me.y)
         ball = world.vision.ball
         assert parts["ball"][3] == np.float32(ball.x) and parts["ball"][9] == np.float32(ball.distance)
-        # the goal it attacks (cyan's, world (-11, 0)) is at (11, 0) in its team frame: 13 m ahead, 1 m to the right
-        a, d = math.atan2(-1, 13), math.atan2(-1, -9)
-        expected = [math.hypot(13, 1), math.cos(a), math.sin(a), math.hypot(9, 1), math.cos(d), math.sin(d)]
+        # the goal it attacks (cyan's, world (-11, 0)) is at (11, 0) in its team frame: 14.5 m ahead, 1 m to the right
+        a, d = math.atan2(-1, 14.5), math.atan2(-1, -7.5)
+        expected = [math.hypot(14.5, 1), math.cos(a), math.sin(a), math.hypot(7.5, 1), math.cos(d), math.sin(d)]
         assert parts["goals"].tolist() == pytest.approx(expected, abs=1e-5)
         assert parts["teammates"].shape == (4, 11) and parts["teammates"][:, 0].tolist() == [1, 1, 1, 1]
         distances = parts["obstacles"][:, 5]

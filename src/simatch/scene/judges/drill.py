@@ -153,8 +153,8 @@ class Drill(PlayJudge):
     def _judge(self, now: float) -> None:
         x, y, z = self.world.ball_array()[:3].tolist()
         f, r = self.field, self.ball_radius
-        over_goal_line = abs(x) > f.half_length + r
-        over_side_line = abs(y) > f.half_width + r
+        over_goal_line = abs(x) > f.outer_half_length + r  # the whole ball past the line's outer edge,
+        over_side_line = abs(y) > f.outer_half_width + r  # as the referee judges it (lines belong to the field)
         if over_goal_line and f.goals and abs(y) < 0.5 * f.goal_width and z < f.goal_height:
             team = self.attacker.get(1 if x > 0 else -1, "")
             if team:
