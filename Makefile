@@ -7,12 +7,12 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test setup system-deps ros2-interfaces bench clean
+.PHONY: run test setup system-deps ros2-interfaces learn bench clean
 
 run: setup
 	$(BIN)/simatch run msl_5v5 --events all
 
-test: setup system-deps ros2-interfaces
+test: setup system-deps ros2-interfaces learn
 	$(BIN)/python -m pytest
 
 bench: setup
@@ -33,6 +33,15 @@ ros2-interfaces: $(VENV)/.ros2-interfaces
 
 $(VENV)/.ros2-interfaces: $(VENV)/.installed $(wildcard src/simatch/msgs/simatch_msgs/msg/*.msg)
 	$(BIN)/simatch ros2 --build-interfaces
+	touch $@
+
+# The learning extra (docs/learning.md), for the tests, not for `make run`: torch's CPU build first (2.13.0 lies on
+# the development machines' disk; an unpinned torch would pull a CUDA build of several GB), then the extra.
+learn: $(VENV)/.learn
+
+$(VENV)/.learn: $(VENV)/.installed
+	$(BIN)/pip install --quiet 'torch==2.13.0'
+	$(BIN)/pip install --quiet -e '.[test,learn]'
 	touch $@
 
 system-deps:

@@ -66,23 +66,47 @@ class FieldGeometry:
         names = ", ".join(a.name for a in self.areas) or "none"
         raise KeyError(f"the world has no area named {name!r} (world.areas: {names})")
 
+    # --- the lines belong to what they bound -----------------------------------------------------------
+    # Every line is drawn centred on its nominal coordinate with `line_width` (see `lines`), and, as in
+    # soccer, a line belongs to the region it bounds: the field's lines to the field (a ball is out, or in
+    # the goal, only once it is wholly past the line's outer edge), an area's lines to the area (a robot
+    # whose centre is on the painted line is in the area). The judges read these limits, the viewers draw
+    # the same lines.
+    @property
+    def outer_half_length(self) -> float:
+        """|x| of the goal lines' outer edges."""
+        return self.half_length + 0.5 * self.line_width
+
+    @property
+    def outer_half_width(self) -> float:
+        """|y| of the side lines' outer edges."""
+        return self.half_width + 0.5 * self.line_width
+
+    def area_limits(self, kind: str) -> tuple[float, float]:
+        """(x_in, y_half) of the ``"penalty"`` or ``"goal"`` area, its lines included: a point is in the area
+        of side s when ``s * x >= x_in`` (towards its goal line) and ``|y| <= y_half``."""
+        if kind == "penalty":
+            depth, width = self.penalty_area_depth, self.penalty_area_width
+        elif kind == "goal":
+            depth, width = self.goal_area_depth, self.goal_area_width
+        else:
+            raise ValueError(f"an area is 'penalty' or 'goal', not {kind!r}")
+        half = 0.5 * self.line_width
+        return (self.half_length - depth - half, 0.5 * width + half)
+
     # --- soccer regions (side = -1 for the goal at -x, cyan's; +1 for magenta's) ---------------------
     def in_field(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x) <= self.half_length + margin and abs(y) <= self.half_width + margin
 
     def in_penalty_area(self, x: float, y: float, side: int) -> bool:
-        return (
-            side * x >= self.half_length - self.penalty_area_depth
-            and side * x <= self.half_length
-            and abs(y) <= 0.5 * self.penalty_area_width
-        )
+        """On the field side of the goal line (its line included) and in the penalty area, its lines included."""
+        x_in, y_half = self.area_limits("penalty")
+        return x_in <= side * x <= self.outer_half_length and abs(y) <= y_half
 
     def in_goal_area(self, x: float, y: float, side: int) -> bool:
-        return (
-            side * x >= self.half_length - self.goal_area_depth
-            and side * x <= self.half_length
-            and abs(y) <= 0.5 * self.goal_area_width
-        )
+        """On the field side of the goal line (its line included) and in the goal area, its lines included."""
+        x_in, y_half = self.area_limits("goal")
+        return x_in <= side * x <= self.outer_half_length and abs(y) <= y_half
 
     def goal_center(self, side: int) -> tuple[float, float]:
         return (side * self.half_length, 0.0)

@@ -189,16 +189,21 @@ class Simulation:
     def duration(self) -> float | None:
         return self.judge.duration
 
-    def step(self, n: int = 1) -> None:
-        """Advance by ``n`` physics steps; every node and the judge run in lockstep."""
+    def step(self, n: int = 1, hold_before: Phase | None = None) -> None:
+        """Advance by ``n`` physics steps; every node and the judge run in lockstep. With ``hold_before``,
+        then also tick the next step's nodes of the phases before that one and hold the step there (the next
+        call finishes it, as its first step): a learning environment holds each control tick before
+        `Phase.ROBOT`, where the perception and the game command are out and the decisions are still to come."""
         t0 = _time.perf_counter()
         step = self.clock.step
         self._stepping = True
         try:
             for _ in range(n):
                 step()
+            if hold_before is not None:
+                self.clock.step_until(hold_before)
         finally:
-            self._stepping = False
+            self._stepping = self.clock.holding
         self._wall += _time.perf_counter() - t0
 
     def run(

@@ -57,3 +57,15 @@ class SlowChaser(Chaser):
     def decide(self, world) -> Command:
         time.sleep(0.035)
         return super().decide(world)
+
+
+class SideAware(Chaser):
+    """A Chaser whose robot 5 drives to a point fixed in the world, (2, 3) for cyan and (2, -3) for magenta,
+    turned into its team frame with the side its WorldModel believes the team attacks: after the teams change
+    ends it drives to the same world point only if its process learnt the new side (from the game state)."""
+
+    def decide(self, world) -> Command:
+        if self.ctx.id != 5:
+            return super().decide(world)
+        wx, wy = 2.0, (3.0 if self.ctx.team == "cyan" else -3.0)
+        return Command(target=(world.sign * wx, world.sign * wy), max_vel=2.5, user=(1e9,))

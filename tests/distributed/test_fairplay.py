@@ -116,7 +116,7 @@ def test_teams_are_confined_to_their_own_robots(procs):
     pose = states[-1].pose.reshape(len(names), -1)
     for s in states:  # magenta/2, 3, 4 never moved
         p = s.pose.reshape(len(names), -1)
-        for robot, start in (("magenta/2", (2.0, -1.0)), ("magenta/3", (2.0, 1.0)), ("magenta/4", (5.0, -2.0))):
+        for robot, start in (("magenta/2", (3.5, -1.0)), ("magenta/3", (3.5, 1.0)), ("magenta/4", (5.0, -2.0))):
             i = names.index(robot)
             assert math.hypot(p[i, 0] - start[0], p[i, 1] - start[1]) < 1e-6, robot
     ball = names.index("ball")

@@ -35,6 +35,25 @@ def test_credentials_are_private_stable_and_checked(tmp_path, creds):
     assert sorted(open(users).read().split()) == sorted(f"{c.name}:{c.secret}" for c in creds.values())
 
 
+def test_a_credential_appears_whole_or_not_at_all(tmp_path, monkeypatch):
+    """A client reading while the server writes its keys never sees a half-written file: the key is written
+    beside it and linked into place, leaving nothing else in the folder."""
+    folder = tmp_path / "keys"
+    seen = []
+    real_link = os.link
+
+    def link(src, dst):
+        seen.append(os.path.exists(dst))  # the final name does not exist until the whole text is there
+        assert open(src).read().count(":") == 1 and open(src).read().endswith("\n")
+        real_link(src, dst)
+
+    monkeypatch.setattr(os, "link", link)
+    made = credentials.ensure(folder, ["cyan"])
+    assert seen == [False]
+    assert sorted(p.name for p in folder.iterdir()) == ["cyan.key"]
+    assert credentials.read(folder / "cyan.key") == made["cyan"]
+
+
 def test_signatures_prove_the_sender_for_this_run_topic_and_payload(creds):
     verify = credentials.Verifier("m1", creds)
     sign = creds["cyan"].signer("m1")

@@ -16,7 +16,7 @@ def play_a_little(sim) -> None:
     """Two simulated seconds of 5v5 with every kind of operator command (API calls, coach commands)."""
     for coach in sim.coaches.values():
         coach.start_play()
-    sim.set_model_state("ball", x=-1.4, y=1.0, z=0.11, vx=-1.0, vy=0.0)  # rolls into cyan/2
+    sim.set_model_state("ball", x=-2.9, y=1.0, z=0.11, vx=-1.0, vy=0.0)  # rolls into cyan/2 (at -3.5, 1)
     sim.set_model_state("magenta/3", x=0.0, y=-3.0, yaw=1.0)
     sim.run(seconds=0.6)
     sim.take_control("cyan/2")

@@ -58,7 +58,7 @@ def test_the_first_difference_is_named(tmp_path):
         path, lambda sim: sim.simulator.set_model_state("magenta/2", x=3.0, y=-2.5)
     )
     assert (diff.step, diff.model, diff.field) == (100, "magenta/2", "x")
-    assert diff.recorded == 3.0 and diff.simulated == pytest.approx(2.0, abs=0.05)  # near its start pose
+    assert diff.recorded == 3.0 and diff.simulated == pytest.approx(3.5, abs=0.05)  # near its start pose
     proc = subprocess.run(
         SIMATCH + ["replay", str(path), "--verify", "strategies"], capture_output=True, text=True, timeout=300
     )
@@ -136,3 +136,28 @@ def test_requests_carried_out_inside_a_step_are_reproduced(tmp_path):
     verdict = verify(path, mode="strategies")
     assert verdict.identical and verdict.operator_commands == 3, verdict.describe()
     assert verify(path).identical
+
+
+def test_a_match_that_changes_ends_is_recorded_and_reproduced(tmp_path):
+    """A whole refereed match (short halves, nubot on both sides) changes ends at half time: the recording
+    has the game states saying so and the 3D field again with the goals' new colours, and it re-simulates bit
+    for bit across the change."""
+    from simatch.record import Recording
+    from simatch.record.scene3d import SceneBuilder
+
+    path = tmp_path / "ends.mcap"
+    with simatch.Simulation("msl_5v5", seed=5, overrides={"match.half_duration": 3.0, "match.half_time": 0.5}) as sim:
+        with Recorder.for_run(sim, path, command_line=["pytest"]):
+            sim.run()
+        assert sim.done and sim.game["attacks"] == {"cyan": "-x", "magenta": "+x"}
+        spec = sim.scene.spec
+    rec = Recording(path)
+    fields = list(rec.raw(topics=["scene/field"]))
+    builder = SceneBuilder(spec)
+    assert [data for _, _, data in fields] == [builder.field_update(), builder.field_update({"cyan": -1, "magenta": 1})]
+    assert fields[1][1] == 3_000_000_000  # written when the first half ended
+    sides = {(round(t / 1e9, 3) < 3.0, tuple(m.attacks)) for _, t, m in rec.messages(topics=["game_state"])}
+    assert sides == {(True, ("+x", "-x")), (False, ("-x", "+x"))}
+    for mode in ("inputs", "strategies"):  # from the recorded world inputs, and by playing the match again
+        verdict = verify(path, mode=mode)
+        assert verdict.identical and verdict.complete, (mode, verdict.describe())

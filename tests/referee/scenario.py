@@ -12,6 +12,8 @@ at all in a legal case). Format (all times in seconds after the setup)::
     duration = 6.0
     [settings]                         # scene overrides, e.g. "judge.stop_time" = 0.5
     [setup]
+    stage = "second_half"              # optional: play the match (robots off the field) until this stage
+                                       # begins, then set up (the teams have changed ends by then)
     start = "play"                     # "play" (force start) | "match" (the referee's own kick-off) |
                                        # { command = "OUR_FREEKICK", team = "cyan", spot = [x, y] }
     ball = [x, y]                      # or { x = .., y = .., vx = .., vy = .., vz = .. }
@@ -23,7 +25,8 @@ at all in a legal case). Format (all times in seconds after the setup)::
     [[script]]
     at = 1.0
     ball = { x = 0.0, vx = 3.0 }       # or operator = { op = "pause" } / { op = "command", command = ..., team = .. }
-    [[expect]]                         # an event: every given field must match; value_min/value_max/within
+    [[expect]]                         # an event: every given field must match (a number 0 matches a field the
+                                       # event leaves out); value_min/value_max/within/detail_has
     type = "dribble_too_far"
     team = "cyan"
     robot = 2
@@ -133,10 +136,16 @@ class Scenario:
             sim.bus.subscribe(topics.team_topic(team, topics.RECEIVE_FROM_COACH), msgs.CoachInfo, on_coach)
         sim.step()  # the referee begins: STOP
         placed = {k: v for k, v in setup.get("robots", {}).items()}
+        stage = setup.get("stage")
         for name in ROBOTS:
-            x, y, yaw = placed.get(name, parked(name))
+            x, y, yaw = parked(name) if stage is not None else placed.get(name, parked(name))
             sim.set_model_state(name, x=x, y=y, yaw=yaw, vx=0.0, vy=0.0, wz=0.0)
             sim.take_control(name)
+        if stage is not None:
+            self._until_stage(sim, stage)
+            for name in ROBOTS:  # the referee placed them for the new ends: where the scenario wants them
+                x, y, yaw = placed.get(name, parked(name))
+                sim.set_model_state(name, x=x, y=y, yaw=yaw, vx=0.0, vy=0.0, wz=0.0)
         ball = setup.get("ball", [0.0, 0.0])
         state = {"z": 0.11, "vx": 0.0, "vy": 0.0, "vz": 0.0, "wx": 0.0, "wy": 0.0, "wz": 0.0}
         state.update(ball if isinstance(ball, dict) else {"x": ball[0], "y": ball[1]})
@@ -173,6 +182,14 @@ class Scenario:
             h[:] = [(t - t0, c) for t, c in h]
         positions = {name: (st.x, st.y) for name, st in sim.model_states().items()}
         return Outcome(events, heard, sim.game, sim.judge.result(), t0, positions, sim if keep else None)
+
+    def _until_stage(self, sim, stage: str) -> None:
+        """Run the match until ``stage`` begins (at most a simulated hour)."""
+        for _ in range(round(3600.0 / sim.dt)):
+            if sim.judge.game()["stage"] == stage:
+                return
+            sim.step()
+        raise ValueError(f"{self.path}: the match never reached stage {stage!r}")
 
     def _do(self, sim, item: dict) -> None:
         if "robot" in item:
@@ -266,7 +283,9 @@ def _matches(exp: dict, e: dict) -> bool:
     for key, want in exp.items():
         if key in ("within", "value_min", "value_max", "detail_has"):
             continue
-        if e.get(key) != want:
+        # events leave zero fields out: robot = 0 matches an event without a robot
+        got = e.get(key, 0 if isinstance(want, (int, float)) and not isinstance(want, bool) else None)
+        if got != want:
             return False
     if not _within(exp, e["t"]):
         return False

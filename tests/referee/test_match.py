@@ -13,6 +13,7 @@ import simatch
 from simatch import msgs
 from simatch.bus import topics
 from simatch.config.loader import SceneError
+from simatch.scene.referee.log import FOUL_TYPES
 
 SHORT = {"match.half_duration": 6.0, "match.half_time": 1.0, "judge.stop_time": 0.5, "judge.kickoff_prepare_time": 3.0}
 
@@ -25,7 +26,9 @@ def test_msl_5v5_is_refereed_and_lasts_a_full_match():
 
 
 def test_run_json_carries_score_fouls_and_every_event():
-    # robots that stay at the original start poses (the default teams would take legal positions)
+    # robots that stay at their start poses (the default teams would take legal positions): both halves begin
+    # without a foul (the start poses keep the kick-off distances for the kicking and the defending team alike,
+    # docs/referee.md "Kick-off positions"), and the teams change ends at half time
     still = {"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "startpose"}
     args = ["run", "msl_5v5", "--json", "--seed", "3"] + [f"--set={k}={v}" for k, v in {**SHORT, **still}.items()]
     proc = subprocess.run([sys.executable, "-m", "simatch", *args], capture_output=True, text=True, timeout=300)
@@ -38,12 +41,11 @@ def test_run_json_carries_score_fouls_and_every_event():
     assert out["sim_seconds"] == pytest.approx(13.0, abs=0.01)  # 6 + 1 + 6: the referee ended it
     kinds = [e["type"] for e in out["events"]]
     assert kinds[0] == "stage" and kinds[-1] == "match_end"
-    assert {"command", "ball_placed", "set_piece_distance"} <= set(kinds)  # the original start poses are too close
-    # the fouls in the result are the foul events of the log, per team
-    for team in ("cyan", "magenta"):
-        assert r["fouls"][team] == sum(
-            1 for e in out["events"] if e["type"] == "set_piece_distance" and e["team"] == team
-        )
+    assert {"command", "ball_placed", "ends_changed"} <= set(kinds)
+    assert r["fouls"] == {"cyan": 0, "magenta": 0}
+    assert not [e for e in out["events"] if e["type"] in FOUL_TYPES]
+    kickoffs = [e for e in out["events"] if e["type"] == "command" and e.get("value") == 1.0]
+    assert [e["team"] for e in kickoffs] == ["cyan", "magenta"]  # the second half: the other team kicks off
     first = out["events"][0]
     assert first == {"t": 0.0, "type": "stage", "value": 6.0, "limit": 0.0, "detail": "first_half begins"}
 
@@ -124,3 +126,20 @@ def test_referee_benchmark_reports_its_figures():
     out = run(1.0)
     assert set(out) >= {"referee_us_per_step", "referee_overhead_us_per_step", "referee_decisions"}
     assert out["referee_us_per_step"] > 0 and out["referee_sim_seconds"] == 1.0
+
+
+def test_a_match_may_begin_in_play_or_with_a_restart():
+    """match.start sets up a situation (the audit's sample scenes use it): the ball in play from the first step,
+    or a restart for a team at a spot; a team that the scene does not have is refused."""
+    with simatch.Simulation("msl_5v5", overrides={**SHORT, "match.start": "play"}) as sim:
+        sim.step()
+        assert sim.game["phase"] == "play" and sim.game["commands"]["cyan"]["name"] == "STARTROBOT"
+    settings = {**SHORT, "match.start": "corner_kick", "match.start_team": "magenta", "match.start_spot": [-10.7, 6.7]}
+    with simatch.Simulation("msl_5v5", overrides=settings) as sim:
+        sim.run(seconds=1.0)
+        assert sim.game["next_restart"] is None and sim.game["restart"] == "corner kick for magenta at (-10.70, 6.70)"
+        assert sim.game["commands"]["magenta"]["name"] == "OUR_CORNERKICK"
+        b = sim.model_states()["ball"]
+        assert (b.x, b.y) == pytest.approx((-10.7, 6.7))
+    with pytest.raises(SceneError, match="match.start_team names team 'yellow'"):
+        simatch.Simulation("msl_5v5", overrides={"match.start": "free_kick", "match.start_team": "yellow"})

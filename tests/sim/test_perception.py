@@ -112,3 +112,29 @@ def test_the_perception_of_some_robots_alone_is_what_they_get_among_all(field_si
                 assert msgs.encode(msg) == msgs.encode(every[i])
             else:
                 assert msg is None
+
+
+def test_a_team_frame_turns_when_the_teams_change_ends(field_sim):
+    """The referee turns the team frames at half time (`set_team_sign`): from the next observation on, cyan
+    sees the world turned by pi (it attacks -x), magenta as it is; each still attacks +x in its own frame."""
+    sim = field_sim()
+    sim.set_model_state("cyan/2", x=3.5, y=-1.0, yaw=math.pi)
+    sim.set_model_state("magenta/2", x=-3.5, y=1.0, yaw=0.0)
+    sim.set_model_state("ball", x=0.5, y=0.25, z=R, vx=1.0, vy=-0.5)
+    world = sim.simulator
+    world.set_team_sign("cyan", -1)
+    world.set_team_sign("magenta", 1)
+    got = _listen(sim, ["cyan/2", "magenta/2"])
+    sim.step()
+    c, m = got["cyan/2"], got["magenta/2"]
+    me_c = next(r for r in c.robots if r.id == 2)
+    me_m = next(r for r in m.robots if r.id == 2)
+    # both forwards stand in their own half facing the other goal: at (-3.5, +-1) facing +x in their frames
+    assert (me_c.x, me_c.y, me_c.yaw) == pytest.approx((-3.5, 1.0, 0.0), abs=1e-6)
+    assert (me_m.x, me_m.y, me_m.yaw) == pytest.approx((-3.5, 1.0, 0.0), abs=1e-6)
+    assert (c.ball.x, c.ball.y, c.ball.vx, c.ball.vy) == pytest.approx((-0.5, -0.25, -1.0, 0.5))
+    assert (m.ball.x, m.ball.y, m.ball.vx, m.ball.vy) == pytest.approx((0.5, 0.25, 1.0, -0.5))
+    with pytest.raises(Exception, match="sign must be"):
+        world.set_team_sign("cyan", 0)
+    with pytest.raises(Exception, match="no team named 'yellow'"):
+        world.set_team_sign("yellow", 1)

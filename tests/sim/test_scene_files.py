@@ -15,12 +15,13 @@ def test_shipped_scenes_load_by_name():
         assert load_scene(name).spec.name == name
 
 
-def test_msl_5v5_has_the_original_start_poses():
+def test_msl_5v5_has_the_original_start_poses_with_legal_kickoff_distances():
     spec = load_scene("msl_5v5").spec
     cyan = [tuple(p[:2]) for p in spec.teams["cyan"].start]
     magenta = [tuple(p[:2]) for p in spec.teams["magenta"].start]
-    assert cyan == [(-10.5, 0), (-2, 1), (-2, -1), (-5, 2), (-5, -2)]
-    assert magenta == [(10.5, 0), (2, -1), (2, 1), (5, -2), (5, 2)]
+    # the original's, but the two forwards 3.5 m behind the half-way line instead of 2 m (docs/referee.md)
+    assert cyan == [(-10.5, 0), (-3.5, 1), (-3.5, -1), (-5, 2), (-5, -2)]
+    assert magenta == [(10.5, 0), (3.5, -1), (3.5, 1), (5, -2), (5, 2)]
     assert (spec.world.length, spec.world.width) == (22.0, 14.0)
     assert spec.physics.timestep == 0.005 and spec.physics.gravity == 9.8
 

@@ -97,7 +97,7 @@ def test_a_recording_plays_in_the_live_pages_and_the_replay_page_goes_through_it
             catch (e) { return e.message; } }""")
         assert "is a recording" in answer
         magenta = {r["name"]: r for r in console.evaluate("window.simatch.frame.robots")}["magenta/3"]
-        assert (magenta["x"], magenta["y"]) != pytest.approx((2.0, 1.0), abs=0.1), "magenta drives in circles"
+        assert (magenta["x"], magenta["y"]) != pytest.approx((3.5, 1.0), abs=0.1), "magenta drives in circles"
         shot(console, f"recording_console_{command[0]}")
         for page in (replay, console):
             page.close()

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from .conftest import answer, drag_ball, run_until, shot, start_request, wait_frame
 
 #: a refereed msl_5v5 whose robots stand still (so only what the test does happens)
@@ -115,3 +117,35 @@ def test_the_console_is_the_referees_operator(live, open_page):
     run_until(sim, lambda: answer(page) is not None)
     assert answer(page) == "the referee refused: cyan/2 is not sent off"
     assert sim.events[-1]["type"] == "operator_refused"
+
+
+def test_the_pages_show_the_teams_change_ends_at_half_time(live, open_page):
+    """Before half time cyan defends the goal at -x (left); after it, the right one: the goals change colours on
+    the console and the coach page, their arrows turn, and the coach page turns its team's perception back to
+    the world frame with the new side (cyan's goalkeeper is drawn at +10.5, where it stands)."""
+    from .test_pages import PIXEL_AT, TEAM_RGB, near
+
+    sim, view = live(**REFEREED, **{"match.half_duration": 1.0, "match.half_time": 0.5})
+    sim.run(seconds=0.2)
+    console, coach = open_page(view.urls["referee"]), open_page(view.urls["cyan coach"])
+
+    def goal_colour(page, side: int):
+        return page.evaluate(PIXEL_AT, [side * (11.0 + 0.6), 0.0, 0.0, 0.0])
+
+    for page in (console, coach):
+        wait_frame(page, sim.time)
+        assert near(goal_colour(page, -1), TEAM_RGB["cyan"]) and near(goal_colour(page, 1), TEAM_RGB["magenta"])
+    assert console.inner_text("#ends") == "cyan → · magenta ←" and coach.inner_text("#attacks") == "→"
+    run_until(sim, lambda: sim.game["stage"] == "second_half")
+    sim.run(seconds=0.2)
+    assert sim.game["attacks"] == {"cyan": "-x", "magenta": "+x"}
+    for page in (console, coach):
+        wait_frame(page, sim.time)
+        page.wait_for_function("window.simatch.frame.game && window.simatch.frame.game.stage === 'second_half'")
+        assert near(goal_colour(page, -1), TEAM_RGB["magenta"]) and near(goal_colour(page, 1), TEAM_RGB["cyan"])
+    console.wait_for_function("document.getElementById('ends').textContent === 'cyan ← · magenta →'")
+    coach.wait_for_function("document.getElementById('attacks').textContent === '←'")
+    keeper = {r["name"]: r for r in coach.evaluate("window.simatch.frame.robots")}["cyan/1"]
+    assert keeper["x"] == pytest.approx(10.5, abs=0.1) and abs(keeper["yaw"]) == pytest.approx(math.pi, abs=0.05)
+    shot(console, "ends_changed_console")
+    shot(coach, "ends_changed_coach")

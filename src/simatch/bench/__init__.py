@@ -22,4 +22,5 @@ BENCHMARKS: dict[str, str] = {
     "tournament": "simatch.bench.tournament:run",
     "ros1": "simatch.bench.ros1:run",
     "ros2": "simatch.bench.ros2:run",
+    "envs": "simatch.bench.envs:run",
 }

@@ -97,6 +97,7 @@ class LockstepClock:
         self._nodes: list[Node] = []
         self._schedule: list[tuple[Node, int]] = []  # (node, period in steps), sorted by phase
         self._table: list[list] = [[]]  # tick methods due at step k: _table[k % len(_table)]
+        self._held: list | None = None  # the rest of a step held by `step_until`
         self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=lambda: self.step_index)
 
     def now(self) -> float:
@@ -133,9 +134,39 @@ class LockstepClock:
             self._rebuild()
             node.stop()
 
+    def _due(self, k: int) -> list[tuple[Phase, Callable[[float], None]]]:
+        """(phase, tick) of the nodes due at step ``k``, in tick order."""
+        due = k - self.offset
+        return [(node.phase, node.tick) for node, period in self._schedule if due % period == 0]
+
+    def step_until(self, phase: Phase) -> None:
+        """Tick the current step's nodes of the phases before ``phase`` and hold the step there; the next
+        `step` ticks the rest. A learning environment holds each control tick before the ROBOT phase: the
+        perception and the game command of the tick are out, and the learner's decision is still to come."""
+        if self._held is not None:
+            raise RuntimeError("a step is already held: finish it with step() first")
+        now = self.step_index * self.dt
+        due = self._due(self.step_index)
+        i = 0
+        while i < len(due) and due[i][0] < phase:
+            due[i][1](now)
+            i += 1
+        self._held = [tick for _, tick in due[i:]]
+
+    @property
+    def holding(self) -> bool:
+        """A step is held part-way (`step_until`)."""
+        return self._held is not None
+
     def step(self) -> None:
         k = self.step_index
         now = k * self.dt
+        if self._held is not None:  # finish the step `step_until` held
+            rest, self._held = self._held, None
+            for tick in rest:
+                tick(now)
+            self.step_index = k + 1
+            return
         due = k - self.offset
         table = self._table
         if table:

@@ -117,6 +117,11 @@ class TeamSpec(Strict):
         description="its robots' names on ROS are <ros_prefix><id>; default NuBot for cyan, rival for "
         "magenta (the original's), else the team's name",
     )
+    learners: list[int] = Field(
+        default_factory=list,
+        description="ids of the robots handed to learning (they play what a learning environment decides, "
+        "see docs/learning.md); the others play `strategy`. strategy = 'learner' hands over the whole team",
+    )
     start: list[Pose] = Field(
         min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
     )
@@ -128,7 +133,17 @@ class TeamSpec(Strict):
                 raise ValueError(f"ids has {len(self.ids)} entries but start has {len(self.start)}")
             if len(set(self.ids)) != len(self.ids) or min(self.ids) < 1:
                 raise ValueError("ids must be distinct positive integers")
+        unknown = sorted(set(self.learners) - set(self.robot_ids()))
+        if unknown:
+            raise ValueError(f"learners: the team has no robot(s) {unknown}; its robots are {self.robot_ids()}")
+        if self.learners and self.strategy == "external":
+            raise ValueError("learners: an 'external' team plays in its own process; its robots cannot learn here")
         return self
+
+    def learner_ids(self) -> list[int]:
+        """The robots of this team handed to learning, in the team's order."""
+        every = self.strategy == "learner"
+        return [rid for rid in self.robot_ids() if every or rid in self.learners]
 
     def robot_ids(self) -> list[int]:
         return list(self.ids) if self.ids is not None else list(range(1, len(self.start) + 1))
@@ -159,6 +174,21 @@ class DribblerSpec(Strict):
     )
     settle_time: float = Field(
         0.1, ge=0.0, le=2.0, description="after taking the ball, time before the grip limit applies [s]"
+    )
+    roller_torque: float = Field(
+        1.0,
+        ge=0.0,
+        le=100.0,
+        description="largest torque the rollers put on a held ball to keep it turning [N m] (0: no rollers, "
+        "the ball turns only as the floor makes it)",
+    )
+    roller_spin: float = Field(
+        1.0,
+        ge=-2.0,
+        le=2.0,
+        description="the spin the rollers keep a held ball at, as a fraction of rolling with its motion over the "
+        "floor: 1 turns it as a free ball rolls (its natural rotation, MSL RC-12.3.1), 0 clamps it without "
+        "turning (against its rotation: a foul), below 0 turns it against its motion",
     )
 
 
@@ -191,6 +221,41 @@ class MatchSpec(Strict):
     half_time: float = Field(10.0, ge=0.0, le=3600.0, description="break between halves [s]")
     kickoff: str = Field("cyan", description="team that kicks off the first half")
     penalty_shootout: bool = Field(False, description="a shoot-out decides a draw")
+    change_ends: bool = Field(
+        True,
+        description="the teams change ends at half time, and again before extra time and a shoot-out "
+        "(every team frame, start pose and side the referee judges follows)",
+    )
+    start: Literal[
+        "kickoff", "play", "throw_in", "goal_kick", "corner_kick", "free_kick", "penalty", "dropped_ball"
+    ] = Field(
+        "kickoff",
+        description="how the referee begins the match: the kick-off, the ball in play at once, or a restart "
+        "(to look at a situation again: scripts/referee_audit.py writes such scenes)",
+    )
+    start_team: str | None = Field(None, description="the team whose restart `start` is (default: kickoff)")
+    start_spot: tuple[float, float] | None = Field(
+        None, description="the spot of the `start` restart, world frame [m] (default: where the ball starts)"
+    )
+
+
+class LearningSpec(Strict):
+    """How a scene is used for learning (`simatch.envs`): rewards, what ends an episode, how long one lasts.
+    A run that is not a learning environment ignores it."""
+
+    rewards: dict[str, float | dict[str, Any]] = Field(
+        default_factory=dict,
+        description="reward terms: a shipped term name or package.module:Class -> its weight, or a table "
+        "{weight = ..., other settings of the term} (docs/learning.md lists the terms)",
+    )
+    end_on: list[str] = Field(
+        default_factory=list,
+        description="event types that end an episode (terminated), besides the judge ending the run, "
+        "e.g. ['goal', 'ball_out']",
+    )
+    episode_time: float | None = Field(
+        None, gt=0.0, le=86400.0, description="an episode is cut (truncated) after this long [s]; none: the run's"
+    )
 
 
 class Scene(Strict):
@@ -207,6 +272,7 @@ class Scene(Strict):
     perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
     judge: JudgeSpec = Field(default_factory=JudgeSpec)
     match: MatchSpec = Field(default_factory=MatchSpec)
+    learning: LearningSpec = Field(default_factory=LearningSpec)
 
     @field_validator("teams")
     @classmethod
@@ -233,6 +299,8 @@ class Scene(Strict):
                 raise ValueError("control.strategy_pub_period must be a multiple of control.period")
         if self.match.kickoff not in self.teams:
             raise ValueError(f"match.kickoff names team {self.match.kickoff!r}, which the scene does not have")
+        if self.match.start_team is not None and self.match.start_team not in self.teams:
+            raise ValueError(f"match.start_team names team {self.match.start_team!r}, which the scene does not have")
         return self
 
     # --- derived --------------------------------------------------------------------------------------
@@ -247,6 +315,10 @@ class Scene(Strict):
 
     def robot_names(self) -> list[str]:
         return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.robot_ids()]
+
+    def learner_names(self) -> list[str]:
+        """The robots handed to learning (``teams.<team>.learners`` or ``strategy = 'learner'``)."""
+        return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.learner_ids()]
 
     @property
     def strategy_pub_period(self) -> float:

@@ -94,11 +94,22 @@ def ensure(folder: str | os.PathLike, names: Iterable[str]) -> dict[str, Credent
                 raise CredentialError(f"credential file {path} is for {cred.name!r}, not {name!r}")
         else:
             cred = Credential(name, secrets.token_hex(32))
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-            with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(f"{cred.name}:{cred.secret}\n")
+            _create_whole(path, f"{cred.name}:{cred.secret}\n")
         out[name] = cred
     return out
+
+
+def _create_whole(path: Path, text: str) -> None:
+    """Create ``path`` (0600) holding ``text``, appearing whole or not at all: a client starting while the server
+    writes its key must never read a half-written file (it failed with 'expected name:hexsecret'). Written
+    beside it, then linked into place, which fails if the file already exists (as O_EXCL did)."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.link(tmp, path)
+    finally:
+        os.unlink(tmp)
 
 
 def users_file(folder: str | os.PathLike, creds: Iterable[Credential]) -> str:

@@ -12,13 +12,13 @@ The hot path is one Python-to-C call per message: measured, every Python frame a
 cost a visible share of a match's time. Bus deliveries come from the thread that runs the bus (the in-process
 bus calls synchronously; the Zenoh bus delivers from its owner's thread), so the hot path takes no lock.
 
-What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics
-step), ball contacts, events, game state and operator commands, plus the two 3D-scene channels and the
-simulated time as ROS 2's ``/clock`` (`layout.ros_clock`). Given a folder (`rosbag2`), the recording is a
-rosbag2 folder: the MCAP file and the ``metadata.yaml`` that ``ros2 bag`` writes beside it. Link
-states are recorded only on request (``links=True``): a listener makes the simulator compute every
-wheel's pose each physics step, which costs several times a whole physics step, and base and ball links are
-the model states anyway.
+What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics step), ball
+contacts, events, game state and operator commands, plus the two 3D-scene channels (the field again when the teams
+change ends) and the simulated time as ROS 2's ``/clock`` (`layout.ros_clock`). Given a folder (`rosbag2`), the
+recording is a rosbag2 folder: the MCAP file and the ``metadata.yaml`` that ``ros2 bag`` writes beside it. Link
+states are recorded only on request (``links=True``): a listener makes the simulator compute every wheel's pose
+each physics step, which costs several times a whole physics step, and base and ball links are the model states
+anyway.
 
 Nothing a producer sends can stop the run: a message whose type is unknown or that does not encode is
 counted (and its topic named in the ``simatch_end`` metadata), never raised into the bus.
@@ -159,7 +159,9 @@ class Recorder:
         self._scene3d = SceneBuilder(scene.spec)
         self._game_every = max(1, round(1.0 / (GAME_RATE * dt)))
         self._game = self._raw_channel(GAME_TOPIC, fg.typestore, fg.SCENE_UPDATE)
-        self._log.record(self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE), self._scene3d.field_update())
+        self._field = self._raw_channel(FIELD_TOPIC, fg.typestore, fg.SCENE_UPDATE)
+        self._log.record(self._field, self._scene3d.field_update())
+        self._attacks: tuple = ()  # the teams' ends the field was last drawn with (they change at half time)
         # the 3D scene's game updates: the log writes the poses of the model states into the update's template
         self._log.poses(topics.MODEL_STATES, self._game, self._game_every, self._scene_update)
         wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
@@ -169,6 +171,7 @@ class Recorder:
         self._subs.append(
             bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: log_.record(ros_clock, layout.ros_clock(log_.now)))
         )
+        self._subs.append(bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_game))
 
     # --- channels --------------------------------------------------------------------------------------------
     def _raw_channel(self, channel_topic: str, typestore, typename: str) -> int:
@@ -245,6 +248,21 @@ class Recorder:
             self._log.record(self._game, fill_poses(template, slots, msg.pose, GRID, TURN_GRID))
         except Exception as exc:
             log.warning("recording: no 3D scene update at step %s: %s", getattr(msg, "step", "?"), exc)
+
+    def _on_game(self, msg) -> None:
+        """The field again when the teams change ends (its goals take the colours of their new defenders)."""
+        attacks = tuple(zip(msg.teams, msg.attacks))
+        if not attacks or attacks == self._attacks:
+            return
+        first = not self._attacks
+        self._attacks = attacks
+        signs = {team: -1 if side == "-x" else 1 for team, side in attacks}
+        if first and all(self.scene.spec.team_sign(t) == s for t, s in signs.items() if t in self.scene.spec.teams):
+            return  # as drawn at the start
+        try:
+            self._log.record(self._field, self._scene3d.field_update(signs))
+        except Exception as exc:  # never raised into the bus
+            log.warning("recording: no 3D field update for the change of ends: %s", exc)
 
     # --- end ---------------------------------------------------------------------------------------------------
     @property

@@ -1,9 +1,10 @@
 """The game as a Foxglove 3D scene: two ``foxglove_msgs/msg/SceneUpdate`` channels of a recording.
 
-``/scene/field`` is written once: the floor, the markings (``FieldGeometry.lines()``, the very lines the
-judges read), the goals tinted with the colour of the team defending them, the boards and any named
-areas. ``/scene/game`` is written a few times per simulated second: each robot as a cylinder in its team's
-colour with an arrow along its kicker axis and its id above it, and the ball. Two channels, because a
+``/scene/field`` is written at the start: the floor, the markings (``FieldGeometry.lines()``, the very lines
+the judges read), the goals tinted with the colour of the team defending them, the boards and any named
+areas; and again whenever the teams change ends (the goals change colours). ``/scene/game`` is written a
+few times per simulated second: each robot as a cylinder in its team's colour with an arrow along its kicker
+axis and its id above it, and the ball. Two channels, because a
 viewer that seeks shows the latest message of each channel: the field must not be a message that the
 next game update replaces.
 
@@ -142,7 +143,9 @@ class SceneBuilder:
         return self.codec.encode(self._msg("SceneUpdate", deletions=[], entities=entities), fg.SCENE_UPDATE)
 
     # --- the field -----------------------------------------------------------------------------------------
-    def field_update(self) -> bytes:
+    def field_update(self, signs: dict[str, int] | None = None) -> bytes:
+        """The field; ``signs`` (team -> +1 attacking +x, -1 attacking -x) says who defends which goal now
+        (default: the scene's team frames)."""
         F = self.geometry
         L, W, m = F.half_length, F.half_width, F.margin
         white = (0.97, 0.97, 0.97)
@@ -189,16 +192,17 @@ class SceneBuilder:
             for sy in (-1, 1):
                 cubes.append(self._cube(0.0, sy * (W + m + t / 2), h / 2, 2 * (L + m), t, h, board))
         if F.goals:
-            cubes += self._goals()
+            cubes += self._goals(signs)
         field = self._entity("field", cubes=cubes, lines=lines, cylinders=cylinders)
         return self._update([field])
 
-    def _goals(self) -> list:
+    def _goals(self, signs: dict[str, int] | None = None) -> list:
         F = self.geometry
         L, p, gw, gh, gd = F.half_length, F.goal_post_size, F.goal_width, F.goal_height, F.goal_depth
         defenders = {}
         for team in self.scene.teams:
-            defenders[-self.scene.team_sign(team)] = team  # attacking +x means defending the goal at -x
+            sign = (signs or {}).get(team, self.scene.team_sign(team))
+            defenders[-sign] = team  # attacking +x means defending the goal at -x
         out = []
         for side in (-1, 1):
             x = side * (L + p / 2)

@@ -127,6 +127,45 @@ def keep_ball(
 
 
 @numba.njit(cache=True, nogil=True)
+def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
+    """One physics step of the dribbler's rollers on a held ball: turn its horizontal spin towards ``spin``
+    times rolling with its motion over the floor (w = z x v / r), by at most ``max_dw`` [rad/s] (the rollers'
+    torque over a step, divided by the ball's moment of inertia). The free joint's angular velocity is in the
+    ball's own frame: it is turned to the world frame, changed, and turned back (unit quaternion)."""
+    qw = qpos[ball_q + 3]
+    qx = qpos[ball_q + 4]
+    qy = qpos[ball_q + 5]
+    qz = qpos[ball_q + 6]
+    lx = qvel[ball_v + 3]
+    ly = qvel[ball_v + 4]
+    lz = qvel[ball_v + 5]
+    # world = q * local * q^-1: v + 2 qw (u x v) + 2 u x (u x v), u = (qx, qy, qz)
+    cx = qy * lz - qz * ly
+    cy = qz * lx - qx * lz
+    cz = qx * ly - qy * lx
+    wx = lx + 2.0 * (qw * cx + qy * cz - qz * cy)
+    wy = ly + 2.0 * (qw * cy + qz * cx - qx * cz)
+    wz = lz + 2.0 * (qw * cz + qx * cy - qy * cx)
+    tx = -spin * qvel[ball_v + 1] / radius
+    ty = spin * qvel[ball_v] / radius
+    dx = tx - wx
+    dy = ty - wy
+    d = (dx * dx + dy * dy) ** 0.5
+    if d > max_dw:
+        dx *= max_dw / d
+        dy *= max_dw / d
+    wx += dx
+    wy += dy
+    # local = q^-1 * world * q: the same with u negated
+    cx = -(qy * wz - qz * wy)
+    cy = -(qz * wx - qx * wz)
+    cz = -(qx * wy - qy * wx)
+    qvel[ball_v + 3] = wx + 2.0 * (qw * cx - qy * cz + qz * cy)
+    qvel[ball_v + 4] = wy + 2.0 * (qw * cy - qz * cx + qx * cz)
+    qvel[ball_v + 5] = wz + 2.0 * (qw * cz - qx * cy + qy * cx)
+
+
+@numba.njit(cache=True, nogil=True)
 def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 

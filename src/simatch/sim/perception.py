@@ -3,7 +3,7 @@
 A robot sees the ball (position, velocity, and its bearing and distance from the robot's kicker axis),
 every other robot as an obstacle, and its own team's robots (as its team shares them). Everything is in
 the robot's team frame: the world frame for a team that attacks +x, the world turned by pi for the other
-(magenta), so one strategy plays either colour.
+(magenta), so one strategy plays either colour. The frames turn when the teams change ends (`set_signs`).
 
 Realism knobs from the scene, all off by default (and then the perception is exact): Gaussian noise on
 positions, velocities and headings, the ball or an obstacle missed with a probability, and a latency
@@ -95,6 +95,11 @@ class Perception:
             and spec.ball_dropout == 0
             and spec.obstacle_dropout == 0
         )
+
+    def set_signs(self, signs: np.ndarray) -> None:
+        """Every robot's team frame from now on (+1: the world frame, -1: the world turned by pi)."""
+        self.sign = signs.astype(float)
+        self._turn = np.where(self.sign > 0, 0.0, np.pi)
 
     @property
     def needs_history(self) -> bool:

@@ -822,6 +822,21 @@ class Simulator:
                 self.ball.release("robot_disabled")
 
     @world_input
+    def set_team_sign(self, team: str, sign: int) -> None:
+        """``team``'s frame from now on: the world frame (``sign`` +1, the team attacks +x) or the world turned
+        by pi (-1). Its robots' perception is given in it from the next observation on (a referee turns the
+        frames when the teams change ends; commands are in the body frame and need nothing)."""
+        if sign not in (1, -1):
+            raise CommandError(f"set_team_sign({team!r}): sign must be +1 or -1, not {sign!r}")
+        members = [i for i, t in enumerate(self.team_of) if t == team]
+        if not members:
+            raise CommandError(
+                f"set_team_sign: no team named {team!r} (teams: {', '.join(dict.fromkeys(self.team_of))})"
+            )
+        self.signs[members] = float(sign)
+        self.perception.set_signs(self.signs)
+
+    @world_input
     def set_frozen(self, name: str, frozen: bool) -> None:
         """A frozen robot is welded to the floor where it stands: nothing moves it (e.g. a captured target)."""
         i = self.index_of(name)

@@ -1,7 +1,8 @@
 """The strategy subsystem: per robot a WorldModel and a Control (a `RobotStrategy`), per team a StrategyPub.
 
 Strategies are plug-ins named in the scene (``teams.<team>.strategy``): a shipped name, a
-``"package.module:Class"``, ``"none"`` (the team's robots get no node and stand still) or ``"external"``
+``"package.module:Class"``, ``"learner"`` (the robots play what a learning environment decides),
+``"none"`` (the team's robots get no node and stand still) or ``"external"``
 (the team runs in its own process and connects over the bus).
 """
 
@@ -18,6 +19,7 @@ SHIPPED = {
     "simple": "simatch.strategy.simple:SimpleRobot",
     "encircle": "simatch.strategy.encirclement:Chaser",
     "flee": "simatch.strategy.encirclement:Target",
+    "learner": "simatch.strategy.learner:Learner",
 }
 
 #: strategies that create no node in the run that loads the scene

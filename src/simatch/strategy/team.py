@@ -15,6 +15,7 @@ from ..bus import Node, stable_seed
 from ..config.loader import LoadedScene, SceneError, validate_params
 from . import NO_NODES, strategy_class
 from .base import RobotContext, RobotStrategy, TeamContext, TeamStrategy
+from .learner import Learner
 from .node import RobotNode, StrategyPub
 from .worldmodel import WorldModel, team_field
 
@@ -33,10 +34,11 @@ def build_team(
     """The nodes of one team (all its robots, or only ``robot_ids``), in tick order."""
     spec = scene.spec
     tspec = spec.teams[team]
-    if tspec.strategy in NO_NODES:
+    learners = set(tspec.learner_ids())
+    if tspec.strategy in NO_NODES and not learners:
         return []
     try:
-        cls = strategy_class(tspec.strategy)
+        cls = Learner if tspec.strategy == "none" else strategy_class(tspec.strategy)
     except Exception as exc:
         raise SceneError(f"{scene.source}: teams.{team}.strategy: {exc}") from None
     sign = spec.team_sign(team)
@@ -78,5 +80,11 @@ def build_team(
             rng=np.random.default_rng(stable_seed(seed, "strategy", team, str(rid))),
         )
         world = WorldModel(team, rid, sign, geo, tspec.goalkeeper)
-        nodes.append(RobotNode(team, rid, make(ctx), world, spec.control.period))
+        if rid in learners:
+            strategy = Learner(ctx)
+        elif tspec.strategy == "none":
+            continue  # this robot gets no node and stands still
+        else:
+            strategy = make(ctx)
+        nodes.append(RobotNode(team, rid, strategy, world, spec.control.period))
     return nodes

@@ -4,6 +4,12 @@ It is fed only by topics: its own perception (OmniVisionInfo), its team's fused 
 (TeamStrategy, from StrategyPub), the game command (CoachInfo on receive_from_coach) and the judge's public
 picture of the game (GameState on game_state: stage, clock, the judge-specific result). A strategy reads it
 and never touches the simulator.
+
+The team frame is the world frame turned so that the team attacks +x. When the teams change ends (at half
+time, in a refereed match), the GameState says which way each team attacks now (``attacks``) and the
+WorldModel follows it (`sign`, `field`): a robot learns its new side from the game state, in one process or
+in a distributed run alike. What it perceives and commands stays in the team frame, so a strategy still
+attacks +x.
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ class WorldModel:
         self.team = team
         self.id = rid
         self.sign = sign
+        self._world_field = field
         self.field = team_field(field, sign)
         self.goalkeeper = goalkeeper
         self.vision = None  # latest OmniVisionInfo
@@ -77,6 +84,14 @@ class WorldModel:
 
     def on_game(self, msg) -> None:
         self.game = msg
+        attacks = msg.attacks
+        if attacks and self.team in msg.teams:
+            k = list(msg.teams).index(self.team)
+            if k < len(attacks):
+                sign = -1 if attacks[k] == "-x" else 1
+                if sign != self.sign:
+                    self.sign = sign
+                    self.field = team_field(self._world_field, sign)
 
     # --- what a strategy reads ---------------------------------------------------------------------------
     @property

@@ -142,6 +142,8 @@ def game_record(msg) -> dict:
         "manual": bool(msg.manual),
         "ball_x": round(float(msg.ball_x), 3),
         "ball_y": round(float(msg.ball_y), 3),
+        # the way each team attacks now (the teams change ends at half time); empty from judges without sides
+        "attacks": {team: side for team, side in zip(teams, msg.attacks)},
     }
 
 

@@ -7,7 +7,9 @@
   the ball as seen by the robot nearest to it (as the original coach fused it); pass lines; the command
   the team is playing.
 
-Everything is in the world frame; a team's perception is turned back from its team frame here.
+Everything is in the world frame; a team's perception is turned back from its team frame here, the frame
+the team had at that moment (the game state says which way each team attacks: the teams change ends at
+half time).
 """
 
 from __future__ import annotations
@@ -105,8 +107,15 @@ class Picture:
         return out
 
     # --- what one team knows --------------------------------------------------------------------------------
+    def frame_sign(self, team: str, stamp: float) -> int:
+        """+1 if ``team``'s frame was the world frame for what its robots perceived at ``stamp``, -1 if it was
+        turned by pi. A perception is made before the judge's step at the same time, so the game state
+        that changed the ends at ``stamp`` applies from the next perception on."""
+        game = self.obs.game_at(stamp - 1e-6)
+        side = (game or {}).get("attacks", {}).get(team)
+        return self.signs[team] if side is None else (-1 if side == "-x" else 1)
+
     def team(self, team: str, t: float) -> dict:
-        sign = self.signs[team]
         robots, obstacles, passes = [], {}, []
         best_ball, best_dist = None, math.inf
         game = self.obs.game_at(t)
@@ -114,6 +123,7 @@ class Picture:
         for rid in self.ids[team]:
             vision = self.obs.vision_at(team, rid, t)
             intent = self.obs.intent_at(team, rid, t)
+            sign = self.frame_sign(team, float(vision.stamp) if vision is not None else t)
             entry: dict = {"id": rid, "name": f"{team}/{rid}", "sent_off": f"{team}/{rid}" in off, "seen": False}
             me = None
             if vision is not None:

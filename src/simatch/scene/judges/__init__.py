@@ -11,6 +11,7 @@ SHIPPED = {
     "locomotion_test": "simatch.scene.judges.locomotion:LocomotionTest",
     "msl_referee": "simatch.scene.referee:MslReferee",
     "encirclement": "simatch.scene.judges.encirclement:Encirclement",
+    "drill": "simatch.scene.judges.drill:Drill",
 }
 
 

@@ -23,11 +23,7 @@ from ... import msgs
 from ...bus import NodeContext, topics
 from ...config.loader import SceneError
 from ...field import Area
-from ...msgs.game_commands import MatchMode
-from .base import Judge
-
-#: GameState is re-published at least this often even when nothing changes [s]
-GAME_STATE_PERIOD = 1.0
+from .base import PlayJudge
 
 
 class EncirclementParams(BaseModel):
@@ -57,10 +53,9 @@ class EncirclementParams(BaseModel):
         return self
 
 
-class Encirclement(Judge):
+class Encirclement(PlayJudge):
     Params = EncirclementParams
     name = "encirclement"
-    gives_commands = True
 
     def __init__(self, scene, params: EncirclementParams, world):
         super().__init__(scene, params, world)
@@ -87,15 +82,12 @@ class Encirclement(Judge):
         # the judge looks at the world as often as the robots decide (reading the model states at every
         # physics step would cost as much as a third of the physics)
         self.period = spec.control.period
-        self.teams = list(spec.teams)
         tspec = spec.teams[params.targets]
         self.target_names = [f"{params.targets}/{rid}" for rid in tspec.robot_ids()]
         self.team_of = {name: name.partition("/")[0] for name in spec.robot_names()}
         self.top_speed = {team: 0.0 for team in self.teams}
         self.captures: list[dict] = []
         self.captured: set[str] = set()
-        self._published = -math.inf
-        self._dirty = True
 
     @property
     def duration(self) -> float:
@@ -104,12 +96,6 @@ class Encirclement(Judge):
     # --- set-up -----------------------------------------------------------------------------------------------
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
-        bus = ctx.bus
-        self.pub_coach = {
-            t: bus.publisher(topics.team_topic(t, topics.RECEIVE_FROM_COACH), msgs.CoachInfo) for t in self.teams
-        }
-        self.pub_game = bus.publisher(topics.GAME_STATE, msgs.GameState)
-        self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
         if self.params.scatter is not None:
             self._scatter(ctx.rng("judge", "scatter"))
 
@@ -151,9 +137,7 @@ class Encirclement(Judge):
                         self._capture(now, name, st.x, st.y)
             if len(self.captured) == len(self.target_names):
                 self._end(now)
-        self._publish_commands(now)
-        if self._dirty or now - self._published >= GAME_STATE_PERIOD - 1e-9:
-            self._publish_game(now)
+        self.publish(now)
 
     def _measure_speeds(self, states: dict) -> None:
         """Each team's top speed so far (captured targets excluded), so every run shows the speed ratio."""
@@ -171,76 +155,42 @@ class Encirclement(Judge):
         self.captures.append({"robot": name, "t": round(now, 6), "x": round(x, 4), "y": round(y, 4)})
         team, rid = topics.split_robot_name(name)
         n, total = len(self.captured), len(self.target_names)
-        self.pub_events.put(
-            msgs.GameEvent(
-                stamp=now,
-                type="capture",
-                team=team,
-                robot=rid,
-                x=x,
-                y=y,
-                value=float(n),
-                limit=float(total),
-                detail=f"{name} captured in the {self.prison.name} ({n} of {total})",
-            )
-        )
-        self._dirty = True
+        detail = f"{name} captured in the {self.prison.name} ({n} of {total})"
+        self.event(now, "capture", detail, team=team, robot=rid, x=x, y=y, value=float(n), limit=float(total))
 
     def _end(self, now: float) -> None:
         self.done = True
         n = len(self.target_names)
-        self.pub_events.put(
-            msgs.GameEvent(
-                stamp=now,
-                type="all_captured",
-                team=self.params.targets,
-                robot=0,
-                x=0.0,
-                y=0.0,
-                value=round(now, 6),
-                limit=self.params.time_limit,
-                detail=f"all {n} targets captured in {now:.2f} s",
-            )
+        detail = f"all {n} targets captured in {now:.2f} s"
+        self.event(
+            now, "all_captured", detail, team=self.params.targets, value=round(now, 6), limit=self.params.time_limit
         )
-        self._dirty = True
 
     # --- what the judge tells ---------------------------------------------------------------------------------
-    def _command(self) -> MatchMode:
-        return MatchMode.STOPROBOT if self.done else MatchMode.STARTROBOT
-
-    def _publish_commands(self, now: float) -> None:
-        cmd = int(self._command())
-        for pub in self.pub_coach.values():
-            pub.put(msgs.new(msgs.CoachInfo, stamp=now, match_mode=cmd, match_type=cmd))
-
-    def _publish_game(self, now: float) -> None:
+    def game_state(self, now: float):
         n = len(self.captured)
         score = np.array([n if t == self.params.chasers else 0 for t in self.teams], dtype=np.int32)
         none = np.zeros(len(self.teams), dtype=np.int32)  # no cards, no fouls in this game
-        self.pub_game.put(
-            msgs.new(
-                msgs.GameState,
-                stamp=now,
-                stage="ended" if self.done else "encirclement",
-                phase="ended" if self.done else "play",
-                clock=now,
-                stage_time_left=max(0.0, self.params.time_limit - now),
-                command=int(self._command()),
-                teams=list(self.teams),
-                score=score,
-                yellow_cards=none,
-                red_cards=none,
-                fouls=none,
-                result=json.dumps(self.result()),
-            )
+        return msgs.new(
+            msgs.GameState,
+            stamp=now,
+            stage="ended" if self.done else "encirclement",
+            phase="ended" if self.done else "play",
+            clock=now,
+            stage_time_left=max(0.0, self.params.time_limit - now),
+            command=int(self.command()),
+            teams=list(self.teams),
+            score=score,
+            yellow_cards=none,
+            red_cards=none,
+            fouls=none,
+            result=json.dumps(self.result()),
         )
-        self._published = now
-        self._dirty = False
 
     def game(self) -> dict:
         return {
             "stage": "ended" if self.done else "encirclement",
-            "command": self._command().name,
+            "command": self.command().name,
             "captured": len(self.captured),
             "targets": len(self.target_names),
             "time_left_s": max(0.0, self.params.time_limit - self.ctx.now()) if hasattr(self, "ctx") else None,

@@ -7,6 +7,11 @@ recording is judged the same way as a live run.
 
 Speeds towards the other robot are taken as the larger of this period's and the last one's, because the
 impact itself slows the robot that drove in.
+
+One contact, one call: a rule that calls a foul on a contact marks its pair (`mark_called`), and the contact
+rules that judge a contact once (charging, touching the goalkeeper) do not judge a marked pair again while
+the contact lasts, through stoppages too: robots still touching when play resumes after the foul are not
+called a second time.
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ class RobotContacts:
             if t[i] != t[j]
         ]
         self.touching = [False] * len(self.pairs)
+        self.called: set[int] = set()  # pairs whose contact (still going on) a rule has called already
         self.prev_vx = [0.0] * obs.n
         self.prev_vy = [0.0] * obs.n
         self._vx = [0.0] * obs.n
@@ -64,6 +70,12 @@ class RobotContacts:
                 now.append(Contact(k, i, j, dx / dist, dy / dist, not touching[k]))
             touching[k] = on
         self.now = now
+        if self.called:
+            self.called.intersection_update(c.pair for c in now)
+
+    def mark_called(self, pair: int) -> None:
+        """A rule called a foul on this contact: it is not judged again while it lasts."""
+        self.called.add(pair)
 
     def approach(self, i: int, ux: float, uy: float) -> float:
         """Robot i's speed along (ux, uy): the larger of this period's and the last one's [m/s]."""

@@ -23,7 +23,7 @@ class Discipline:
         self.obs = obs
         self.p = params
         self.world = world
-        self.log = log  # log(type, i, value, limit, detail)
+        self.log = log  # log(type, i, value, limit, detail, at=None): at the robot, or at ``at`` (x, y)
         n = obs.n
         self.yellow = np.zeros(n, dtype=np.int64)
         self.red = np.zeros(n, dtype=np.int64)
@@ -57,9 +57,8 @@ class Discipline:
             self.off_until[i] = max(self.off_until[i], until)
             return
         self.off_until[i] = until
-        x, y = self.park_spot(i)
+        x, y = self.park(i)
         name = obs.names[i]
-        self.world.set_model_state(name, x=x, y=y, yaw=math.pi / 2, vx=0.0, vy=0.0, wz=0.0)
         self.world.set_enabled(name, False)
         obs.active[i] = False
         length = forever if seconds is None else f"for {seconds:g} s"
@@ -70,6 +69,12 @@ class Discipline:
             0.0,
             f"{name} sent off {length} ({why}); parked at ({x:.2f}, {y:.2f})",
         )
+
+    def park(self, i: int) -> tuple[float, float]:
+        """Place robot i at its park spot (beside the side line in its own half) and say where that is."""
+        x, y = self.park_spot(i)
+        self.world.set_model_state(self.obs.names[i], x=x, y=y, yaw=math.pi / 2, vx=0.0, vy=0.0, wz=0.0)
+        return x, y
 
     def park_spot(self, i: int) -> tuple[float, float]:
         side = self.obs.own_goal_side(self.obs.team_of[i])
@@ -89,7 +94,9 @@ class Discipline:
         self.world.set_model_state(name, x=x, y=y, yaw=math.pi / 2, vx=0.0, vy=0.0, wz=0.0)
         self.world.set_enabled(name, True)
         obs.active[i] = True
-        self.log("robot_returned", i, 0.0, 0.0, f"{name} comes back on the field at ({x:.2f}, {y:.2f}) ({why})")
+        self.log(
+            "robot_returned", i, 0.0, 0.0, f"{name} comes back on the field at ({x:.2f}, {y:.2f}) ({why})", at=(x, y)
+        )
 
     def return_spot(self, i: int) -> tuple[float, float]:
         """Just inside the side line in the robot's own half, clear of every other robot and the ball."""

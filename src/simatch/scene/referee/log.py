@@ -27,6 +27,7 @@ FOUL_TYPES = frozenset(
         "charging",
         "lob",
         "ball_holding",
+        "ball_rotation",
         "pushing",
         "goalkeeper_contact",
     }

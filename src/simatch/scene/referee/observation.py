@@ -5,7 +5,8 @@ touches the ball), so it judges a live run and a replayed recording alike. `Obse
 ModelStates message (a reference, no copy, every physics step) and, once per control period, `refresh`
 turns it into plain Python lists: with ten robots, a loop over floats costs less than the many small NumPy
 calls the rules would otherwise make. It also knows what never changes during a match: who is in which
-team, which robot keeps goal, which way each team attacks.
+team, which robot keeps goal. Which way each team attacks is known too, and changes when the teams change
+ends (`set_sign`): every rule reads it here, at the time it judges.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ class Observation:
     def __init__(self, scene, robot_radius: float):
         spec = scene.spec
         self.teams: list[str] = list(spec.teams)
-        self.sign = {t: spec.team_sign(t) for t in self.teams}  # +1: attacks +x
+        self.sign = {t: spec.team_sign(t) for t in self.teams}  # +1: attacks +x (now)
+        self.scene_sign = dict(self.sign)  # as the scene sets it (the first half's)
         self.field = f = spec.world.geometry()
         self.ball_radius = spec.ball.radius
         names = spec.robot_names()
@@ -38,11 +40,10 @@ class Observation:
         self.radius: list[float] = [float(spec.teams[t].model_params.get("radius", robot_radius)) for t in self.team_of]
         self.members: dict[str, list[int]] = {t: [i for i in range(n) if self.team_of[i] == t] for t in self.teams}
         self.active: list[bool] = [True] * n  # not sent off
-        # area bounds: |x| >= *_x and |y| <= *_y (the areas extend behind the goal line)
-        self._pen_x = f.half_length - f.penalty_area_depth
-        self._pen_y = 0.5 * f.penalty_area_width
-        self._goal_x = f.half_length - f.goal_area_depth
-        self._goal_y = 0.5 * f.goal_area_width
+        # area bounds, the painted lines included: |x| >= *_x and |y| <= *_y (the areas extend behind the
+        # goal line)
+        self._pen_x, self._pen_y = f.area_limits("penalty")
+        self._goal_x, self._goal_y = f.area_limits("goal")
         self.msg = None
         self._rows: list[int] | None = None  # message row of each robot and of the ball
         self.stamp = 0.0
@@ -53,8 +54,19 @@ class Observation:
         self.VY = [0.0] * n
         self.bx = self.by = self.bz = 0.0
         self.bvx = self.bvy = self.bvz = 0.0
+        self.bwx = self.bwy = 0.0  # the ball's spin about the horizontal axes, world frame [rad/s]
         self.penalty_area = [0] * n  # side of the penalty area the robot is in (-1, +1), 0 if none
         self.goal_area = [0] * n
+
+    def set_sign(self, team: str, sign: int) -> None:
+        """``team`` attacks +x (``sign`` +1) or -x (-1) from now on: the teams changed ends."""
+        self.sign[team] = sign
+        for i in self.members[team]:
+            self.attack_sign[i] = sign
+            self.own_side[i] = -sign
+
+    def attacks(self, team: str) -> str:
+        return "+x" if self.sign[team] > 0 else "-x"
 
     # --- input -------------------------------------------------------------------------------------------
     def set_message(self, msg) -> None:
@@ -88,6 +100,7 @@ class Observation:
         b = rows[n]
         self.bx, self.by, self.bz = P[7 * b], P[7 * b + 1], P[7 * b + 2]
         self.bvx, self.bvy, self.bvz = T[6 * b], T[6 * b + 1], T[6 * b + 2]
+        self.bwx, self.bwy = T[6 * b + 3], T[6 * b + 4]
         self.stamp = msg.stamp
         self.step = msg.step
 

@@ -29,6 +29,7 @@ RULE_NAMES = (
     "own_half_regain",
     "lob",
     "ball_holding",
+    "ball_rotation",
     "pushing",
     "goalkeeper_contact",
 )
@@ -145,6 +146,34 @@ class RefereeParams(BaseModel):
         gt=0.0,
         le=60.0,
         description="longest time the ball may be deeper than ball_holding_depth [s] (MSL: less than 1 s)",
+    )
+
+    ball_rotation_ratio: float = Field(
+        0.5,
+        ge=-5.0,
+        le=5.0,
+        description="a held ball moving over the floor keeps its natural rotation while it turns at least this "
+        "fraction of rolling with its motion (1: rolling, 0: sliding unturned); below it the robot holds "
+        "it against its rotation (MSL RC-12.3.1)",
+    )
+    ball_rotation_time: float = Field(
+        1.0, gt=0.0, le=60.0, description="longest time a ball may be held against its rotation [s] (MSL: 1 s)"
+    )
+    ball_rotation_distance: float = Field(
+        0.3, gt=0.0, le=20.0, description="longest way a ball may travel held against its rotation [m] (MSL: 30 cm)"
+    )
+    ball_rotation_rest: float = Field(
+        4.0,
+        ge=0.0,
+        le=600.0,
+        description="holding the ball against its rotation may begin anew only after this long without, or once "
+        "the ball was released [s] (MSL: 4 s)",
+    )
+    ball_rotation_min_speed: float = Field(
+        0.2,
+        gt=0.0,
+        le=20.0,
+        description="a held ball's rotation is judged while it moves over the floor at least this fast [m/s]",
     )
 
     # --- scoring and lobs -----------------------------------------------------------------------------------

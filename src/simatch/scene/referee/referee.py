@@ -102,8 +102,9 @@ class MslReferee(OperatorTakeover, Judge):
         self.discipline = Discipline(m.obs, params, world, self._log_robot)
         self.shootout: ShootOut | None = None
         f = m.obs.field
-        self._xlim = f.half_length + m.obs.ball_radius
-        self._ylim = f.half_width + m.obs.ball_radius
+        # the whole ball past the outer edge of a line (the lines belong to the field)
+        self._xlim = f.outer_half_length + m.obs.ball_radius
+        self._ylim = f.outer_half_width + m.obs.ball_radius
         self._states = None
         self._ball_row = -1
         self._out_latched = False
@@ -191,12 +192,27 @@ class MslReferee(OperatorTakeover, Judge):
 
     def _begin(self, now: float) -> None:
         self._begun = True
-        self._ball_row = 7 * self.m.obs.ball_row()
-        self.m.obs.refresh()
-        g = self.m.game
-        g.kickoff_team = self.match_spec.kickoff
+        m = self.m
+        obs = m.obs
+        self._ball_row = 7 * obs.ball_row()
+        obs.refresh()
+        g = m.game
+        spec = self.match_spec
+        g.kickoff_team = spec.kickoff
         self._log(now, "stage", detail=f"{g.stage.name} begins", value=g.stage.duration or 0.0)
-        self._stop(now, self.m.spots.kickoff(g.kickoff_team), "the match begins")
+        if spec.start == "kickoff":
+            self._stop(now, m.spots.kickoff(g.kickoff_team), "the match begins")
+        elif spec.start == "play":  # a situation looked at again: the ball is in play from the first step
+            g.go(_Phase.PLAY)
+            self._send(now, MatchMode.STARTROBOT, "", "the match begins with the ball in play (match.start)")
+        else:  # ... or a restart
+            team = "" if spec.start == "dropped_ball" else (spec.start_team or spec.kickoff)
+            x, y = spec.start_spot if spec.start_spot is not None else (obs.bx, obs.by)
+            if spec.start == "penalty":
+                restart = m.spots.penalty(team, obs.own_goal_side(obs.other(team)))
+            else:
+                restart = Restart(spec.start, team, float(x), float(y))
+            self._stop(now, restart, f"the match begins with a {NAMES[spec.start]} (match.start)")
 
     # --- every control period ------------------------------------------------------------------------------
     def _control(self, now: float) -> None:
@@ -362,6 +378,9 @@ class MslReferee(OperatorTakeover, Judge):
         if nxt.kind == "ended":
             self._end_match(now)
             return
+        change = ended.kind == "half" and self.match_spec.change_ends
+        if change:
+            self._change_ends(now, "before the penalty shoot-out" if nxt.kind == "shootout" else "at half time")
         self._log(now, "stage", value=nxt.duration or 0.0, detail=f"{nxt.name} begins")
         if nxt.kind == "shootout":
             self.shootout = ShootOut(m.obs, self.p, m.spots, self.match_spec.kickoff)
@@ -374,6 +393,42 @@ class MslReferee(OperatorTakeover, Judge):
             restart = m.spots.kickoff(g.kickoff_team)
             reason = "half time" if nxt.kind == "break" else f"{nxt.name}"
         self._stop(now, restart, reason)
+        if change:  # at once, whatever the step: the perception turns from the next observation on
+            self._publish(now, force=True)
+
+    def _change_ends(self, now: float, when: str) -> None:
+        """The teams change ends: every team's frame turns (the simulator's perception, the commands' points,
+        every side the rules judge), the robots are placed at their start poses for the new ends (sent-off
+        robots parked beside their new half) and the ball on the centre mark."""
+        m = self.m
+        obs = m.obs
+        for t in self.teams:
+            sign = -obs.sign[t]
+            obs.set_sign(t, sign)
+            self.world.set_team_sign(t, sign)
+        spec = self.scene.spec
+        for t in self.teams:
+            mirrored = obs.sign[t] != obs.scene_sign[t]
+            for rid, (x, y, yaw) in zip(spec.teams[t].robot_ids(), spec.teams[t].start):
+                i = obs.index[f"{t}/{rid}"]
+                if i in self.discipline.off_until:
+                    self.discipline.park(i)
+                    continue
+                if mirrored:
+                    x, y, yaw = -x, -y, math.remainder(yaw + math.pi, 2.0 * math.pi)
+                self.world.set_model_state(obs.names[i], x=x, y=y, yaw=yaw, vx=0.0, vy=0.0, wz=0.0)
+        self._place_ball(0.0, 0.0)
+        m.touches.on_restart()
+        for rule in self.rules:
+            rule.on_restart()
+        m.game.version += 1
+        sides = ", ".join(f"{t} attacks {obs.attacks(t)}" for t in self.teams)
+        self._log(
+            now,
+            "ends_changed",
+            detail=f"the teams change ends {when}: {sides}; every robot is placed at its start pose for these "
+            f"ends, the ball on the centre mark",
+        )
 
     def _end_match(self, now: float) -> None:
         g = self.m.game
@@ -451,12 +506,16 @@ class MslReferee(OperatorTakeover, Judge):
         if call.goal_for:
             g.score[call.goal_for] += 1
             g.version += 1
-            self.goals.append(
-                {"t": round(now, 6), "team": call.goal_for, "robot": obs.names[call.robot] if call.robot >= 0 else ""}
-            )
+            scorer = call.scorer if call.scorer >= 0 else call.robot
+            goal = {"t": round(now, 6), "team": call.goal_for, "robot": obs.names[scorer] if scorer >= 0 else ""}
+            if scorer >= 0 and obs.team_of[scorer] != call.goal_for:
+                goal["own_goal"] = True
+            self.goals.append(goal)
         if call.card and call.robot >= 0:
             self.discipline.card(call.robot, call.card, now, call.detail)
         if call.in_play and g.phase is _Phase.TAKING:
+            # the set piece was not taken: the ball is in play for everybody and nobody is its taker
+            m.touches.disarm()
             g.go(_Phase.PLAY)
         if call.restart is not None:
             self._stop(now, call.restart, call.detail)
@@ -551,15 +610,18 @@ class MslReferee(OperatorTakeover, Judge):
     def _log(self, now: float, type: str, **fields):
         return self.log.add(now, type, **fields)
 
-    def _log_robot(self, type: str, i: int, value: float, limit: float, detail: str) -> None:
+    def _log_robot(
+        self, type: str, i: int, value: float, limit: float, detail: str, at: tuple[float, float] | None = None
+    ) -> None:
         obs = self.m.obs
+        x, y = at if at is not None else (obs.X[i], obs.Y[i])
         self.log.add(
             self.ctx.now(),
             type,
             team=obs.team_of[i],
             robot=obs.rid[i],
-            x=obs.X[i],
-            y=obs.Y[i],
+            x=x,
+            y=y,
             value=value,
             limit=limit,
             detail=detail,

@@ -64,6 +64,7 @@ def game(ref: MslReferee) -> dict:
         "paused": g.phase is Phase.PAUSED,
         "manual": not g.auto,
         "shootout": ref.shootout.summary() if ref.shootout is not None else None,
+        "attacks": {t: obs.attacks(t) for t in ref.teams},
     }
 
 
@@ -117,4 +118,5 @@ def game_state(ref: MslReferee, now: float):
         ball_x=float(spot.x) if spot is not None else 0.0,
         ball_y=float(spot.y) if spot is not None else 0.0,
         result=json.dumps(result(ref)),
+        attacks=[obs.attacks(team) for team in ref.teams],
     )

@@ -196,6 +196,7 @@ class OperatorTakeover:
         if cmd in (MatchMode.STOPROBOT, MatchMode.PARKINGROBOT):
             g.go(Phase.STOPPED)
             g.hold = True
+            m.touches.disarm()  # a set piece being taken is interrupted: it has no taker any more
             g.next_restart = None
             self._send(
                 now,

@@ -85,6 +85,13 @@ class Touches:
         self.retouch = None
         self.others_touched = False
 
+    def disarm(self) -> None:
+        """The set piece ended without being taken (restart timeout, an operator's stop): nobody is its taker,
+        so nobody can touch the ball twice."""
+        self.armed = False
+        self.taker = -1
+        self.retouch = None
+
     # --- input (physics rate) -------------------------------------------------------------------------------
     def on_contacts(self, msg) -> None:
         index = self.obs.index

@@ -1,5 +1,5 @@
 // The coach machine of one team (paper section V-A): command area, display area, status area.
-import { EventLog, FieldView, clock, gameClock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
+import { EventLog, FieldView, attackArrow, clock, gameClock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, test: { mode: "move", point: null } };
@@ -98,7 +98,10 @@ function render(f) {
     $("mtype").textContent = f.command.type !== f.command.mode ? `(after ${f.command.type})` : "";
   }
   const g = f.game;
-  $("gamebox").innerHTML = g ? `score <b>${g.teams.map((t) => g.score[t]).join(" : ")}</b> · ${g.stage} <b>${clock(gameClock(g, f.t))}</b>` : "";
+  // the way this team attacks on the screen now (the teams change ends at half time)
+  const arrow = attackArrow(page.hello, g, page.hello.team, Boolean(page.view && page.view.flip));
+  $("gamebox").innerHTML = (g ? `score <b>${g.teams.map((t) => g.score[t]).join(" : ")}</b> · ${g.stage} <b>${clock(gameClock(g, f.t))}</b> · ` : "")
+    + `attacks <b id="attacks">${arrow}</b>`;
   const rows = f.robots.map((r) => {
     const tr = document.createElement("tr");
     tr.dataset.robot = r.id;

@@ -1,7 +1,7 @@
 // The referee console: both teams, score and clock, the event log with reasons, manual mode. In a run with
 // an automatic referee every button is a request to the referee (its operator interface); without one,
 // commands go to both teams' coaches. A recording is shown read-only.
-import { EventLog, FieldView, clock, fmt, gameClock, setPieceButtons, startPage, teamColor } from "/static/simatch.js";
+import { EventLog, FieldView, attackArrow, clock, fmt, gameClock, setPieceButtons, startPage, teamColor } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, team: null, caps: null };
@@ -169,6 +169,8 @@ function render(f) {
   $("scoreboard").innerHTML = teams.length === 2
     ? `<span style="color:${teamColor(h, teams[0])}">${teams[0]}</span><span class="score" id="score">${score(teams[0])} : ${score(teams[1])}</span><span style="color:${teamColor(h, teams[1])}">${teams[1]}</span>`
     : `<span class="score" id="score">${teams.map(score).join(" : ")}</span>`;
+  // which way each team attacks on the screen now (the teams change ends at half time)
+  $("ends").textContent = teams.map((t) => `${t} ${attackArrow(h, g, t, page.view && page.view.flip)}`).join(" · ");
   const cmds = f.commands || {};
   $("command").textContent = g ? commandText(g) : teams.map((t) => cmds[t] ? cmds[t].mode : "–").join(" / ");
   // the referee's phase: paused by the operator, manual mode (automatic judging off), or the phase of play

@@ -101,6 +101,20 @@ export function gameClock(g, t) {
   return g.paused ? g.clock : g.clock + Math.max(0, t - g.t);
 }
 
+// The way a team attacks now: +1 towards +x, -1 towards -x. The game state says it (the teams change ends at
+// half time); before the first game state, or without a referee, the scene's team frame.
+export function attackSign(hello, game, team) {
+  const side = game && game.attacks ? game.attacks[team] : undefined;
+  if (side) return side === "-x" ? -1 : 1;
+  const t = hello.teams.find((x) => x.name === team);
+  return t ? t.sign : 1;
+}
+
+// An arrow for the way a team attacks on the screen (the field may be turned).
+export function attackArrow(hello, game, team, flip = false) {
+  return attackSign(hello, game, team) * (flip ? -1 : 1) > 0 ? "→" : "←";
+}
+
 export function teamColor(hello, team) {
   const t = hello.teams.find((x) => x.name === team);
   const c = t ? t.color : team;
@@ -260,8 +274,9 @@ export class FieldView {
   goals() {
     const c = this.ctx, f = this.field, L = f.length / 2, gw = f.goal_width / 2, d = f.goal_depth;
     for (const side of [-1, 1]) {
-      // the team that defends this goal: the one whose frame attacks the other way
-      const team = this.hello.teams.find((t) => t.sign === -side) || this.hello.teams[0];
+      // the team that defends this goal now: the one that attacks the other way (they change ends at half time)
+      const game = this.frame && this.frame.game;
+      const team = this.hello.teams.find((t) => attackSign(this.hello, game, t.name) === -side) || this.hello.teams[0];
       const [x0, y0] = this.toScreen(side * L, gw), [x1, y1] = this.toScreen(side * (L + d), -gw);
       c.fillStyle = "rgba(255,255,255,0.25)";
       c.fillRect(Math.min(x0, x1), Math.min(y0, y1), Math.abs(x1 - x0), Math.abs(y1 - y0));

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from .ball_holding import BallHoldingRule
 from .ball_out import BallOutRule
+from .ball_rotation import BallRotationRule
 from .base import Call, Rule
 from .charging import ChargingRule
 from .double_touch import DoubleTouchRule
@@ -38,6 +39,7 @@ CONTROL_RULES: tuple[type[Rule], ...] = (
     GoalkeeperContactRule,
     LobRule,
     BallHoldingRule,
+    BallRotationRule,
     DribblingRule,
     GoalAreaRule,
     PenaltyAreaRule,

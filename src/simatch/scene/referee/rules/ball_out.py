@@ -1,7 +1,10 @@
 """The ball out of the field (MSL RC-15, RC-16, and the corner kick), decided by the last touch.
 
 The ball is out once it has wholly crossed a side line or a goal line (outside the goal), judged at the
-physics rate. Over a side line: a throw-in for the team that did not touch it last, ``throw_in_inset``
+physics rate. The lines belong to the field: the whole ball must be past the painted line's outer edge
+(``FieldGeometry.outer_half_width`` / ``outer_half_length``); a ball resting on the line is in play. The
+event's value is the ball centre's distance past the middle of the line, its limit half the line's width plus
+the ball's radius. Over a side line: a throw-in for the team that did not touch it last, ``throw_in_inset``
 inside the line where the ball crossed. Over a goal line: a goal kick when the attacking team touched it
 last, a corner kick when the defending team did. When nobody has touched the ball, a dropped ball.
 """
@@ -16,6 +19,11 @@ class BallOutRule(Rule):
     name = "ball_out"
     phases = LIVE
 
+    def limit(self) -> float:
+        """How far the ball's centre is past the middle of a line when the whole ball has crossed it."""
+        obs = self.m.obs
+        return 0.5 * obs.field.line_width + obs.ball_radius
+
     def crossed_side_line(self, x: float, y: float) -> Call:
         obs, spots = self.m.obs, self.m.spots
         over = abs(y) - obs.field.half_width
@@ -29,7 +37,7 @@ class BallOutRule(Rule):
                 x=x,
                 y=y,
                 value=over,
-                limit=obs.ball_radius,
+                limit=self.limit(),
                 detail=f"ball out {where}; nobody touched it: dropped ball",
                 restart=restart,
             )
@@ -41,7 +49,7 @@ class BallOutRule(Rule):
             x=x,
             y=y,
             value=over,
-            limit=obs.ball_radius,
+            limit=self.limit(),
             detail=f"ball out {where}, last touched by {obs.names[last]}: throw-in for {team}",
             restart=spots.throw_in(team, x, y),
         )
@@ -64,7 +72,7 @@ class BallOutRule(Rule):
                 x=x,
                 y=y,
                 value=over,
-                limit=obs.ball_radius,
+                limit=self.limit(),
                 detail=f"ball out {where}; nobody touched it: dropped ball",
                 restart=spots.at_ball("dropped_ball", "", px, py),
             )
@@ -82,7 +90,7 @@ class BallOutRule(Rule):
             x=x,
             y=y,
             value=over,
-            limit=obs.ball_radius,
+            limit=self.limit(),
             detail=f"ball out {where}, last touched by {obs.names[last]}: {then}",
             restart=restart,
         )

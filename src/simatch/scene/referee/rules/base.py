@@ -41,6 +41,7 @@ class Call:
     card: str | None = None  # "yellow" or "red" for the robot
     goal_for: str = ""  # a goal that counts, for this team
     in_play: bool = False  # the call puts the ball in play (restart timeout)
+    scorer: int = -1  # a goal's scorer (robot index; of the other team for an own goal)
 
 
 class Rule:

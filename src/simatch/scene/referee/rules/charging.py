@@ -22,10 +22,12 @@ class ChargingRule(Rule):
 
     def check(self) -> list[Call] | None:
         calls = None
-        for c in self.m.contacts.now:
+        contacts = self.m.contacts
+        for c in contacts.now:
             if c.new:
                 call = self._judge(c.i, c.j, c.ux, c.uy)
                 if call is not None:
+                    contacts.mark_called(c.pair)  # one contact, one call (see contacts.py)
                     calls = (calls or []) + [call]
         return calls
 

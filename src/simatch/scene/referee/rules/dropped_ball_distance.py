@@ -1,6 +1,6 @@
-"""Dropped ball (MSL RC-8.6): every robot stays ``dropped_ball_distance`` (1 m) from the ball until START;
-a robot in its own penalty area is exempt. START puts the ball in play at once, so this is judged when
-START is given."""
+"""Dropped ball (MSL RC-8.6): every robot stays ``dropped_ball_distance`` (1 m) from the ball until START
+(measured to the nearest point of its footprint, as every set-piece distance); a robot in its own penalty
+area is exempt. START puts the ball in play at once, so this is judged when START is given."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ class DroppedBallDistanceRule(PositionRule):
     def offenders(self):
         m, p = self.m, self.p
         obs = m.obs
-        d = self.spot_distances()
+        d = self.clearances(self.spot_distances())
         out = []
         for i in range(obs.n):
             if d[i] < p.dropped_ball_distance and obs.active[i] and obs.penalty_area[i] != obs.own_side[i]:
@@ -23,8 +23,8 @@ class DroppedBallDistanceRule(PositionRule):
                         i,
                         d[i],
                         p.dropped_ball_distance,
-                        f"{obs.names[i]} is {d[i]:.3f} m from the dropped ball "
-                        f"(at least {p.dropped_ball_distance:.2f} m)",
+                        f"{obs.names[i]} is {d[i]:.3f} m from the dropped ball (the nearest point of its "
+                        f"footprint; at least {p.dropped_ball_distance:.2f} m)",
                     )
                 )
         return out

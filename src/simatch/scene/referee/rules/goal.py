@@ -1,11 +1,14 @@
 """Goals, and whether they count (MSL RC-10.1, RC-8.4, RC-15).
 
-A goal is scored when the whole ball has passed over the goal line between the posts and under the
-crossbar (judged at the physics rate, the first step the ball is wholly over the line). It counts unless:
+A goal is scored when the whole ball has passed over the whole goal line (past the painted line's outer
+edge: the line belongs to the field) between the posts and under the crossbar (judged at the physics rate,
+the first step the ball is wholly over the line). It counts unless:
 
-* it came directly from a kick-off, free kick, throw-in, goal kick or corner kick: the kicking team needs two
-  of its robots to have touched the ball since the restart (and a goal into the kicking team's own goal
-  needs any robot besides the taker to have touched it);
+* it came directly from a kick-off, free kick, throw-in, goal kick or corner kick: no robot but the taker
+  touched the ball since the restart. "Directly" is meant as the Laws of the Game mean it for an indirect
+  kick: the ball must touch another player, of either team, before it enters the goal; so a defender who
+  plays the ball into its own goal after the opponents' kick-off scores for them, and the taker scores
+  validly after an opponent played the ball;
 * it came directly from a dropped ball: two robots (of any team) must have touched it;
 * the shooter — the last robot to touch the ball, when it belongs to the scoring team — stood in its own
   half when it touched the ball (an own goal, last touched by the defending team, counts);
@@ -46,24 +49,30 @@ class GoalRule(Rule):
         obs = self.m.obs
         defending = obs.defender_of(side)
         scoring = obs.other(defending)
-        depth = side * x - obs.field.half_length
+        f = obs.field
+        depth = side * x - f.half_length  # the ball's centre past the goal line's centre
+        limit = 0.5 * f.line_width + obs.ball_radius  # wholly past the line's outer edge
         why = self.invalid(scoring)
         touches = self.m.touches
         last = touches.last
         shooter = last if last >= 0 and obs.team_of[last] == scoring else -1
         if why is None:
+            own = last >= 0 and obs.team_of[last] == defending
             who = f" by {obs.names[last]}" if last >= 0 else ""
-            own = " (own goal)" if last >= 0 and obs.team_of[last] == defending else ""
             return Call(
                 "goal",
                 team=scoring,
-                robot=last,
+                # the event's team is the one the goal counts for; its robot is the scorer when it is of that
+                # team (an own goal's scorer, of the other team, is named in the detail and in the result)
+                robot=-1 if own else last,
+                scorer=last,
                 x=x,
                 y=y,
                 value=depth,
-                limit=obs.ball_radius,
-                detail=f"goal for {scoring}{who}{own}: the whole ball is {depth:.2f} m over {defending}'s "
-                f"goal line (ball radius {obs.ball_radius:.2f} m), between the posts, under the bar",
+                limit=limit,
+                detail=f"goal for {scoring}{': own goal' if own else ''}{who}: the ball's centre is {depth:.3f} m "
+                f"past the middle of {defending}'s goal line, the whole ball past the line (limit {limit:.4f} m: "
+                f"half the line's width and the ball's radius), between the posts, under the bar",
                 restart=self.m.spots.kickoff(defending),
                 goal_for=scoring,
             )
@@ -84,24 +93,21 @@ class GoalRule(Rule):
         """(value, limit, reason) if a goal for ``scoring`` does not count now, else None."""
         m = self.m
         obs, touches = m.obs, m.touches
-        k = obs.teams.index(scoring)
         since = touches.since_restart
         restart = m.game.restart
-        if restart is not None and restart.kind in NO_DIRECT_GOAL and restart.team:
+        if restart is not None and restart.kind in NO_DIRECT_GOAL and restart.team and len(since) < 2:
+            # "directly": no robot but the one that took the set piece touched the ball (a robot of either
+            # team touching it makes the goal count, an own goal included)
             what = NAMES[restart.kind]
-            if scoring == restart.team:
-                mates = touches.touched_by(k)
-                if len(mates) < 2:
-                    names = ", ".join(obs.names[i] for i in mates) or "no robot"
-                    return (
-                        len(mates),
-                        2,
-                        f"direct goal from a {what}: since the {what} only {names} of "
-                        f"{scoring} touched the ball (two robots of the kicking team must)",
-                    )
-            elif len(since) < 2:
-                return (len(since), 2, f"direct goal from {restart.team}'s {what} into its own goal")
-        elif restart is not None and restart.kind == "dropped_ball" and len(since) < 2:
+            names = ", ".join(obs.names[i] for i in since) or "no robot"
+            into = " into the kicking team's own goal" if scoring != restart.team else ""
+            return (
+                len(since),
+                2,
+                f"direct goal from a {what}{into}: since {restart.team}'s {what} only {names} touched the ball "
+                f"(another robot, of either team, must touch it first)",
+            )
+        if restart is not None and restart.kind == "dropped_ball" and len(since) < 2:
             return (len(since), 2, "direct goal from a dropped ball (two robots must touch the ball first)")
         last = touches.last
         if last < 0 or not since:

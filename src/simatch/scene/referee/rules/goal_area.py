@@ -1,6 +1,7 @@
 """Illegal defence and attack, goal area (MSL RC-12.3.4/5): only a team's own goalkeeper may be in its
-goal area. A robot is inside when its centre is on or over the area's lines (the area extends behind the
-goal line, into the goal). Judged while the ball is in play; the opponents get a free kick.
+goal area. A robot is inside when its centre is on the area's painted lines (up to their outer edge: the
+lines belong to the area) or inside them; the area extends behind the goal line, into the goal. Judged
+while the ball is in play; the opponents get a free kick.
 """
 
 from __future__ import annotations
@@ -20,8 +21,7 @@ class GoalAreaRule(Rule):
             side = area[i]
             if not side or not obs.active[i] or (obs.is_goalkeeper[i] and obs.own_side[i] == side):
                 continue
-            f = obs.field
-            depth = side * obs.X[i] - (f.half_length - f.goal_area_depth)
+            depth = side * obs.X[i] - obs.field.area_limits("goal")[0]
             owner = obs.defender_of(side)
             whose = "its own" if obs.team_of[i] == owner else f"{owner}'s"
             return self.call(
@@ -29,7 +29,7 @@ class GoalAreaRule(Rule):
                 i,
                 depth,
                 0.0,
-                f"{obs.names[i]} is in {whose} goal area ({depth:.2f} m over its line), which only "
+                f"{obs.names[i]} is in {whose} goal area ({depth:.3f} m inside the outer edge of its line), which only "
                 f"{owner}'s goalkeeper may enter",
                 restart=self.free_kick_against(i),
             )

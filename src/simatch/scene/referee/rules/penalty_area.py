@@ -2,10 +2,12 @@
 ``penalty_area_robots`` (1) robot of each team may be in a penalty area, and for at most
 ``penalty_area_time`` (10 s).
 
-A robot is inside when its centre is on or over the area's lines (behind the goal line included). The
-time counts only while the ball is in play and starts again when the robot leaves the area. The robot
-that made the area too crowded (the last to enter) or stayed too long commits the foul; the opponents get
-a free kick.
+A robot is inside when its centre is on the area's painted lines (up to their outer edge: the lines belong
+to the area) or inside them (behind the goal line included). The time counts only while the ball is in play
+and starts again when the robot leaves the area. Who is in the area is followed while the ball is dead too
+(nothing is called then): a robot that leaves the area during a stoppage and comes back starts a new stay,
+and the last robot to enter is known when play resumes. The robot that made the area too crowded (the last
+to enter) or stayed too long commits the foul; the opponents get a free kick.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from .base import Call, Rule
 
 class PenaltyAreaRule(Rule):
     name = "penalty_area"
-    phases = frozenset({Phase.PLAY})
+    phases = frozenset({Phase.STOPPED, Phase.PREPARE, Phase.TAKING, Phase.PLAY})
 
     def __init__(self, match):
         super().__init__(match)
@@ -28,6 +30,7 @@ class PenaltyAreaRule(Rule):
 
     def check(self) -> Call | None:
         obs = self.m.obs
+        play = self.m.game.phase is Phase.PLAY
         area, inside, time_in = obs.penalty_area, self.inside, self.time_in
         groups: dict[tuple[int, int], list[int]] = {}
         for i in range(obs.n):
@@ -39,8 +42,11 @@ class PenaltyAreaRule(Rule):
                 time_in[i] = 0.0
                 self.entered[i] = obs.step
             if side:
-                time_in[i] += self.dt
+                if play:
+                    time_in[i] += self.dt
                 groups.setdefault((side, obs.team_ix[i]), []).append(i)
+        if not play:
+            return None  # the ball is dead: followed, not judged
         for (side, _), robots in groups.items():
             call = self._judge(side, robots)
             if call is not None:

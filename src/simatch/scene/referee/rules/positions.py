@@ -25,10 +25,18 @@ class PositionRule(Rule):
         return r is not None and r.kind in self.kinds and self.m.game.phase in (Phase.PREPARE, Phase.TAKING)
 
     def spot_distances(self) -> list[float]:
+        """Each robot's centre's distance from the restart spot."""
         r = self.m.game.restart
         obs = self.m.obs
         X, Y, x, y = obs.X, obs.Y, r.x, r.y
         return [math.hypot(X[i] - x, Y[i] - y) for i in range(obs.n)]
+
+    def clearances(self, d: list[float]) -> list[float]:
+        """How far each robot stays from the restart spot: from the nearest point of its footprint (its centre's
+        distance less its radius). The MSL distances are circles round the ball that the robots must keep
+        completely outside of."""
+        radius = self.m.obs.radius
+        return [d[i] - radius[i] for i in range(len(d))]
 
     def designated_kicker(self, d: list[float]) -> int:
         """The taker if it touched the ball already, else the kicking team's robot nearest to the spot."""

@@ -1,0 +1,231 @@
+"""What a learning agent observes: its robot's perception (OmniVisionInfo, team frame) and its team's game
+command (CoachInfo), as one fixed-size float32 vector with a documented layout, or as a `Dict` of the same parts.
+
+The numbers are the messages' own: a robot handed to learning perceives exactly what any robot of the scene
+perceives, realism knobs (noise, dropout, latency) included. Angles are given as cosine and sine (no jump at
++-pi); the game commands as one-hot vectors. Layout, in order (``T``: the teammate slots, ``K``: the obstacle
+slots; by default the team's other robots and every other robot of the scene):
+
+========== ======= ===========================================================================================
+part       size    entries
+========== ======= ===========================================================================================
+game       36      one-hot of CoachInfo.match_mode over the 17 commands (`COMMANDS` order), one-hot of
+                   match_type, the restart spot ball_x, ball_y [m]
+self       10      x, y [m], cos yaw, sin yaw, vx, vy [m/s, team frame], w [rad/s], valid, stuck, holding_ball
+ball       12      seen by me (state == SEEBALLBYOWN), pos_known, velocity_known, x, y, z [m], vx, vy, vz [m/s],
+                   distance [m], cos angle, sin angle (bearing from my kicker axis)
+goals      6       the centre of the goal my team attacks (team frame (+L, 0), L half the field's length):
+                   distance [m], cos and sin of its bearing from my kicker axis; the same for my own goal (-L, 0)
+                   (from my perceived pose and the field's geometry, as the ball's bearing is from the ball's)
+teammates  11 x T  per teammate, in the team's id order: present, then as self
+obstacles  9 x K   per robot I see (either team), nearest first: present, x, y, vx, vy, distance, cos angle,
+                   sin angle, radius
+========== ======= ===========================================================================================
+
+A slot nobody fills (an obstacle dropped by perception, fewer robots than slots) is all zeros, with present 0.
+A policy trained with fewer slots plays in a larger scene: it sees its nearest K obstacles and first T
+teammates. Every number is clipped to the space's bounds (`BOUND_*`), which only noise far beyond the field's
+size can reach. Before the first perception (latency) everything but the game command is zero.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..msgs import BallInfo
+from ..msgs.game_commands import MatchMode
+
+#: CoachInfo commands in one-hot order
+COMMANDS: tuple[int, ...] = tuple(int(m) for m in MatchMode)
+_COMMAND_INDEX = {c: i for i, c in enumerate(COMMANDS)}
+
+GAME = ("match_mode[17]", "match_type[17]", "ball_x", "ball_y")
+SELF = ("x", "y", "cos_yaw", "sin_yaw", "vx", "vy", "w", "valid", "stuck", "holding_ball")
+BALL = (
+    "seen_by_me",
+    "pos_known",
+    "velocity_known",
+    "x",
+    "y",
+    "z",
+    "vx",
+    "vy",
+    "vz",
+    "distance",
+    "cos_angle",
+    "sin_angle",
+)
+TEAMMATE = ("present", *SELF)
+GOALS = (
+    "attack_distance",
+    "attack_cos_angle",
+    "attack_sin_angle",
+    "defend_distance",
+    "defend_cos_angle",
+    "defend_sin_angle",
+)
+OBSTACLE = ("present", "x", "y", "vx", "vy", "distance", "cos_angle", "sin_angle", "radius")
+GAME_SIZE = 2 * len(COMMANDS) + 2
+
+#: bounds of the observation space: positions and distances [m], speeds [m/s], turn rates [rad/s]
+BOUND_POSITION = 250.0
+BOUND_SPEED = 100.0
+BOUND_TURN = 200.0
+_SEEBALLBYOWN = BallInfo.SEEBALLBYOWN
+
+
+class Layout:
+    """The observation of one agent: sizes, names of every entry, bounds, and the encoder."""
+
+    def __init__(self, teammates: int, obstacles: int, half_length: float):
+        if teammates < 0 or obstacles < 0:
+            raise ValueError("teammate and obstacle slots must be >= 0")
+        self.teammates = int(teammates)
+        self.obstacles = int(obstacles)
+        self.half_length = float(half_length)
+        self.parts: dict[str, tuple[int, ...]] = {
+            "game": (GAME_SIZE,),
+            "self": (len(SELF),),
+            "ball": (len(BALL),),
+            "goals": (len(GOALS),),
+        }
+        if self.teammates:
+            self.parts["teammates"] = (self.teammates, len(TEAMMATE))
+        if self.obstacles:
+            self.parts["obstacles"] = (self.obstacles, len(OBSTACLE))
+        self.offsets: dict[str, slice] = {}
+        at = 0
+        for name, shape in self.parts.items():
+            n = int(np.prod(shape))
+            self.offsets[name] = slice(at, at + n)
+            at += n
+        self.size = at
+        self.low, self.high = self._bounds()
+
+    # --- description ---------------------------------------------------------------------------------------
+    def names(self) -> list[str]:
+        """The name of every entry of the vector, e.g. ``ball.x`` or ``obstacles[2].distance``."""
+        out = [f"game.match_mode.{MatchMode(c).name}" for c in COMMANDS]
+        out += [f"game.match_type.{MatchMode(c).name}" for c in COMMANDS]
+        out += ["game.ball_x", "game.ball_y"]
+        out += [f"self.{n}" for n in SELF] + [f"ball.{n}" for n in BALL] + [f"goals.{n}" for n in GOALS]
+        out += [f"teammates[{i}].{n}" for i in range(self.teammates) for n in TEAMMATE]
+        out += [f"obstacles[{i}].{n}" for i in range(self.obstacles) for n in OBSTACLE]
+        return out
+
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        kinds = {
+            "x": BOUND_POSITION,
+            "y": BOUND_POSITION,
+            "z": BOUND_POSITION,
+            "ball_x": BOUND_POSITION,
+            "ball_y": BOUND_POSITION,
+            "distance": BOUND_POSITION,
+            "radius": BOUND_POSITION,
+            "vx": BOUND_SPEED,
+            "vy": BOUND_SPEED,
+            "vz": BOUND_SPEED,
+            "w": BOUND_TURN,
+        }
+        high = np.ones(self.size, dtype=np.float32)
+        low = np.zeros(self.size, dtype=np.float32)
+        for i, name in enumerate(self.names()):
+            leaf = name.rsplit(".", 1)[-1]
+            if leaf in kinds:
+                high[i], low[i] = kinds[leaf], -kinds[leaf]
+            elif leaf.endswith("distance"):
+                high[i] = BOUND_POSITION
+            elif "cos_" in leaf or "sin_" in leaf:
+                low[i] = -1.0
+        low[[i for i, n in enumerate(self.names()) if n.endswith((".distance", ".radius"))]] = 0.0
+        return low, high
+
+    def split(self, vector: np.ndarray) -> dict[str, np.ndarray]:
+        """The `Dict` form of a vector: one array per part (views, shaped as `parts`)."""
+        return {name: vector[self.offsets[name]].reshape(shape) for name, shape in self.parts.items()}
+
+    # --- encoding ---------------------------------------------------------------------------------------------
+    def encode(self, vision, coach, teammate_ids: list[int]) -> np.ndarray:
+        """The vector of one robot from its latest OmniVisionInfo (None before the first) and CoachInfo (None
+        before the first); ``teammate_ids`` fixes the order of the teammate slots."""
+        out = np.zeros(self.size, dtype=np.float32)
+        if coach is not None:
+            out[_COMMAND_INDEX.get(int(coach.match_mode), 0)] = 1.0
+            out[len(COMMANDS) + _COMMAND_INDEX.get(int(coach.match_type), 0)] = 1.0
+            out[2 * len(COMMANDS)] = coach.ball_x
+            out[2 * len(COMMANDS) + 1] = coach.ball_y
+        if vision is not None:
+            self._encode_vision(out, vision, teammate_ids)
+        np.clip(out, self.low, self.high, out=out)
+        return out
+
+    def _encode_vision(self, out: np.ndarray, vision, teammate_ids: list[int]) -> None:
+        me = None
+        mates = {}
+        for r in vision.robots:
+            if r.id == vision.robot_id:
+                me = r
+            else:
+                mates[r.id] = r
+        at = GAME_SIZE
+        if me is not None:
+            out[at : at + len(SELF)] = _robot(me)
+            g = self.offsets["goals"].start
+            for side in (1.0, -1.0):
+                dx, dy = side * self.half_length - me.x, -me.y
+                bearing = math.atan2(dy, dx) - me.yaw
+                out[g : g + 3] = (math.hypot(dx, dy), math.cos(bearing), math.sin(bearing))
+                g += 3
+        at += len(SELF)
+        b = vision.ball
+        if b.pos_known:
+            out[at : at + len(BALL)] = (
+                b.state == _SEEBALLBYOWN,
+                1.0,
+                b.velocity_known,
+                b.x,
+                b.y,
+                b.z,
+                b.vx,
+                b.vy,
+                b.vz,
+                b.distance,
+                math.cos(b.angle),
+                math.sin(b.angle),
+            )
+        at += len(BALL) + len(GOALS)
+        for rid in teammate_ids[: self.teammates]:
+            r = mates.get(rid)
+            if r is not None:
+                out[at] = 1.0
+                out[at + 1 : at + len(TEAMMATE)] = _robot(r)
+            at += len(TEAMMATE)
+        at = self.offsets["obstacles"].start if self.obstacles else at
+        o = vision.obstacles
+        n = len(o.x)
+        if n and self.obstacles:
+            k = min(n, self.obstacles)
+            order = np.argsort(o.distance, kind="stable")[:k]
+            angle = o.angle[order].astype(np.float64)
+            block = np.stack(
+                (
+                    np.ones(k),
+                    o.x[order],
+                    o.y[order],
+                    o.vx[order],
+                    o.vy[order],
+                    o.distance[order],
+                    np.cos(angle),
+                    np.sin(angle),
+                    o.radius[order],
+                ),
+                axis=1,
+            )
+            out[at : at + k * len(OBSTACLE)] = block.ravel()
+
+
+def _robot(r) -> tuple:
+    """The `SELF` entries of a RobotInfo."""
+    return (r.x, r.y, math.cos(r.yaw), math.sin(r.yaw), r.vx, r.vy, r.w, r.valid, r.stuck, r.holding_ball)
