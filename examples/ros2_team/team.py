@@ -25,6 +25,7 @@ import time
 import rclpy
 from geometry_msgs.msg import PoseArray, Twist
 from nav_msgs.msg import Odometry
+from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from std_msgs.msg import Bool, Float32, UInt8
 from tf2_msgs.msg import TFMessage
@@ -239,7 +240,7 @@ def main() -> None:
     try:
         while rclpy.ok() and (args.seconds is None or time.monotonic() - t0 < args.seconds):
             rclpy.spin_once(node, timeout_sec=0.1)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):  # Ctrl-C: rclpy's handler has shut the context down
         pass
     finally:
         node.destroy_node()

@@ -4,8 +4,10 @@ own, discovery on this machine only (other people's DDS tests may run at the sam
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -61,6 +63,64 @@ class RosProcesses(Processes):
 
     def client(self, script: str, *args: str, name: str | None = None) -> subprocess.Popen:
         return self.start(*args, program=[sys.executable, str(CLIENTS / script)], name=name or script)
+
+    def close(self) -> None:
+        """Ctrl-C first (rclpy and the bridge then leave the DDS graph and remove their shared-memory files),
+        then `Processes.close` kills what is left."""
+        live = [p for p in self.procs if p.poll() is None]
+        for p in live:
+            p.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + 15.0
+        for p in live:
+            try:
+                p.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                pass
+        super().close()
+
+
+def _fastdds_files() -> set[str]:
+    try:
+        return {
+            n for n in os.listdir("/dev/shm") if n.startswith(("fastdds_", "fastrtps_", "sem.fastdds", "sem.fastrtps"))
+        }
+    except FileNotFoundError:
+        return set()
+
+
+def _mapped_shm() -> set[str]:
+    """The /dev/shm files some live process has mapped (Fast DDS maps its segments; a lock file ``X_el``
+    belongs to the segment ``X``)."""
+    out = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open(f"/proc/{pid}/maps") as f:
+                out.update(line.rsplit("/", 1)[-1].strip() for line in f if "/dev/shm/" in line)
+        except OSError:
+            continue
+    return out
+
+
+@pytest.fixture(scope="session", autouse=True)
+def no_fastdds_files_left():
+    """Every ROS 2 process of these tests ends and leaves no Fast DDS shared-memory file behind: what appeared
+    during the session and no live process uses is a leak (removed, and the session fails)."""
+    before = _fastdds_files()
+    yield
+    time.sleep(0.5)
+    new = _fastdds_files() - before
+    if not new:
+        return
+    in_use = _mapped_shm()
+    leaked = {n for n in new if n not in in_use and n.removesuffix("_el") not in in_use}
+    for n in leaked:
+        try:
+            os.unlink(f"/dev/shm/{n}")
+        except OSError:
+            pass
+    assert not leaked, f"Fast DDS files left in /dev/shm by the ROS 2 tests: {sorted(leaked)}"
 
 
 @pytest.fixture

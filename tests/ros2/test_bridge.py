@@ -16,11 +16,13 @@ import signal
 import numpy as np
 import pytest
 
+from simatch.config.loader import load_scene
+
 from .conftest import RosProcesses
 
 pytestmark = pytest.mark.slow
 
-VX = -1.0  # [m/s] cyan/2 drives back from (-2, 1): nothing in its way for 3 m
+VX = -1.0  # [m/s] cyan/2 drives back from its start (-3.5, 1): nothing in its way for 3 m
 
 
 @pytest.fixture(scope="module")
@@ -128,5 +130,5 @@ def test_a_nan_cmd_vel_is_refused_and_counted(match):
 def test_perceived_obstacles_are_where_the_robots_stand(match):
     seen = np.array(match["drive"]["obstacles"])
     assert len(seen) == 9  # every other robot
-    for x, y in ((10.5, 0.0), (2.0, -1.0), (2.0, 1.0), (5.0, -2.0), (5.0, 2.0)):  # magenta stands at its start
+    for x, y, _ in load_scene("msl_5v5").spec.teams["magenta"].start:  # magenta stands at its start (world frame)
         assert np.min(np.hypot(seen[:, 0] - x, seen[:, 1] - y)) < 0.05, (x, y, seen)

@@ -3,6 +3,7 @@ against nubot's goalkeeper-less startpose team, and scores; its goal is in the e
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import pytest
@@ -40,7 +41,8 @@ def test_the_ros2_team_scores_in_a_refereed_half(rosprocs: RosProcesses):
     bridge = ps.bridge("--team", "cyan", "--wait-answers", "1.0", key="cyan", name="bridge")
     out = ps.result(server)
     ps.wait(bridge, 60)
-    team.kill()
+    team.send_signal(signal.SIGINT)  # as Ctrl-C: it leaves the DDS graph cleanly (no file left in /dev/shm)
+    assert ps.wait(team, 30) == 0, ps.stderr(team)
     assert out["result"]["score"]["cyan"] >= 1, [e for e in out["events"] if e.get("team") == "cyan"]
     goals = [e for e in out["events"] if e["type"] == "goal" and e.get("team") == "cyan"]
     assert goals and goals[0]["robot"] in (2, 3, 4, 5)

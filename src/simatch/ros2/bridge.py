@@ -58,9 +58,9 @@ class RosRobotNode(Node):
 
     phase = Phase.ROBOT
 
-    def __init__(self, bridge: Bridge, team: str, rid: int, sign: int, period: float):
+    def __init__(self, bridge: Bridge, team: str, rid: int, period: float):
         self.bridge = bridge
-        self.team, self.rid, self.sign = team, rid, sign
+        self.team, self.rid = team, rid
         self.name = f"{team}/{rid}/ros2"
         self.period = period
         self.ports = bridge.graph.add_robot(team, rid, driven=True)
@@ -82,12 +82,13 @@ class RosRobotNode(Node):
         graph = self.bridge.graph
         graph.set_time(info.stamp)
         vision = self.ports.vision
-        graph.publish_perception(self.ports, self.sign, info, msgs.encode(info) if graph.heard(vision) else None)
+        sign = self.bridge.signs[self.team]  # the team frame of now: it turns when the teams change ends
+        graph.publish_perception(self.ports, sign, info, msgs.encode(info) if graph.heard(vision) else None)
         me = next((r for r in info.robots if r.id == self.rid), None)
         #: an odom went out this tick: with --wait-answers, a cmd_vel is waited for (not from a robot sent off)
         self.expects_answer = me is not None and me.valid
         if self.expects_answer:
-            self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(self.sign, me)
+            self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(sign, me)
 
     def tick(self, now: float) -> None:
         bridge, graph, slot = self.bridge, self.bridge.graph, self.ports.command
@@ -128,8 +129,7 @@ class RosTeamProcess(TeamProcess):
             self.bridge._graph(scene)
         spec = scene.spec
         ids = self.robots if self.robots is not None else spec.teams[self.team].robot_ids()
-        sign = spec.team_sign(self.team)
-        nodes = [RosRobotNode(self.bridge, self.team, rid, sign, spec.control.period) for rid in ids]
+        nodes = [RosRobotNode(self.bridge, self.team, rid, spec.control.period) for rid in ids]
         self.bridge.ros_nodes = nodes
         return nodes
 
@@ -179,6 +179,9 @@ class Bridge:
         self.proc: RosTeamProcess | None = None
         self.bus: ZenohBus | None = None
         self.own_poses: dict = {}
+        #: each team's frame now (+1: the world frame, the team attacks +x; -1: turned by pi), from the scene at
+        #: start, then from the game state's ``attacks``: the teams change ends at half time (docs/referee.md)
+        self.signs: dict[str, int] = {}
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
         self._pub_set_model = None
         self.ros_nodes: list[RosRobotNode] = []
@@ -290,12 +293,14 @@ class Bridge:
         spec = scene.spec
         for team in spec.teams:
             names.check_team(team)
+        self.signs = {team: spec.team_sign(team) for team in spec.teams}
         what = self.team if self.team is not None else "observer"
         if self.robots is not None:
             what += "_" + "_".join(map(str, self.robots))
         graph = RosGraph(
             what,
             spec,
+            self.signs,
             max_speed=MAX_COMMAND_SPEED,
             max_turn=MAX_COMMAND_TURN,
             markers_period=self.markers_period,
@@ -312,7 +317,7 @@ class Bridge:
             bus.take_feed(feed["topic"], feed["covers"])
         bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: graph.publish_clock(m.stamp))
         graph.add_game_state()
-        bus.subscribe(topics.GAME_STATE, msgs.GameState, lambda m: graph.publish_game_state(msgs.encode(m)))
+        bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_game_state)
         teams = list(spec.teams) if self.observing else [self.team]
         for team in teams:
             graph.add_team(team)
@@ -346,6 +351,20 @@ class Bridge:
         world = "publishes the ground truth" if self.observing else "publishes its team's view"
         domain = os.environ.get("ROS_DOMAIN_ID", "0")
         return f"bridge of run {self.run_name!r} at {self.connect} on ROS 2 domain {domain}: {driven}, {world}"
+
+    def _on_game_state(self, m) -> None:
+        """Forward the game state; when the teams changed ends, turn their frames: the perception is in the new
+        team frame from the next observation on (the server sends this game state before it), so odom, ball,
+        obstacles and team-mates stay right in ``map``, and ``<team>/field`` on /tf_static turns."""
+        changed = False
+        for team, side in zip(m.teams, m.attacks):
+            sign = {"+x": 1, "-x": -1}.get(side)
+            if sign is not None and team in self.signs and self.signs[team] != sign:
+                self.signs[team] = sign
+                changed = True
+        if changed:
+            self.graph.set_team_signs(self.signs)
+        self.graph.publish_game_state(msgs.encode(m))
 
     def _on_models(self, m) -> None:
         # the server sends them every physics step; ROS gets them once per control period

@@ -248,12 +248,17 @@ def _wait_for_bridge(zbus: ZenohBus, ready: list, proc: subprocess.Popen, wait: 
 
 
 def _stop_bridge(zbus: ZenohBus, proc: subprocess.Popen | None) -> None:
+    """Tell the bridge the run is over; if it does not leave, SIGTERM (it closes its ROS side: no Fast DDS
+    file stays in /dev/shm), and only then kill it."""
     if proc is None:
         return
     with contextlib.suppress(Exception):
         zbus.put_raw(protocol.END, protocol.dumps({"reason": "the run is over"}))
-    try:
-        proc.wait(10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait(5)
+    for stop, wait in ((None, 10), (proc.terminate, 5), (proc.kill, 5)):
+        if stop is not None:
+            stop()
+        try:
+            proc.wait(wait)
+            return
+        except subprocess.TimeoutExpired:
+            continue

@@ -126,11 +126,21 @@ class RosGraph:
     """One rclpy node in its own context, spun by a thread of its own."""
 
     def __init__(
-        self, what: str, spec, *, max_speed: float, max_turn: float, markers_period: float = 0.05, clock: bool = True
+        self,
+        what: str,
+        spec,
+        signs: dict[str, int],
+        *,
+        max_speed: float,
+        max_turn: float,
+        markers_period: float = 0.05,
+        clock: bool = True,
     ):
-        """``clock``: publish /clock (one publisher per ROS domain: a second bridge on the same graph leaves it
-        to the first, see docs/ros.md)."""
+        """``signs``: each team's frame (+1 the world's, -1 turned by pi; `set_team_signs` when they change);
+        ``clock``: publish /clock (one publisher per ROS domain: a second bridge on the same graph leaves it to
+        the first, see docs/ros.md)."""
         self.spec = spec
+        self.signs = dict(signs)
         self.max_speed, self.max_turn = max_speed, max_turn
         self.context = rclpy.Context()
         rclpy.init(context=self.context, args=[])
@@ -233,17 +243,23 @@ class RosGraph:
         self.robots[name] = ports
         return ports
 
-    def _static_frames(self) -> None:
+    def set_team_signs(self, signs: dict[str, int]) -> None:
+        """The teams changed ends: their frames on /tf_static from now on (the newest message replaces the
+        last one for late subscribers too: transient local, keep last 1)."""
+        self.signs = dict(signs)
+        self._static_frames(self.now)
+
+    def _static_frames(self, at: float = 0.0) -> None:
         """``map`` -> ``<team>/field`` for every team: each team's own frame, turned by pi for a team attacking -x."""
         if self.pub_tf_static is None:
             return
         out = []
         for team in self.spec.teams:
             t = TransformStamped()
-            t.header.stamp = _time(0.0)
+            t.header.stamp = _time(at)
             t.header.frame_id = names.MAP
             t.child_frame_id = names.team_frame(team)
-            qx, qy, qz, qw = quaternion_of_yaw(0.0 if self.spec.team_sign(team) > 0 else math.pi)
+            qx, qy, qz, qw = quaternion_of_yaw(0.0 if self.signs[team] > 0 else math.pi)
             t.transform.rotation.x, t.transform.rotation.y = qx, qy
             t.transform.rotation.z, t.transform.rotation.w = qz, qw
             out.append(t)
