@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import json
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from simatch.record import rosbag2
+from simatch.record.reader import being_written
 
 SIMATCH = [sys.executable, "-m", "simatch"]
 
@@ -79,3 +84,54 @@ def test_refuses_a_folder_that_is_not_empty(tmp_path):
         text=True,
     )
     assert bad.returncode == 2 and "not an empty folder" in bad.stderr and bad.stderr.count("\n") == 1
+
+
+def test_simatch_commands_take_the_folder(recorded, tmp_path):
+    """A folder recorded with --record DIR/ is a recording wherever simatch takes one."""
+    info = subprocess.run(
+        [*SIMATCH, "replay", str(recorded / "match"), "--info", "--json"], check=True, capture_output=True, text=True
+    )
+    assert json.loads(info.stdout)["file"].endswith("match_0.mcap")
+    verdict = subprocess.run(
+        [*SIMATCH, "replay", str(recorded / "match"), "--verify", "--json"], capture_output=True, text=True
+    )
+    assert verdict.returncode == 0 and json.loads(verdict.stdout)["identical"], verdict.stdout + verdict.stderr
+    out = tmp_path / "tables"
+    subprocess.run([*SIMATCH, "export", str(recorded / "match"), "--format", "csv", "--out", str(out)], check=True)
+    assert (out / "events.csv").is_file()
+
+
+def test_a_killed_run_leaves_a_folder_that_recover_completes(tmp_path):
+    """SIGKILL: the run cannot write metadata.yaml (its writer process still finalises the file); ``simatch
+    recover DIR`` writes it, and AnyReader reads the folder."""
+    folder = tmp_path / "killed"
+    proc = subprocess.Popen(
+        [*SIMATCH, "run", "msl_5v5", "--duration", "600", "--quiet", "--record", f"{folder}/"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    mcap = folder / "killed_0.mcap"
+    try:
+        deadline = time.monotonic() + 120
+        while not (mcap.is_file() and mcap.stat().st_size > 300_000) and time.monotonic() < deadline:
+            assert proc.poll() is None, proc.stderr.read()
+            time.sleep(0.1)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(30)
+    deadline = time.monotonic() + 30
+    while being_written(mcap):
+        assert time.monotonic() < deadline, "the writer process did not end"
+        time.sleep(0.05)
+    assert sorted(p.name for p in folder.iterdir()) == ["killed_0.mcap"]
+    with pytest.raises(Exception, match="metadata"):
+        _read(folder)
+    out = subprocess.run([*SIMATCH, "recover", str(folder)], check=True, capture_output=True, text=True)
+    assert "nothing to recover" in out.stdout and "metadata.yaml" in out.stdout, out.stdout
+    topics, clock, count = _read(folder)
+    assert topics["/clock"].msgtype == "rosgraph_msgs/msg/Clock" and len(clock) > 10
+    with open(mcap, "rb") as f:
+        assert count == sum(1 for _ in make_reader(f).iter_messages())

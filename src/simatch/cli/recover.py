@@ -20,7 +20,11 @@ def add_parser(sub) -> None:
         "this is for a file whose writer process stopped too (or was damaged on disk). Without -o the file is "
         "replaced (written next to it, then renamed), only if it needs it.",
     )
-    p.add_argument("file", metavar="FILE.mcap", help="the recording to recover")
+    p.add_argument(
+        "file",
+        metavar="FILE.mcap|DIR",
+        help="the recording to recover (a rosbag2 folder of --record DIR/: its file, and its metadata.yaml written)",
+    )
     p.add_argument("-o", "--output", metavar="OUT.mcap", help="write the recovered file here (never overwritten)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

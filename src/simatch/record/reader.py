@@ -30,7 +30,7 @@ from .. import msgs
 from ..config.loader import LoadedScene, SceneError, load_scene
 from ..msgs.cdr import Codec
 from . import foxglove_msgs as fg
-from . import layout
+from . import layout, rosbag2
 
 
 class RecordingError(Exception):
@@ -58,7 +58,7 @@ class Recording:
     ``simatch_end`` record (None if the file was not finalised), ``problems`` what was found wrong."""
 
     def __init__(self, path: str | Path):
-        self.path = Path(path)
+        self.path = rosbag2.recording_in(path)  # a rosbag2 folder (``--record DIR/``): its file
         self.metadata: dict = {}
         self.end: dict | None = None
         self.channels: dict[int, ChannelInfo] = {}
@@ -69,6 +69,8 @@ class Recording:
         self._checked: dict[str, bool] = {}
         self._codecs: dict[int, Codec] = {}
         self._reported: set[str] = set()
+        if self.path.is_dir():
+            raise RecordingError(f"{self.path}: a folder without exactly one .mcap recording in it")
         if not self.path.is_file():
             raise RecordingError(f"{self.path}: no such recording")
         self._scan()

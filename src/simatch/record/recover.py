@@ -33,7 +33,7 @@ from mcap.exceptions import McapError
 from mcap.records import Channel, Chunk, ChunkIndex, Footer, Header, Message, MessageIndex, Metadata, Schema
 from mcap.stream_reader import StreamReader, get_chunk_data_stream
 
-from . import layout
+from . import layout, rosbag2
 from .reader import being_written
 from .writer_process import MAGIC, summary_section
 
@@ -58,15 +58,17 @@ class Recovered:
     skipped: list[str] = field(default_factory=list)  # what was damaged and left out
     was_finalised: bool = False
     written: bool = True  # False: the file needed nothing (finalised and intact) and was left as it was
+    metadata: str | None = None  # the rosbag2 folder's metadata.yaml written (a recording in a folder)
 
     def describe(self) -> str:
+        tail = [f"wrote {self.metadata}"] if self.metadata else []
         if not self.written:
-            return f"{self.source} is finalised and intact: nothing to recover"
+            return "\n".join([f"{self.source} is finalised and intact: nothing to recover", *tail])
         head = (
             f"recovered {self.source} -> {self.output}: {self.messages} messages on {self.channels} channels in "
             f"{self.chunks} chunks (t={self.start:.3f}..{self.end:.3f} s), finalised and indexed"
         )
-        return "\n".join([head] + [f"left out: {s}" for s in self.skipped])
+        return "\n".join([head] + [f"left out: {s}" for s in self.skipped] + tail)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -76,8 +78,13 @@ def recover(
     path: str | Path, output: str | Path | None = None, progress: Callable[[float], None] | None = None
 ) -> Recovered:
     """Write a finalised, indexed copy of what is intact in ``path`` to ``output`` (None: replace ``path``
-    if it needs it). ``progress(fraction)`` hears how far the reading got."""
-    src = Path(path)
+    if it needs it). ``progress(fraction)`` hears how far the reading got. ``path`` may be a rosbag2 folder
+    (``simatch run --record DIR/``): its file is recovered in place and its ``metadata.yaml`` written again
+    (missing when the run was killed before it could write it)."""
+    folder = Path(path).is_dir()
+    src = rosbag2.recording_in(path)
+    if folder and src.is_dir():
+        raise RecoverError(f"{src}: a folder without exactly one .mcap recording in it")
     if not src.is_file():
         raise RecoverError(f"{src}: no such file")
     if being_written(src):
@@ -96,14 +103,19 @@ def recover(
     report.was_finalised = scan.finalised
     if in_place and scan.finalised and not scan.skipped:
         report.written = False
-        return report
-    try:
-        _write(scan, dst, report)
-        if in_place:
-            os.replace(dst, src)
-    except BaseException:
-        dst.unlink(missing_ok=True)
-        raise
+    else:
+        try:
+            _write(scan, dst, report)
+            if in_place:
+                os.replace(dst, src)
+        except BaseException:
+            dst.unlink(missing_ok=True)
+            raise
+    if folder and in_place:
+        try:
+            report.metadata = str(rosbag2.complete(src.parent))
+        except rosbag2.Rosbag2Error as exc:
+            raise RecoverError(str(exc)) from None
     return report
 
 

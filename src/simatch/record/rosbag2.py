@@ -8,7 +8,10 @@ with the ``.mcap`` alone, AnyReader fails with "Expected metadata file ... does 
   ``DIR/DIR_0.mcap`` (the name ``ros2 bag record -o DIR`` gives its first file) and writes
   ``DIR/metadata.yaml`` when the recording is finalised;
 * ``simatch export FILE.mcap --format rosbag2 [-o DIR]`` makes such a folder of an existing recording (the
-  file copied, the metadata counted from it).
+  file copied, the metadata counted from it);
+* simatch's own commands take the folder wherever they take a recording (`recording_in`: its one ``.mcap``);
+  a folder whose run was killed before it wrote ``metadata.yaml`` (the writer process still finalised the
+  file) gets it from ``simatch recover DIR`` or ``simatch export DIR --format rosbag2`` (`complete`).
 
 The metadata is rosbag2's version 9 (what Jazzy and later write): per channel its topic, type, ``cdr``, the
 type's RIHS01 hash, and message counts; times are the recording's log times (simulated nanoseconds from 0).
@@ -20,8 +23,6 @@ import os
 import shutil
 from collections.abc import Iterable
 from pathlib import Path
-
-from ruamel.yaml import YAML
 
 from .. import msgs
 from . import foxglove_msgs as fg
@@ -40,6 +41,32 @@ def is_folder(target: str | os.PathLike) -> bool:
     text = os.fspath(target)
     path = Path(text)
     return text.endswith(("/", os.sep)) or (path.is_dir() and not any(path.iterdir()))
+
+
+def recording_in(path: str | os.PathLike) -> Path:
+    """The recording file of ``path``: a file as it is, a folder's one ``.mcap`` file (a rosbag2 folder written
+    by ``--record DIR/`` or by ``ros2 bag``); a folder with none or several is returned as it is (the reader
+    then says it is no recording)."""
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(p for p in path.glob("*.mcap") if p.is_file())
+        if len(files) == 1:
+            return files[0]
+    return path
+
+
+def complete(folder: str | os.PathLike) -> Path:
+    """(Re)write the ``metadata.yaml`` of a folder holding one recording, counted from the file (a run killed
+    before it wrote it); returns the metadata's path."""
+    folder = Path(folder)
+    mcap = recording_in(folder)
+    if mcap == folder:
+        raise Rosbag2Error(f"{folder} holds no single .mcap recording")
+    channels, start, end = scan(mcap)
+    try:
+        return write_metadata(folder, mcap.name, channels, start, end)
+    except OSError as exc:
+        raise Rosbag2Error(f"cannot write {folder / METADATA}: {exc}") from None
 
 
 def prepare(folder: str | os.PathLike) -> Path:
@@ -100,6 +127,8 @@ def write_metadata(
         "custom_data": {"simatch_recording": layout.FORMAT_VERSION},
         "ros_distro": "simatch",
     }
+    from ruamel.yaml import YAML
+
     yaml = YAML(typ="safe")
     yaml.default_flow_style = False
     path = folder / METADATA
@@ -133,8 +162,12 @@ def scan(mcap_path: Path) -> tuple[list[tuple[str, str, str, int]], int, int]:
 
 
 def export(mcap_path: str | os.PathLike, folder: str | os.PathLike | None = None) -> Path:
-    """A rosbag2 folder of the recording ``mcap_path`` (default: beside it, named after it); returns it."""
+    """A rosbag2 folder of the recording ``mcap_path`` (default: beside it, named after it); returns it. Given
+    a folder that holds a recording already (and no other ``folder``), its metadata is written in place."""
     src = Path(mcap_path)
+    if src.is_dir() and (folder is None or Path(folder).resolve() == src.resolve()):
+        complete(src)
+        return src
     if not src.is_file():
         raise Rosbag2Error(f"{src} does not exist")
     target = Path(folder) if folder is not None else src.with_suffix("")
