@@ -14,15 +14,15 @@ import pytest
 
 pytest.importorskip("rclpy", reason="ROS 2 is not installed: pip install -e '.[ros2]' (make setup does)")
 
-from simatch.ros2 import interfaces  # noqa: E402
+from simatch.ros2 import domain, interfaces  # noqa: E402
 
 from ..distributed.cluster import Processes  # noqa: E402
 
 CLIENTS = Path(__file__).resolve().parent / "clients"
 ROOT_EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "ros2_team"
 
-#: one DDS domain per test session (0..232 are valid; 0 is everybody's default)
-DOMAIN_ID = 100 + os.getpid() % 120
+#: one DDS domain per test session, held by nobody else on this machine (a lock kept while the session runs)
+DOMAIN_ID, _DOMAIN_LOCK = domain.claim()
 
 
 def ros_env(base: dict | None = None) -> dict:

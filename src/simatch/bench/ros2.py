@@ -39,8 +39,16 @@ LATENCY_SECONDS = 20.0  # wall seconds of probing
 OBSERVER_SECONDS = 60.0  # simulated seconds of each embedded run
 
 
+_DOMAIN_LOCK = None
+
+
 def _ros_env() -> None:
-    os.environ.setdefault("ROS_DOMAIN_ID", str(150 + os.getpid() % 80))
+    """The environment's ROS_DOMAIN_ID if set, else a domain nobody else on this machine uses, on this machine."""
+    global _DOMAIN_LOCK
+    if "ROS_DOMAIN_ID" not in os.environ and _DOMAIN_LOCK is None:
+        from ..ros2 import domain
+
+        _, _DOMAIN_LOCK = domain.claim()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 
