@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import signal
 import subprocess
 import sys
@@ -135,3 +136,57 @@ def test_a_killed_run_leaves_a_folder_that_recover_completes(tmp_path):
     assert topics["/clock"].msgtype == "rosgraph_msgs/msg/Clock" and len(clock) > 10
     with open(mcap, "rb") as f:
         assert count == sum(1 for _ in make_reader(f).iter_messages())
+
+
+def test_outputs_of_a_folder_lie_beside_it_and_the_folder_keeps_the_bag_alone(recorded, tmp_path):
+    shutil.copytree(recorded / "match", tmp_path / "match")
+    folder = tmp_path / "match"
+    report = subprocess.run([*SIMATCH, "report", str(folder)], check=True, capture_output=True, text=True)
+    assert (tmp_path / "match.html").is_file() and "wrote" in report.stdout, report.stdout
+    subprocess.run([*SIMATCH, "export", str(folder), "--format", "csv"], check=True, capture_output=True)
+    assert (tmp_path / "match_tables" / "events.csv").is_file()
+    # from inside the folder too ("simatch report ." names the page after the folder)
+    (tmp_path / "match.html").unlink()
+    subprocess.run([*SIMATCH, "report", "."], cwd=folder, check=True, capture_output=True)
+    assert (tmp_path / "match.html").is_file()
+    assert sorted(p.name for p in folder.iterdir()) == ["match_0.mcap", "metadata.yaml"]
+    topics, clock, _ = _read(folder)
+    assert len(clock) == 40
+
+
+def test_export_rosbag2_of_a_folder_writes_its_missing_metadata(recorded, tmp_path):
+    folder = tmp_path / "match"
+    shutil.copytree(recorded / "match", folder)
+    (folder / rosbag2.METADATA).unlink()
+    with pytest.raises(Exception, match="metadata"):
+        _read(folder)
+    out = subprocess.run(
+        [*SIMATCH, "export", str(folder), "--format", "rosbag2"], check=True, capture_output=True, text=True
+    )
+    assert str(folder) in out.stdout
+    topics, clock, count = _read(folder)
+    ref_topics, ref_clock, ref_count = _read(recorded / "match")
+    assert count == ref_count and set(topics) == set(ref_topics) and len(clock) == len(ref_clock)
+    written = (folder / rosbag2.METADATA).read_text()
+    assert written == (recorded / "match" / rosbag2.METADATA).read_text()
+
+
+@pytest.mark.parametrize("files", [0, 2])
+def test_a_folder_without_exactly_one_recording_is_refused_in_one_line(recorded, tmp_path, files):
+    folder = tmp_path / "odd"
+    folder.mkdir()
+    for i in range(files):
+        shutil.copy(recorded / "plain.mcap", folder / f"part{i}.mcap")
+    before = sorted(p.name for p in folder.iterdir())
+    for command in (
+        ["replay", str(folder), "--info"],
+        ["report", str(folder)],
+        ["recover", str(folder)],
+        ["export", str(folder), "--format", "csv"],
+        ["export", str(folder), "--format", "rosbag2"],
+        ["export", str(folder), "--format", "rosbag1"],
+    ):
+        bad = subprocess.run([*SIMATCH, *command], capture_output=True, text=True)
+        assert bad.returncode == 2, (command, bad.stdout, bad.stderr)
+        assert bad.stderr.count("\n") == 1 and "one .mcap" in bad.stderr, (command, bad.stderr)
+    assert sorted(p.name for p in folder.iterdir()) == before  # nothing written, nothing lost

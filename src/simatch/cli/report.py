@@ -16,19 +16,25 @@ def add_parser(sub) -> None:
         "and event timeline with the referee's reasons, possession over time, the shots on the field, heat maps "
         "of the ball and of each team, distance and top speed per robot, role time, the game stages.",
     )
-    p.add_argument("file", metavar="FILE.mcap", help="a recording")
-    p.add_argument("-o", "--out", metavar="REPORT.html", help="where to write it (default: FILE.html beside FILE)")
+    p.add_argument("file", metavar="FILE.mcap|DIR", help="a recording (or a rosbag2 folder of --record DIR/)")
+    p.add_argument(
+        "-o",
+        "--out",
+        metavar="REPORT.html",
+        help="where to write it (default: FILE.html beside FILE or DIR.html beside DIR)",
+    )
     p.add_argument("--force", action="store_true", help="overwrite an existing report")
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
+    from ..record import rosbag2
     from ..record.reader import RecordingError
     from ..report.match_report import write_match_report
     from ..report.recorded import analyse_recording
 
     src = Path(args.file)
-    out = Path(args.out) if args.out else src.with_suffix(".html")
+    out = Path(args.out) if args.out else rosbag2.beside(src, ".html")
     if out.suffix.lower() not in (".html", ".htm"):
         raise UsageError(f"{out}: a report is an HTML file: give a name ending in .html")
     if out.exists() and not args.force:

@@ -70,7 +70,7 @@ class Recording:
         self._codecs: dict[int, Codec] = {}
         self._reported: set[str] = set()
         if self.path.is_dir():
-            raise RecordingError(f"{self.path}: a folder without exactly one .mcap recording in it")
+            raise RecordingError(f"{self.path}: {rosbag2.NOT_ONE}")
         if not self.path.is_file():
             raise RecordingError(f"{self.path}: no such recording")
         self._scan()

@@ -84,7 +84,7 @@ def recover(
     folder = Path(path).is_dir()
     src = rosbag2.recording_in(path)
     if folder and src.is_dir():
-        raise RecoverError(f"{src}: a folder without exactly one .mcap recording in it")
+        raise RecoverError(f"{src}: {rosbag2.NOT_ONE}")
     if not src.is_file():
         raise RecoverError(f"{src}: no such file")
     if being_written(src):

@@ -43,6 +43,10 @@ def is_folder(target: str | os.PathLike) -> bool:
     return text.endswith(("/", os.sep)) or (path.is_dir() and not any(path.iterdir()))
 
 
+#: what simatch's commands say of a folder that is no rosbag2 recording
+NOT_ONE = "a folder without exactly one .mcap recording in it"
+
+
 def recording_in(path: str | os.PathLike) -> Path:
     """The recording file of ``path``: a file as it is, a folder's one ``.mcap`` file (a rosbag2 folder written
     by ``--record DIR/`` or by ``ros2 bag``); a folder with none or several is returned as it is (the reader
@@ -55,13 +59,24 @@ def recording_in(path: str | os.PathLike) -> Path:
     return path
 
 
+def beside(path: str | os.PathLike, suffix: str) -> Path:
+    """Where an output of the recording ``path`` goes by default: beside it, named after it with ``suffix``
+    (``.html``, ``.bag``, ``_tables``) in place of ``.mcap``; for a rosbag2 folder, beside the folder (which
+    keeps the bag alone), named after the folder."""
+    path = Path(path)
+    if path.is_dir():
+        path = path.resolve()
+        return path.with_name(path.name + suffix)
+    return path.with_name(path.stem + suffix)
+
+
 def complete(folder: str | os.PathLike) -> Path:
     """(Re)write the ``metadata.yaml`` of a folder holding one recording, counted from the file (a run killed
     before it wrote it); returns the metadata's path."""
     folder = Path(folder)
     mcap = recording_in(folder)
     if mcap == folder:
-        raise Rosbag2Error(f"{folder} holds no single .mcap recording")
+        raise Rosbag2Error(f"{folder}: {NOT_ONE}")
     channels, start, end = scan(mcap)
     try:
         return write_metadata(folder, mcap.name, channels, start, end)

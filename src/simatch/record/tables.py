@@ -37,7 +37,7 @@ from rosbags.interfaces import Nodetype
 
 from .. import msgs
 from ..bus import topics
-from . import layout
+from . import layout, rosbag2
 from .reader import Recording
 
 FORMATS = ("parquet", "csv")
@@ -325,12 +325,12 @@ def export(
     path: str | Path, fmt: str = "parquet", out: str | Path | None = None
 ) -> tuple[Path, dict[str, int], Recording]:
     """Write the tables of the recording at ``path`` into folder ``out`` (default: next to the recording,
-    ``<name>_tables``); returns the folder, the row count of each table, and the recording (its
-    ``problems`` say what was damaged)."""
+    ``<name>_tables``; a rosbag2 folder's beside the folder, which then holds the bag alone); returns the
+    folder, the row count of each table, and the recording (its ``problems`` say what was damaged)."""
     if fmt not in FORMATS:
         raise ExportError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
     rec = Recording(path)
-    folder = Path(out) if out is not None else rec.path.with_name(rec.path.stem + "_tables")
+    folder = Path(out) if out is not None else rosbag2.beside(path, "_tables")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

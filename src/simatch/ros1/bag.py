@@ -28,6 +28,7 @@ from rosbags.rosbag1 import Writer, WriterError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from ..bus import topics as T
+from ..record import rosbag2
 from ..record.reader import Recording
 from . import convert
 from . import names as N
@@ -81,7 +82,7 @@ def export_rosbag1(path: str | Path, out: str | Path | None = None) -> tuple[Pat
     rec = Recording(path)
     spec = rec.scene().spec
     names = Names(spec)
-    target = Path(out) if out else Path(path).with_suffix(".bag")
+    target = Path(out) if out else rosbag2.beside(path, ".bag")
     if target.exists():
         target.unlink()
     store = typestore()
