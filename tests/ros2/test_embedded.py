@@ -13,13 +13,20 @@ from .conftest import RosProcesses
 pytestmark = pytest.mark.slow
 
 
-def test_an_embedded_run_on_the_ros2_graph(rosprocs: RosProcesses):
+@pytest.mark.parametrize("command", ["run", "server"])
+def test_an_embedded_run_on_the_ros2_graph(rosprocs: RosProcesses, command):
+    """``simatch run --ros2``, and ``simatch server --ros2`` (the same observer, beside the server's teams; here
+    with no team to wait for)."""
     ps = rosprocs
     watch = ps.client("watch.py", "60", str(ps.tmp / "watch.json"), "cyan", "magenta")
     place = ps.client("place.py", "3.0", "2.0", str(ps.tmp / "place.json"))
-    run = ps.start(
-        "run", "msl_5v5", "--realtime", "--duration", "8", "--ros2", "--quiet", "--json", name="run",
-    )  # fmt: skip
+    if command == "run":
+        run = ps.start(
+            "run", "msl_5v5", "--realtime", "--duration", "8", "--ros2", "--quiet", "--json", name="run",
+        )  # fmt: skip
+    else:
+        alone = ["--set", "teams.cyan.strategy=none", "--set", "teams.magenta.strategy=none"]
+        run = ps.server("msl_5v5", "--realtime", "--duration", "8", "--ros2", *alone)
     assert ps.wait(run, 180) == 0, ps.stderr(run)
     out = json.loads(ps.stdout(run))
     assert ps.wait(place, 60) == 0, ps.stderr(place)
