@@ -4,7 +4,8 @@ One refereed msl_5v5 run in real time (the watchdog keeps a command 0.5 s: the m
 is played from ROS 2 through a team bridge (cyan's credential), magenta stands; an observer bridge (the
 organiser's credential) publishes the ground truth and /clock. A client drives cyan/2 with cmd_vel and
 records its odom and /clock, then sends a NaN command; another watches markers, /tf, both teams'
-match_mode and the events.
+match_mode and the events; at the end a third places the ball through the observer (the organiser's
+set_model_state, forwarded to the server's world service).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from .conftest import RosProcesses
 pytestmark = pytest.mark.slow
 
 VX = -1.0  # [m/s] cyan/2 drives back from its start (-3.5, 1): nothing in its way for 3 m
+BALL_AT = (3.0, -2.0)  # [m] where the organiser's client places the ball (world frame), after the driving
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +52,8 @@ def match(tmp_path_factory, ros_interfaces):
         drive = ps.client("drive.py", "/cyan/robot2", str(VX), "0", "0", "2.5", str(tmp / "drive.json"), "--nan")
         assert ps.wait(drive, 150) == 0, ps.stderr(drive)
         assert ps.wait(watch, 150) == 0, ps.stderr(watch)
+        place = ps.client("place.py", *map(str, BALL_AT), str(tmp / "place.json"))
+        assert ps.wait(place, 120) == 0, ps.stderr(place)
         server.send_signal(signal.SIGINT)
         result = ps.result(server, codes=(130,))
         ps.wait(team, 30)
@@ -57,6 +61,7 @@ def match(tmp_path_factory, ros_interfaces):
         yield {
             "drive": json.loads((tmp / "drive.json").read_text()),
             "watch": json.loads((tmp / "watch.json").read_text()),
+            "place": json.loads((tmp / "place.json").read_text()),
             "result": result,
             "team_err": ps.stderr(team),
             "observer_err": ps.stderr(observer),
@@ -132,3 +137,8 @@ def test_perceived_obstacles_are_where_the_robots_stand(match):
     assert len(seen) == 9  # every other robot
     for x, y, _ in load_scene("msl_5v5").spec.teams["magenta"].start:  # magenta stands at its start (world frame)
         assert np.min(np.hypot(seen[:, 0] - x, seen[:, 1] - y)) < 0.05, (x, y, seen)
+
+
+def test_the_organisers_bridge_places_the_ball_on_the_server(match):
+    after = match["place"]["after"]
+    assert any(abs(x - BALL_AT[0]) < 0.05 and abs(y - BALL_AT[1]) < 0.05 for _, x, y in after), after
