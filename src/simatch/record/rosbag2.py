@@ -146,6 +146,7 @@ def write_metadata(
 
     yaml = YAML(typ="safe")
     yaml.default_flow_style = False
+    yaml.width = 4096  # a type hash on its key's line, as ros2 bag writes it (a folded one is valid YAML too)
     path = folder / METADATA
     tmp = path.with_suffix(".yaml.tmp")
     with open(tmp, "w", encoding="utf-8") as f:
