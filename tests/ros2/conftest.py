@@ -61,6 +61,30 @@ class RosProcesses(Processes):
             name=name,
         )
 
+    def cyan_from_ros(self) -> subprocess.Popen:
+        """A refereed msl_5v5 served in real time, cyan to be played from ROS 2, magenta standing; returned when it
+        listens (the watchdog keeps a command 0.5 s: the machine may be busy)."""
+        server = self.server(
+            "msl_5v5", "--realtime", "--duration", "600", "--set", "control.command_timeout=0.5",
+            "--set", "teams.cyan.strategy=external", "--set", "teams.magenta.strategy=none",
+        )  # fmt: skip
+        self.wait_for_line(server, "listening", 60)
+        return server
+
+    def observer_and_team(self) -> tuple[subprocess.Popen, subprocess.Popen]:
+        """The organiser's observer bridge (ground truth, /clock), once it publishes, and cyan's team bridge."""
+        observer = self.bridge(name="observer")
+        self.wait_for_line(observer, "publishes the ground truth", 90)
+        return observer, self.bridge("--team", "cyan", "--no-clock", key="cyan", name="team")
+
+    def end(self, server: subprocess.Popen, *bridges: subprocess.Popen) -> dict:
+        """Stop the server as Ctrl-C does; its result, once the bridges left with it."""
+        server.send_signal(signal.SIGINT)
+        result = self.result(server, codes=(130,))
+        for p in bridges:
+            self.wait(p, 30)
+        return result
+
     def client(self, script: str, *args: str, name: str | None = None) -> subprocess.Popen:
         return self.start(*args, program=[sys.executable, str(CLIENTS / script)], name=name or script)
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import math
-import signal
 
 import numpy as np
 import pytest
@@ -32,32 +31,15 @@ def match(tmp_path_factory, ros_interfaces):
     tmp = tmp_path_factory.mktemp("ros2match")
     ps = RosProcesses(tmp)
     try:
-        server = ps.server(
-            "msl_5v5",
-            "--realtime",
-            "--duration",
-            "600",
-            "--set",
-            "control.command_timeout=0.5",
-            "--set",
-            "teams.cyan.strategy=external",
-            "--set",
-            "teams.magenta.strategy=none",
-        )
-        ps.wait_for_line(server, "listening", 60)
+        server = ps.cyan_from_ros()
         watch = ps.client("watch.py", "90", str(tmp / "watch.json"), "cyan", "magenta")
-        observer = ps.bridge(name="observer")
-        ps.wait_for_line(observer, "publishes the ground truth", 90)
-        team = ps.bridge("--team", "cyan", "--no-clock", key="cyan", name="team")
+        observer, team = ps.observer_and_team()
         drive = ps.client("drive.py", "/cyan/robot2", str(VX), "0", "0", "2.5", str(tmp / "drive.json"), "--nan")
         assert ps.wait(drive, 150) == 0, ps.stderr(drive)
         assert ps.wait(watch, 150) == 0, ps.stderr(watch)
         place = ps.client("place.py", *map(str, BALL_AT), str(tmp / "place.json"))
         assert ps.wait(place, 120) == 0, ps.stderr(place)
-        server.send_signal(signal.SIGINT)
-        result = ps.result(server, codes=(130,))
-        ps.wait(team, 30)
-        ps.wait(observer, 30)
+        result = ps.end(server, team, observer)
         yield {
             "drive": json.loads((tmp / "drive.json").read_text()),
             "watch": json.loads((tmp / "watch.json").read_text()),

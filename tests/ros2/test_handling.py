@@ -6,7 +6,6 @@ takes and kicks the ball, ``omni_vision``, ``holding_ball``, ``teammates``, ``/<
 from __future__ import annotations
 
 import json
-import signal
 
 import pytest
 
@@ -22,20 +21,11 @@ def handled(tmp_path_factory, ros_interfaces):
     tmp = tmp_path_factory.mktemp("ros2handle")
     ps = RosProcesses(tmp)
     try:
-        server = ps.server(
-            "msl_5v5", "--realtime", "--duration", "600", "--set", "control.command_timeout=0.5",
-            "--set", "teams.cyan.strategy=external", "--set", "teams.magenta.strategy=none",
-        )  # fmt: skip
-        ps.wait_for_line(server, "listening", 60)
-        observer = ps.bridge(name="observer")
-        ps.wait_for_line(observer, "publishes the ground truth", 90)
-        team = ps.bridge("--team", "cyan", "--no-clock", key="cyan", name="team")
+        server = ps.cyan_from_ros()
+        observer, team = ps.observer_and_team()
         handle = ps.client("handle.py", "cyan", "2", str(KICK), str(tmp / "handle.json"))
         assert ps.wait(handle, 240) == 0, ps.stderr(handle)
-        server.send_signal(signal.SIGINT)
-        result = ps.result(server, codes=(130,))
-        ps.wait(team, 30)
-        ps.wait(observer, 30)
+        result = ps.end(server, team, observer)
         yield json.loads((tmp / "handle.json").read_text()), result
     finally:
         ps.close()
