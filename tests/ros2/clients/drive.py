@@ -2,9 +2,10 @@
 
     python drive.py NAMESPACE VX VY W SECONDS OUT.json [--nan]
 
-Waits (up to 60 s) for the robot's first odom, then publishes cmd_vel at 50 Hz of wall time for SECONDS of
-simulated time (/clock), recording every odom (simulated stamp, map pose, body twist) and /clock. With --nan
-it then publishes one cmd_vel whose linear.x is NaN and keeps recording for one more simulated second.
+A node with ``use_sim_time`` (it notes its clock at each odom). Waits (up to 60 s) for the robot's first
+odom, then publishes cmd_vel at 50 Hz of wall time for SECONDS of simulated time (/clock), recording every
+odom (simulated stamp, map pose, body twist) and /clock. With --nan it then publishes one cmd_vel whose
+linear.x is NaN and keeps recording for one more simulated second.
 """
 
 import json
@@ -15,6 +16,7 @@ import time
 import rclpy
 from geometry_msgs.msg import PoseArray, Twist
 from nav_msgs.msg import Odometry
+from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
 
@@ -23,7 +25,9 @@ def main() -> None:
     ns, vx, vy, w, seconds, out = sys.argv[1], *map(float, sys.argv[2:6]), sys.argv[6]
     nan = "--nan" in sys.argv
     rclpy.init()
-    node = rclpy.create_node("drive_test")
+    # a node on simulated time, as ROS 2 users run theirs with a simulator: its clock is /clock's
+    node = rclpy.create_node("drive_test", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+    node_time = []  # (odom's stamp, the node's clock when the odom came)
     odom, clock, sent = [], [], []
 
     def on_odom(m):
@@ -43,6 +47,7 @@ def main() -> None:
                 m.child_frame_id,
             ]
         )
+        node_time.append([stamp, node.get_clock().now().nanoseconds * 1e-9])
 
     node.create_subscription(Odometry, f"{ns}/odom", on_odom, qos_profile_sensor_data)
     node.create_subscription(
@@ -97,6 +102,7 @@ def main() -> None:
                 "last_sent": sent[-1] if sent else None,
                 "nan_at": nan_at,
                 "obstacles": obstacles[-1] if obstacles else [],
+                "node_time": node_time,
             },
             f,
         )
