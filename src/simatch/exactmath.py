@@ -143,3 +143,15 @@ TWO_PI = 2.0 * math.pi
 def wrap(a: float) -> float:
     """An angle in [-pi, pi]: ``math.remainder(a, 2 pi)`` of CPython, bit for bit."""
     return remainder(a, TWO_PI)
+
+
+@numba.njit(cache=True, nogil=True)
+def pymin(a: float, b: float) -> float:
+    """Python's ``min(a, b)`` in a kernel: the first of equals (``min(0.0, -0.0)`` is 0.0)."""
+    return b if b < a else a
+
+
+@numba.njit(cache=True, nogil=True)
+def pymax(a: float, b: float) -> float:
+    """Python's ``max(a, b)`` in a kernel: the first of equals."""
+    return b if b > a else a

@@ -63,6 +63,7 @@ class WorldModel:
         self.time = 0.0
         self.tick = 0
         self._ball: Ball | None = None
+        self._me = None  # my RobotInfo in the latest observation (found on first use)
         self._last_ball = None  # the BallInfo of the last observation that saw the ball
         self._last_seen = -math.inf
 
@@ -75,6 +76,7 @@ class WorldModel:
             self._last_seen = msg.stamp
             self._last_ball = msg.ball
         self._ball = None  # built on first use this tick
+        self._me = None
 
     def on_team(self, msg) -> None:
         self.strategies = {s.agent_id: s for s in msg.strategies}
@@ -101,10 +103,14 @@ class WorldModel:
     @property
     def me(self):
         """My RobotInfo (team frame)."""
-        for r in self.vision.robots:
-            if r.id == self.id:
-                return r
-        raise LookupError(f"robot {self.id} is missing from its own perception")
+        me = self._me
+        if me is None:
+            for r in self.vision.robots:
+                if r.id == self.id:
+                    self._me = r
+                    return r
+            raise LookupError(f"robot {self.id} is missing from its own perception")
+        return me
 
     @property
     def teammates(self) -> list:
