@@ -15,37 +15,27 @@ from .base import AnyCallback, BusStats, Callback
 
 
 class _Publisher:
-    """A topic's sending end. ``put(msg)`` delivers to every subscriber, in subscription order; ``active``
-    says whether anybody listens. Both are plain attributes, set again whenever a subscriber comes or goes:
-    with one subscriber (a robot's commands, its perception) ``put`` *is* that subscriber's callback, so a
-    delivery costs no Python frame of the bus's own."""
+    """A topic's sending end: ``put(msg)`` delivers to every subscriber, in subscription order. ``active``
+    (whether anybody listens) is a plain attribute, set again whenever a subscriber comes or goes: it is
+    read before building a message that nobody may want, hundreds of times per simulated second."""
 
-    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "put", "active")
+    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "active")
 
     def __init__(self, bus: InProcessBus, topic: str, msgtype: Any):
         self.topic = topic
         self.msgtype = msgtype
         self._bus = bus
         self._callbacks: list[Callback] = []
-        self._rebind()
+        self.active = False
 
     def _rebind(self) -> None:
-        callbacks = self._callbacks
-        self.active = bool(callbacks)
-        if not callbacks:
-            self.put = _nobody
-        elif len(callbacks) == 1:
-            self.put = callbacks[0]
-        else:
-            self.put = self._put_all
+        self.active = bool(self._callbacks)
 
-    def _put_all(self, msg: Any) -> None:
+    # (a method, looked up at each call: a sender may keep the bound ``put``, and must still reach
+    # subscribers that come later)
+    def put(self, msg: Any) -> None:
         for cb in self._callbacks:
             cb(msg)
-
-
-def _nobody(msg: Any) -> None:
-    """``put`` of a topic nobody listens to."""
 
 
 class _Subscription:

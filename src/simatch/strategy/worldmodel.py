@@ -59,7 +59,8 @@ class WorldModel:
         self.vision = None  # latest OmniVisionInfo
         self.coach = None  # latest CoachInfo
         self.game = None  # latest GameState from the judge (None if it publishes none)
-        self.strategies: dict = {}  # teammate id -> latest StrategyInfo (from the team picture)
+        self.team_strategy = None  # latest TeamStrategy (the team's fused StrategyInfo)
+        self._strategies: dict | None = {}
         self.time = 0.0
         self.tick = 0
         self._ball: Ball | None = None
@@ -79,7 +80,20 @@ class WorldModel:
         self._me = None
 
     def on_team(self, msg) -> None:
-        self.strategies = {s.agent_id: s for s in msg.strategies}
+        self.team_strategy = msg
+        self._strategies = None  # made on first use (the robots of a team share the message)
+
+    @property
+    def strategies(self) -> dict:
+        """Teammate id -> latest StrategyInfo (from the team picture)."""
+        found = self._strategies
+        if found is None:
+            found = self._strategies = {s.agent_id: s for s in self.team_strategy.strategies}
+        return found
+
+    @strategies.setter
+    def strategies(self, value: dict) -> None:
+        self._strategies = value
 
     def on_coach(self, msg) -> None:
         self.coach = msg

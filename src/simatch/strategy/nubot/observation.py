@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from itertools import chain
-from operator import is_
 
 import numba
 import numpy as np
@@ -74,27 +73,22 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array")
+    __slots__ = ("tick", "robots", "team_strategy", "mates", "by_id", "array")
 
     def __init__(self):
         self.tick = -1
         self.robots = None
-        self.infos: tuple = ()
+        self.team_strategy = None
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
         self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
-        strategies = world.strategies
-        infos = self.infos
-        if (
-            self.tick == world.tick
-            and self.robots is robots
-            and len(infos) == len(strategies)
-            and all(map(is_, infos, strategies.values()))
-        ):
+        team = world.team_strategy
+        if self.tick == world.tick and self.robots is robots and self.team_strategy is team:
             return self.mates, self.by_id, self.array
+        strategies = world.strategies
         gk = world.goalkeeper
         mates = []
         told = strategies.get
@@ -109,7 +103,7 @@ class TeamView:
             mates.append(
                 Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
             )
-        self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
+        self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
         return self.mates, self.by_id, self.array
