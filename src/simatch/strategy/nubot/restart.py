@@ -62,7 +62,7 @@ class RestartTaker:
             return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION, pass_intent=self.player.pass_intent(obs))
         receiver = None
         if flow.kind == MODES.OUR_PENALTY:
-            aim_y, _ = shot_window(bx, by, obs.opps, self.L2, self.goal_half, p.shot_speed)
+            aim_y, _ = shot_window(bx, by, obs.opp_array, self.L2, self.goal_half, p.shot_speed)
             ax, ay, speed = self.L2 + 0.3, aim_y, p.shot_speed
         else:
             slot = pic.slots.get(me.id)
