@@ -28,7 +28,7 @@ import numpy as np
 from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
-from .evaluate import lane_clear, pass_speed, position_value, shot_window
+from .evaluate import POST_MARGIN, lane_clear, pass_speed, position_value, shot_window
 from .gameflow import PHASES, GameFlow
 from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion
@@ -208,7 +208,7 @@ class BallPlayer:
         plan = None
         # 1. shoot, when part of the goal stays open and there is time to turn to it
         if can_score and math.hypot(L2 - bx, by) < p.shoot_range:
-            aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed)
+            aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed, POST_MARGIN)
             need = SHOT_KEEP_WIDTH if (prev and prev[0] == "shoot") else SHOT_WIDTH
             if left < 0.4 or threat < 0.8:
                 need = 0.025
@@ -277,7 +277,7 @@ class BallPlayer:
             if d < 1.8 or d > p.max_pass:
                 continue
             v = pass_speed(d, p.pass_arrival_speed, p.ball_deceleration)
-            margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed))
+            margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
             if margin < 0.15:
                 continue
             near = min((math.hypot(o[0] - cx, o[1] - cy) for o in obs.opps), default=9.0)
@@ -287,7 +287,8 @@ class BallPlayer:
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(
-                    shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed)[1], 0.15
+                    shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[1],
+                    0.15,
                 )
             out.append((value, m.id, cx, cy, v))
         return out
@@ -314,7 +315,7 @@ class BallPlayer:
         tx, ty = me.x + 4.0 * c, me.y + 4.0 * s
         if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
             return None
-        if lane_clear(obs.bx, obs.by, tx, ty, obs.opp_array, CLEAR_SPEED) < 0.0:
+        if lane_clear(obs.bx, obs.by, tx, ty, obs.opp_array, CLEAR_SPEED, 0.0) < 0.0:
             return None  # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
         # opponents' throw-in (most of these kicks used to go out)
@@ -340,7 +341,7 @@ class BallPlayer:
         p = self.p
         L2 = self.areas.L2
         if can_score:
-            aim_y, _ = shot_window(obs.bx, obs.by, obs.opp_array, L2, self.goal_half, p.shot_speed)
+            aim_y, _ = shot_window(obs.bx, obs.by, obs.opp_array, L2, self.goal_half, p.shot_speed, POST_MARGIN)
             return ("shoot", L2 + 0.3, aim_y, p.shot_speed, 0.0)
         tx, ty = self.dribble_target(obs, 2.5)[1:3]
         d = max(2.0, math.hypot(tx - obs.bx, ty - obs.by))
@@ -510,7 +511,7 @@ def _dribble_choice(
         score = position_value(tx, ty, opps, L2)
         score += 0.35 * pymin(lane_clear(x, y, tx, ty, opps, 1.5, 0.0), 0.5)
         if can_score and tx > 0.0 and L2 - tx < shoot_range:
-            score += OPEN_GOAL_VALUE * pymin(shot_window(tx, ty, opps, L2, goal_half, shot_speed, 0.22)[1], 0.15)
+            score += OPEN_GOAL_VALUE * pymin(shot_window(tx, ty, opps, L2, goal_half, shot_speed, POST_MARGIN)[1], 0.15)
         # away from opponents closing in: keep the body between them and the ball
         for j in range(opps.shape[0]):
             rx, ry = opps[j, 0] - x, opps[j, 1] - y

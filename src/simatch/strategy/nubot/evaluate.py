@@ -7,6 +7,8 @@ The judges are compiled kernels (numba, cached on disk): the robot with the ball
 directions and every pass each control tick, a few hundred small loops over the opponents. ``opps`` is
 the observation's (M, 4) array of x, y, vx, vy (`Observation.opp_array`). The float operations are those
 of the Python they replaced, with CPython's hypot (simatch.exactmath), so a run is the same bit for bit.
+Their arguments have no defaults: a kernel called from Python with a default left out takes numba's slow
+path (tens of microseconds) at every call.
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ MAX_REACH = 0.9  # an opponent covers at most this much beyond its body during a
 #: a shot is seen only once it is under way: a defender (a goalkeeper fitting the ball's path) starts to
 #: move this long after the kick [s]
 SHOT_REACTION = 0.15
+#: the goal posts are kept this far out of a shot's window [m]
+POST_MARGIN = 0.22
+#: opponents this close to a point crowd it [m]
+PRESSURE_RADIUS = 2.2
 
 
 @numba.njit(cache=True, nogil=True)
@@ -34,7 +40,7 @@ def reach(t: float) -> float:
 
 @numba.njit(cache=True, nogil=True)
 def shot_window(
-    bx: float, by: float, opps: np.ndarray, goal_x: float, goal_half: float, speed: float, post_margin: float = 0.22
+    bx: float, by: float, opps: np.ndarray, goal_x: float, goal_half: float, speed: float, post_margin: float
 ) -> tuple[float, float]:
     """(aim y on the goal line, width in radians) of the widest part of the goal mouth that no opponent
     can cover before a shot at ``speed`` from (bx, by) passes it; width 0 if none is open."""
@@ -94,7 +100,7 @@ def shot_window(
 
 @numba.njit(cache=True, nogil=True)
 def lane_clear(
-    bx: float, by: float, cx: float, cy: float, opps: np.ndarray, speed: float, exclude_near_end: float = 0.0
+    bx: float, by: float, cx: float, cy: float, opps: np.ndarray, speed: float, exclude_near_end: float
 ) -> float:
     """Smallest margin (m) by which opponents miss the ball on its way from B to C at ``speed`` (negative
     when one can get in the way). Opponents that can reach the lane while the ball passes count."""
@@ -124,7 +130,7 @@ def lane_clear(
 
 
 @numba.njit(cache=True, nogil=True)
-def pressure(x: float, y: float, opps: np.ndarray, radius: float = 2.2) -> float:
+def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     """How crowded a point is: the sum of how far each opponent is inside ``radius`` of it."""
     total = 0.0
     for k in range(opps.shape[0]):
@@ -137,7 +143,7 @@ def pressure(x: float, y: float, opps: np.ndarray, radius: float = 2.2) -> float
 @numba.njit(cache=True, nogil=True)
 def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float:
     """How good a place is to have the ball: near the opponents' goal, in the middle, with room."""
-    return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, 2.2)
+    return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)
 
 
 def pass_speed(distance: float, arrival: float, decel: float, lo: float = 1.6, hi: float = 7.5) -> float:
