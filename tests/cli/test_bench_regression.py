@@ -67,3 +67,9 @@ def test_bad_input_is_one_clear_line(tmp_path):
     assert out.returncode == 2 and "not the JSON of simatch bench --json" in out.stderr
     unknown = _check("--only", "no_such_figure")
     assert unknown.returncode == 2 and "no reference for no_such_figure" in unknown.stderr
+
+
+def test_match_instructions_refuses_bad_arguments_before_starting_valgrind():
+    script = ROOT / "scripts" / "match_instructions.py"
+    out = subprocess.run([sys.executable, str(script), "--seconds", "0"], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "--seconds must be positive" in out.stderr
