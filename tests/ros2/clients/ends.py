@@ -2,10 +2,10 @@
 
     python ends.py NAMESPACE TEAM VX W UNTIL OUT.json
 
-Answers every odom of the robot with one cmd_vel (VX forward, W turning: a circle), until /clock reaches
-UNTIL simulated seconds; records the robot's odom (its perception, from a team bridge), its ground_truth
-(from an observer bridge), each ``map -> TEAM/field`` frame on /tf_static (when it came, its yaw) and
-/clock.
+Says "ready" (stderr) once it heard the observer (its latched /tf_static). Answers every odom of the robot
+with one cmd_vel (VX forward, W turning: a circle), until /clock reaches UNTIL simulated seconds; records the
+robot's odom (its perception, from a team bridge), its ground_truth (from an observer bridge), each
+``map -> TEAM/field`` frame on /tf_static (when it came, its yaw) and /clock.
 """
 
 import json
@@ -59,8 +59,10 @@ def main() -> None:
     )
     node.create_subscription(TFMessage, "/tf_static", on_static, latched)
     node.create_subscription(Clock, "/clock", lambda m: seen["clock"].append(seconds(m.clock)), qos_profile_sensor_data)
-    print("driving", flush=True)
     limit = time.monotonic() + 150
+    while not seen["field"] and time.monotonic() < limit:  # the observer found (its /tf_static is latched)
+        rclpy.spin_once(node, timeout_sec=0.05)
+    print("ready", file=sys.stderr, flush=True)
     while (not seen["clock"] or seen["clock"][-1] < until) and time.monotonic() < limit:
         rclpy.spin_once(node, timeout_sec=0.05)
     with open(out, "w") as f:
