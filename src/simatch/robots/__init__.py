@@ -13,6 +13,7 @@ from .base import HULL_HEIGHT, OmniParams, RobotModel
 SHIPPED = {
     "omni4": "simatch.robots.omni4:Omni4",
     "omni3": "simatch.robots.omni3:Omni3",
+    "quadrotor": "simatch.robots.quadrotor:Quadrotor",
 }
 
 

@@ -13,14 +13,14 @@ import numpy as np
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from .base import Command, RobotStrategy
-from .hwcontroller import velocity_towards
+from .hwcontroller import climb_towards, velocity_towards
 from .worldmodel import WorldModel
 
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
 # built positionally (three messages per robot and control tick; see msgs.positional)
-_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
+_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w vz")
 _ActionCmd = msgs.positional(
     msgs.ActionCmd,
     "stamp tick move_action rotate_action rotate_mode target_x target_y "
@@ -106,11 +106,12 @@ class RobotNode(Node):
             move, (tx, ty) = _MOVE, target
         rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
         tvx, tvy = cmd.target_vel
+        vz = cmd.vz if cmd.altitude is None else self._climb(cmd)
         # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
-        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(
-            vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed
+        vx, vy, w, vz, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(
+            vx, vy, w, vz, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed
         )
-        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
+        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w, vz))
         self.pub_action.put(
             _ActionCmd(
                 now,
@@ -132,6 +133,13 @@ class RobotNode(Node):
         )
         if self.pub_info.active:
             self.pub_info.put(self.strategy_info(now, tick, cmd))
+
+    def _climb(self, cmd: Command) -> float:
+        try:
+            z = self.world.me.z
+        except LookupError:
+            return 0.0
+        return climb_towards(z, cmd.altitude, cmd.max_vz)
 
     def strategy_info(self, now: float, tick: int, cmd: Command):
         p = cmd.pass_intent
