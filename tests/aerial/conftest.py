@@ -6,7 +6,7 @@ import pytest
 
 import simatch
 from simatch.config.loader import scene_from_text
-from tests.web.conftest import browser, live, open_page  # noqa: F401  (the web UI's fixtures, for test_web)
+from tests.web.conftest import live, open_page  # noqa: F401  (the web UI's fixtures, for test_web)
 
 ARENA = """
 name = "{name}"

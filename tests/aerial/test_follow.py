@@ -4,6 +4,7 @@ states and set/apply interface work on drones."""
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -39,9 +40,16 @@ def test_a_recorded_chase_with_interventions_on_drones_reproduces_bit_for_bit(tm
         with Recorder.for_run(sim, path, command_line=["pytest"]):
             intervene(sim)
         digest = sim.state_digest()
-    verdict = verify(path)
+    # from the world's inputs alone (the drones' commands, with their climb rates, are among them) ...
+    verdict = verify(path, mode="inputs")
     assert verdict.identical and verdict.complete, verdict.describe()
-    assert verdict.operator_commands == 6
+    calls = [c for _, _, m in Recording(path).messages(topics={"world_inputs"}) for c in m.calls]
+    climbs = [json.loads(c) for c in calls if c.startswith('["command_velocity"')]
+    assert climbs and all(len(args) == 5 for _, args, _ in climbs)  # (robot, vx, vy, w, vz)
+    assert any('"set_rotor"' in c for c in calls)
+    # ... and by running the strategies and the judge again, the interventions re-applied
+    verdict = verify(path, mode="strategies")
+    assert verdict.identical and verdict.operator_commands == 6, verdict.describe()
     with simatch.Simulation("pursuit_evasion_3d", seed=3) as again:  # the same calls, the same run
         intervene(again)
         assert again.state_digest() == digest

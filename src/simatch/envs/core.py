@@ -100,16 +100,19 @@ class LearningRun:
         self.layouts: dict[str, Layout] = {}
         self.teammate_ids: dict[str, list[int]] = {}
         self.team_of_robot = {name: name.partition("/")[0] for name in spec.robot_names()}
+        # in a scene with aerial robots every observation has their heights (docs/aerial.md)
+        airborne = any(model_class(m.model).locomotion == "aerial" for t in spec.teams.values() for m in t.members())
         for name in self.agents:
             team, _, rid = name.partition("/")
             tspec = spec.teams[team]
             self.info[name] = Agent(name, team, geo.half_length)
-            model = model_class(tspec.model)(tspec.model_params)
+            member = next(m for m in tspec.members() if m.id == int(rid))  # (a squad may hold other models)
+            model = model_class(member.model)(member.model_params)
             self.limits[name] = actions.Limits.of(model, spec.kicker, max_vel, max_w)
             self.teammate_ids[name] = [r for r in tspec.robot_ids() if r != int(rid)]
             t = len(tspec.robot_ids()) - 1 if teammates is None else teammates
             k = n_robots - 1 if obstacles is None else obstacles
-            self.layouts[name] = Layout(t, k, geo.half_length)
+            self.layouts[name] = Layout(t, k, geo.half_length, heights=airborne)
         self.sim: Simulation | None = None
         self.closed = False
         self.over = True  # no episode in progress
@@ -160,9 +163,9 @@ class LearningRun:
             a = actions_by_agent[name]
             lim = self.limits[name]
             if self.action_type == "box":
-                out[name] = lim.command(actions.check_box(name, a, self.strict_actions))
+                out[name] = lim.command(actions.check_box(name, a, self.strict_actions, lim.size))
             else:
-                out[name] = lim.discrete(actions.check_discrete(name, a))
+                out[name] = lim.discrete(actions.check_discrete(name, a, lim.moves))
         return out
 
     def step(self, actions_by_agent: Mapping[str, Any]):

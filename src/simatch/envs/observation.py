@@ -68,6 +68,9 @@ GOALS = (
 )
 OBSTACLE = ("present", "x", "y", "vx", "vy", "distance", "cos_angle", "sin_angle", "radius")
 GAME_SIZE = 2 * len(COMMANDS) + 2
+#: in a scene with aerial robots, a last part: my height and climb rate, then each team-mate's and each
+#: obstacle's height, in the slots' order (0 on the ground)
+HEIGHTS = ("z", "vz")
 
 #: bounds of the observation space: positions and distances [m], speeds [m/s], turn rates [rad/s]
 BOUND_POSITION = 250.0
@@ -79,12 +82,13 @@ _SEEBALLBYOWN = BallInfo.SEEBALLBYOWN
 class Layout:
     """The observation of one agent: sizes, names of every entry, bounds, and the encoder."""
 
-    def __init__(self, teammates: int, obstacles: int, half_length: float):
+    def __init__(self, teammates: int, obstacles: int, half_length: float, heights: bool = False):
         if teammates < 0 or obstacles < 0:
             raise ValueError("teammate and obstacle slots must be >= 0")
         self.teammates = int(teammates)
         self.obstacles = int(obstacles)
         self.half_length = float(half_length)
+        self.heights = bool(heights)  # a part of heights (a scene with aerial robots): see `HEIGHTS`
         self.parts: dict[str, tuple[int, ...]] = {
             "game": (GAME_SIZE,),
             "self": (len(SELF),),
@@ -95,6 +99,8 @@ class Layout:
             self.parts["teammates"] = (self.teammates, len(TEAMMATE))
         if self.obstacles:
             self.parts["obstacles"] = (self.obstacles, len(OBSTACLE))
+        if self.heights:
+            self.parts["heights"] = (len(HEIGHTS) + self.teammates + self.obstacles,)
         self.offsets: dict[str, slice] = {}
         at = 0
         for name, shape in self.parts.items():
@@ -113,6 +119,10 @@ class Layout:
         out += [f"self.{n}" for n in SELF] + [f"ball.{n}" for n in BALL] + [f"goals.{n}" for n in GOALS]
         out += [f"teammates[{i}].{n}" for i in range(self.teammates) for n in TEAMMATE]
         out += [f"obstacles[{i}].{n}" for i in range(self.obstacles) for n in OBSTACLE]
+        if self.heights:
+            out += [f"heights.self.{n}" for n in HEIGHTS]
+            out += [f"heights.teammates[{i}].z" for i in range(self.teammates)]
+            out += [f"heights.obstacles[{i}].z" for i in range(self.obstacles)]
         return out
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -224,6 +234,18 @@ class Layout:
                 axis=1,
             )
             out[at : at + k * len(OBSTACLE)] = block.ravel()
+        if self.heights:  # my height and climb rate, my team-mates' and the obstacles' heights, slot by slot
+            h = self.offsets["heights"].start
+            if me is not None:
+                out[h : h + 2] = (me.z, me.vz)
+            h += len(HEIGHTS)
+            for i, rid in enumerate(teammate_ids[: self.teammates]):
+                r = mates.get(rid)
+                if r is not None:
+                    out[h + i] = r.z
+            h += self.teammates
+            if n and self.obstacles:
+                out[h : h + k] = o.z[order]
 
 
 def _robot(r) -> tuple:

@@ -41,7 +41,7 @@ class SimatchParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         self.render_mode = None
         self._obs_spaces = {a: observation_space(self.run.layouts[a], self.form) for a in self.possible_agents}
-        self._act_spaces = {a: action_space(self.run.action_type) for a in self.possible_agents}
+        self._act_spaces = {a: action_space(self.run.action_type, self.run.limits[a]) for a in self.possible_agents}
         n = 3 * len(self.run.team_of_robot) + 6
         self.state_space = spaces.Box(-BOUND, BOUND, shape=(n,), dtype=np.float32)
         self._seeds: np.random.Generator | None = None
