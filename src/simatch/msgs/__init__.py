@@ -228,11 +228,15 @@ def positional(msgtype: Any, order: str):
 
     Hot paths (perception, commands: hundreds of messages per simulated second) build messages
     positionally, about three times faster than by keyword. The check, at import, turns a later change of
-    a ``.msg`` file into a clear error instead of fields silently swapped."""
+    a ``.msg`` file into a clear error instead of fields silently swapped; fields appended later with a
+    default value in the ``.msg`` (VelCmd's ``vz``) may be left out of ``order``: they take their default."""
     want, have = tuple(order.split()), fields(msgtype)
-    if want != have:
+    cls = typestore.types[msgtype_name(msgtype)]
+    rest = have[len(want) :]
+    defaulted = cls.__dataclass_fields__
+    if want != have[: len(want)] or any(defaulted[f].default is dataclasses.MISSING for f in rest):
         raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
-    return typestore.types[msgtype_name(msgtype)]
+    return cls
 
 
 _FLOAT32 = [struct.Struct(f"<{n}f") for n in range(17)]
