@@ -6,6 +6,7 @@ import pytest
 
 import simatch
 from simatch.config.loader import scene_from_text
+from tests.distributed.conftest import procs  # noqa: F401  (real processes, none outliving a test: test_distributed)
 from tests.web.conftest import live, open_page  # noqa: F401  (the web UI's fixtures, for test_web)
 
 ARENA = """

@@ -9,16 +9,7 @@ import subprocess
 
 import pytest
 
-from tests.distributed.cluster import ROOT, SIMATCH, Processes
-
-
-@pytest.fixture
-def procs(tmp_path):
-    ps = Processes(tmp_path)
-    try:
-        yield ps
-    finally:
-        ps.close()
+from tests.distributed.cluster import ROOT, SIMATCH
 
 
 def embedded(procs, scene: str, settings: list[str]) -> dict:
