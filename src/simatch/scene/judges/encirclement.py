@@ -172,7 +172,8 @@ class Encirclement(PlayJudge):
         team, rid = topics.split_robot_name(name)
         n, total = len(self.captured), len(self.target_names)
         detail = f"{name} captured in the {self.prison.name} ({n} of {total})"
-        self.event(now, "capture", detail, team=team, robot=rid, x=x, y=y, value=float(n), limit=float(total))
+        cx, cy = caught  # the event is where it was caught
+        self.event(now, "capture", detail, team=team, robot=rid, x=cx, y=cy, value=float(n), limit=float(total))
 
     def _stow(self, name: str, spacing: float = 0.55) -> tuple[float, float]:
         """A free place at the back of the prison (rows along its side farthest from the arena's centre, from
