@@ -77,6 +77,7 @@ class LearningRun:
         strict_actions: bool = False,
         teammates: int | None = None,
         obstacles: int | None = None,
+        structures: int | None = None,
         episode_time: float | None = None,
     ):
         if action_type not in ("box", "discrete"):
@@ -101,7 +102,9 @@ class LearningRun:
         self.teammate_ids: dict[str, list[int]] = {}
         self.team_of_robot = {name: name.partition("/")[0] for name in spec.robot_names()}
         # in a scene with aerial robots every observation has their heights (docs/aerial.md)
-        airborne = any(model_class(m.model).locomotion == "aerial" for t in spec.teams.values() for m in t.members())
+        self.airborne = airborne = any(
+            model_class(m.model).locomotion == "aerial" for t in spec.teams.values() for m in t.members()
+        )
         for name in self.agents:
             team, _, rid = name.partition("/")
             tspec = spec.teams[team]
@@ -112,7 +115,8 @@ class LearningRun:
             self.teammate_ids[name] = [r for r in tspec.robot_ids() if r != int(rid)]
             t = len(tspec.robot_ids()) - 1 if teammates is None else teammates
             k = n_robots - 1 if obstacles is None else obstacles
-            self.layouts[name] = Layout(t, k, geo.half_length, heights=airborne)
+            m = len(geo.obstacles) if structures is None else structures
+            self.layouts[name] = Layout(t, k, geo.half_length, heights=airborne, structures=m)
         self.sim: Simulation | None = None
         self.closed = False
         self.over = True  # no episode in progress
@@ -211,7 +215,9 @@ class LearningRun:
         nodes = self.sim.robot_nodes
         for name in self.agents:
             world = nodes[name].world
-            out[name] = self.layouts[name].encode(world.vision, world.coach, self.teammate_ids[name])
+            out[name] = self.layouts[name].encode(
+                world.vision, world.coach, self.teammate_ids[name], world.field.obstacles
+            )
         return out
 
     def snapshot(self) -> Snapshot:
