@@ -34,3 +34,38 @@ def test_a_team_with_a_squad_of_drones():
 def test_squad_mistakes_are_named(overrides, error):
     with pytest.raises(SceneError, match=error):
         simatch.Simulation("aerial_encirclement", overrides=overrides)
+
+
+@pytest.mark.parametrize(
+    "overrides, error",
+    [
+        ({"teams.cyan.model_params.start_altitude": 3.99}, r"teams.cyan.model_params.start_altitude: 3.99 m puts"),
+        ({"teams.magenta.model_params.start_altitude": 4.2}, r"teams.magenta.model_params.start_altitude: 4.2 m"),
+        ({"judge.scatter": [-2.0, -4.0, 1.0, 6.0, 4.0, 4.5]}, r"judge.scatter: its top z1 = 4.5 m puts the evader"),
+        ({"judge.scatter": [-2.0, -4.0, 1.0, 6.0, 4.0, 3.99]}, r"judge.scatter: its top z1 = 3.99 m .* ceiling"),
+        ({"judge.scatter": [-2.0, -4.0, 0.01, 6.0, 4.0, 3.0]}, r"judge.scatter: its bottom z0 = 0.01 m .* floor"),
+    ],
+)
+def test_drones_start_under_the_ceiling(overrides, error):
+    with pytest.raises(SceneError, match=error):
+        simatch.Simulation("pursuit_evasion_3d", overrides=overrides)
+
+
+def test_drones_just_under_the_ceiling_fly():
+    """The bounds are the body's, not its centre's: a frame that fits starts and the evader scatters in the box."""
+    overrides = {"teams.cyan.model_params.start_altitude": 3.98, "judge.scatter": [-2.0, -4.0, 0.02, 6.0, 4.0, 3.98]}
+    with simatch.Simulation("pursuit_evasion_3d", overrides=overrides) as sim:
+        sim.run(seconds=0.1)
+        states = sim.model_states()
+        assert all(3.9 < states[f"cyan/{i}"].z < 4.0 for i in (1, 2, 3))
+        assert 0.0 < states["magenta/1"].z < 4.0
+
+
+def test_a_ground_evader_is_scattered_over_the_floor():
+    """The pursuit judge scatters a wheeled evader over the box's floor, upright, and says nothing about heights."""
+    overrides = {"teams.magenta.model": "omni4", "teams.magenta.model_params": {}, "teams.magenta.strategy": "none"}
+    with simatch.Simulation("pursuit_evasion_3d", overrides=overrides) as sim:
+        sim.run(seconds=0.2)
+        e = sim.model_states()["magenta/1"]
+        assert -2.0 <= e.x <= 6.0 and -4.0 <= e.y <= 4.0 and abs(e.z) < 0.5
+        assert "robot_upright" not in [ev["type"] for ev in sim.events]

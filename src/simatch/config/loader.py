@@ -224,7 +224,9 @@ def validate_params(model: type[BaseModel], params: Mapping[str, Any], source: s
 
 
 def check_models(scene: LoadedScene) -> None:
-    """Check every team's robot models and their parameters; SceneError naming the file and the key."""
+    """Check every team's robot models and their parameters, and that a flying robot starts below the world's
+    ceiling; SceneError naming the file and the key."""
+    ceiling = scene.spec.world.ceiling
     for team, tspec in scene.spec.teams.items():
         groups = [(f"teams.{team}", tspec.model, tspec.model_params)]
         groups += [(f"teams.{team}.squads[{k}]", q.model, q.model_params) for k, q in enumerate(tspec.squads)]
@@ -233,4 +235,12 @@ def check_models(scene: LoadedScene) -> None:
                 cls = model_class(model)
             except PluginError as exc:
                 raise SceneError(f"{scene.source}: {key}.model: {exc}") from None
-            validate_params(cls.Params, params, scene.source, f"{key}.model_params")
+            p = validate_params(cls.Params, params, scene.source, f"{key}.model_params")
+            start = getattr(p, "start_altitude", None)
+            if ceiling is not None and cls.locomotion == "aerial" and start is not None:
+                top = start + cls(p).height / 2
+                if top >= ceiling:
+                    raise SceneError(
+                        f"{scene.source}: {key}.model_params.start_altitude: {start:g} m puts the robot's top at "
+                        f"{top:g} m, at or above the ceiling (world.ceiling = {ceiling:g} m)"
+                    )

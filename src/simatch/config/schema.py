@@ -445,6 +445,12 @@ class Scene(Strict):
     def robot_names(self) -> list[str]:
         return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.robot_ids()]
 
+    def member(self, name: str) -> Member | None:
+        """The robot ``team/id`` as the scene gives it (its model and start), or None if there is none."""
+        team, _, rid = name.partition("/")
+        spec = self.teams.get(team)
+        return next((m for m in spec.members() if str(m.id) == rid), None) if spec is not None else None
+
     def learner_names(self) -> list[str]:
         """The robots handed to learning (``teams.<team>.learners`` or ``strategy = 'learner'``)."""
         return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.learner_ids()]

@@ -57,7 +57,7 @@ class FlightTest(Judge):
         spec = scene.spec
         self.robot = params.robot or spec.robot_names()[0]
         team, _, rid = self.robot.partition("/")
-        member = next((m for m in spec.teams[team].members() if str(m.id) == rid), None) if team in spec.teams else None
+        member = spec.member(self.robot)
         if member is None:
             raise SceneError(f"{scene.source}: judge.robot: the scene has no robot {self.robot!r}")
         self.model = model_class(member.model)(member.model_params)

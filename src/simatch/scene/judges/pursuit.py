@@ -11,7 +11,8 @@ thing hit: flying among obstacles without touching them is part of the task.
 
 Like the encirclement judge it gives the game commands itself (STARTROBOT from the start, STOPROBOT at
 the end) and publishes its result on ``game_state``. With ``scatter`` the evader starts at a random free
-place of a box (drawn from the run's seed), every run another chase.
+place of a box (drawn from the run's seed), every run another chase; a flying evader's frame must fit in
+the box's heights between the floor and the ceiling, a ground evader is scattered over the box's floor.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from ... import msgs
 from ...bus import NodeContext, topics
 from ...config.loader import SceneError
+from ...robots import model_class
 from .base import PlayJudge, require_team
 
 
@@ -69,6 +71,11 @@ class Pursuit(PlayJudge):
         self.pursuer_names = [n for n in names if n.partition("/")[0] == params.pursuers]
         self.period = spec.control.period
         self.geometry = spec.world.geometry()
+        member = spec.member(params.evader)
+        evader = model_class(member.model)(member.model_params)
+        self.evader_flies = evader.aerial
+        if params.scatter is not None and evader.aerial:
+            _check_scatter_heights(scene.source, params.scatter, evader.height / 2, spec.world.ceiling)
         self.capture: dict | None = None
         self.closest = math.inf
         self.collisions: Counter = Counter()
@@ -93,11 +100,14 @@ class Pursuit(PlayJudge):
         for _ in range(10000):
             x, y, z = rng.uniform(x0, x1), rng.uniform(y0, y1), rng.uniform(z0, z1)
             ob = self.geometry.obstacle_at(x, y, clear)
-            if ob is None or ob.height < z - clear:
+            if ob is None or (self.evader_flies and ob.height < z - clear):
                 break
         else:
             raise SceneError(f"{self.scene.source}: judge.scatter: no free place for the evader")
-        self.world.set_model_state(self.params.evader, x=float(x), y=float(y), z=float(z), yaw=0.0)
+        place = {"x": float(x), "y": float(y), "yaw": 0.0}
+        if self.evader_flies:  # a ground evader stays on the floor: the box's heights are not its
+            place["z"] = float(z)
+        self.world.set_model_state(self.params.evader, **place)
 
     def _on_event(self, ev) -> None:
         if ev.type == "collision":
@@ -180,6 +190,21 @@ class Pursuit(PlayJudge):
             },
             "end": end,
         }
+
+
+def _check_scatter_heights(source: str, box, half_height: float, ceiling: float | None) -> None:
+    """A flying evader scattered anywhere in the box must fit between the floor and the ceiling."""
+    z0, z1 = box[2], box[5]
+    if z0 - half_height <= 0.0:
+        raise SceneError(
+            f"{source}: judge.scatter: its bottom z0 = {z0:g} m puts the evader's frame (half height "
+            f"{half_height:g} m) into the floor"
+        )
+    if ceiling is not None and z1 + half_height >= ceiling:
+        raise SceneError(
+            f"{source}: judge.scatter: its top z1 = {z1:g} m puts the evader's frame (half height {half_height:g} m) "
+            f"at or above the ceiling (world.ceiling = {ceiling:g} m)"
+        )
 
 
 def _kind(label: str, geometry) -> str:
