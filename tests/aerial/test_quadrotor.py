@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import simatch
+from simatch.config.loader import SceneError
 from simatch.robots.quadrotor import STANDARD_GRAVITY, Quadrotor
 
 from .conftest import track
@@ -217,3 +218,27 @@ def test_hover_does_not_wander(drones):
     sim.run(120.0)
     s = sim.model_states()[DRONE]
     assert math.hypot(s.x, s.y) < 1e-6 and abs(s.z - 1.2) < 1e-6
+
+
+def test_a_quadrotor_written_outside_simatch_flies():
+    """A plug-in airframe (a "+" layout, its own parameters) takes off and holds its height as the shipped one."""
+    overrides = {"teams.cyan.model": "tests.aerial.plugin_drone:PlusQuad", "judge.hover": 30.0}
+    with simatch.Simulation("quadrotor_flight", overrides=overrides) as sim:
+        sim.run(seconds=4.0)  # took off (to 1.5 m, overshooting as the shipped airframe does), hovering
+        held = sim.model_states()[DRONE].z
+        sim.run(seconds=4.0)
+        s = sim.model_states()[DRONE]
+        assert sim.simulator.m.body(DRONE).mass[0] == pytest.approx(0.05)
+        assert 1.5 < held < 1.8 and s.z == pytest.approx(held, abs=0.005) and math.hypot(s.vx, s.vy) < 1e-3
+
+
+@pytest.mark.parametrize(
+    "model, error",
+    [
+        ("tests.aerial.plugin_drone:Hexarotor", r"teams.cyan.model: .*6 rotor angle\(s\).*exactly 4 rotors"),
+        ("tests.aerial.plugin_drone:Hovercraft", r"teams.cyan.model: .*locomotion 'floating' is neither"),
+    ],
+)
+def test_aerial_models_the_simulator_cannot_fly_are_refused(model, error):
+    with pytest.raises(SceneError, match=error):
+        simatch.Simulation("quadrotor_flight", overrides={"teams.cyan.model": model})
