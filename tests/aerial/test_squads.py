@@ -69,3 +69,19 @@ def test_a_ground_evader_is_scattered_over_the_floor():
         e = sim.model_states()["magenta/1"]
         assert -2.0 <= e.x <= 6.0 and -4.0 <= e.y <= 4.0 and abs(e.z) < 0.5
         assert "robot_upright" not in [ev["type"] for ev in sim.events]
+
+
+@pytest.mark.parametrize("height, altitude, fits", [(1.0, 1.5, True), (1.49, 1.5, False), (0.5, 0.0, False)])
+def test_a_drone_may_start_in_the_air_above_a_low_obstacle(height, altitude, fits):
+    """Over a box lower than its frame's bottom a drone starts where the scene says; into it, it is refused."""
+    box = {"shape": "box", "x": -6.2, "y": -3.0, "size": [0.6, 0.6], "height": height}
+    overrides = {"world.obstacles": [box], "teams.cyan.model_params.start_altitude": altitude}
+    if not fits:
+        with pytest.raises(SceneError, match=r"teams.cyan.start: robot 1 starts at \(-6.2, -3\), inside obstacle"):
+            simatch.Simulation("pursuit_evasion_3d", overrides=overrides)
+        return
+    with simatch.Simulation("pursuit_evasion_3d", overrides=overrides) as sim:
+        s = sim.model_states()["cyan/1"]
+        assert (s.x, s.y) == pytest.approx((-6.2, -3.0)) and s.z == pytest.approx(altitude)
+        sim.run(seconds=0.5)
+        assert sim.model_states()["cyan/1"].z > height  # it flies off above the box, not through it

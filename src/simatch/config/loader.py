@@ -210,9 +210,22 @@ def check_world(spec: Scene, source: str) -> None:
         for m in tspec.members():
             x, y, _ = m.start
             ob = geometry.obstacle_at(x, y)
-            if ob is not None:
+            if ob is not None and not _starts_above(m, ob.height):
                 where = f"teams.{team}.start" if m.squad < 0 else f"teams.{team}.squads[{m.squad}].start"
                 raise SceneError(f"{source}: {where}: robot {m.id} starts at ({x:g}, {y:g}), inside obstacle {ob.name}")
+
+
+def _starts_above(member, top: float) -> bool:
+    """A flying robot may start in the air above a low obstacle (its frame clear of the obstacle's top). A
+    model or parameters that do not load are left to `check_models`, which names the key."""
+    try:
+        cls = model_class(member.model)
+        if cls.locomotion != "aerial":
+            return False
+        model = cls(cls.Params.model_validate(dict(member.model_params)))
+    except (PluginError, ValidationError):
+        return False
+    return model.params.start_altitude - model.height / 2 > top
 
 
 def validate_params(model: type[BaseModel], params: Mapping[str, Any], source: str, key: str) -> BaseModel:
