@@ -85,3 +85,16 @@ def test_a_drone_may_start_in_the_air_above_a_low_obstacle(height, altitude, fit
         assert (s.x, s.y) == pytest.approx((-6.2, -3.0)) and s.z == pytest.approx(altitude)
         sim.run(seconds=0.5)
         assert sim.model_states()["cyan/1"].z > height  # it flies off above the box, not through it
+
+
+@pytest.mark.parametrize("scene", ["pursuit_evasion_3d", "msl_5v5"])
+@pytest.mark.parametrize("call", ["stop_robot", "command_velocity", "command_action"])
+def test_a_robot_index_out_of_range_is_an_index_error(scene, call):
+    """With or without drones, past the last robot or negative: an IndexError, no other robot commanded."""
+    with simatch.Simulation(scene) as sim:
+        w = sim.simulator
+        args = {"stop_robot": (), "command_velocity": (0.5, 0.0, 0.0), "command_action": (True,)}[call]
+        for i in (w.n, w.n + 5, -1):
+            with pytest.raises(IndexError, match=rf"robot index {i} out of range: the world has robots 0..{w.n - 1}"):
+                getattr(w, call)(i, *args)
+        assert not w.commanded.any()

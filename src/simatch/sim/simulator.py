@@ -298,6 +298,7 @@ class Simulator:
     def command_velocity(self, i: int, vx: float, vy: float, w: float, vz: float = 0.0) -> bool:
         """Robot i's body-frame velocity command (``vz``, the upward speed, moves aerial robots only). False
         (and an event) if refused."""
+        self._check_index(i)
         try:
             ok = (
                 -MAX_COMMAND_SPEED <= vx <= MAX_COMMAND_SPEED
@@ -369,6 +370,7 @@ class Simulator:
         """Robot i's dribbler state and kick request (fires at the first step the ball is in the mouth,
         within ``window`` seconds, by default one control period). An aerial robot has neither: its
         ball-handling requests are taken (it is alive) and do nothing."""
+        self._check_index(i)
         try:
             ok = 0.0 <= kick_speed <= MAX_KICK_REQUEST
         except TypeError:
@@ -414,7 +416,14 @@ class Simulator:
 
     @world_input
     def stop_robot(self, i: int) -> None:
+        self._check_index(i)
         self._stop_robot(i)
+
+    def _check_index(self, i: int) -> None:
+        """Robot indices are 0..n-1 (ground robots, then aerial ones): any other is the caller's mistake, an
+        IndexError here rather than another robot commanded (a negative index) or a drone's part missing."""
+        if not 0 <= i < self.n:
+            raise IndexError(f"robot index {i!r} out of range: the world has robots 0..{self.n - 1}")
 
     def _stop_robot(self, i: int) -> None:
         if i >= self.ng:  # a drone told to stop hovers where it is
