@@ -26,9 +26,16 @@ def test_the_aerial_scenes_pass_the_parallel_api_test():
             env.close()
 
 
-@pytest.mark.parametrize("options", [{}, {"action_type": "discrete", "observation": "dict"}])
-def test_gymnasium_check_env_on_a_drone(options):
-    env = gymnasium.make("simatch/pursuit_evasion_3d-v0", agent="cyan/2", **options)
+@pytest.mark.parametrize(
+    "scene, agent, options",
+    [
+        ("pursuit_evasion_3d", "cyan/2", {}),
+        ("pursuit_evasion_3d", "cyan/2", {"action_type": "discrete", "observation": "dict"}),
+        ("aerial_encirclement", "cyan/10", {}),  # a drone of a squad, in a team of ground robots
+    ],
+)
+def test_gymnasium_check_env_on_a_drone(scene, agent, options):
+    env = gymnasium.make(f"simatch/{scene}-v0", agent=agent, **options)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
