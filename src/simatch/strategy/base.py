@@ -26,7 +26,7 @@ from pydantic import BaseModel
 
 from ..field import FieldGeometry
 from ..robots import model_class
-from .roles import Role
+from .roles import Action, Role
 from .worldmodel import WorldModel
 
 
@@ -66,7 +66,7 @@ class Command:
     lob: bool = False
     # what the robot tells its team (StrategyInfo)
     role: int = Role.NOROLE  # a robot says which role it plays; none said is none (0 would be the goalie)
-    action: int = 0
+    action: int = Action.NO_ACTION  # likewise: none said is none (0 would be STUCKED)
     intent: tuple[float, float] | None = None
     pass_intent: PassIntent | None = None
     target_num: tuple[int, ...] = ()
