@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 from ..config.loader import load_scene, parse_override, shipped_scenes
+from ..worlds import world_class
 
 
 def add_parser(sub) -> None:
@@ -12,7 +13,8 @@ def add_parser(sub) -> None:
         "scenes",
         help="list the shipped scenes, or show one scene's settings",
         description="Without SCENE: the shipped scenes. With SCENE: every setting of that scene "
-        "(defaults filled in, overrides applied), as JSON.",
+        "(defaults filled in, overrides applied), as JSON, and the world as its plug-in made it (world_made: "
+        "zones, obstacles given and scattered).",
     )
     p.add_argument("scene", nargs="?", help="a shipped scene name or a path to a .toml file")
     p.add_argument(
@@ -33,5 +35,12 @@ def main(args) -> int:
             print(f"{name:20s} {spec.description}")
         return 0
     loaded = load_scene(args.scene, dict(parse_override(o) for o in args.overrides))
-    print(json.dumps(loaded.spec.model_dump(mode="json"), indent=2))
+    data = loaded.spec.model_dump(mode="json")
+    world = world_class(loaded.spec.world.kind)
+    for key in world.foreign_keys:  # settings of another kind of world: not this one's
+        data["world"].pop(key, None)
+    made = loaded.spec.world.geometry().describe()
+    made.pop("lines", None)
+    data["world_made"] = made  # the world as its plug-in made it (scattered obstacles included)
+    print(json.dumps(data, indent=2))
     return 0

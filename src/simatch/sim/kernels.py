@@ -303,12 +303,25 @@ def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twi
     for k in range(3):
         twist[n, k] = qvel[ball_v + k]
     # w_world = R(q) w_local
-    w0, w1, w2 = qvel[ball_v + 3], qvel[ball_v + 4], qvel[ball_v + 5]
-    qw, qx, qy, qz = qpos[ball_q + 3], qpos[ball_q + 4], qpos[ball_q + 5], qpos[ball_q + 6]
-    # v' = v + 2 qw (q x v) + 2 q x (q x v)
+    twist[n, 3], twist[n, 4], twist[n, 5] = rotate(
+        qpos[ball_q + 3],
+        qpos[ball_q + 4],
+        qpos[ball_q + 5],
+        qpos[ball_q + 6],
+        qvel[ball_v + 3],
+        qvel[ball_v + 4],
+        qvel[ball_v + 5],
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def rotate(qw, qx, qy, qz, w0, w1, w2):
+    """The vector (w0, w1, w2) turned by the unit quaternion q: v' = v + 2 qw (q x v) + 2 q x (q x v)."""
     cx = qy * w2 - qz * w1
     cy = qz * w0 - qx * w2
     cz = qx * w1 - qy * w0
-    twist[n, 3] = w0 + 2.0 * (qw * cx + qy * cz - qz * cy)
-    twist[n, 4] = w1 + 2.0 * (qw * cy + qz * cx - qx * cz)
-    twist[n, 5] = w2 + 2.0 * (qw * cz + qx * cy - qy * cx)
+    return (
+        w0 + 2.0 * (qw * cx + qy * cz - qz * cy),
+        w1 + 2.0 * (qw * cy + qz * cx - qx * cz),
+        w2 + 2.0 * (qw * cz + qx * cy - qy * cx),
+    )

@@ -102,6 +102,12 @@ class SimulatorNode(Node):
     # simulator's logging twins)
     def _vel_callback(self, i: int):
         sim = self.sim
+        if i >= sim.ng:  # an aerial robot: with the upward speed
+
+            def on_flight(msg) -> None:
+                sim.command_velocity(i, msg.vx, msg.vy, msg.w, msg.vz)
+
+            return on_flight
 
         def on_vel(msg) -> None:
             sim.command_velocity(i, msg.vx, msg.vy, msg.w)

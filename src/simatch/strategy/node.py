@@ -13,14 +13,14 @@ import numpy as np
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from .base import Command, RobotStrategy
-from .hwcontroller import velocity_towards
+from .hwcontroller import climb_towards, velocity_towards
 from .worldmodel import WorldModel
 
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
 # built positionally (three messages per robot and control tick; see msgs.positional)
-_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
+_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w vz")
 _ActionCmd = msgs.positional(
     msgs.ActionCmd,
     "stamp tick move_action rotate_action rotate_mode target_x target_y "
@@ -109,11 +109,12 @@ class RobotNode(Node):
         info = self.pub_info.active
         intent = cmd.intent if cmd.intent is not None else target
         ix, iy = intent if info and intent is not None else (math.nan, math.nan)
+        vz = cmd.vz if cmd.altitude is None else self._climb(cmd)
         # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs), all at once
-        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick, ix, iy = _f32s(
-            vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed, ix, iy
+        vx, vy, w, vz, tx, ty, ori, tvx, tvy, max_vel, max_w, kick, ix, iy = _f32s(
+            vx, vy, w, vz, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed, ix, iy
         )
-        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
+        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w, vz))
         self.pub_action.put(
             _ActionCmd(
                 now,
@@ -135,6 +136,13 @@ class RobotNode(Node):
         )
         if info:
             self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
+
+    def _climb(self, cmd: Command) -> float:
+        try:
+            z = self.world.me.z
+        except LookupError:
+            return 0.0
+        return climb_towards(z, cmd.altitude, cmd.max_vz)
 
     def strategy_info(self, now: float, tick: int, cmd: Command, ix: float, iy: float):
         """The StrategyInfo this robot tells its team for ``cmd`` (``ix``, ``iy``: its intent, float32)."""

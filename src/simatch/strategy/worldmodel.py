@@ -23,13 +23,14 @@ from ..field import Area, FieldGeometry
 
 
 def team_field(field: FieldGeometry, sign: int) -> FieldGeometry:
-    """The field as a team sees it: lines and goals are symmetric; named areas are turned with the frame."""
-    if sign > 0 or not field.areas:
+    """The field as a team sees it: lines and goals are symmetric; named areas and obstacles are turned with
+    the frame."""
+    if sign > 0 or not (field.areas or field.obstacles):
         return field
     from dataclasses import replace
 
     areas = tuple(Area(a.name, -a.x1, -a.y1, -a.x0, -a.y0) for a in field.areas)
-    return replace(field, areas=areas)
+    return replace(field, areas=areas, obstacles=tuple(o.turned() for o in field.obstacles))
 
 
 @dataclass
