@@ -44,6 +44,7 @@ export class Connection {
       el.classList.toggle("up", state === "up");
       el.textContent = { up: "live", down: "reconnecting…", refused: "refused" }[state] || state;
     }
+    if (state === "refused") refuse();
     if (this.handlers.onStatus) this.handlers.onStatus(state, detail);
   }
 
@@ -74,6 +75,15 @@ export class Connection {
   }
 }
 
+// A page the server refused (a wrong or missing token) can do nothing: every control says so.
+function refuse() {
+  document.body.classList.add("refused");
+  document.querySelectorAll("button, input, select").forEach((el) => {
+    el.disabled = true;
+    el.title = "this page was refused: open an address printed on the console";
+  });
+}
+
 let toastTimer = null;
 export function toast(text, ok = false) {
   const el = document.getElementById("toast");
@@ -89,10 +99,12 @@ export function fmt(v, digits = 2) {
   return v === null || v === undefined || Number.isNaN(v) ? "–" : Number(v).toFixed(digits);
 }
 
+// m:ss.s — rounded to the tenth first, then split, so that 119.97 s reads 2:00.0 (never 1:60.0)
 export function clock(t) {
-  if (t === null || t === undefined) return "–";
-  const m = Math.floor(t / 60), s = t - 60 * m;
-  return `${m}:${s.toFixed(1).padStart(4, "0")}`;
+  if (t === null || t === undefined || !Number.isFinite(t)) return "–";
+  const tenths = Math.round(Math.abs(t) * 10);
+  const m = Math.floor(tenths / 600), s = (tenths - 600 * m) / 10;
+  return `${t < 0 && tenths ? "-" : ""}${m}:${s.toFixed(1).padStart(4, "0")}`;
 }
 
 // The match clock at frame time t: the referee publishes its game state on every change and once a second;
