@@ -27,8 +27,13 @@ EXTENSIONS: list[str] = [
 ]
 
 
-def add_run_options(p, with_extensions: bool = True) -> None:
-    p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
+SCENE_HELP = "a shipped scene name (see 'simatch scenes') or a path to a .toml scene file"
+
+
+def add_run_options(
+    p, with_extensions: bool = True, scene_help: str = SCENE_HELP, scene_metavar: str = "SCENE"
+) -> None:
+    p.add_argument("scene", metavar=scene_metavar, help=scene_help)
     p.add_argument(
         "--duration", type=float, metavar="S", help="simulated seconds to run (default: until the judge ends the run)"
     )
@@ -42,7 +47,7 @@ def add_run_options(p, with_extensions: bool = True) -> None:
         type=_event_count,
         default=30,
         metavar="N|all",
-        help="how many of the run's last events the summary prints (default 30; `all`: the whole "
+        help="how many of the run's last events the summary prints (default 30; 'all': the whole "
         "event log; --json always carries every event)",
     )
     for ext in extensions() if with_extensions else ():

@@ -38,7 +38,13 @@ def add_parser(sub) -> None:
         "otherwise. Given a recording (FILE.mcap), show it: it plays on the bus for "
         "the live pages and the replay page goes through all of it.",
     )
-    add_run_options(p, with_extensions=False)
+    add_run_options(
+        p,
+        with_extensions=False,
+        scene_metavar="SCENE|FILE.mcap",
+        scene_help="a shipped scene name (see 'simatch scenes'), a path to a .toml scene file, or a recording "
+        "(FILE.mcap, made by 'simatch run SCENE --record FILE.mcap') to show",
+    )
     add_view_options(p.add_argument_group("web UI"), default_wait=None)
     rec = p.add_argument_group("a recording (SCENE is a FILE.mcap)")
     rec.add_argument(

@@ -22,7 +22,7 @@ class RecordExtension:
             "--record",
             metavar="FILE.mcap",
             help="record every topic of the run, the 3D scene and the metadata needed to reproduce "
-            "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`)",
+            "it into one MCAP file (rosbag2-compatible; see 'simatch replay', 'simatch export')",
         )
         group.add_argument(
             "--record-links",
