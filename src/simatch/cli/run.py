@@ -169,16 +169,8 @@ def _readable(value: Any) -> Any:
 
 
 def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
-    """The run for people: what ran, how fast, the result, and the last ``limit`` events (None: all)."""
-    print(f"scene {out['scene']}  seed {out['seed']}", file=file)
-    rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
-    print(
-        f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})", file=file
-    )
-    print(f"state digest {out['state_digest']}", file=file)
-    print("result:", file=file)
-    for key, value in out["result"].items():
-        print(f"  {key}: {json.dumps(_readable(value))}", file=file)
+    """The run for people: the last ``limit`` events (None: all), then what ran, how fast and the result — last,
+    so that the final screen of a terminal shows the result however long the event log is."""
     events = out["events"]
     shown = events if limit is None else events[max(0, len(events) - limit) :]
     print(f"events: {len(events)}", file=file)
@@ -191,6 +183,15 @@ def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
     for ev in shown:
         rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
         print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(_readable(rest)) if rest else ''}", file=file)
+    print(f"scene {out['scene']}  seed {out['seed']}", file=file)
+    rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
+    print(
+        f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})", file=file
+    )
+    print(f"state digest {out['state_digest']}", file=file)
+    print("result:", file=file)
+    for key, value in out["result"].items():
+        print(f"  {key}: {json.dumps(_readable(value))}", file=file)
 
 
 def main(args) -> int:
