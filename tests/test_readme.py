@@ -84,3 +84,27 @@ def test_a_state_set_where_nothing_undoes_it_is_not_reported():
             at = sim.time
             sim.step(40)
             assert not [e for e in sim.events if e["t"] >= at and e["type"] == "ball_placed"]
+
+
+def test_the_readme_gives_the_locomotion_test_figures_it_measures():
+    """The figures of `simatch run omni_circle` beside the paper's, as the README prints them."""
+    text = README.read_text(encoding="utf-8").split("### The paper's locomotion test", 1)[1].split("\n## ", 1)[0]
+    rows = {
+        line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:5]]
+        for line in text.splitlines()
+        if line.startswith("| ")
+    }
+    with simatch.Simulation("omni_circle") as sim:
+        sim.run()
+        r = sim.result()["result"]
+    assert rows["samples"] == [str(r["paper"]["samples"]), str(r["samples"]), str(r["samples"])]
+    position = rows["mean position error (distance to the centre - radius)"]
+    assert position[0] == f"{r['paper']['position_error_cm']} cm"
+    assert (
+        position[1] == f"{r['position_error_cm']:.4f} cm" and position[2] == f"{r['position_error_expected_cm']:.4f} cm"
+    )
+    heading = rows["mean orientation error (heading - w t)"]
+    assert heading[0] == f"{r['paper']['orientation_error_rad']} rad"
+    assert heading[1] == f"{r['orientation_error_rad']:.4f} rad"
+    assert heading[2].startswith(f"{r['orientation_error_expected_rad']:.4f} rad")
+    assert r["orientation_error_vs_ideal_rad"] < 1e-9
