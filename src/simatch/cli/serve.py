@@ -83,11 +83,11 @@ def main(args) -> int:
 
 def serve_scene(args) -> int:
     from ..simulation import Simulation
-    from ..web.view import print_urls, start_view
+    from ..web.view import announce, start_view
 
     scene = load_scene(args.scene, overrides_of(args))
     with Simulation(scene, seed=args.seed) as sim, start_view(sim, args.view_host, args.view_port) as view:
-        print_urls(view)
+        announce(view, args)
         end = args.duration if args.duration is not None else sim.duration
         anchor = None  # (wall, sim time) since the run has been watched without a break
         try:
@@ -123,7 +123,7 @@ def serve_recording(args) -> int:
     """What ``simatch replay FILE --view`` does, with serve's options."""
     from ..record.player import Player
     from ..record.reader import Recording, RecordingError
-    from ..web.view import linger, print_urls, start_recording_view, wait_for_page
+    from ..web.view import announce, linger, start_recording_view, wait_for_page
 
     given = [
         name
@@ -150,7 +150,7 @@ def serve_recording(args) -> int:
     if start > player.duration:
         raise UsageError(f"--from {start}: the recording ends at {player.duration:.3f} s")
     with start_recording_view(player, args.view_host, args.view_port) as view:
-        print_urls(view)
+        announce(view, args, first="replay")
         try:
             wait_for_page(view, args.view_wait, any_page=True)
             player.play()
