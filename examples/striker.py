@@ -40,6 +40,9 @@ PASS_BY = 0.8  # centre-to-centre distance at which a robot passes an opponent i
 CARRY = 1.6  # how far a robot carries the ball before it passes or shoots (the rules allow 3 m) [m]
 AFTER_KICK = 1.5  # a robot that has just kicked leaves the ball to the others this long [s]
 AFTER_RESTART = 4.0  # ... after a restart pass (it may not touch the ball again before another robot) [s]
+# centre-to-ball distances kept at restarts: the rules' 3 m (theirs), 2 m (ours) and 1 m (dropped ball) count
+# from the nearest point of a robot's footprint, 0.25 m from its centre; a little more for the way there [m]
+THEIRS, OURS, DROPPED = 3.85, 2.85, 1.75
 
 
 class StrikerParams(BaseModel):
@@ -59,17 +62,20 @@ def safe_speed(world, target: tuple[float, float], top: float) -> float:
     stands (or comes) in its way to ``target``, and no more than NEAR_SPEED beside one: it never charges, and
     it never pushes."""
     me = world.me
-    heading = toward((me.x, me.y), target)
-    ahead = (me.x + 3.0 * math.cos(heading), me.y + 3.0 * math.sin(heading))
+    headings = [toward((me.x, me.y), target)]
+    if math.hypot(me.vx, me.vy) > 0.5:  # and the way it is still going (it needs time to turn)
+        headings.append(math.atan2(me.vy, me.vx))
     speed = top
     for x, y, vx, vy in world.opponents:
         d = math.hypot(x - me.x, y - me.y)
         coming = max(0.0, -(vx * (x - me.x) + vy * (y - me.y)) / max(d, 1e-6))  # its speed towards me
         gap = d - CONTACT - coming * 1.0  # (what it covers in the second it takes me to slow down)
-        if _off_line((me.x, me.y), ahead, (x, y)) < CONTACT + 0.35:  # in my way (the next 3 m of it)
-            speed = min(speed, CONTACT_SPEED + math.sqrt(2 * BRAKING * max(gap - 0.05, 0.0)))
-        elif gap < 0.6 and abs(math.remainder(toward((me.x, me.y), (x, y)) - heading, 2 * math.pi)) < math.pi / 2:
-            speed = min(speed, NEAR_SPEED)  # beside me, a little ahead
+        for heading in headings:
+            ahead = (me.x + 3.0 * math.cos(heading), me.y + 3.0 * math.sin(heading))
+            if _off_line((me.x, me.y), ahead, (x, y)) < CONTACT + 0.35:  # in my way (the next 3 m of it)
+                speed = min(speed, CONTACT_SPEED + math.sqrt(2 * BRAKING * max(gap - 0.05, 0.0)))
+            elif gap < 0.6 and abs(math.remainder(toward((me.x, me.y), (x, y)) - heading, 2 * math.pi)) < math.pi / 2:
+                speed = min(speed, NEAR_SPEED)  # beside me, a little ahead
     return speed
 
 
@@ -77,10 +83,19 @@ def waypoint(start, goal, blocks) -> tuple[float, float]:
     """``goal``, or a point on the way round the first of ``blocks`` (x, y, clearance) that the straight way to
     it passes too near: a robot goes round opponents, and round the ball at a restart (on a circle a little
     wider than the clearance, 35 degrees at a time, so that the way to the point stays clear too)."""
-    for bx, by, clear in blocks:  # well inside one: straight out of it first
-        d = math.hypot(start[0] - bx, start[1] - by)
-        if 0.3 < d < clear - 0.15:
-            return (bx + (start[0] - bx) / d * (clear + 0.3), by + (start[1] - by) / d * (clear + 0.3))
+    inside = [b for b in blocks if 0.3 < math.hypot(start[0] - b[0], start[1] - b[1]) < b[2] - 0.15]
+    if inside:  # well inside one: straight out of it first, away from every one it is near (not into another)
+        ax = ay = 0.0
+        for bx, by, clear in blocks:
+            d = math.hypot(start[0] - bx, start[1] - by)
+            if 1e-6 < d < clear + 0.3:
+                ax, ay = ax + (start[0] - bx) / d, ay + (start[1] - by) / d
+        bx, by, clear = inside[0]
+        if math.hypot(ax, ay) < 0.3:  # squeezed between two: sideways
+            ax, ay = -(start[1] - by), start[0] - bx
+        n = math.hypot(ax, ay)
+        return (start[0] + ax / n * (clear + 0.3), start[1] + ay / n * (clear + 0.3))
+    blocks = _clusters(blocks)  # overlapping ones are gone round as one (never between them, back and forth)
     first, at = None, 2.0
     dx, dy = goal[0] - start[0], goal[1] - start[1]
     length2 = max(dx * dx + dy * dy, 1e-9)
@@ -93,8 +108,43 @@ def waypoint(start, goal, blocks) -> tuple[float, float]:
     bx, by, clear = first
     a0, a1 = toward((bx, by), start), toward((bx, by), goal)
     turn = math.remainder(a1 - a0, 2 * math.pi)
-    a = a0 + math.copysign(min(abs(turn), math.radians(35)), turn)
-    return (bx + (clear + 0.5) * math.cos(a), by + (clear + 0.5) * math.sin(a))
+    sides = []
+    for way in (turn, turn - math.copysign(2 * math.pi, turn)):  # the short way round, then the long one
+        a = a0 + math.copysign(min(abs(way), math.radians(35)), way)
+        sides.append((bx + (clear + 0.5) * math.cos(a), by + (clear + 0.5) * math.sin(a)))
+    for point in sides:  # the first side whose next point keeps clear of the others (a cluster: round it all)
+        if all(math.hypot(point[0] - x, point[1] - y) >= c for x, y, c in blocks if (x, y, c) != first):
+            return point
+    return sides[0]
+
+
+def _clusters(blocks, largest: float = 2.5) -> list:
+    """``blocks`` with every two that overlap replaced by the circle round both (up to ``largest``; one that
+    lies inside another is dropped whatever their size)."""
+    blocks = list(blocks)
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(blocks)):
+            for j in range(i + 1, len(blocks)):
+                (ax, ay, ra), (bx, by, rb) = blocks[i], blocks[j]
+                d = math.hypot(bx - ax, by - ay)
+                if d >= ra + rb:
+                    continue
+                if d + rb <= ra:
+                    both = blocks[i]
+                elif d + ra <= rb:
+                    both = blocks[j]
+                else:
+                    r = (d + ra + rb) / 2
+                    both = (ax + (r - ra) * (bx - ax) / d, ay + (r - ra) * (by - ay) / d, r)
+                if both[2] <= largest or both[2] == max(ra, rb):
+                    blocks[i], merged = both, True
+                    del blocks[j]
+                    break
+            if merged:
+                break
+    return blocks
 
 
 class Keeper(RobotStrategy):
@@ -149,13 +199,15 @@ class Striker(RobotStrategy):
         if mode == MatchMode.PARKINGROBOT:
             return Command(target=(-3.0 * self.ctx.id, -self.ctx.field.half_width - 0.5), target_ori=math.pi / 2)
         if mode == MatchMode.STARTROBOT and 1 <= last <= 13:  # a restart begins
-            self.restart = (is_ours(last), (ball.x, ball.y), last)
+            self.restart = (is_ours(last), self.restart_spot(world), last)
         moved = math.hypot(ball.x - self.restart[1][0], ball.y - self.restart[1][1]) if self.restart else 0.0
-        if self.taking and moved > 0.05 and math.hypot(ball.vx, ball.vy) > 0.3:
-            # it has played our restart: another robot must touch the ball before it may again
-            self.taking, self.rest_until = False, world.time + AFTER_RESTART
-        if moved > 0.5:
-            self.restart = None  # the ball is in play
+        if self.taking and moved > 0.05:  # the ball has left the restart spot: played (or pushed) by the taker
+            self.taking = False
+            if math.hypot(me.x - self.restart[1][0], me.y - self.restart[1][1]) < 0.8:
+                # it has played our restart: another robot must touch the ball before it may again
+                self.rest_until = world.time + AFTER_RESTART
+        if self.restart and (world.game.ball_in_play if world.game is not None else moved > 0.5):
+            self.restart = None  # the ball is in play (the referee says so; without one: it has moved 0.5 m)
         near = math.hypot(ball.x - me.x, ball.y - me.y)
         if near < 0.42 and self.took_at is None:  # it touches the ball: where the 3 m of a dribble count from
             self.took_at = (me.x, me.y)
@@ -165,18 +217,33 @@ class Striker(RobotStrategy):
             self.rest_until, self.taking = -math.inf, False
             return self.prepare(world, mode)
         if self.restart and not self.restart[0]:  # theirs: wait until the ball is in play
-            return self.keep_away(world, 3.6 if self.restart[2] != MatchMode.DROPBALL else 1.5)
+            return self.keep_away(world, THEIRS if self.restart[2] != MatchMode.DROPBALL else DROPPED)
         if self.restart:  # ours: the taker passes to a team-mate, who waits for it
             if self.resting(world):  # it has touched the ball: a team-mate must play it next
                 return self.go(world, (me.x, me.y), Role.PASSOFPASS, Action.NO_ACTION)
+            if moved > 0.15:  # the pass is on its way: the others stay where they are until the ball is in play
+                self.taking = False
+                return self.go(world, (me.x, me.y), Role.ASSISTANT, Action.CATCH_POSITIONED)
             if self.taker(world):
                 return self.take_restart(world, self.restart[2])
+            self.taking = False
+            if self.restart[2] == MatchMode.OUR_PENALTY:  # a shot: the others 3 m away, out of the area
+                return self.keep_away(world, THEIRS)
             if self.rank(world) == 0:
-                return self.go(world, self.receiving_spot(world), Role.ASSISTANT, Action.CATCH_POSITIONED, clear=2.4)
-            return self.keep_away(world, 2.6)
+                return self.go(world, self.receiving_spot(world), Role.ASSISTANT, Action.CATCH_POSITIONED, clear=OURS)
+            return self.keep_away(world, OURS)
         if self.on_the_ball(world):
             return self.play_ball(world)
         return self.support(world)
+
+    def restart_spot(self, world) -> tuple[float, float]:
+        """Where the ball lies for the restart: where it is seen, unless the referee's spot is further off than
+        the ball's placement and perception differ (it puts a ball that has moved back on its spot at START)."""
+        game, ball = world.game, world.ball
+        if game is None or game.phase not in ("prepare", "taking"):
+            return (ball.x, ball.y)
+        spot = (world.sign * game.ball_x, world.sign * game.ball_y)  # (the referee's is in the world frame)
+        return spot if math.hypot(spot[0] - ball.x, spot[1] - ball.y) > 0.1 else (ball.x, ball.y)
 
     def resting(self, world) -> bool:
         return world.time < self.rest_until
@@ -199,7 +266,13 @@ class Striker(RobotStrategy):
         mate = self.pass_target(world)
         if mate is not None and (won_at_home or (done and me.x < 0.5)):
             return self.kick(world, (mate.x, mate.y), pass_to=mate)
-        if math.hypot(goal[0] - me.x, goal[1] - me.y) < p.shoot_from or (done and me.x > 0.5 and not won_at_home):
+        shot = math.hypot(goal[0] - me.x, goal[1] - me.y) < p.shoot_from or (done and me.x > 0.5 and not won_at_home)
+        if pressed and abs(math.remainder(face - me.yaw, 2 * math.pi)) < 1.0:
+            # pressed, and turned roughly to the goal already: no time to turn further, kick it on at once
+            if shot and self.on_target(world):
+                return self.kick(world, goal)
+            return self.kick(world, (me.x + math.cos(me.yaw), me.y + math.sin(me.yaw)), speed=4.0)
+        if shot:
             return self.kick(world, goal)
         if done:  # from our half a shot would not count: play the ball into theirs
             return self.kick(world, (self.ctx.field.half_length / 2, 0.0), speed=3.5)
@@ -207,6 +280,7 @@ class Striker(RobotStrategy):
         # ball is limited to 2 m by the rules)
         facing = abs(math.remainder(face - me.yaw, 2 * math.pi)) < 0.5
         step = (me.x + 0.8 * math.cos(face), me.y + 0.8 * math.sin(face)) if facing else (me.x, me.y)
+        step = self.inside(step, self.crowded(world))  # (never into their penalty area where a team-mate is)
         return Command(
             target=step,
             target_ori=face,
@@ -222,7 +296,7 @@ class Striker(RobotStrategy):
         rather than the robot pushing it on). With time for it, from behind the ball, already facing the goal:
         a robot that takes the ball facing its own goal has to turn with it, and is robbed while it turns."""
         me, ball, p = world.me, world.ball, self.ctx.params
-        crowded = any(self.in_their_penalty_area(r.x, r.y) for r in self.field_mates(world))
+        crowded = self.crowded(world)
         spot = self.inside((ball.x, ball.y), penalty_area=crowded)  # (never into their goal area)
         to_goal = toward((ball.x, ball.y), (self.ctx.field.half_length, 0.0))
         face = toward((me.x, me.y), (ball.x, ball.y))
@@ -238,7 +312,7 @@ class Striker(RobotStrategy):
             face = to_goal
         near = math.hypot(ball.x - me.x, ball.y - me.y)
         others = [(x, y, PASS_BY) for x, y, _, _ in world.opponents if math.hypot(x - ball.x, y - ball.y) > 0.8]
-        spot = waypoint((me.x, me.y), spot, others)  # round the opponents between it and the ball
+        spot = self.inside(waypoint((me.x, me.y), spot, others), crowded)  # round the opponents in its way
         return Command(
             target=spot,
             target_ori=face,
@@ -300,15 +374,21 @@ class Striker(RobotStrategy):
             else None,
         )
 
+    def on_target(self, world) -> bool:
+        """The kicker points into the goal's mouth (with a margin for the ball)."""
+        me, f = world.me, self.ctx.field
+        if math.cos(me.yaw) < 0.1 or me.x >= f.half_length:
+            return False
+        return abs(me.y + math.tan(me.yaw) * (f.half_length - me.x)) < f.goal_width / 2 - 0.3
+
     def kick(self, world, at: tuple[float, float], pass_to=None, speed: float = 8.0) -> Command:
-        """Turn to ``at`` holding the ball, then kick: a pass just hard enough to arrive, or a shot."""
+        """Turn to ``at`` holding the ball, then kick: a pass just hard enough to arrive, or a shot (aimed as
+        soon as the kicker points anywhere into the goal's mouth)."""
         me, f = world.me, self.ctx.field
         face = toward((me.x, me.y), at)
         distance = math.hypot(at[0] - me.x, at[1] - me.y)
-        if pass_to is None and at[0] >= f.half_length and me.x < f.half_length and abs(math.cos(me.yaw)) > 0.1:
-            # a shot: aimed as soon as the kicker points anywhere into the goal's mouth
-            crossing = me.y + math.tan(me.yaw) * (f.half_length - me.x)
-            aimed = math.cos(me.yaw) > 0 and abs(crossing) < f.goal_width / 2 - 0.3
+        if pass_to is None and at[0] >= f.half_length:
+            aimed = self.on_target(world)
         else:
             aimed = abs(math.remainder(face - me.yaw, 2 * math.pi)) < 0.1
         if pass_to is not None:
@@ -350,29 +430,33 @@ class Striker(RobotStrategy):
         kickoff = mode in (MatchMode.OUR_KICKOFF, MatchMode.OPP_KICKOFF)
         if not is_ours(mode):
             if kickoff or mode == MatchMode.OPP_PENALTY:  # from our start places (outside our penalty area)
-                return self.keep_away(world, 3.6, home=tuple(self.ctx.start[:2]), during=False)
-            return self.keep_away(world, 3.6 if mode != MatchMode.DROPBALL else 1.5, during=False)
-        if self.taker(world):
+                return self.keep_away(world, THEIRS, home=tuple(self.ctx.start[:2]))
+            return self.keep_away(world, THEIRS if mode != MatchMode.DROPBALL else DROPPED)
+        if self.taker(world):  # behind the ball, round it: the ball must not move before START
             mate = self.receiving_spot(world)
             away = toward(mate, (ball.x, ball.y)) if not kickoff else math.pi
+            me = world.me
+            if math.hypot(me.x - ball.x, me.y - ball.y) < 0.5:  # touching it: straight back from it first
+                away = toward((ball.x, ball.y), (me.x, me.y))
             spot = (ball.x + 0.7 * math.cos(away), ball.y + 0.7 * math.sin(away))
-            return self.go(world, spot, Role.ACTIVE, Action.POSITIONED_STATIC, face=(ball.x, ball.y))
+            return self.go(world, spot, Role.ACTIVE, Action.POSITIONED_STATIC, face=(ball.x, ball.y), clear=0.45)
+        if mode == MatchMode.OUR_PENALTY:  # the others 3 m from the mark, in our half (out of the area)
+            return self.keep_away(world, THEIRS, home=tuple(self.ctx.start[:2]))
         if self.rank(world) == 0:
-            return self.go(world, self.receiving_spot(world), Role.ASSISTANT, Action.CATCH_POSITIONED, clear=2.4)
-        return self.keep_away(world, 2.6, home=tuple(self.ctx.start[:2]) if kickoff else None, during=False)
+            return self.go(world, self.receiving_spot(world), Role.ASSISTANT, Action.CATCH_POSITIONED, clear=OURS)
+        return self.keep_away(world, OURS, home=tuple(self.ctx.start[:2]) if kickoff else None)
 
-    def keep_away(self, world, distance: float, home=None, during: bool = True) -> Command:
+    def keep_away(self, world, distance: float, home=None) -> Command:
         """Stay where it is (or go ``home``) if that is far enough from the ball, else step away from the ball.
-        ``during`` the restart (after START) the way never cuts through the circle the rules keep clear; while
-        it is prepared, a robot only keeps from touching the ball on its way."""
+        The way never cuts through the circle the rules keep clear, before START too: START may come while
+        a robot is still on its way."""
         me, ball = world.me, world.ball
         spot = home or (me.x, me.y)
         d = math.hypot(spot[0] - ball.x, spot[1] - ball.y)
         if d < distance + 0.3:  # (from its place, or from where it is: straight away from the ball)
             ux, uy = (spot[0] - ball.x) / max(d, 1e-6), (spot[1] - ball.y) / max(d, 1e-6)
             spot = (ball.x + ux * (distance + 0.6), ball.y + uy * (distance + 0.6))
-        clear = distance + 0.3 if during else 0.7
-        return self.go(world, spot, Role.PASSIVE, Action.POSITIONED, face=(ball.x, ball.y), clear=clear)
+        return self.go(world, spot, Role.PASSIVE, Action.POSITIONED, face=(ball.x, ball.y), clear=distance + 0.3)
 
     def receiving_spot(self, world) -> tuple[float, float]:
         """Where the receiver of a restart pass waits: 3 m from the ball, towards the middle of the field and a
@@ -380,7 +464,7 @@ class Striker(RobotStrategy):
         ball = world.ball
         side = -1.0 if ball.y > 0 else 1.0
         if abs(ball.x) < 0.1 and abs(ball.y) < 0.1:  # the kick-off: beside the ball, in our half
-            return (-0.4, -2.2)
+            return (-0.5, -2.9)
         return self.inside((ball.x - 1.2, ball.y + side * 2.8))
 
     def go(self, world, spot, role: int, action: int, face=None, clear: float = 0.0) -> Command:
@@ -391,7 +475,8 @@ class Striker(RobotStrategy):
         spot = self.inside(spot, penalty_area=role != Role.ACTIVE)
         blocks = [(ball.x, ball.y, clear)] if clear else []  # (the ball first: the rules' circle comes first)
         blocks += [(x, y, PASS_BY) for x, y, _, _ in world.opponents] + [(r.x, r.y, 0.55) for r in world.teammates]
-        step = waypoint((me.x, me.y), spot, blocks)
+        step = self.inside(waypoint((me.x, me.y), spot, blocks), penalty_area=role != Role.ACTIVE)  # (a way out
+        # of the ball's circle may not cut through an area either)
         return Command(
             target=step,
             target_ori=toward((me.x, me.y), face),
@@ -447,6 +532,10 @@ class Striker(RobotStrategy):
             if best is None or r.x > best.x:
                 best = r
         return best
+
+    def crowded(self, world) -> bool:
+        """A team-mate is in their penalty area (one that has just shot from there too): one attacker at a time."""
+        return any(self.in_their_penalty_area(r.x, r.y) for r in world.teammates if r.id != world.goalkeeper)
 
     def in_their_penalty_area(self, x: float, y: float) -> bool:
         f = self.ctx.field
