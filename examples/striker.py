@@ -201,7 +201,8 @@ class Striker(RobotStrategy):
         if mode == MatchMode.STARTROBOT and 1 <= last <= 13:  # a restart begins
             self.restart = (is_ours(last), self.restart_spot(world), last)
         moved = math.hypot(ball.x - self.restart[1][0], ball.y - self.restart[1][1]) if self.restart else 0.0
-        if self.taking and moved > 0.05:  # the ball has left the restart spot: played (or pushed) by the taker
+        if self.taking and moved > 0.12:  # the ball has left the restart spot: played (or pushed) by the taker
+            # (by more than a noisy perception would make it seem to move: the taker would stop short of it)
             self.taking = False
             if math.hypot(me.x - self.restart[1][0], me.y - self.restart[1][1]) < 0.8:
                 # it has played our restart: another robot must touch the ball before it may again
@@ -221,9 +222,9 @@ class Striker(RobotStrategy):
         if self.restart:  # ours: the taker passes to a team-mate, who waits for it
             if self.resting(world):  # it has touched the ball: a team-mate must play it next
                 return self.go(world, (me.x, me.y), Role.PASSOFPASS, Action.NO_ACTION)
-            if moved > 0.15:  # the pass is on its way: the others stay where they are until the ball is in play
-                self.taking = False
-                return self.go(world, (me.x, me.y), Role.ASSISTANT, Action.CATCH_POSITIONED)
+            if moved > 0.15:  # the pass is on its way: the others keep the 2 m from the ball until it is in play
+                self.taking = False  # (the pass rolls towards the receiver: it steps back before it)
+                return self.keep_away(world, OURS)
             if self.taker(world):
                 return self.take_restart(world, self.restart[2])
             self.taking = False
