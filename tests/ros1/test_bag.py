@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import time
 
 import pytest
 
+from simatch.config.loader import load_scene
 from tests.ros1.conftest import ROOT, SIMATCH, text
 
 pytestmark = pytest.mark.slow
@@ -35,7 +37,10 @@ def test_a_recording_exported_as_a_ros1_bag_plays_into_ros(ros, tmp_path):
         "nubot_common/CoachInfo           [7bb01a0f4328cb28beb61d4f502c2969]",
     ):
         assert line in info, info
-    # rosbag play: a subscriber receives the original's message, the ball 2.24 m from NuBot2 at the start
+    # rosbag play: a subscriber receives the original's message: the ball on the centre mark, seen from NuBot2's
+    # start pose (cm, cut to one decimal as rostopic prints more)
+    x0, y0, _ = load_scene("msl_5v5").spec.teams["cyan"].start[1]
+    radius = f"radius: {math.floor(1000.0 * math.hypot(x0, y0)) / 10:.1f}"
     ros.run("rosparam", "set", "/use_sim_time", "false")
     echo = ros.start("rostopic", "echo", "-n", "1", "/NuBot2/omnivision/OmniVisionInfo/ballinfo/real_pos", name="echo")
     time.sleep(2.0)
@@ -43,7 +48,7 @@ def test_a_recording_exported_as_a_ros1_bag_plays_into_ros(ros, tmp_path):
     assert echo.wait(30) == 0, text(echo) + play
     echo.out.seek(0)
     got = echo.out.read()
-    assert "radius: 223.6" in got, got
+    assert radius in got, got
 
 
 def test_export_refuses_what_is_not_a_recording(tmp_path):

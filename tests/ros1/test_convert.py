@@ -32,8 +32,9 @@ def test_perception_is_in_centimetres_in_the_team_frame():
     assert (cyan.ballinfo.pos.x, cyan.ballinfo.pos.y) == pytest.approx((150.0, -200.0), abs=0.01)
     assert cyan.header.seq == 7 and cyan.ballinfo.ballinfostate == 1 and cyan.ballinfo.pos_known
     me = next(r for r in cyan.robotinfo if r.AgentID == 2)
-    assert (me.pos.x, me.pos.y) == pytest.approx((-200.0, 100.0), abs=0.01)  # its start pose, cm
-    dist = math.hypot(150.0 + 200.0, -200.0 - 100.0)
+    x0, y0, _ = (100.0 * v for v in load_scene("msl_5v5").spec.teams["cyan"].start[1])  # cyan/2's start pose, cm
+    assert (me.pos.x, me.pos.y) == pytest.approx((x0, y0), abs=0.01)
+    dist = math.hypot(150.0 - x0, -200.0 - y0)
     assert cyan.ballinfo.real_pos.radius == pytest.approx(dist, abs=0.01)
     assert len(cyan.obstacleinfo.pos) == 9 and len(cyan.robotinfo) == 5
     magenta = convert.omnivision(KIT, got["magenta/2"], 1)  # mirrored: magenta attacks +x in its frame too

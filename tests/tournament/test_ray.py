@@ -70,6 +70,8 @@ def test_a_small_tournament_standing_rows_recordings_and_reports(reference):
     report = reference["root"] / "report"
     assert (report / "index.html").exists() and (report / "plotly.min.js").exists()
     assert len(list((report / "matches").glob("*.html"))) == MATCHES
+    # the terminal shows simatch's lines only: a local instance's token authentication is chosen, not warned of
+    assert "WARNING" not in reference["stderr"], reference["stderr"]
 
 
 def test_a_match_of_the_tournament_is_the_match_simatch_run_plays(reference):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import json
 import os
 import re
@@ -58,6 +59,13 @@ async def _watch(url: str, seconds: float) -> list[dict]:
     return got
 
 
+def _run(coro):
+    """``coro`` run to its end on an event loop of its own, in a thread: the session's browser (Playwright's sync
+    API) keeps its loop running on this thread once a test has opened it, and asyncio.run refuses to nest."""
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+        return pool.submit(asyncio.run, coro).result()
+
+
 def _finish(proc: subprocess.Popen, timeout: float = 30.0) -> tuple[str, str]:
     try:
         out, err = proc.communicate(timeout=timeout)
@@ -78,7 +86,7 @@ def test_a_viewed_run_waits_for_a_page_plays_at_real_time_and_ends_when_the_page
         assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay"}
         assert all(u.startswith("http://127.0.0.1:") for u in urls.values()), "loopback by default"
         assert len({u.split("token=")[1] for u in urls.values()}) == 4, "one token per page"
-        messages = asyncio.run(_watch(urls["referee"], 2.5))
+        messages = _run(_watch(urls["referee"], 2.5))
         frames = [m for m in messages if m["type"] == "frame"]
         assert messages[0]["type"] == "hello" and messages[0]["role"] == "referee"
         assert frames and frames[-1]["t"] == pytest.approx(1.0, abs=0.05)

@@ -24,7 +24,7 @@ def add_parser(sub) -> None:
         "and deterministic by its seed, as Ray tasks (a local Ray instance on every core, or a cluster with "
         "--address). Each result is stored as it comes back (OUT/matches/, Parquet), so the same command "
         "resumes an interrupted tournament and plays only what is missing. Prints the standing (points, goal "
-        "difference, Elo with a 95%% interval from the seeds); with --json, one JSON object.",
+        "difference, Elo with a 95% interval from the seeds); with --json, one JSON object.",
     )
     p.add_argument(
         "--teams",

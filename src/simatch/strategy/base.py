@@ -25,6 +25,7 @@ import numpy as np
 from pydantic import BaseModel
 
 from ..field import FieldGeometry
+from .roles import Role
 from .worldmodel import WorldModel
 
 
@@ -61,7 +62,7 @@ class Command:
     kick_speed: float = 0.0
     lob: bool = False
     # what the robot tells its team (StrategyInfo)
-    role: int = 0
+    role: int = Role.NOROLE  # a robot says which role it plays; none said is none (0 would be the goalie)
     action: int = 0
     intent: tuple[float, float] | None = None
     pass_intent: PassIntent | None = None

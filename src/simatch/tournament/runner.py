@@ -65,6 +65,8 @@ class RayPool:
         joining = bool(address or os.environ.get("RAY_ADDRESS"))
         if joining:
             _token_auth_if_configured()
+        elif "RAY_AUTH_MODE" not in os.environ:
+            _token_auth()  # a local instance: Ray's default, chosen explicitly (else Ray warns that it chose it)
         try:
             import ray
         except ImportError:
@@ -185,12 +187,17 @@ def _token_auth_if_configured() -> None:
     if "RAY_AUTH_MODE" in os.environ:
         return
     if os.environ.get("RAY_AUTH_TOKEN") or (Path.home() / ".ray" / "auth_token").is_file():
-        os.environ["RAY_AUTH_MODE"] = "token"
-        if "ray" in sys.modules:  # Ray reads its settings when imported: read them again
-            try:
-                sys.modules["ray"]._raylet.Config.initialize("")
-            except AttributeError:
-                pass
+        _token_auth()
+
+
+def _token_auth() -> None:
+    """Token authentication for this process and the ones it starts (a new local instance makes its token)."""
+    os.environ["RAY_AUTH_MODE"] = "token"
+    if "ray" in sys.modules:  # Ray reads its settings when imported: read them again
+        try:
+            sys.modules["ray"]._raylet.Config.initialize("")
+        except AttributeError:
+            pass
 
 
 def _export_paths(paths: Iterable[str]) -> None:
