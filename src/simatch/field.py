@@ -7,7 +7,8 @@ World frame: origin at the field centre, +x towards magenta's goal (cyan defends
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,96 @@ class Area:
     @property
     def center(self) -> tuple[float, float]:
         return (0.5 * (self.x0 + self.x1), 0.5 * (self.y0 + self.y1))
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A static solid standing on the floor (world frame): a box turned by ``yaw``, or an upright cylinder.
+
+    Robots cannot pass through it, a ground robot's line of sight stops at it (``perception.line_of_sight``),
+    drones fly over it when it is low enough; viewers draw it and strategies plan around it."""
+
+    name: str
+    shape: str  # "box" or "cylinder"
+    x: float
+    y: float
+    height: float
+    half_x: float = 0.0  # a box's half length along its own x (turned by yaw)
+    half_y: float = 0.0
+    yaw: float = 0.0
+    radius: float = 0.0  # a cylinder's
+
+    @cached_property
+    def bounding_radius(self) -> float:
+        """Radius of the smallest circle about the centre that holds the outline [m]."""
+        return self.radius if self.shape == "cylinder" else math.hypot(self.half_x, self.half_y)
+
+    @cached_property
+    def _turn(self) -> tuple[float, float]:
+        return (math.cos(self.yaw), math.sin(self.yaw))
+
+    def local(self, x: float, y: float) -> tuple[float, float]:
+        """A world point in the obstacle's own frame (a box's axes)."""
+        dx, dy = x - self.x, y - self.y
+        c, s = self._turn
+        return (c * dx + s * dy, -s * dx + c * dy)
+
+    def distance(self, x: float, y: float) -> float:
+        """Signed horizontal distance of a point from the outline: negative inside [m]."""
+        if self.shape == "cylinder":
+            return math.hypot(x - self.x, y - self.y) - self.radius
+        lx, ly = self.local(x, y)
+        qx, qy = abs(lx) - self.half_x, abs(ly) - self.half_y
+        outside = math.hypot(max(qx, 0.0), max(qy, 0.0))
+        return outside + min(max(qx, qy), 0.0)
+
+    def away(self, x: float, y: float) -> tuple[float, float]:
+        """The unit direction (world frame) in which the distance from the outline grows fastest at (x, y)."""
+        if self.shape == "cylinder":
+            dx, dy = x - self.x, y - self.y
+            d = math.hypot(dx, dy)
+            return (dx / d, dy / d) if d > 1e-9 else (1.0, 0.0)
+        lx, ly = self.local(x, y)
+        qx, qy = abs(lx) - self.half_x, abs(ly) - self.half_y
+        if qx > 0.0 or qy > 0.0:
+            gx, gy = max(qx, 0.0) * math.copysign(1.0, lx), max(qy, 0.0) * math.copysign(1.0, ly)
+        elif qx > qy:
+            gx, gy = math.copysign(1.0, lx), 0.0
+        else:
+            gx, gy = 0.0, math.copysign(1.0, ly)
+        n = math.hypot(gx, gy) or 1.0
+        c, s = self._turn
+        return ((c * gx - s * gy) / n, (s * gx + c * gy) / n)
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        return self.near(x, y, margin) and self.distance(x, y) < margin
+
+    def near(self, x: float, y: float, margin: float) -> bool:
+        """A quick test: (x, y) may lie within ``margin`` of the outline (it is within the bounding circle's)."""
+        r = self.bounding_radius + margin
+        dx, dy = x - self.x, y - self.y
+        return dx * dx + dy * dy <= r * r
+
+    def corners(self) -> list[tuple[float, float]]:
+        """A box's four corners, counter-clockwise (world frame)."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        out = []
+        for lx, ly in ((1, 1), (-1, 1), (-1, -1), (1, -1)):
+            px, py = lx * self.half_x, ly * self.half_y
+            out.append((self.x + c * px - s * py, self.y + s * px + c * py))
+        return out
+
+    def turned(self) -> Obstacle:
+        """The obstacle in a frame turned by pi about z (a team that attacks -x)."""
+        return replace(self, x=-self.x, y=-self.y, yaw=math.remainder(self.yaw + math.pi, 2 * math.pi))
+
+    def describe(self) -> dict:
+        out = {"name": self.name, "shape": self.shape, "x": self.x, "y": self.y, "height": self.height}
+        if self.shape == "cylinder":
+            out["radius"] = self.radius
+        else:
+            out.update(half_x=self.half_x, half_y=self.half_y, yaw=self.yaw)
+        return out
 
 
 @dataclass(frozen=True)
@@ -50,6 +141,10 @@ class FieldGeometry:
     walls: bool = True  # boards at the outer edge of the margin
     wall_height: float = 0.5
     areas: tuple[Area, ...] = field(default_factory=tuple)
+    #: the world plug-in that made this description (``world.kind``)
+    kind: str = "msl_field"
+    obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
+    ceiling: float | None = None  # height of a ceiling over the whole world [m]; None: open sky
 
     @property
     def half_length(self) -> float:
@@ -58,6 +153,30 @@ class FieldGeometry:
     @property
     def half_width(self) -> float:
         return 0.5 * self.width
+
+    @property
+    def reach_x(self) -> float:
+        """Half length of the floor inside the walls (lines plus margin) [m]."""
+        return self.half_length + self.margin
+
+    @property
+    def reach_y(self) -> float:
+        return self.half_width + self.margin
+
+    def obstacle_at(self, x: float, y: float, margin: float = 0.0) -> Obstacle | None:
+        """The first obstacle nearer than ``margin`` to (x, y) (inside it for margin 0), if any."""
+        for ob in self.obstacles:
+            if ob.contains(x, y, margin):
+                return ob
+        return None
+
+    def free(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """(x, y) is on the floor, ``margin`` or more from the walls and from every obstacle."""
+        return (
+            abs(x) <= self.reach_x - margin
+            and abs(y) <= self.reach_y - margin
+            and self.obstacle_at(x, y, margin) is None
+        )
 
     def area(self, name: str) -> Area:
         for a in self.areas:
@@ -170,4 +289,8 @@ class FieldGeometry:
             "walls": self.walls,
             "lines": self.lines(),
             "areas": [{"name": a.name, "x0": a.x0, "y0": a.y0, "x1": a.x1, "y1": a.y1} for a in self.areas],
+            "kind": self.kind,
+            "wall_height": self.wall_height,
+            "obstacles": [ob.describe() for ob in self.obstacles],
+            "ceiling": self.ceiling,
         }

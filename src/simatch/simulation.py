@@ -94,7 +94,7 @@ class ManualDriver(Node):
     def __init__(self, team: str, rid: int, period: float):
         self.team, self.rid, self.period = team, rid, period
         self.name = f"{team}/{rid}/manual"
-        self.vel = (0.0, 0.0, 0.0)
+        self.vel = (0.0, 0.0, 0.0, 0.0)
         self.dribble = False
         self.kick = 0.0
         self.lob = False
@@ -105,8 +105,8 @@ class ManualDriver(Node):
         self.pub_action = ctx.bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
 
     def send_now(self, now: float) -> None:
-        vx, vy, w = self.vel
-        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=0, vx=vx, vy=vy, w=w))
+        vx, vy, w, vz = self.vel
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=0, vx=vx, vy=vy, w=w, vz=vz))
         self.pub_action.put(
             msgs.new(
                 msgs.ActionCmd,
@@ -388,6 +388,13 @@ class Simulation:
         self.simulator.apply_wrench(name, force, torque, duration)
         self._operator("apply_wrench", name, force=list(force), torque=list(torque), duration=duration)
 
+    def set_rotor(self, name: str, rotor: int, working: bool = True) -> None:
+        """Cut (``working=False``) or restore rotor ``rotor`` (1-4) of an aerial robot: a cut rotor gives no
+        thrust, and the drone's controller does not know it."""
+        self.simulator.set_rotor(name, rotor, working)
+        self._operator("set_rotor", name, rotor=rotor, working=bool(working))
+        self._sensor.flush_events()
+
     def set_perception_phase(self, name: str, phase: int) -> None:
         """Take robot ``name``'s perception (OmniVisionInfo) at physics step ``phase`` of each control period
         instead of the first: a real-time server spreads its robot processes over the period this way."""
@@ -424,11 +431,13 @@ class Simulation:
         except KeyError:
             raise CommandError(f"{name} is not under manual control: call take_control({name!r}) first") from None
 
-    def send_vel(self, name: str, vx: float, vy: float, w: float) -> None:
-        """Body-frame velocity command for a robot under manual control (applies at once)."""
+    def send_vel(self, name: str, vx: float, vy: float, w: float, vz: float = 0.0) -> None:
+        """Body-frame velocity command for a robot under manual control (applies at once); ``vz``, the
+        upward speed, moves aerial robots."""
         d = self._driver(name)
-        d.vel = (vx, vy, w)
-        self._operator("send_vel", name, vx=vx, vy=vy, w=w)
+        d.vel = (vx, vy, w, vz)
+        args = {"vx": vx, "vy": vy, "w": w} if vz == 0.0 else {"vx": vx, "vy": vy, "w": w, "vz": vz}
+        self._operator("send_vel", name, **args)
         d.send_now(self.time)
 
     def send_action(self, name: str, dribble: bool = False, kick: float = 0.0, lob: bool = False) -> None:

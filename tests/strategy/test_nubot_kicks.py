@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from simatch.field import FieldGeometry
@@ -28,7 +29,14 @@ def player() -> BallPlayer:
 def holding(x: float, y: float, yaw: float, opps: list) -> SimpleNamespace:
     """What a robot holding the ball sees (team frame): itself, the ball in its mouth, opponents."""
     me = SimpleNamespace(id=2, x=x, y=y, yaw=yaw, vx=0.0, vy=0.0, w=0.0, holding=True)
-    return SimpleNamespace(me=me, mates=[me], opps=opps, bx=x + MOUTH * math.cos(yaw), by=y + MOUTH * math.sin(yaw))
+    return SimpleNamespace(
+        me=me,
+        mates=[me],
+        opps=opps,
+        opp_array=np.array(opps, dtype=np.float64).reshape(-1, 4),  # as Observation gives them to kernels
+        bx=x + MOUTH * math.cos(yaw),
+        by=y + MOUTH * math.sin(yaw),
+    )
 
 
 def test_a_clearance_stays_on_the_field():

@@ -16,6 +16,7 @@ BENCHMARKS: dict[str, str] = {
     "referee": "simatch.bench.referee:run",
     "web": "simatch.bench.web:run",
     "encirclement": "simatch.bench.encirclement:run",
+    "aerial": "simatch.bench.aerial:run",
     "distributed_rtt": "simatch.bench.distributed:rtt",
     "distributed_lockstep": "simatch.bench.distributed:lockstep",
     "distributed_realtime": "simatch.bench.distributed:realtime",

@@ -11,14 +11,19 @@ import statistics
 import time
 
 
-def _one(seed: int) -> tuple[float, float, float, dict]:
+def one_run(scene: str, seed: int, overrides: dict | None = None) -> tuple[float, float, float, dict]:
+    """A whole run of ``scene`` as ``simatch run`` makes it: (simulated s, CPU s, wall s, the judge's result)."""
     from ..simulation import Simulation
 
-    with Simulation("encirclement_9v7", seed=seed) as sim:
+    with Simulation(scene, seed=seed, overrides=overrides) as sim:
         cpu, wall = time.process_time(), time.perf_counter()
         sim.run()
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
         return sim.time, cpu, wall, sim.judge.result()
+
+
+def _one(seed: int) -> tuple[float, float, float, dict]:
+    return one_run("encirclement_9v7", seed)
 
 
 def run(seconds: float | None = None) -> dict:

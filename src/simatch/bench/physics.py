@@ -114,14 +114,15 @@ def run(seconds: float | None = None) -> dict:
     warm = Simulator(scene, seed=99)
     _loop(warm, CYCLE, np.random.default_rng(99), _state(warm), _stats())
     stats = _stats()
-    sim_time = wall = 0.0
+    sim_time = wall = cpu = 0.0
     steps = kicks = catches = 0
     rtfs = []
     for seed in SEEDS:
         sim = Simulator(scene, seed=seed)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         _loop(sim, seconds, np.random.default_rng(seed), _state(sim), stats)
         w = time.perf_counter() - t0
+        cpu += time.process_time() - c0
         rtfs.append(round(sim.time / w, 1))
         wall += w
         sim_time += sim.time
@@ -131,6 +132,8 @@ def run(seconds: float | None = None) -> dict:
     scrums = stats["scrum_ticks"]  # none in a run shorter than the first scrum (--seconds): no figure
     return {
         "physics_rtf": round(sim_time / wall, 1),
+        # per second of this process's CPU time (compare with match_cpu_rtf on a machine shared with other work)
+        "physics_cpu_rtf": round(sim_time / max(cpu, 1e-9), 1),
         "physics_rtf_per_seed": rtfs,
         "physics_scrum_rtf": round(scrums * sim.control_steps * sim.dt / stats["scrum_wall"], 1) if scrums else None,
         "physics_steps_per_s": round(steps / wall),

@@ -15,18 +15,24 @@ from .base import AnyCallback, BusStats, Callback
 
 
 class _Publisher:
-    __slots__ = ("topic", "msgtype", "_bus", "_callbacks")
+    """A topic's sending end: ``put(msg)`` delivers to every subscriber, in subscription order. ``active``
+    (whether anybody listens) is a plain attribute, set again whenever a subscriber comes or goes: it is
+    read before building a message that nobody may want, hundreds of times per simulated second."""
+
+    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "active")
 
     def __init__(self, bus: InProcessBus, topic: str, msgtype: Any):
         self.topic = topic
         self.msgtype = msgtype
         self._bus = bus
         self._callbacks: list[Callback] = []
+        self.active = False
 
-    @property
-    def active(self) -> bool:
-        return bool(self._callbacks)
+    def _rebind(self) -> None:
+        self.active = bool(self._callbacks)
 
+    # (a method, looked up at each call: a sender may keep the bound ``put``, and must still reach
+    # subscribers that come later)
     def put(self, msg: Any) -> None:
         for cb in self._callbacks:
             cb(msg)
@@ -55,6 +61,7 @@ class _Subscription:
                 )
             bound = self.callback
         pub._callbacks.append(bound)
+        pub._rebind()
         self._bound.append((pub, bound))
 
     def close(self) -> None:
@@ -63,6 +70,7 @@ class _Subscription:
                 pub._callbacks.remove(bound)
             except ValueError:
                 pass
+            pub._rebind()
         self._bound.clear()
         if self in self._bus._subs:
             self._bus._subs.remove(self)

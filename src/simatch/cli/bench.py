@@ -56,6 +56,22 @@ def run_alone(name: str, seconds: float | None) -> dict:
         raise UsageError(f"benchmark {name} printed no JSON object: {out.stdout[-300:]!r}") from None
 
 
+def ratios(out: dict) -> dict:
+    """Figures that compare two benchmarks of the same ``simatch bench`` run: ``match_physics_ratio``, the
+    whole match's speed as a fraction of the physics alone (``match_rtf / physics_rtf``; 0.5 means the
+    strategies, perception, bus and referee together cost as much as the physics), and the same of the
+    CPU-time figures (``match_physics_cpu_ratio``, steadier on a machine shared with other work)."""
+    found = {}
+    for key, match_key, physics_key in (
+        ("match_physics_ratio", "match_rtf", "physics_rtf"),
+        ("match_physics_cpu_ratio", "match_cpu_rtf", "physics_cpu_rtf"),
+    ):
+        match, physics = out.get(match_key), out.get(physics_key)
+        if isinstance(match, int | float) and isinstance(physics, int | float) and physics > 0:
+            found[key] = round(match / physics, 3)
+    return found
+
+
 def main(args) -> int:
     names = args.only or list(BENCHMARKS)
     unknown = [n for n in names if n not in BENCHMARKS]
@@ -69,6 +85,7 @@ def main(args) -> int:
         if not args.json:
             print(f"[{k}/{len(names)}] running {name} ...", file=sys.stderr, flush=True)
         out.update(run(name, args.seconds))
+    out.update(ratios(out))
     if args.json:
         print(json.dumps(out))
     else:

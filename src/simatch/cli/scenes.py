@@ -7,6 +7,7 @@ import json
 
 from .. import version
 from ..config.loader import LoadedScene, load_scene, parse_override, shipped_scenes
+from ..worlds import world_class
 
 
 def add_parser(sub) -> None:
@@ -14,9 +15,9 @@ def add_parser(sub) -> None:
         "scenes",
         help="list the shipped scenes, or show one scene's settings (JSON, or a scene file with --toml)",
         description="Without SCENE: the shipped scenes. With SCENE: every setting of that scene "
-        "(defaults filled in, overrides applied), as JSON; with --toml, as a complete scene file with a "
-        "comment on every setting, to save and edit: simatch scenes msl_5v5 --toml > my.toml, then "
-        "simatch run my.toml.",
+        "(defaults filled in, overrides applied), as JSON, and the world as its plug-in made it (world_made: "
+        "zones, obstacles given and scattered); with --toml, as a complete scene file with a comment on every "
+        "setting, to save and edit: simatch scenes msl_5v5 --toml > my.toml, then simatch run my.toml.",
     )
     p.add_argument("scene", nargs="?", metavar="SCENE", help="a shipped scene name or a path to a .toml file")
     p.add_argument(
@@ -49,8 +50,15 @@ def main(args) -> int:
     loaded = load_scene(args.scene, dict(parse_override(o) for o in args.overrides))
     if args.toml:
         print(scene_file(loaded, args), end="")
-    else:
-        print(json.dumps(loaded.spec.model_dump(mode="json"), indent=2))
+        return 0
+    data = loaded.spec.model_dump(mode="json")
+    world = world_class(loaded.spec.world.kind)
+    for key in world.foreign_keys:  # settings of another kind of world: not this one's
+        data["world"].pop(key, None)
+    made = loaded.spec.world.geometry().describe()
+    made.pop("lines", None)
+    data["world_made"] = made  # the world as its plug-in made it (scattered obstacles included)
+    print(json.dumps(data, indent=2))
     return 0
 
 

@@ -14,6 +14,7 @@ from pydantic import BaseModel, ValidationError
 
 from ..plugins import PluginError
 from ..robots import model_class
+from ..worlds import WorldError
 from .schema import Scene
 
 
@@ -187,7 +188,44 @@ def scene_from_text(text: str, source: str, overrides: Mapping[str, Any] | None 
         spec = Scene.model_validate(data)
     except ValidationError as exc:
         raise SceneError(format_errors(exc, source, model=Scene)) from None
+    check_world(spec, source)
     return LoadedScene(spec=spec, source=source, text=text, overrides=overrides)
+
+
+def check_world(spec: Scene, source: str) -> None:
+    """Make the scene's world once (its plug-in, its ``params``, its scattered obstacles) and check that no
+    robot starts inside an obstacle; SceneError naming the file and the key."""
+    from ..worlds import world_class
+
+    try:
+        cls = world_class(spec.world.kind)
+    except PluginError as exc:
+        raise SceneError(f"{source}: world.kind: {exc}") from None
+    validate_params(cls.Params, spec.world.params, source, "world.params")
+    try:
+        geometry = spec.world.geometry()
+    except WorldError as exc:
+        raise SceneError(f"{source}: {exc}") from None
+    for team, tspec in spec.teams.items():
+        for m in tspec.members():
+            x, y, _ = m.start
+            ob = geometry.obstacle_at(x, y)
+            if ob is not None and not _starts_above(m, ob.height):
+                where = f"teams.{team}.start" if m.squad < 0 else f"teams.{team}.squads[{m.squad}].start"
+                raise SceneError(f"{source}: {where}: robot {m.id} starts at ({x:g}, {y:g}), inside obstacle {ob.name}")
+
+
+def _starts_above(member, top: float) -> bool:
+    """A flying robot may start in the air above a low obstacle (its frame clear of the obstacle's top). A
+    model or parameters that do not load are left to `check_models`, which names the key."""
+    try:
+        cls = model_class(member.model)
+        if cls.locomotion != "aerial":
+            return False
+        model = cls(cls.Params.model_validate(dict(member.model_params)))
+    except (PluginError, ValidationError):
+        return False
+    return model.params.start_altitude - model.height / 2 > top
 
 
 def validate_params(model: type[BaseModel], params: Mapping[str, Any], source: str, key: str) -> BaseModel:
@@ -199,10 +237,23 @@ def validate_params(model: type[BaseModel], params: Mapping[str, Any], source: s
 
 
 def check_models(scene: LoadedScene) -> None:
-    """Check every team's robot model and its parameters; SceneError naming the file and the key."""
+    """Check every team's robot models and their parameters, and that a flying robot starts below the world's
+    ceiling; SceneError naming the file and the key."""
+    ceiling = scene.spec.world.ceiling
     for team, tspec in scene.spec.teams.items():
-        try:
-            cls = model_class(tspec.model)
-        except PluginError as exc:
-            raise SceneError(f"{scene.source}: teams.{team}.model: {exc}") from None
-        validate_params(cls.Params, tspec.model_params, scene.source, f"teams.{team}.model_params")
+        groups = [(f"teams.{team}", tspec.model, tspec.model_params)]
+        groups += [(f"teams.{team}.squads[{k}]", q.model, q.model_params) for k, q in enumerate(tspec.squads)]
+        for key, model, params in groups:
+            try:
+                cls = model_class(model)
+            except PluginError as exc:
+                raise SceneError(f"{scene.source}: {key}.model: {exc}") from None
+            p = validate_params(cls.Params, params, scene.source, f"{key}.model_params")
+            start = getattr(p, "start_altitude", None)
+            if ceiling is not None and cls.locomotion == "aerial" and start is not None:
+                top = start + cls(p).height / 2
+                if top >= ceiling:
+                    raise SceneError(
+                        f"{scene.source}: {key}.model_params.start_altitude: {start:g} m puts the robot's top at "
+                        f"{top:g} m, at or above the ceiling (world.ceiling = {ceiling:g} m)"
+                    )

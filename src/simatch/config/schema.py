@@ -8,11 +8,13 @@ strategies, judges) check their own parameters with their own models (see ``sima
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, field_validator, model_validator
 
-from ..field import Area, FieldGeometry
+from ..field import FieldGeometry
+from ..worlds import make_world
 
 
 class Strict(BaseModel):
@@ -51,7 +53,66 @@ class AreaSpec(Strict):
         return self
 
 
+class ObstacleSpec(Strict):
+    """A static obstacle standing on the floor: a box (``size``, turned by ``yaw``) or a cylinder (``radius``)."""
+
+    shape: Literal["box", "cylinder"]
+    x: float = Field(description="centre, world frame [m]")
+    y: float
+    size: tuple[float, float] | None = Field(None, description="a box's length along its own x and y [m]")
+    radius: float | None = Field(None, gt=0.0, le=50.0, description="a cylinder's [m]")
+    yaw: float = Field(0.0, description="a box's turn about z [rad]")
+    height: float = Field(1.0, gt=0.0, le=100.0, description="[m]")
+    name: str | None = Field(None, min_length=1, description="default obstacle_<k>")
+
+    @model_validator(mode="after")
+    def _shape(self):
+        if self.shape == "box":
+            if self.size is None or min(self.size) <= 0.0:
+                raise ValueError("a box needs size = [length, width], both positive")
+            if self.radius is not None:
+                raise ValueError("a box has a size, not a radius")
+        else:
+            if self.radius is None:
+                raise ValueError("a cylinder needs a radius")
+            if self.size is not None or self.yaw != 0.0:
+                raise ValueError("a cylinder has a radius, not a size or a yaw")
+        return self
+
+
+Rect = tuple[float, float, float, float]
+
+
+class ClutterSpec(Strict):
+    """Obstacles scattered at random free places, drawn from ``seed`` (the scene's, not the run's: every
+    process and viewer of a run computes the same world)."""
+
+    seed: int = Field(0, ge=0, description="draws sizes, places and turns")
+    boxes: int = Field(0, ge=0, le=200)
+    cylinders: int = Field(0, ge=0, le=200)
+    size: tuple[float, float] = Field((0.6, 1.6), description="range of a box's sides and a cylinder's diameter [m]")
+    height: tuple[float, float] = Field((0.5, 1.5), description="range of the heights [m]")
+    region: Rect | None = Field(None, description="x0, y0, x1, y1: where centres may fall; default the whole floor")
+    gap: float = Field(1.0, ge=0.0, le=20.0, description="least free floor around each obstacle [m]")
+    keep_clear: list[Rect] = Field(
+        default_factory=list, description="rectangles x0, y0, x1, y1 kept free (e.g. where robots start)"
+    )
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        for what, (lo, hi) in (("size", self.size), ("height", self.height)):
+            if not 0.0 < lo <= hi:
+                raise ValueError(f"{what}: expected 0 < low <= high, got {[lo, hi]}")
+        for what, rect in [("region", self.region)] + [(f"keep_clear[{k}]", r) for k, r in enumerate(self.keep_clear)]:
+            if rect is not None and not (rect[0] < rect[2] and rect[1] < rect[3]):
+                raise ValueError(f"{what}: expected x0 < x1 and y0 < y1")
+        return self
+
+
 class WorldSpec(Strict):
+    kind: str = Field(
+        "msl_field", min_length=1, description="the world plug-in: msl_field, arena, or package.module:Class"
+    )
     length: float = Field(22.0, gt=1.0, le=200.0, description="between the goal lines [m]")
     width: float = Field(14.0, gt=1.0, le=200.0, description="between the side lines [m]")
     margin: float = Field(1.5, ge=0.0, le=20.0, description="floor beyond the lines [m]")
@@ -71,10 +132,17 @@ class WorldSpec(Strict):
     goal_post_size: float = Field(0.125, gt=0.0, le=1.0)
     walls: bool = True
     wall_height: float = Field(0.5, gt=0.0, le=5.0)
-    areas: list[AreaSpec] = Field(default_factory=list)
+    areas: list[AreaSpec] = Field(default_factory=list, description="named zones (a prison, a base), world frame")
+    obstacles: list[ObstacleSpec] = Field(default_factory=list, description="static obstacles at given poses")
+    clutter: ClutterSpec | None = Field(None, description="static obstacles scattered from a seed")
+    ceiling: float | None = Field(None, gt=0.5, le=100.0, description="height of a ceiling [m]; none: open sky")
+    params: dict[str, Any] = Field(default_factory=dict, description="a world plug-in's own settings")
+    _geometry: tuple[str, FieldGeometry] | None = PrivateAttr(None)
 
     @model_validator(mode="after")
     def _fits(self):
+        if self.kind != "msl_field":
+            return self  # the soccer sizes are the MSL field's (another kind refuses or ignores them)
         if self.goals and self.goal_width >= self.width:
             raise ValueError("goal_width must be smaller than the field width")
         if self.penalty_area_depth > self.length / 2 or self.penalty_area_width > self.width:
@@ -82,9 +150,13 @@ class WorldSpec(Strict):
         return self
 
     def geometry(self) -> FieldGeometry:
-        data = self.model_dump()
-        data["areas"] = tuple(Area(**a) for a in data["areas"])
-        return FieldGeometry(**data)
+        """The world's description (`FieldGeometry`), made by the world plug-in of ``kind``; computed once
+        per setting (a scattered clutter is drawn once). Raises `WorldError` or `PluginError` for a world
+        that cannot be made (the loader checks every scene for that first, `check_world`)."""
+        key = self.model_dump_json()
+        if self._geometry is None or self._geometry[0] != key:
+            self._geometry = (key, make_world(self).geometry())
+        return self._geometry[1]
 
 
 class BallSpec(Strict):
@@ -96,6 +168,35 @@ class BallSpec(Strict):
     restitution: float = Field(0.6, ge=0.0, le=0.95, description="bounce on the floor: rebound/impact speed")
     friction: float = Field(0.6, ge=0.0, le=2.0, description="sliding friction against floor and robots")
     position: tuple[float, float] = (0.0, 0.0)
+
+
+class SquadSpec(Strict):
+    """More robots of a team, of another model (drones beside wheeled robots): one team, one strategy, one
+    picture of the game, robots of several kinds."""
+
+    model: str = Field(min_length=1, description="robot model: a shipped name or package.module:Class")
+    model_params: dict[str, Any] = Field(default_factory=dict)
+    ids: list[int] | None = Field(None, description="robot ids; default: after the team's ids before them")
+    start: list[Pose] = Field(
+        min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
+    )
+
+    @model_validator(mode="after")
+    def _ids(self):
+        if self.ids is not None and len(self.ids) != len(self.start):
+            raise ValueError(f"ids has {len(self.ids)} entries but start has {len(self.start)}")
+        return self
+
+
+@dataclass(frozen=True)
+class Member:
+    """One robot of a team as the scene gives it: its id, model and start pose."""
+
+    id: int
+    model: str
+    model_params: dict
+    start: Pose
+    squad: int  # -1: the team's own robots (teams.<team>.start), else its index in teams.<team>.squads
 
 
 class TeamSpec(Strict):
@@ -125,17 +226,22 @@ class TeamSpec(Strict):
     start: list[Pose] = Field(
         min_length=1, max_length=32, description="one start pose [x, y, yaw] per robot, world frame [m, rad]"
     )
+    squads: list[SquadSpec] = Field(
+        default_factory=list, max_length=8, description="more robots of other models (e.g. drones), same team"
+    )
 
     @model_validator(mode="after")
     def _ids(self):
-        if self.ids is not None:
-            if len(self.ids) != len(self.start):
-                raise ValueError(f"ids has {len(self.ids)} entries but start has {len(self.start)}")
-            if len(set(self.ids)) != len(self.ids) or min(self.ids) < 1:
-                raise ValueError("ids must be distinct positive integers")
-        unknown = sorted(set(self.learners) - set(self.robot_ids()))
+        if self.ids is not None and len(self.ids) != len(self.start):
+            raise ValueError(f"ids has {len(self.ids)} entries but start has {len(self.start)}")
+        ids = [m.id for m in self.members()]
+        if len(set(ids)) != len(ids) or min(ids) < 1:
+            raise ValueError("ids must be distinct positive integers (over the team and its squads)")
+        if len(ids) > 64:
+            raise ValueError(f"a team has at most 64 robots, this one {len(ids)}")
+        unknown = sorted(set(self.learners) - set(ids))
         if unknown:
-            raise ValueError(f"learners: the team has no robot(s) {unknown}; its robots are {self.robot_ids()}")
+            raise ValueError(f"learners: the team has no robot(s) {unknown}; its robots are {ids}")
         if self.learners and self.strategy == "external":
             raise ValueError("learners: an 'external' team plays in its own process; its robots cannot learn here")
         return self
@@ -145,8 +251,22 @@ class TeamSpec(Strict):
         every = self.strategy == "learner"
         return [rid for rid in self.robot_ids() if every or rid in self.learners]
 
+    def members(self) -> list[Member]:
+        """Every robot of the team, its own robots first, then each squad's, in the scene's order."""
+        ids = list(self.ids) if self.ids is not None else list(range(1, len(self.start) + 1))
+        out = [Member(rid, self.model, self.model_params, tuple(p), -1) for rid, p in zip(ids, self.start)]
+        for k, squad in enumerate(self.squads):
+            after = max((m.id for m in out), default=0)
+            sids = list(squad.ids) if squad.ids is not None else list(range(after + 1, after + 1 + len(squad.start)))
+            out += [Member(rid, squad.model, squad.model_params, tuple(p), k) for rid, p in zip(sids, squad.start)]
+        return out
+
     def robot_ids(self) -> list[int]:
-        return list(self.ids) if self.ids is not None else list(range(1, len(self.start) + 1))
+        return [m.id for m in self.members()]
+
+    def starts(self) -> list[Pose]:
+        """Every robot's start pose, in the order of `robot_ids`."""
+        return [m.start for m in self.members()]
 
 
 class ControlSpec(Strict):
@@ -206,6 +326,15 @@ class PerceptionSpec(Strict):
     ball_dropout: float = Field(0.0, ge=0.0, le=1.0, description="probability that the ball is not seen")
     obstacle_dropout: float = Field(0.0, ge=0.0, le=1.0, description="probability that an obstacle is missed")
     latency: float = Field(0.0, ge=0.0, le=2.0, description="delay of every observation [s]")
+    line_of_sight: bool = Field(
+        False, description="ground robots see only what no obstacle hides (3D sight line from the top of the robot)"
+    )
+    camera_footprint: bool = Field(
+        False, description="aerial robots see only what lies within their downward camera's cone below them"
+    )
+    ground_range: float | None = Field(
+        None, gt=0.0, le=1000.0, description="ground robots see nothing farther than this [m]; none: no limit"
+    )
 
 
 class JudgeSpec(BaseModel):
@@ -315,6 +444,12 @@ class Scene(Strict):
 
     def robot_names(self) -> list[str]:
         return [f"{team}/{rid}" for team, spec in self.teams.items() for rid in spec.robot_ids()]
+
+    def member(self, name: str) -> Member | None:
+        """The robot ``team/id`` as the scene gives it (its model and start), or None if there is none."""
+        team, _, rid = name.partition("/")
+        spec = self.teams.get(team)
+        return next((m for m in spec.members() if str(m.id) == rid), None) if spec is not None else None
 
     def learner_names(self) -> list[str]:
         """The robots handed to learning (``teams.<team>.learners`` or ``strategy = 'learner'``)."""

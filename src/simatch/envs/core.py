@@ -77,6 +77,7 @@ class LearningRun:
         strict_actions: bool = False,
         teammates: int | None = None,
         obstacles: int | None = None,
+        structures: int | None = None,
         episode_time: float | None = None,
     ):
         if action_type not in ("box", "discrete"):
@@ -100,16 +101,22 @@ class LearningRun:
         self.layouts: dict[str, Layout] = {}
         self.teammate_ids: dict[str, list[int]] = {}
         self.team_of_robot = {name: name.partition("/")[0] for name in spec.robot_names()}
+        # in a scene with aerial robots every observation has their heights (docs/aerial.md)
+        self.airborne = airborne = any(
+            model_class(m.model).locomotion == "aerial" for t in spec.teams.values() for m in t.members()
+        )
         for name in self.agents:
             team, _, rid = name.partition("/")
             tspec = spec.teams[team]
             self.info[name] = Agent(name, team, geo.half_length)
-            model = model_class(tspec.model)(tspec.model_params)
+            member = next(m for m in tspec.members() if m.id == int(rid))  # (a squad may hold other models)
+            model = model_class(member.model)(member.model_params)
             self.limits[name] = actions.Limits.of(model, spec.kicker, max_vel, max_w)
             self.teammate_ids[name] = [r for r in tspec.robot_ids() if r != int(rid)]
             t = len(tspec.robot_ids()) - 1 if teammates is None else teammates
             k = n_robots - 1 if obstacles is None else obstacles
-            self.layouts[name] = Layout(t, k, geo.half_length)
+            m = len(geo.obstacles) if structures is None else structures
+            self.layouts[name] = Layout(t, k, geo.half_length, heights=airborne, structures=m)
         self.sim: Simulation | None = None
         self.closed = False
         self.over = True  # no episode in progress
@@ -160,9 +167,9 @@ class LearningRun:
             a = actions_by_agent[name]
             lim = self.limits[name]
             if self.action_type == "box":
-                out[name] = lim.command(actions.check_box(name, a, self.strict_actions))
+                out[name] = lim.command(actions.check_box(name, a, self.strict_actions, lim.size))
             else:
-                out[name] = lim.discrete(actions.check_discrete(name, a))
+                out[name] = lim.discrete(actions.check_discrete(name, a, lim.moves))
         return out
 
     def step(self, actions_by_agent: Mapping[str, Any]):
@@ -208,7 +215,9 @@ class LearningRun:
         nodes = self.sim.robot_nodes
         for name in self.agents:
             world = nodes[name].world
-            out[name] = self.layouts[name].encode(world.vision, world.coach, self.teammate_ids[name])
+            out[name] = self.layouts[name].encode(
+                world.vision, world.coach, self.teammate_ids[name], world.field.obstacles
+            )
         return out
 
     def snapshot(self) -> Snapshot:

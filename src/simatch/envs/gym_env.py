@@ -62,7 +62,7 @@ class SimatchEnv(gymnasium.Env):
         self.agent = agent
         self.render_mode = None
         self.observation_space = observation_space(self.run.layouts[agent], self.form)
-        self.action_space = action_space(self.run.action_type)
+        self.action_space = action_space(self.run.action_type, self.run.limits[self.agent])
 
     def _obs(self, obs: dict[str, np.ndarray]):
         v = obs[self.agent]

@@ -20,7 +20,16 @@ goals      6       the centre of the goal my team attacks (team frame (+L, 0), L
 teammates  11 x T  per teammate, in the team's id order: present, then as self
 obstacles  9 x K   per robot I see (either team), nearest first: present, x, y, vx, vy, distance, cos angle,
                    sin angle, radius
+structures 6 x S   (a world with static obstacles, docs/aerial.md) per obstacle of the world's map, nearest
+                   first: present, distance [m] from my centre to its outline, cos and sin of the bearing of
+                   its nearest point from my kicker axis, its bounding radius [m], its height [m]
+heights    2+T+K   (a scene with aerial robots) my height z [m] and climb rate vz [m/s], then each teammate
+                   slot's height and each obstacle slot's height, in the slots' order (0 on the ground)
 ========== ======= ===========================================================================================
+
+``S`` defaults to every static obstacle of the world (none on the MSL field: no part); the obstacles are the
+map every robot has (`FieldGeometry.obstacles`, in the team frame), measured from my perceived pose.
+Scenes without static obstacles or aerial robots keep the layout without those parts.
 
 A slot nobody fills (an obstacle dropped by perception, fewer robots than slots) is all zeros, with present 0.
 A policy trained with fewer slots plays in a larger scene: it sees its nearest K obstacles and first T
@@ -31,9 +40,11 @@ size can reach. Before the first perception (latency) everything but the game co
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
+from ..field import Obstacle
 from ..msgs import BallInfo
 from ..msgs.game_commands import MatchMode
 
@@ -68,6 +79,11 @@ GOALS = (
 )
 OBSTACLE = ("present", "x", "y", "vx", "vy", "distance", "cos_angle", "sin_angle", "radius")
 GAME_SIZE = 2 * len(COMMANDS) + 2
+#: per static obstacle of the world's map (boxes, cylinders: `FieldGeometry.obstacles`), nearest first
+STRUCTURE = ("present", "distance", "cos_angle", "sin_angle", "radius", "height")
+#: in a scene with aerial robots, a last part: my height and climb rate, then each team-mate's and each
+#: obstacle's height, in the slots' order (0 on the ground)
+HEIGHTS = ("z", "vz")
 
 #: bounds of the observation space: positions and distances [m], speeds [m/s], turn rates [rad/s]
 BOUND_POSITION = 250.0
@@ -79,12 +95,14 @@ _SEEBALLBYOWN = BallInfo.SEEBALLBYOWN
 class Layout:
     """The observation of one agent: sizes, names of every entry, bounds, and the encoder."""
 
-    def __init__(self, teammates: int, obstacles: int, half_length: float):
-        if teammates < 0 or obstacles < 0:
-            raise ValueError("teammate and obstacle slots must be >= 0")
+    def __init__(self, teammates: int, obstacles: int, half_length: float, heights: bool = False, structures: int = 0):
+        if teammates < 0 or obstacles < 0 or structures < 0:
+            raise ValueError("teammate, obstacle and structure slots must be >= 0")
         self.teammates = int(teammates)
         self.obstacles = int(obstacles)
+        self.structures = int(structures)  # slots for the world's static obstacles: see `STRUCTURE`
         self.half_length = float(half_length)
+        self.heights = bool(heights)  # a part of heights (a scene with aerial robots): see `HEIGHTS`
         self.parts: dict[str, tuple[int, ...]] = {
             "game": (GAME_SIZE,),
             "self": (len(SELF),),
@@ -95,6 +113,10 @@ class Layout:
             self.parts["teammates"] = (self.teammates, len(TEAMMATE))
         if self.obstacles:
             self.parts["obstacles"] = (self.obstacles, len(OBSTACLE))
+        if self.structures:
+            self.parts["structures"] = (self.structures, len(STRUCTURE))
+        if self.heights:
+            self.parts["heights"] = (len(HEIGHTS) + self.teammates + self.obstacles,)
         self.offsets: dict[str, slice] = {}
         at = 0
         for name, shape in self.parts.items():
@@ -113,6 +135,11 @@ class Layout:
         out += [f"self.{n}" for n in SELF] + [f"ball.{n}" for n in BALL] + [f"goals.{n}" for n in GOALS]
         out += [f"teammates[{i}].{n}" for i in range(self.teammates) for n in TEAMMATE]
         out += [f"obstacles[{i}].{n}" for i in range(self.obstacles) for n in OBSTACLE]
+        out += [f"structures[{i}].{n}" for i in range(self.structures) for n in STRUCTURE]
+        if self.heights:
+            out += [f"heights.self.{n}" for n in HEIGHTS]
+            out += [f"heights.teammates[{i}].z" for i in range(self.teammates)]
+            out += [f"heights.obstacles[{i}].z" for i in range(self.obstacles)]
         return out
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -124,6 +151,7 @@ class Layout:
             "ball_y": BOUND_POSITION,
             "distance": BOUND_POSITION,
             "radius": BOUND_POSITION,
+            "height": BOUND_POSITION,
             "vx": BOUND_SPEED,
             "vy": BOUND_SPEED,
             "vz": BOUND_SPEED,
@@ -139,7 +167,7 @@ class Layout:
                 high[i] = BOUND_POSITION
             elif "cos_" in leaf or "sin_" in leaf:
                 low[i] = -1.0
-        low[[i for i, n in enumerate(self.names()) if n.endswith((".distance", ".radius"))]] = 0.0
+        low[[i for i, n in enumerate(self.names()) if n.endswith((".distance", ".radius", ".height"))]] = 0.0
         return low, high
 
     def split(self, vector: np.ndarray) -> dict[str, np.ndarray]:
@@ -147,9 +175,10 @@ class Layout:
         return {name: vector[self.offsets[name]].reshape(shape) for name, shape in self.parts.items()}
 
     # --- encoding ---------------------------------------------------------------------------------------------
-    def encode(self, vision, coach, teammate_ids: list[int]) -> np.ndarray:
+    def encode(self, vision, coach, teammate_ids: list[int], structures: Sequence[Obstacle] = ()) -> np.ndarray:
         """The vector of one robot from its latest OmniVisionInfo (None before the first) and CoachInfo (None
-        before the first); ``teammate_ids`` fixes the order of the teammate slots."""
+        before the first); ``teammate_ids`` fixes the order of the teammate slots; ``structures`` are the
+        world's static obstacles in the robot's team frame (its `WorldModel.field.obstacles`)."""
         out = np.zeros(self.size, dtype=np.float32)
         if coach is not None:
             out[_COMMAND_INDEX.get(int(coach.match_mode), 0)] = 1.0
@@ -157,11 +186,11 @@ class Layout:
             out[2 * len(COMMANDS)] = coach.ball_x
             out[2 * len(COMMANDS) + 1] = coach.ball_y
         if vision is not None:
-            self._encode_vision(out, vision, teammate_ids)
+            self._encode_vision(out, vision, teammate_ids, structures)
         np.clip(out, self.low, self.high, out=out)
         return out
 
-    def _encode_vision(self, out: np.ndarray, vision, teammate_ids: list[int]) -> None:
+    def _encode_vision(self, out: np.ndarray, vision, teammate_ids: list[int], structures) -> None:
         me = None
         mates = {}
         for r in vision.robots:
@@ -224,6 +253,35 @@ class Layout:
                 axis=1,
             )
             out[at : at + k * len(OBSTACLE)] = block.ravel()
+        if self.structures and me is not None and structures:
+            self._encode_structures(out, me, structures)
+        if self.heights:  # my height and climb rate, my team-mates' and the obstacles' heights, slot by slot
+            h = self.offsets["heights"].start
+            if me is not None:
+                out[h : h + 2] = (me.z, me.vz)
+            h += len(HEIGHTS)
+            for i, rid in enumerate(teammate_ids[: self.teammates]):
+                r = mates.get(rid)
+                if r is not None:
+                    out[h + i] = r.z
+            h += self.teammates
+            if n and self.obstacles:
+                out[h : h + k] = o.z[order]
+
+    def _encode_structures(self, out: np.ndarray, me, structures: Sequence[Obstacle]) -> None:
+        """The nearest static obstacles as I see them from my perceived pose: how far their outline is, in
+        which direction its nearest point lies, how big and how tall they are."""
+        rows = []
+        for ob in structures:
+            d = ob.distance(me.x, me.y)
+            ax, ay = ob.away(me.x, me.y)  # the nearest point of the outline is d back along it
+            bearing = math.atan2(-ay, -ax) - me.yaw
+            rows.append((max(d, 0.0), math.cos(bearing), math.sin(bearing), ob.bounding_radius, ob.height))
+        rows.sort(key=lambda row: row[0])
+        at = self.offsets["structures"].start
+        for row in rows[: self.structures]:
+            out[at : at + len(STRUCTURE)] = (1.0, *row)
+            at += len(STRUCTURE)
 
 
 def _robot(r) -> tuple:

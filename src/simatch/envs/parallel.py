@@ -28,8 +28,9 @@ class SimatchParallelEnv(ParallelEnv):
     (``"cyan/2"``) handed to learning besides the scene's own (default: the scene's, else its first team);
     ``overrides``: ``{"dotted.key": value}`` as ``--set``; ``observation``: ``"vector"`` or ``"dict"``;
     ``action_type``: ``"box"`` or ``"discrete"``; ``max_vel``/``max_w``: caps on the action's velocity scale;
-    ``strict_actions``: refuse numbers outside [-1, 1] instead of clipping; ``teammates``/``obstacles``: slots
-    in the observation; ``episode_time``: cut episodes after this many simulated seconds."""
+    ``strict_actions``: refuse numbers outside [-1, 1] instead of clipping; ``teammates``/``obstacles``/
+    ``structures``: slots in the observation (team-mates, robots seen, the world's static obstacles);
+    ``episode_time``: cut episodes after this many simulated seconds."""
 
     metadata = {"name": "simatch_v0", "render_modes": [], "is_parallelizable": True}
 
@@ -41,8 +42,8 @@ class SimatchParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         self.render_mode = None
         self._obs_spaces = {a: observation_space(self.run.layouts[a], self.form) for a in self.possible_agents}
-        self._act_spaces = {a: action_space(self.run.action_type) for a in self.possible_agents}
-        n = 3 * len(self.run.team_of_robot) + 6
+        self._act_spaces = {a: action_space(self.run.action_type, self.run.limits[a]) for a in self.possible_agents}
+        n = (4 if self.run.airborne else 3) * len(self.run.team_of_robot) + 6
         self.state_space = spaces.Box(-BOUND, BOUND, shape=(n,), dtype=np.float32)
         self._seeds: np.random.Generator | None = None
 
@@ -83,13 +84,17 @@ class SimatchParallelEnv(ParallelEnv):
         return self._form(obs), rewards, terminated, truncated, infos
 
     def state(self) -> np.ndarray:
-        """The world's true state (world frame): x, y, yaw of every robot, then the ball's x, y, z, vx, vy, vz."""
+        """The world's true state (world frame): x, y, yaw of every robot, then the ball's x, y, z, vx, vy, vz;
+        in a scene with aerial robots, then every robot's height z (in `Simulator.robot_names` order)."""
         self.run.check_open()
         sim = self.run.sim
         if sim is None:
             raise RuntimeError("call reset() first")
-        robots = sim.simulator.robot_array()[:, :3].ravel()
-        state = np.concatenate((robots, sim.simulator.ball_array())).astype(np.float32)
+        parts = [sim.simulator.robot_array()[:, :3].ravel(), sim.simulator.ball_array()]
+        if self.run.airborne:
+            _, pose, _ = sim.simulator.model_state_arrays()
+            parts.append(pose[:-1, 2])  # the robots' heights (the ball is last)
+        state = np.concatenate(parts).astype(np.float32)
         return np.clip(state, -BOUND, BOUND, out=state)
 
     def render(self):

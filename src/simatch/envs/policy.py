@@ -51,7 +51,13 @@ def save_policy(model: Any, file: str | Path, env: Any, agent: str | None = None
         "algorithm": type(model).__name__,
         "scene": run.scene.name,
         "agent": agent,
-        "observation": {"teammates": layout.teammates, "obstacles": layout.obstacles, "size": layout.size},
+        "observation": {
+            "teammates": layout.teammates,
+            "obstacles": layout.obstacles,
+            "heights": layout.heights,
+            "structures": layout.structures,
+            "size": layout.size,
+        },
         "action": {"type": run.action_type, **limits.__dict__},
     }
     if normalize is not None and getattr(normalize, "norm_obs", False):
@@ -106,7 +112,13 @@ class Policy(RobotStrategy):
             self._cache[key] = (_load_model(file, meta["algorithm"]), meta)
         self.model, meta = self._cache[key]
         obs, act = meta["observation"], dict(meta["action"])
-        self.layout = Layout(obs["teammates"], obs["obstacles"], ctx.field.half_length)
+        self.layout = Layout(
+            obs["teammates"],
+            obs["obstacles"],
+            ctx.field.half_length,
+            obs.get("heights", False),
+            obs.get("structures", 0),
+        )
         self.discrete = act.pop("type") == "discrete"
         self.limits = actions.Limits(**act)
         self.mates = [rid for rid in ctx.ids if rid != ctx.id]
@@ -120,11 +132,11 @@ class Policy(RobotStrategy):
         self.name = f"{ctx.team}/{ctx.id}"
 
     def decide(self, world) -> Command:
-        obs = self.layout.encode(world.vision, world.coach, self.mates)
+        obs = self.layout.encode(world.vision, world.coach, self.mates, world.field.obstacles)
         if self.norm is not None:
             mean, std, clip = self.norm
             obs = np.clip((obs - mean) / std, -clip, clip).astype(np.float32)
         a, _ = self.model.predict(obs, deterministic=self.ctx.params.deterministic)
         if self.discrete:
-            return self.limits.discrete(actions.check_discrete(self.name, a))
-        return self.limits.command(actions.check_box(self.name, np.asarray(a).ravel()))
+            return self.limits.discrete(actions.check_discrete(self.name, a, self.limits.moves))
+        return self.limits.command(actions.check_box(self.name, np.asarray(a).ravel(), size=self.limits.size))

@@ -19,10 +19,11 @@ def observation_space(layout: Layout, form: str) -> spaces.Space:
     return spaces.Dict({name: spaces.Box(lows[name], highs[name], dtype=np.float32) for name in layout.parts})
 
 
-def action_space(action_type: str) -> spaces.Space:
+def action_space(action_type: str, limits: action.Limits | None = None) -> spaces.Space:
+    """The action space of an agent whose robot has ``limits`` (an aerial robot's has its climb as well)."""
     if action_type == "discrete":
-        return spaces.Discrete(len(action.DISCRETE))
-    return spaces.Box(-1.0, 1.0, shape=(action.SIZE,), dtype=np.float32)
+        return spaces.Discrete(limits.moves if limits is not None else len(action.DISCRETE))
+    return spaces.Box(-1.0, 1.0, shape=(limits.size if limits is not None else action.SIZE,), dtype=np.float32)
 
 
 def check_form(form: str) -> str:

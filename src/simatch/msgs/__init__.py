@@ -91,7 +91,22 @@ _GENERATED = {
 }
 
 
-def _with_slots(cls: type) -> type:
+_NUMBER_TYPES = {"float32": float, "float64": float, "bool": lambda v: v.lower() == "true"}
+
+
+def _defaults(text: str) -> dict[str, Any]:
+    """The default values a ``.msg`` text gives its fields (``float32 vz 0.0``), as ROS 2 allows: a field
+    appended to a message with a default leaves every constructor that does not name it valid."""
+    out = {}
+    for line in text.splitlines():
+        body = line.split("#", 1)[0].split()
+        if len(body) == 3 and "=" not in line.split("#", 1)[0]:
+            kind, name, value = body
+            out[name] = _NUMBER_TYPES.get(kind, int)(value)
+    return out
+
+
+def _with_slots(cls: type, defaults: dict[str, Any]) -> type:
     """The same message class with ``__slots__``: the same fields in the same order, constants and
     ``__msgtype__``, and no per-instance dict.
 
@@ -101,7 +116,11 @@ def _with_slots(cls: type) -> type:
     added to a message by mistake either (``msg.vz = 1`` on a VelCmd raises AttributeError)."""
     # rosbags declares the constants and ``__msgtype__`` as "ClassVar[...]" strings, which dataclasses takes
     # for fields with a default: here they are class attributes only
-    fields = [(f.name, f.type) for f in dataclasses.fields(cls) if not str(f.type).startswith("ClassVar")]
+    fields = [
+        (f.name, f.type, dataclasses.field(default=defaults[f.name])) if f.name in defaults else (f.name, f.type)
+        for f in dataclasses.fields(cls)
+        if not str(f.type).startswith("ClassVar")
+    ]
     namespace = {k: v for k, v in vars(cls).items() if k not in _GENERATED}
     slotted = dataclasses.make_dataclass(cls.__name__, fields, namespace=namespace, slots=True)
     slotted.__qualname__ = cls.__qualname__
@@ -110,7 +129,7 @@ def _with_slots(cls: type) -> type:
 
 
 for _name in _TEXTS:
-    typestore.types[_name] = _with_slots(typestore.types[_name])
+    typestore.types[_name] = _with_slots(typestore.types[_name], _defaults(_TEXTS[_name]))
 
 
 def names() -> list[str]:
@@ -209,11 +228,15 @@ def positional(msgtype: Any, order: str):
 
     Hot paths (perception, commands: hundreds of messages per simulated second) build messages
     positionally, about three times faster than by keyword. The check, at import, turns a later change of
-    a ``.msg`` file into a clear error instead of fields silently swapped."""
+    a ``.msg`` file into a clear error instead of fields silently swapped; fields appended later with a
+    default value in the ``.msg`` (VelCmd's ``vz``) may be left out of ``order``: they take their default."""
     want, have = tuple(order.split()), fields(msgtype)
-    if want != have:
+    cls = typestore.types[msgtype_name(msgtype)]
+    rest = have[len(want) :]
+    defaulted = cls.__dataclass_fields__
+    if want != have[: len(want)] or any(defaulted[f].default is dataclasses.MISSING for f in rest):
         raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
-    return typestore.types[msgtype_name(msgtype)]
+    return cls
 
 
 _FLOAT32 = [struct.Struct(f"<{n}f") for n in range(17)]

@@ -53,6 +53,7 @@ WORLD_CALLS = {
     "release_control",
     "send_vel",
     "send_action",
+    "set_rotor",
 }
 POSE_FIELDS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 TWIST_FIELDS = ("vx", "vy", "vz", "wx", "wy", "wz")

@@ -1,10 +1,12 @@
 """The game as a Foxglove 3D scene: two ``foxglove_msgs/msg/SceneUpdate`` channels of a recording.
 
 ``/scene/field`` is written at the start: the floor, the markings (``FieldGeometry.lines()``, the very lines
-the judges read), the goals tinted with the colour of the team defending them, the boards and any named
-areas; and again whenever the teams change ends (the goals change colours). ``/scene/game`` is written a
-few times per simulated second: each robot as a cylinder in its team's colour with an arrow along its kicker
-axis and its id above it, and the ball. Two channels, because a
+the judges read), the goals tinted with the colour of the team defending them, the boards, any named areas
+and the static obstacles (boxes and cylinders at their heights); and again whenever the teams change ends
+(the goals change colours). ``/scene/game`` is written a few times per simulated second: each robot as a
+cylinder in its team's colour with an arrow along its kicker axis and its id above it, each drone as a flat
+disc at its height with an arrow along its heading (drawn twice its size, for the eye: a nano quadrotor is
+13 cm across), and the ball. Two channels, because a
 viewer that seeks shows the latest message of each channel: the field must not be a message that the
 next game update replaces.
 
@@ -29,6 +31,7 @@ import numpy as np
 
 from ..config.schema import Scene
 from ..msgs.cdr import Codec
+from ..robots import model_class
 from . import foxglove_msgs as fg
 from .messagelog import PoseSlot, fill_poses
 
@@ -54,6 +57,7 @@ NAMED_COLORS = {
     "brown": (0.55, 0.35, 0.15),
 }
 
+DRONE_SCALE = 2.0  # drones are drawn this much larger than they are (for the eye)
 GRID = 1024.0  # positions drawn: steps per metre
 TURN_GRID = 4096.0  # orientations drawn: steps per unit of a quaternion
 
@@ -193,6 +197,23 @@ class SceneBuilder:
                 cubes.append(self._cube(0.0, sy * (W + m + t / 2), h / 2, 2 * (L + m), t, h, board))
         if F.goals:
             cubes += self._goals(signs)
+        rock = (0.36, 0.38, 0.42)
+        for ob in F.obstacles:
+            if ob.shape == "cylinder":
+                cylinders.append(
+                    self._msg(
+                        "CylinderPrimitive",
+                        pose=self._pose(ob.x, ob.y, ob.height / 2),
+                        size=self._vec(2 * ob.radius, 2 * ob.radius, ob.height),
+                        bottom_scale=1.0,
+                        top_scale=1.0,
+                        color=self._color(rock),
+                    )
+                )
+            else:
+                cubes.append(
+                    self._cube(ob.x, ob.y, ob.height / 2, 2 * ob.half_x, 2 * ob.half_y, ob.height, rock, yaw=ob.yaw)
+                )
         field = self._entity("field", cubes=cubes, lines=lines, cylinders=cylinders)
         return self._update([field])
 
@@ -232,6 +253,50 @@ class SceneBuilder:
         params = spec.model_params if spec is not None else {}
         return float(params.get("radius", 0.25)), float(params.get("height", 0.8))
 
+    def _flyers(self) -> dict[str, float]:
+        """The aerial robots: name -> footprint radius."""
+        out = {}
+        for team, spec in self.scene.teams.items():
+            for m in spec.members():
+                model = model_class(m.model)(m.model_params)
+                if model.aerial:
+                    out[f"{team}/{m.id}"] = model.radius
+        return out
+
+    def _drone_entity(self, name: str, k: int, radius: float, mark):
+        """A drone: a flat disc in its team's colour at its height, turned with its heading, an arrow along
+        the heading and its id (all at its centre: the template writes one pose per model)."""
+        team, _, rid = name.partition("/")
+        rgb = color_rgb(self.scene.team_color(team)) if team in self.scene.teams else (0.6, 0.6, 0.6)
+        span = 2 * radius * DRONE_SCALE
+        body = self._msg(
+            "CylinderPrimitive",
+            pose=mark(k, "drone", 0.0),
+            size=self._vec(span, span, 0.04),
+            bottom_scale=1.0,
+            top_scale=1.0,
+            color=self._color(rgb),
+        )
+        nose = self._msg(
+            "ArrowPrimitive",
+            pose=mark(k, "drone", 0.0),
+            shaft_length=0.6 * span,
+            shaft_diameter=0.02,
+            head_length=0.25 * span,
+            head_diameter=0.06,
+            color=self._color((0.1, 0.1, 0.1)),
+        )
+        label = self._msg(
+            "TextPrimitive",
+            pose=mark(k, "drone", 0.0),
+            billboard=True,
+            font_size=0.25,
+            scale_invariant=False,
+            color=self._color((1.0, 1.0, 1.0)),
+            text=rid or name,
+        )
+        return self._entity(name, cylinders=[body], arrows=[nose], texts=[label])
+
     def _build_template(self, names: list[str]) -> None:
         """Encode one update with a distinct sentinel in every pose, then note where each pose lies."""
         sentinels: list[tuple[int, float, str, float]] = []
@@ -242,7 +307,11 @@ class SceneBuilder:
             return self._pose(value, 0.0, z)
 
         entities = []
+        flyers = self._flyers()
         for k, name in enumerate(names):
+            if name in flyers:
+                entities.append(self._drone_entity(name, k, flyers[name], mark))
+                continue
             if name == "ball":
                 r = self.scene.ball.radius
                 entities.append(
@@ -296,5 +365,5 @@ class SceneBuilder:
             off = template.find(pattern)
             if off < 0 or template.find(pattern, off + 1) >= 0:
                 raise RuntimeError(f"scene template: pose sentinel {value} not found exactly once")
-            slots.append((off, k, math.nan if kind == "ball" else z, kind == "robot"))
+            slots.append((off, k, math.nan if kind in ("ball", "drone") else z, kind in ("robot", "drone")))
         self._template, self._names, self._slots = template, names, slots

@@ -58,11 +58,14 @@ class Wheel:
 
 
 class RobotModel:
-    """Base of robot models. Subclasses give ``name``, ``Params`` and ``wheel_angles``."""
+    """Base of robot models. Subclasses give ``name``, ``Params`` and ``wheel_angles`` (a wheeled base), or
+    set ``locomotion = "aerial"`` (a flying robot, see `simatch.robots.quadrotor`)."""
 
     name: ClassVar[str] = "robot"
     Params: ClassVar[type[BaseModel]] = OmniParams
     wheel_angles: ClassVar[tuple[float, ...]] = ()
+    #: "ground": a planar base driven by its wheels (x, y, yaw); "aerial": a free rigid body in 3D
+    locomotion: ClassVar[str] = "ground"
 
     def __init__(self, params: BaseModel | dict | None = None):
         if params is None:
@@ -88,6 +91,19 @@ class RobotModel:
         return self.rim_matrix() / self.params.wheel_radius
 
     # --- body -------------------------------------------------------------------------------------------
+    @property
+    def aerial(self) -> bool:
+        return self.locomotion == "aerial"
+
+    @property
+    def radius(self) -> float:
+        """Footprint radius [m] (what others see and avoid)."""
+        return self.params.radius
+
+    @property
+    def height(self) -> float:
+        return self.params.height
+
     @property
     def mass(self) -> float:
         return self.params.mass

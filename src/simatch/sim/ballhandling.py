@@ -80,8 +80,9 @@ class BallHandling:
         self.lost_until = 0
         self._dt = model.opt.timestep
         self.recatch_steps = round(RECATCH_WAIT / self._dt)
-        self._robot_q0 = int(index.robot_qpos[0, 0]) if self.n else 0  # robots' joints are consecutive
-        self._robot_v0 = int(index.robot_qvel[0, 0]) if self.n else 0
+        # ground robots' joints are consecutive (aerial robots, after them, have no dribbler or kicker)
+        self._robot_q0 = int(index.robot_qpos[0, 0]) if len(index.robot_qpos) else 0
+        self._robot_v0 = int(index.robot_qvel[0, 0]) if len(index.robot_qvel) else 0
 
     # --- requests from commands -----------------------------------------------------------------------------
     def set_dribbler(self, i: int, on: bool) -> None:

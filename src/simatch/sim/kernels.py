@@ -250,11 +250,45 @@ def robot_flags(R, act, M, n_wheels, enabled, slow_since, step, stuck_steps, hal
 
 
 @numba.njit(cache=True, nogil=True)
+def ball_apart(xpos, geoms, bound2, ball):
+    """True when none of ``geoms`` (a robot's) can be in contact with geom ``ball``: every geom centre
+    (``xpos``, the engine's geom_xpos of the last collision pass) is farther from the ball's than the
+    geom's bound (``bound2``: squared; the two bounding spheres and the contact margin). The engine makes
+    no contact between geoms whose bounding spheres, grown by the margin, are apart, so this answers
+    without reading the contact list (a costly accessor) for most physics steps."""
+    bx, by, bz = xpos[ball, 0], xpos[ball, 1], xpos[ball, 2]
+    for k in range(geoms.shape[0]):
+        g = geoms[k]
+        dx, dy, dz = xpos[g, 0] - bx, xpos[g, 1] - by, xpos[g, 2] - bz
+        if not dx * dx + dy * dy + dz * dz > bound2[k]:
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
 def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
     """Poses (n+1, 7: x y z qw qx qy qz) and twists (n+1, 6) of the robots (planar joints from robot_q/
     robot_v on) and the ball (free joint at ball_q/ball_v, its angular velocity turned to the world frame)."""
     pose = np.zeros((n + 1, 7))
     twist = np.zeros((n + 1, 6))
+    _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist)
+    return pose, twist
+
+
+@numba.njit(cache=True, nogil=True)
+def model_poses32(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
+    """`model_poses` written into float32 zeros ``pose`` (7 (n+1),) and ``twist`` (6 (n+1),), flat as the
+    ModelStates message carries them: each number computed in float64 as there, then rounded to float32
+    (what ``astype(float32)`` of `model_poses`' arrays gives). Called every physics step: the arrays come
+    in (allocating and returning arrays costs a compiled function more than its arithmetic here)."""
+    _fill_model_poses(
+        qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose.reshape((n + 1, 7)), twist.reshape((n + 1, 6))
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
+    """The body of `model_poses`, into zeroed arrays of any float type."""
     for i in range(n):
         half = 0.5 * qpos[robot_q + 3 * i + 2]
         pose[i, 0] = qpos[robot_q + 3 * i]
@@ -269,13 +303,25 @@ def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
     for k in range(3):
         twist[n, k] = qvel[ball_v + k]
     # w_world = R(q) w_local
-    w0, w1, w2 = qvel[ball_v + 3], qvel[ball_v + 4], qvel[ball_v + 5]
-    qw, qx, qy, qz = qpos[ball_q + 3], qpos[ball_q + 4], qpos[ball_q + 5], qpos[ball_q + 6]
-    # v' = v + 2 qw (q x v) + 2 q x (q x v)
+    twist[n, 3], twist[n, 4], twist[n, 5] = rotate(
+        qpos[ball_q + 3],
+        qpos[ball_q + 4],
+        qpos[ball_q + 5],
+        qpos[ball_q + 6],
+        qvel[ball_v + 3],
+        qvel[ball_v + 4],
+        qvel[ball_v + 5],
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def rotate(qw, qx, qy, qz, w0, w1, w2):
+    """The vector (w0, w1, w2) turned by the unit quaternion q: v' = v + 2 qw (q x v) + 2 q x (q x v)."""
     cx = qy * w2 - qz * w1
     cy = qz * w0 - qx * w2
     cz = qx * w1 - qy * w0
-    twist[n, 3] = w0 + 2.0 * (qw * cx + qy * cz - qz * cy)
-    twist[n, 4] = w1 + 2.0 * (qw * cy + qz * cx - qx * cz)
-    twist[n, 5] = w2 + 2.0 * (qw * cz + qx * cy - qy * cx)
-    return pose, twist
+    return (
+        w0 + 2.0 * (qw * cx + qy * cz - qz * cy),
+        w1 + 2.0 * (qw * cy + qz * cx - qx * cz),
+        w2 + 2.0 * (qw * cz + qx * cy - qy * cx),
+    )

@@ -102,6 +102,12 @@ class SimulatorNode(Node):
     # simulator's logging twins)
     def _vel_callback(self, i: int):
         sim = self.sim
+        if i >= sim.ng:  # an aerial robot: with the upward speed
+
+            def on_flight(msg) -> None:
+                sim.command_velocity(i, msg.vx, msg.vy, msg.w, msg.vz)
+
+            return on_flight
 
         def on_vel(msg) -> None:
             sim.command_velocity(i, msg.vx, msg.vy, msg.w)
@@ -142,12 +148,10 @@ class SimulatorNode(Node):
                 for i in due:
                     if pubs[i].active:
                         pubs[i].put(infos[i])
-        arrays = None
         if self.pub_models.active:
-            arrays = names, pose, twist = sim.model_state_arrays()
-            self.pub_models.put(model_states_message(now, k, names, pose, twist))
+            self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
         if self.pub_fingerprint.active and k % self.control_steps == 0:
-            _, pose, twist = arrays or sim.model_state_arrays()
+            _, pose, twist = sim.model_state_arrays()
             self.pub_fingerprint.put(_StateFingerprint(now, k, fingerprint(pose, twist)))
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()

@@ -7,7 +7,9 @@ the robot's team frame: the world frame for a team that attacks +x, the world tu
 
 Realism knobs from the scene, all off by default (and then the perception is exact): Gaussian noise on
 positions, velocities and headings, the ball or an obstacle missed with a probability, and a latency
-(the observation shows the world as it was that long ago).
+(the observation shows the world as it was that long ago). What a robot can see at all is `sight.Sight`'s
+(obstacles in the line of sight, a drone camera's cone, a range). Heights (an aerial robot's altitude) are
+given exactly.
 
 The numbers are float32, as the messages define them (and as the original's were): they are rounded
 here, where they are made, so that a strategy reads the same numbers whether its perception came through
@@ -27,8 +29,8 @@ from .kernels import perceive
 
 # built positionally (several hundred messages per simulated second; see msgs.positional)
 _BallInfo = msgs.positional(msgs.BallInfo, "state x y z vx vy vz angle distance pos_known velocity_known")
-_ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius")
-_RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds")
+_ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius z")
+_RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds z vz")
 _OmniVisionInfo = msgs.positional(msgs.OmniVisionInfo, "stamp tick robot_id ball obstacles robots")
 _EMPTY = np.zeros(0, dtype=np.float32)
 _F32 = np.float32
@@ -45,6 +47,7 @@ class Snapshot:
     wheels: np.ndarray  # (N, W) rim speeds
     valid: np.ndarray  # (N,) bool
     stuck: np.ndarray  # (N,) bool
+    heights: np.ndarray | None = None  # (N, 2): z, vz of each robot's origin (None: all on the ground)
 
 
 def wrap(a):
@@ -62,6 +65,7 @@ class Perception:
         spec,
         dt: float,
         rng: np.random.Generator,
+        sight=None,
     ):
         self.n = len(robots)
         self.ids = np.array([r.rid for r in robots], dtype=np.int32)
@@ -87,6 +91,10 @@ class Perception:
         self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(_F32)
         self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
+        self.sight = sight  # what each robot can see at all (None: everything)
+        self._ground_z = [0.0] * n
+        self._oz = np.zeros((n, m), dtype=_F32)
+        self._oz_rows = list(self._oz)
         self._nw = [int(k) for k in n_wheels]
         self.exact = (
             spec.position_noise == 0
@@ -143,6 +151,18 @@ class Perception:
         keep = None
         if spec.obstacle_dropout > 0 and n > 1:
             keep = rng.random((n, m)) >= spec.obstacle_dropout
+        if snap.heights is None:
+            tz = tvz = self._ground_z
+            oz = self._oz
+        else:
+            hz = snap.heights.astype(_F32)
+            tz, tvz = hz[:, 0].tolist(), hz[:, 1].tolist()
+            oz = hz[:, 0][self.others] if n > 1 else np.zeros((n, 0), dtype=_F32)
+        if self.sight is not None:
+            Z = snap.heights[:, 0] if snap.heights is not None else np.zeros(n)
+            vis, ball_vis = self.sight.visible(snap.robots, Z, snap.ball, self.others)
+            keep = vis if keep is None else keep & vis
+            seen = [a and b for a, b in zip(seen, ball_vis.tolist())]
 
         # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
         tx, ty, tyaw, tvx, tvy, tw = own.T.tolist()
@@ -168,6 +188,8 @@ class Perception:
                     stuck[i],
                     holder == i,
                     wheels[i][: nw[i]],
+                    tz[i],
+                    tvz[i],
                 )
                 for i in idx
             ]
@@ -175,14 +197,16 @@ class Perception:
         bz, bvz = msgs.f32s(snap.ball[2], snap.ball[5])
         if n > 1:
             if only is None and keep is None:  # each robot's row of every array
-                obstacles = [_ObstaclesInfo(*row) for row in zip(*(list(a) for a in obs), self._orad_rows)]
-            else:
+                rows_z = self._oz_rows if oz is self._oz else list(oz)
+                obstacles = [_ObstaclesInfo(*row) for row in zip(*(list(a) for a in obs), self._orad_rows, rows_z)]
+            else:  # every array's row, of the obstacles each robot keeps, in one indexing per robot
+                stacked = np.concatenate((obs, self._orad[None], oz[None]))
                 obstacles = [None] * n
                 for i in wanted:
                     k = slice(None) if keep is None else keep[i]
-                    obstacles[i] = _ObstaclesInfo(*(a[i][k] for a in obs), self._orad[i][k])
+                    obstacles[i] = _ObstaclesInfo(*stacked[:, i, k])
         else:
-            obstacles = [_ObstaclesInfo(_EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY)] * n
+            obstacles = [_ObstaclesInfo(_EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY)] * n
         unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
         out = [None] * n
         for i in wanted:

@@ -9,7 +9,9 @@ Collision groups (contype/conaffinity bits) keep every contact pair meaningful a
     HULL    the robots' sphere hulls; they touch each other, goals and boards (frictionless between robots)
     BALL    the ball
     MOUTH   the robots' ball colliders (a capsule whose front is the mouth); only the ball touches them
-    STATIC  goal frames, nets and boards; ball and hulls touch them
+    STATIC  goal frames, nets, boards, obstacles and a ceiling; ball, hulls and drones touch them
+    AIR     aerial robots' frames (`simatch.sim.airframe`); they touch the floor, statics, hulls, the ball and
+            each other
 """
 
 from __future__ import annotations
@@ -20,10 +22,11 @@ import mujoco
 import numpy as np
 
 from ..config.schema import Scene
-from ..field import FieldGeometry
+from ..field import FieldGeometry, Obstacle
 from ..robots import HULL_HEIGHT, RobotModel, model_class
+from .airframe import AerialIndex, add_airframe, aerial_index
 
-FLOOR, HULL, BALL, MOUTH, STATIC = 1, 2, 4, 8, 16
+FLOOR, HULL, BALL, MOUTH, STATIC, AIR = 1, 2, 4, 8, 16, 32
 
 BALL_NAME = "ball"
 
@@ -39,7 +42,11 @@ class RobotEntry:
 
 @dataclass
 class WorldIndex:
-    """Addresses into MjModel/MjData, resolved once."""
+    """Addresses into MjModel/MjData, resolved once.
+
+    Robots are indexed ground robots first (in the scene's order), then aerial ones: the per-robot arrays
+    of planar bases below (``robot_qpos`` ... ``freeze_eq``) have one row per ground robot, and ``aerial``
+    holds the aerial robots' addresses (None in a world without them)."""
 
     robots: list[RobotEntry]
     robot_body: np.ndarray  # (N,) body ids
@@ -57,11 +64,30 @@ class WorldIndex:
     ball_geom: int
     static_geoms: np.ndarray
     robot_of_geom: dict[int, int] = field(default_factory=dict)  # geom id -> robot index
+    aerial: AerialIndex | None = None
+    obstacle_geoms: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
 
 #: contact of the ball with robots, goals and boards: a stiff spring-damper that returns about a third of
 #: the impact speed (damping ratio 0.3; a lower one is unstable at 200 Hz)
 BALL_BODY_SOLREF = [0.02, 0.3]
+
+
+def add_obstacle(static_body, static_geom, ob: Obstacle) -> str:
+    """A static obstacle of the world's description as a body of its own (its geom's name returned)."""
+    body = static_body(ob.name)
+    if ob.shape == "cylinder":
+        static_geom(
+            body,
+            ob.name,
+            (ob.x, ob.y, ob.height / 2),
+            (ob.radius, ob.height / 2, 0.0),
+            kind=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        )
+    else:
+        g = static_geom(body, ob.name, (ob.x, ob.y, ob.height / 2), (ob.half_x, ob.half_y, ob.height / 2))
+        g.quat = [np.cos(ob.yaw / 2), 0.0, 0.0, np.sin(ob.yaw / 2)]
+    return ob.name
 
 
 def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex, FieldGeometry]:
@@ -100,10 +126,10 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     def static_body(name: str):
         return wb.add_body(name=name)
 
-    def static_box(body, name: str, center, half_sizes, damped: bool = False):
+    def static_box(body, name: str, center, half_sizes, damped: bool = False, kind=mujoco.mjtGeom.mjGEOM_BOX):
         g = body.add_geom(
             name=name,
-            type=mujoco.mjtGeom.mjGEOM_BOX,
+            type=kind,
             pos=list(center),
             size=list(half_sizes),
             contype=STATIC,
@@ -169,6 +195,11 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
                 damped=True,
             )
 
+    obstacle_names = [add_obstacle(static_body, static_box, ob) for ob in geo.obstacles]
+    if geo.ceiling is not None:
+        slab = 0.05
+        static_box(static_body("ceiling"), "ceiling", (0.0, 0.0, geo.ceiling + slab), (half_x, half_y, slab))
+
     # --- ball -----------------------------------------------------------------------------------------------
     b = scene.ball
     ball = wb.add_body(name=BALL_NAME, pos=[b.position[0], b.position[1], b.radius])
@@ -201,10 +232,11 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     # --- robots -----------------------------------------------------------------------------------------
     robots: list[RobotEntry] = []
     for team, tspec in scene.teams.items():
-        cls = model_class(tspec.model)
-        params = cls.Params.model_validate(tspec.model_params)
-        for rid, pose in zip(tspec.robot_ids(), tspec.start):
-            robots.append(RobotEntry(f"{team}/{rid}", team, rid, cls(params), tuple(pose)))
+        for m in tspec.members():
+            cls = model_class(m.model)
+            robots.append(RobotEntry(f"{team}/{m.id}", team, m.id, cls(m.model_params), tuple(m.start)))
+    flying = [r for r in robots if r.model.aerial]
+    robots = [r for r in robots if not r.model.aerial]  # ground robots first: their joints are consecutive
 
     for entry in robots:
         model = entry.model
@@ -286,6 +318,10 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
             active=False,
             solref=[2.0 * scene.physics.timestep, 1.0],
         )  # as stiff as the step allows
+    for entry in flying:
+        add_airframe(spec, entry, AIR, FLOOR | HULL | BALL | STATIC | AIR)
+    ground = robots
+    robots = ground + flying
 
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -299,34 +335,37 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     index = WorldIndex(
         robots=robots,
         robot_body=np.array([model.body(r.name).id for r in robots], dtype=int),
-        robot_qpos=np.array([[jq(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(
+        robot_qpos=np.array([[jq(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in ground], dtype=int).reshape(
             -1, 3
         ),
-        robot_qvel=np.array([[jv(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in robots], dtype=int).reshape(
+        robot_qvel=np.array([[jv(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in ground], dtype=int).reshape(
             -1, 3
         ),
         robot_ctrl=np.array(
-            [[model.actuator(f"{r.name}/servo_{a}").id for a in "xyw"] for r in robots], dtype=int
+            [[model.actuator(f"{r.name}/servo_{a}").id for a in "xyw"] for r in ground], dtype=int
         ).reshape(-1, 3),
         robot_act=np.array(
-            [[model.actuator_actadr[model.actuator(f"{r.name}/servo_{a}").id] for a in "xyw"] for r in robots],
+            [[model.actuator_actadr[model.actuator(f"{r.name}/servo_{a}").id] for a in "xyw"] for r in ground],
             dtype=int,
         ).reshape(-1, 3),
         robot_hull_geom=np.array([model.geom(f"{r.name}/hull").id for r in robots], dtype=int),
-        robot_mouth_geom=np.array([model.geom(f"{r.name}/mouth").id for r in robots], dtype=int),
-        dribble_eq=np.array([model.equality(f"{r.name}/dribble").id for r in robots], dtype=int),
-        freeze_eq=np.array([model.equality(f"{r.name}/freeze").id for r in robots], dtype=int),
+        robot_mouth_geom=np.array([model.geom(f"{r.name}/mouth").id for r in ground], dtype=int),
+        dribble_eq=np.array([model.equality(f"{r.name}/dribble").id for r in ground] + [-1] * len(flying), dtype=int),
+        freeze_eq=np.array([model.equality(f"{r.name}/freeze").id for r in ground], dtype=int),
         ball_body=model.body(BALL_NAME).id,
         ball_qpos=jq("ball"),
         ball_qvel=jv("ball"),
         ball_geom=model.geom("ball").id,
         static_geoms=np.array([model.geom(s.name).id for s in statics], dtype=int),
+        aerial=aerial_index(model, data, flying, len(ground), scene.physics.gravity) if flying else None,
+        obstacle_geoms=np.array([model.geom(name).id for name in obstacle_names], dtype=int),
     )
     for i, r in enumerate(robots):
         index.robot_of_geom[int(index.robot_hull_geom[i])] = i
-        index.robot_of_geom[int(index.robot_mouth_geom[i])] = i
-        x, y, yaw = r.start
-        data.qpos[index.robot_qpos[i]] = (x, y, yaw)
+        if i < len(ground):
+            index.robot_of_geom[int(index.robot_mouth_geom[i])] = i
+            x, y, yaw = r.start
+            data.qpos[index.robot_qpos[i]] = (x, y, yaw)
     mujoco.mj_forward(model, data)
     del floor, ball_geom
     return model, data, index, geo

@@ -20,6 +20,11 @@ SHIPPED = {
     "encircle": "simatch.strategy.encirclement:Chaser",
     "flee": "simatch.strategy.encirclement:Target",
     "learner": "simatch.strategy.learner:Learner",
+    "aerial_encircle": "simatch.strategy.aerial:AerialChasers",
+    "evade": "simatch.strategy.aerial:Evader",
+    "pincer": "simatch.strategy.aerial:Pincer",
+    "chase": "simatch.strategy.aerial:Chase",
+    "evade_3d": "simatch.strategy.aerial:Evader3D",
 }
 
 #: strategies that create no node in the run that loads the scene

@@ -25,7 +25,8 @@ import numpy as np
 from pydantic import BaseModel
 
 from ..field import FieldGeometry
-from .roles import Role
+from ..robots import model_class
+from .roles import Action, Role
 from .worldmodel import WorldModel
 
 
@@ -47,7 +48,9 @@ class Command:
 
     Motion: if ``target`` is None the robot drives at the body-frame velocity (vx, vy, w); otherwise its
     low-level controller drives it to ``target`` (team frame) and turns it to ``target_ori`` (if given),
-    within ``max_vel`` and ``max_w``.
+    within ``max_vel`` and ``max_w``. An aerial robot also climbs at ``vz`` (upward, m/s), or, if
+    ``altitude`` is given, its low-level controller takes it to that height within ``max_vz``; ground
+    robots ignore both.
     """
 
     vx: float = 0.0
@@ -63,11 +66,15 @@ class Command:
     lob: bool = False
     # what the robot tells its team (StrategyInfo)
     role: int = Role.NOROLE  # a robot says which role it plays; none said is none (0 would be the goalie)
-    action: int = 0
+    action: int = Action.NO_ACTION  # likewise: none said is none (0 would be STUCKED)
     intent: tuple[float, float] | None = None
     pass_intent: PassIntent | None = None
     target_num: tuple[int, ...] = ()
     user: tuple[float, ...] = ()
+    # aerial robots (appended: positional constructions of the fields above keep their meaning)
+    vz: float = 0.0
+    altitude: float | None = None
+    max_vz: float = 1.0
 
     @classmethod
     def stop(cls, **info: Any) -> Command:
@@ -87,10 +94,17 @@ class RobotContext:
     control_period: float  # [s]
     params: Any  # validated strategy_params (a pydantic model or a dict)
     rng: np.random.Generator = field(repr=False, default_factory=np.random.default_rng)
+    model: str = "omni4"  # the robot's model (teams.<team>.model, or its squad's)
+    models: dict[int, str] = field(default_factory=dict)  # every robot of the team: id -> model
 
     @property
     def is_goalkeeper(self) -> bool:
         return self.goalkeeper is not None and self.id == self.goalkeeper
+
+    @property
+    def aerial(self) -> bool:
+        """The robot flies (its model's locomotion is aerial)."""
+        return is_aerial(self.model)
 
 
 @dataclass
@@ -102,6 +116,12 @@ class TeamContext:
     starts: dict[int, tuple[float, float, float]]
     control_period: float
     params: Any
+    models: dict[int, str] = field(default_factory=dict)  # id -> robot model (teams with squads mix models)
+
+
+def is_aerial(model: str) -> bool:
+    """Whether robots of ``model`` (a robot model's name or plug-in path) fly."""
+    return model_class(model).locomotion == "aerial"
 
 
 class RobotStrategy:

@@ -8,6 +8,7 @@ import math
 
 POSITION_GAIN = 5.0  # [1/s]: speed = gain x distance, capped
 HEADING_GAIN = 2.0  # [1/s]
+ALTITUDE_GAIN = 1.5  # [1/s]: an aerial robot's climb towards a commanded altitude
 
 
 def velocity_towards(x: float, y: float, yaw: float, cmd, max_vel: float, max_w: float) -> tuple[float, float, float]:
@@ -31,3 +32,8 @@ def velocity_towards(x: float, y: float, yaw: float, cmd, max_vel: float, max_w:
         w = max(-max_w, min(max_w, HEADING_GAIN * err))
     c, s = math.cos(yaw), math.sin(yaw)
     return (c * vx_w + s * vy_w, -s * vx_w + c * vy_w, w)
+
+
+def climb_towards(z: float, altitude: float, max_vz: float) -> float:
+    """Upward speed that takes an aerial robot at height ``z`` to ``altitude``, capped at ``max_vz``."""
+    return max(-max_vz, min(max_vz, ALTITUDE_GAIN * (altitude - z)))

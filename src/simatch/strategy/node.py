@@ -13,14 +13,14 @@ import numpy as np
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from .base import Command, RobotStrategy
-from .hwcontroller import velocity_towards
+from .hwcontroller import climb_towards, velocity_towards
 from .worldmodel import WorldModel
 
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
 # built positionally (three messages per robot and control tick; see msgs.positional)
-_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
+_VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w vz")
 _ActionCmd = msgs.positional(
     msgs.ActionCmd,
     "stamp tick move_action rotate_action rotate_mode target_x target_y "
@@ -106,11 +106,15 @@ class RobotNode(Node):
             move, (tx, ty) = _MOVE, target
         rotate, ori = (_NO_ACTION, 0.0) if ori is None else (_MOVE, ori)
         tvx, tvy = cmd.target_vel
-        # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs)
-        vx, vy, w, tx, ty, ori, tvx, tvy, max_vel, max_w, kick = _f32s(
-            vx, vy, w, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed
+        info = self.pub_info.active
+        intent = cmd.intent if cmd.intent is not None else target
+        ix, iy = intent if info and intent is not None else (math.nan, math.nan)
+        vz = cmd.vz if cmd.altitude is None else self._climb(cmd)
+        # the messages' float32 numbers are rounded here, where they are made (see simatch.msgs), all at once
+        vx, vy, w, vz, tx, ty, ori, tvx, tvy, max_vel, max_w, kick, ix, iy = _f32s(
+            vx, vy, w, vz, tx, ty, ori, tvx, tvy, cmd.max_vel, cmd.max_w, cmd.kick_speed, ix, iy
         )
-        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w))
+        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w, vz))
         self.pub_action.put(
             _ActionCmd(
                 now,
@@ -130,10 +134,18 @@ class RobotNode(Node):
                 _LOB if cmd.lob else _GROUND,
             )
         )
-        if self.pub_info.active:
-            self.pub_info.put(self.strategy_info(now, tick, cmd))
+        if info:
+            self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
 
-    def strategy_info(self, now: float, tick: int, cmd: Command):
+    def _climb(self, cmd: Command) -> float:
+        try:
+            z = self.world.me.z
+        except LookupError:
+            return 0.0
+        return climb_towards(z, cmd.altitude, cmd.max_vz)
+
+    def strategy_info(self, now: float, tick: int, cmd: Command, ix: float, iy: float):
+        """The StrategyInfo this robot tells its team for ``cmd`` (``ix``, ``iy``: its intent, float32)."""
         p = cmd.pass_intent
         if p is None:
             pass_cmd = _NO_PASS
@@ -151,15 +163,17 @@ class RobotNode(Node):
                 is_static_pass=bool(p.static),
                 is_valid=True,
             )
-        intent = cmd.intent if cmd.intent is not None else cmd.target
-        ix, iy = _f32s(*intent) if intent is not None else (math.nan, math.nan)
+        try:
+            holding = bool(self.world.me.holding_ball)
+        except LookupError:
+            holding = False
         return _StrategyInfo(
             now,
             tick,
             self.rid,
             cmd.role,
             cmd.action,
-            self._holding(),
+            holding,
             False,
             0.0,
             ix,
@@ -170,12 +184,6 @@ class RobotNode(Node):
             pass_cmd,
             np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64,
         )
-
-    def _holding(self) -> bool:
-        try:
-            return bool(self.world.me.holding_ball)
-        except LookupError:
-            return False
 
     def _error(self, now: float, exc: Exception) -> None:
         self.errors += 1

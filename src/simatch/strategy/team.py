@@ -45,13 +45,16 @@ def build_team(
     geo = spec.world.geometry()
     field = team_field(geo, sign)
     ids = tspec.robot_ids()
+    models = {m.id: m.model for m in tspec.members()}
     starts = {}
-    for rid, (x, y, yaw) in zip(ids, tspec.start):
+    for rid, (x, y, yaw) in zip(ids, tspec.starts()):
         tx, ty = frames.point(sign, x, y)
         starts[rid] = (tx, ty, frames.yaw(sign, yaw))
     params = _params(cls, tspec.strategy_params, scene, team)
     if issubclass(cls, TeamStrategy):
-        team_strategy = cls(TeamContext(team, ids, tspec.goalkeeper, field, starts, spec.control.period, params))
+        team_strategy = cls(
+            TeamContext(team, ids, tspec.goalkeeper, field, starts, spec.control.period, params, models)
+        )
         make = team_strategy.make_robot
     else:
 
@@ -78,6 +81,8 @@ def build_team(
             control_period=spec.control.period,
             params=params,
             rng=np.random.default_rng(stable_seed(seed, "strategy", team, str(rid))),
+            model=models[rid],
+            models=models,
         )
         world = WorldModel(team, rid, sign, geo, tspec.goalkeeper)
         if rid in learners:

@@ -23,13 +23,14 @@ from ..field import Area, FieldGeometry
 
 
 def team_field(field: FieldGeometry, sign: int) -> FieldGeometry:
-    """The field as a team sees it: lines and goals are symmetric; named areas are turned with the frame."""
-    if sign > 0 or not field.areas:
+    """The field as a team sees it: lines and goals are symmetric; named areas and obstacles are turned with
+    the frame."""
+    if sign > 0 or not (field.areas or field.obstacles):
         return field
     from dataclasses import replace
 
     areas = tuple(Area(a.name, -a.x1, -a.y1, -a.x0, -a.y0) for a in field.areas)
-    return replace(field, areas=areas)
+    return replace(field, areas=areas, obstacles=tuple(o.turned() for o in field.obstacles))
 
 
 @dataclass
@@ -59,10 +60,12 @@ class WorldModel:
         self.vision = None  # latest OmniVisionInfo
         self.coach = None  # latest CoachInfo
         self.game = None  # latest GameState from the judge (None if it publishes none)
-        self.strategies: dict = {}  # teammate id -> latest StrategyInfo (from the team picture)
+        self.team_strategy = None  # latest TeamStrategy (the team's fused StrategyInfo)
+        self._strategies: dict | None = {}
         self.time = 0.0
         self.tick = 0
         self._ball: Ball | None = None
+        self._me = None  # my RobotInfo in the latest observation (found on first use)
         self._last_ball = None  # the BallInfo of the last observation that saw the ball
         self._last_seen = -math.inf
 
@@ -75,9 +78,23 @@ class WorldModel:
             self._last_seen = msg.stamp
             self._last_ball = msg.ball
         self._ball = None  # built on first use this tick
+        self._me = None
 
     def on_team(self, msg) -> None:
-        self.strategies = {s.agent_id: s for s in msg.strategies}
+        self.team_strategy = msg
+        self._strategies = None  # made on first use (the robots of a team share the message)
+
+    @property
+    def strategies(self) -> dict:
+        """Teammate id -> latest StrategyInfo (from the team picture)."""
+        found = self._strategies
+        if found is None:
+            found = self._strategies = {s.agent_id: s for s in self.team_strategy.strategies}
+        return found
+
+    @strategies.setter
+    def strategies(self, value: dict) -> None:
+        self._strategies = value
 
     def on_coach(self, msg) -> None:
         self.coach = msg
@@ -101,10 +118,14 @@ class WorldModel:
     @property
     def me(self):
         """My RobotInfo (team frame)."""
-        for r in self.vision.robots:
-            if r.id == self.id:
-                return r
-        raise LookupError(f"robot {self.id} is missing from its own perception")
+        me = self._me
+        if me is None:
+            for r in self.vision.robots:
+                if r.id == self.id:
+                    self._me = r
+                    return r
+            raise LookupError(f"robot {self.id} is missing from its own perception")
+        return me
 
     @property
     def teammates(self) -> list:

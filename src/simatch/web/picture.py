@@ -18,6 +18,7 @@ import math
 
 from .. import frames
 from ..msgs.game_commands import name as command_name
+from ..robots import model_class
 from ..strategy.roles import action_words, role_words
 from .observer import RunObserver
 
@@ -35,21 +36,31 @@ class Picture:
         self.signs = {team: spec.team_sign(team) for team in self.teams}
         self.ids = {team: spec.teams[team].robot_ids() for team in self.teams}
         self.sent_off = sent_off
+        #: the aerial robots (name -> model), drawn with their height
+        self.aerial = {
+            f"{team}/{m.id}": model_class(m.model)(m.model_params)
+            for team in self.teams
+            for m in spec.teams[team].members()
+            if model_class(m.model).locomotion == "aerial"
+        }
 
     def robots_meta(self) -> list[dict]:
         out = []
         for team in self.teams:
             radius = float(self.spec.teams[team].model_params.get("radius", 0.25))
             for rid in self.ids[team]:
-                out.append(
-                    {
-                        "name": f"{team}/{rid}",
-                        "team": team,
-                        "id": rid,
-                        "radius": radius,
-                        "goalkeeper": rid == self.spec.teams[team].goalkeeper,
-                    }
-                )
+                name = f"{team}/{rid}"
+                meta = {
+                    "name": name,
+                    "team": team,
+                    "id": rid,
+                    "radius": radius,
+                    "goalkeeper": rid == self.spec.teams[team].goalkeeper,
+                }
+                flyer = self.aerial.get(name)
+                if flyer is not None:
+                    meta.update(radius=flyer.radius, aerial=True, model=flyer.name, goalkeeper=False)
+                out.append(meta)
         return out
 
     def _off(self, game: dict | None) -> list[str]:
@@ -80,18 +91,19 @@ class Picture:
                 ball = {"x": _r(x), "y": _r(y), "z": _r(z), "vx": _r(vx, 2), "vy": _r(vy, 2)}
             else:
                 team, _, rid = name.partition("/")
-                robots.append(
-                    {
-                        "name": name,
-                        "team": team,
-                        "id": int(rid),
-                        "x": _r(x),
-                        "y": _r(y),
-                        "yaw": _r(yaw),
-                        "vx": _r(vx, 2),
-                        "vy": _r(vy, 2),
-                    }
-                )
+                robot = {
+                    "name": name,
+                    "team": team,
+                    "id": int(rid),
+                    "x": _r(x),
+                    "y": _r(y),
+                    "yaw": _r(yaw),
+                    "vx": _r(vx, 2),
+                    "vy": _r(vy, 2),
+                }
+                if name in self.aerial:
+                    robot["z"] = _r(z)
+                robots.append(robot)
         game = self.obs.game_at(t)
         out = {
             "type": "frame",
@@ -148,6 +160,8 @@ class Picture:
                     stuck=bool(me.stuck),
                     holding=bool(me.holding_ball),
                 )
+                if entry["name"] in self.aerial:
+                    entry.update(z=_r(me.z), vz=_r(me.vz, 2))
                 obstacles[rid] = self._obstacles(vision, sign, team)
                 b = vision.ball
                 if b.pos_known and b.distance < best_dist:
@@ -215,5 +229,8 @@ class Picture:
             if any(math.hypot(ox - mx, oy - my) < 0.1 for mx, my in mates):
                 continue  # a teammate, not an obstacle to avoid (as the original's oppinfo)
             wx, wy = frames.point(sign, ox, oy)
-            out.append([_r(wx), _r(wy), _r(float(o.radius[k]) if len(o.radius) > k else 0.25, 2)])
+            seen = [_r(wx), _r(wy), _r(float(o.radius[k]) if len(o.radius) > k else 0.25, 2)]
+            if len(o.z) > k and o.z[k] > 0.05:
+                seen.append(_r(float(o.z[k]), 2))  # a drone: its height
+            out.append(seen)
         return out

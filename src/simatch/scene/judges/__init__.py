@@ -12,6 +12,8 @@ SHIPPED = {
     "msl_referee": "simatch.scene.referee:MslReferee",
     "encirclement": "simatch.scene.judges.encirclement:Encirclement",
     "drill": "simatch.scene.judges.drill:Drill",
+    "flight_test": "simatch.scene.judges.flight:FlightTest",
+    "pursuit": "simatch.scene.judges.pursuit:Pursuit",
 }
 
 

@@ -30,6 +30,17 @@ class WorldControl(Protocol):
     def set_enabled(self, name: str, enabled: bool) -> None: ...
     def set_frozen(self, name: str, frozen: bool) -> None: ...
     def set_team_sign(self, team: str, sign: int) -> None: ...  # the team's frame from now on (ends changed)
+    def set_rotor(self, name: str, rotor: int, working: bool = True) -> None: ...  # aerial robots
+
+
+def require_team(scene: LoadedScene, key: str, team: str) -> None:
+    """SceneError naming the file and ``judge.<key>`` if the scene has no team ``team``."""
+    from ...config.loader import SceneError
+
+    if team not in scene.spec.teams:
+        raise SceneError(
+            f"{scene.source}: judge.{key}: the scene has no team {team!r} (teams: {', '.join(scene.spec.teams)})"
+        )
 
 
 class NoParams(BaseModel):

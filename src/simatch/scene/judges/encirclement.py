@@ -23,7 +23,10 @@ from ... import msgs
 from ...bus import NodeContext, topics
 from ...config.loader import SceneError
 from ...field import Area
-from .base import PlayJudge
+from .base import PlayJudge, require_team
+
+#: a scattered target starts at least this far from every obstacle (centre to outline) [m]
+OBSTACLE_CLEARANCE = 0.5
 
 
 class EncirclementParams(BaseModel):
@@ -35,11 +38,16 @@ class EncirclementParams(BaseModel):
     scatter: tuple[float, float, float, float] | None = Field(
         None,
         description="x0, y0, x1, y1 (world frame): the targets start at random places in this rectangle, "
-        "drawn from the run's seed, scatter_spacing or more from the prison (each axis); none: "
-        "at their start poses",
+        "drawn from the run's seed, scatter_spacing or more from the prison (each axis) and clear of "
+        "obstacles; none: at their start poses",
     )
     scatter_spacing: float = Field(
         1.2, gt=0.0, le=20.0, description="least distance between a scattered target and any other robot [m]"
+    )
+    stow: bool = Field(
+        False,
+        description="captured targets are led to the back of the prison (the side farthest from the arena's "
+        "centre), so that they do not block its entrance; false: frozen where they were caught",
     )
 
     @model_validator(mode="after")
@@ -61,12 +69,8 @@ class Encirclement(PlayJudge):
         super().__init__(scene, params, world)
         spec = scene.spec
         for key in ("chasers", "targets"):
-            team = getattr(params, key)
-            if team not in spec.teams:
-                raise SceneError(
-                    f"{scene.source}: judge.{key}: the scene has no team {team!r} (teams: {', '.join(spec.teams)})"
-                )
-        geometry = spec.world.geometry()
+            require_team(scene, key, getattr(params, key))
+        self.geometry = geometry = spec.world.geometry()
         try:
             self.prison = geometry.area(params.prison)
         except KeyError as exc:
@@ -107,12 +111,17 @@ class Encirclement(PlayJudge):
         keep_out = Area("", p.x0 - spacing, p.y0 - spacing, p.x1 + spacing, p.y1 + spacing)
         spec = self.scene.spec
         placed = [
-            (x, y) for team, tspec in spec.teams.items() if team != self.params.targets for x, y, _ in tspec.start
+            (x, y) for team, tspec in spec.teams.items() if team != self.params.targets for x, y, _ in tspec.starts()
         ]
+        clear = OBSTACLE_CLEARANCE
         for name in self.target_names:
             for _ in range(10000):
                 x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
-                if not keep_out.contains(x, y) and all(math.hypot(x - px, y - py) >= spacing for px, py in placed):
+                if (
+                    not keep_out.contains(x, y)
+                    and all(math.hypot(x - px, y - py) >= spacing for px, py in placed)
+                    and self.geometry.obstacle_at(x, y, clear) is None
+                ):
                     break
             else:
                 raise SceneError(
@@ -150,13 +159,43 @@ class Encirclement(PlayJudge):
                     top[team] = v
 
     def _capture(self, now: float, name: str, x: float, y: float) -> None:
+        caught = (x, y)
+        if self.params.stow:
+            x, y = self._stow(name)
+            self.world.set_model_state(name, x=x, y=y, vx=0.0, vy=0.0, wz=0.0)
         self.world.set_frozen(name, True)
         self.captured.add(name)
-        self.captures.append({"robot": name, "t": round(now, 6), "x": round(x, 4), "y": round(y, 4)})
+        capture = {"robot": name, "t": round(now, 6), "x": round(x, 4), "y": round(y, 4)}
+        if self.params.stow:
+            capture["caught_at"] = [round(caught[0], 4), round(caught[1], 4)]
+        self.captures.append(capture)
         team, rid = topics.split_robot_name(name)
         n, total = len(self.captured), len(self.target_names)
         detail = f"{name} captured in the {self.prison.name} ({n} of {total})"
-        self.event(now, "capture", detail, team=team, robot=rid, x=x, y=y, value=float(n), limit=float(total))
+        cx, cy = caught  # the event is where it was caught
+        self.event(now, "capture", detail, team=team, robot=rid, x=cx, y=cy, value=float(n), limit=float(total))
+
+    def _stow(self, name: str, spacing: float = 0.55) -> tuple[float, float]:
+        """A free place at the back of the prison (rows along its side farthest from the arena's centre, from
+        the back forward): no other robot within ``spacing``."""
+        p, inset = self.prison, 0.3
+        cx, cy = p.center
+        along_x = abs(cx) * (p.y1 - p.y0) >= abs(cy) * (p.x1 - p.x0)  # the back side is an x = const side
+        states = self.world.model_states()
+        others = [(s.x, s.y) for n, s in states.items() if n != name and n in self.team_of]
+        rows = int(((p.x1 - p.x0) if along_x else (p.y1 - p.y0)) / spacing)
+        for row in range(max(rows, 1)):
+            if along_x:
+                back = (p.x1 - inset - row * spacing) if cx >= 0 else (p.x0 + inset + row * spacing)
+                spots = [(back, y) for y in np.arange(p.y0 + inset, p.y1 - inset + 1e-9, spacing)]
+            else:
+                back = (p.y1 - inset - row * spacing) if cy >= 0 else (p.y0 + inset + row * spacing)
+                spots = [(x, back) for x in np.arange(p.x0 + inset, p.x1 - inset + 1e-9, spacing)]
+            for x, y in spots:
+                if all(math.hypot(x - ox, y - oy) >= spacing for ox, oy in others):
+                    return float(x), float(y)
+        st = states[name]
+        return st.x, st.y  # the prison is full: where it stands
 
     def _end(self, now: float) -> None:
         self.done = True

@@ -75,23 +75,40 @@ class Chaser(RobotStrategy):
     def decide(self, world) -> Command:
         if world.match_mode == MatchMode.STOPROBOT:
             return Command()
-        p = self.ctx.params
         me = world.me
         prison = self.prison
         caps = self.captures.update(world)
-        free = [d for x, y in caps.free(opponents(world)) if (d := prison_distance(prison, x, y)) > 0.0]
+        free = [d for x, y in caps.free(self.seen(world)) if (d := prison_distance(prison, x, y)) > 0.0]
         if not free:  # (a target in the prison is captured at the judge's next look)
-            return Command(target=(me.x, me.y), max_vel=p.max_speed)
+            return self.hold(world)
         outermost = max(free)
         slack = self._slack(world.time, outermost, len(caps.names))
         r = self._radius(world, min(outermost + slack, self.max_radius))
-        net = make_net(prison, self.arena, round(r, 6), len(world.vision.robots))
+        team = self.net_members(world)
+        net = make_net(prison, self.arena, round(r, 6), len(team))
         if net is None:
-            return Command(target=(me.x, me.y), max_vel=p.max_speed)
-        team = world.vision.robots
+            return self.hold(world)
         mine = next(i for i, m in enumerate(team) if m.id == me.id)
         sx, sy = net.station(tuple((m.x, m.y) for m in team), mine)
-        return Command(target=(sx, sy), max_vel=p.max_speed, intent=(sx, sy), user=(r, slack))
+        return self.go(world, (sx, sy), r, slack)
+
+    # --- what a variant may change (see simatch.strategy.aerial) -------------------------------------------------
+    def seen(self, world) -> list[tuple[float, float]]:
+        """The targets this chaser knows of (team frame): the opponents it perceives."""
+        return opponents(world)
+
+    def net_members(self, world) -> list:
+        """The team's robots that stand on the net (RobotInfo, in the same order for every chaser)."""
+        return world.vision.robots
+
+    def hold(self, world) -> Command:
+        """Stay where I am (no free target, or no net in the arena)."""
+        me = world.me
+        return Command(target=(me.x, me.y), max_vel=self.ctx.params.max_speed)
+
+    def go(self, world, station: tuple[float, float], r: float, slack: float) -> Command:
+        """Drive to my station on the net; tell the team the net's radius and slack."""
+        return Command(target=station, max_vel=self.ctx.params.max_speed, intent=station, user=(r, slack))
 
     def _slack(self, now: float, outermost: float, captured: int) -> float:
         """The nominal slack, shrinking while the encirclement makes no progress."""

@@ -76,7 +76,7 @@ class Target(RobotStrategy):
         flee_x = flee_y = 0.0
         nearest = math.inf
         sense = p.sense_radius
-        for cx, cy in opponents(world):
+        for cx, cy in self.threats(world):
             dx, dy = x - cx, y - cy
             if abs(dx) < sense and abs(dy) < sense:
                 d = max(math.hypot(dx, dy), 0.3)
@@ -88,10 +88,7 @@ class Target(RobotStrategy):
         norm = math.hypot(flee_x, flee_y)
         wish_x, wish_y = (flee_x / norm, flee_y / norm) if norm > 1e-9 else (0.0, 0.0)
         # walls and corners
-        px, py = self._walls(x, y)
-        cx, cy = self._corners(x, y)
-        sx, sy = self._separation(world, caps, x, y)
-        push_x, push_y = px + cx + sx, py + cy + sy
+        push_x, push_y = self._pushes(world, caps, x, y)
         fleeing = norm > 1e-9
         if fleeing:
             wish_x, wish_y = self._jinked(world.time, wish_x + push_x, wish_y + push_y)
@@ -109,7 +106,19 @@ class Target(RobotStrategy):
         c, s = math.cos(me.yaw), math.sin(me.yaw)
         return Command(vx=c * vx + s * vy, vy=-s * vx + c * vy, w=0.0, intent=(x + vx, y + vy))
 
+    # --- what a variant may change (see simatch.strategy.aerial) -------------------------------------------
+    def threats(self, world) -> list[tuple[float, float]]:
+        """The chasers to flee from (team frame): every opponent I perceive."""
+        return opponents(world)
+
     # --- pushes -------------------------------------------------------------------------------------------
+    def _pushes(self, world, caps: Captures, x: float, y: float) -> tuple[float, float]:
+        """The sum of the walls', corners' and free team-mates' pushes."""
+        px, py = self._walls(x, y)
+        cx, cy = self._corners(x, y)
+        sx, sy = self._separation(world, caps, x, y)
+        return px + cx + sx, py + cy + sy
+
     def _walls(self, x: float, y: float) -> tuple[float, float]:
         p = self.ctx.params
         m, k = p.wall_margin, p.wall_weight

@@ -22,11 +22,13 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
+from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
-from .evaluate import lane_clear, pass_speed, position_value, shot_window
+from .evaluate import POST_MARGIN, lane_clear, pass_speed, position_value, shot_window
 from .gameflow import PHASES, GameFlow
 from .geometry import clamp, time_to_cover, wrap
 from .motion import Motion
@@ -53,6 +55,7 @@ CLEAR_SPEED = 4.0  # a first-time kick into space, at most [m/s] ...
 CLEAR_MIN_SPEED = 1.8  # ... and at least (slower is no clearance: dribble away instead) [m/s]
 PASS_ANNOUNCE = 1.0  # a kicked pass is announced this long beyond its expected travel time [s]
 DRIBBLE_DIRECTIONS = [(math.cos(k * math.pi / 8), math.sin(k * math.pi / 8)) for k in range(16)]
+_DIRECTIONS = np.array(DRIBBLE_DIRECTIONS)
 
 
 class BallPlayer:
@@ -82,6 +85,9 @@ class BallPlayer:
         self.announce_until = -1.0
         self.pa_since: float | None = None  # when I entered the opponents' penalty area
         self.dribble_dir: tuple[float, float] | None = None
+        # what `_dribble_choice` reads of the field: half length and width, our penalty area's depth and
+        # half width, the opponents' (widened) goal area's near edge and half width
+        self.zones = np.array((areas.L2, areas.W2, areas.pa_depth, areas.pa_half, areas.opp_ga[0], areas.opp_ga[2]))
 
     # --- bookkeeping every tick --------------------------------------------------------------------------
     def track(self, obs: Observation) -> None:
@@ -194,7 +200,7 @@ class BallPlayer:
         L2 = self.areas.L2
         used = math.hypot(me.x - self.dribble_from[0], me.y - self.dribble_from[1]) if self.dribble_from else 0.0
         left = p.dribble_limit - used
-        opps = obs.opps
+        opps = obs.opp_array
         bx, by = obs.bx, obs.by
         can_score = not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == PHASES.PLAY
         threat = self.threat_time(obs)
@@ -202,7 +208,7 @@ class BallPlayer:
         plan = None
         # 1. shoot, when part of the goal stays open and there is time to turn to it
         if can_score and math.hypot(L2 - bx, by) < p.shoot_range:
-            aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed)
+            aim_y, width = shot_window(bx, by, opps, L2, self.goal_half, p.shot_speed, POST_MARGIN)
             need = SHOT_KEEP_WIDTH if (prev and prev[0] == "shoot") else SHOT_WIDTH
             if left < 0.4 or threat < 0.8:
                 need = 0.025
@@ -271,17 +277,18 @@ class BallPlayer:
             if d < 1.8 or d > p.max_pass:
                 continue
             v = pass_speed(d, p.pass_arrival_speed, p.ball_deceleration)
-            margin = lane_clear(bx, by, cx, cy, obs.opps, 0.5 * (v + p.pass_arrival_speed))
+            margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
             if margin < 0.15:
                 continue
             near = min((math.hypot(o[0] - cx, o[1] - cy) for o in obs.opps), default=9.0)
             if near < 1.1:
                 continue
-            value = position_value(cx, cy, obs.opps, self.areas.L2) + 0.3 * min(margin, 1.5)
+            value = position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * min(margin, 1.5)
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(
-                    shot_window(cx, cy, obs.opps, self.areas.L2, self.goal_half, p.shot_speed)[1], 0.15
+                    shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[1],
+                    0.15,
                 )
             out.append((value, m.id, cx, cy, v))
         return out
@@ -308,7 +315,7 @@ class BallPlayer:
         tx, ty = me.x + 4.0 * c, me.y + 4.0 * s
         if abs(ty) > self.areas.W2 - 0.5 or abs(tx) > L2 - 0.5:
             return None
-        if lane_clear(obs.bx, obs.by, tx, ty, obs.opps, CLEAR_SPEED) < 0.0:
+        if lane_clear(obs.bx, obs.by, tx, ty, obs.opp_array, CLEAR_SPEED, 0.0) < 0.0:
             return None  # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
         # opponents' throw-in (most of these kicks used to go out)
@@ -334,7 +341,7 @@ class BallPlayer:
         p = self.p
         L2 = self.areas.L2
         if can_score:
-            aim_y, _ = shot_window(obs.bx, obs.by, obs.opps, L2, self.goal_half, p.shot_speed)
+            aim_y, _ = shot_window(obs.bx, obs.by, obs.opp_array, L2, self.goal_half, p.shot_speed, POST_MARGIN)
             return ("shoot", L2 + 0.3, aim_y, p.shot_speed, 0.0)
         tx, ty = self.dribble_target(obs, 2.5)[1:3]
         d = max(2.0, math.hypot(tx - obs.bx, ty - obs.by))
@@ -342,53 +349,37 @@ class BallPlayer:
 
     def dribble_target(self, obs: Observation, left: float, can_score: bool = False):
         """("dribble", x, y): the best point within reach of the ball, inside the dribble circle; near the
-        opponents' goal, one from which more of the goal is open."""
-        me, areas = obs.me, self.areas
-        L2, W2 = areas.L2, areas.W2
-        opps = obs.opps
-        step = clamp(left, 0.3, 1.5)
+        opponents' goal, one from which more of the goal is open. (The sixteen directions are scored by the
+        compiled `_dribble_choice`.)"""
+        me, areas, p = obs.me, self.areas, self.p
         cx, cy = self.dribble_from or (me.x, me.y)
-        radius = max(0.0, self.p.dribble_limit - 0.15)
         others_in_area = any(areas.in_opp_penalty_area(m.x, m.y) for m in obs.mates if m is not me)
-        best, best_s = None, -math.inf
-        c, s = math.cos(me.yaw), math.sin(me.yaw)
-        for ux, uy in DRIBBLE_DIRECTIONS:
-            tx, ty = me.x + step * ux, me.y + step * uy
-            dx, dy = tx - cx, ty - cy
-            r = math.hypot(dx, dy)
-            if r > radius:
-                tx, ty = cx + dx / r * radius, cy + dy / r * radius
-            if abs(tx) > L2 - 0.8 or abs(ty) > W2 - 0.8:
-                continue
-            if areas.in_own_penalty_area(tx, ty) or tx > areas.opp_ga[0] and abs(ty) < areas.opp_ga[2]:
-                continue
-            if areas.in_opp_penalty_area(tx, ty) and (others_in_area or not self.may_enter_opp_area(obs)):
-                continue
-            score = position_value(tx, ty, opps, L2)
-            score += 0.35 * min(lane_clear(me.x, me.y, tx, ty, opps, 1.5), 0.5)
-            if can_score and tx > 0.0 and L2 - tx < self.p.shoot_range:
-                score += OPEN_GOAL_VALUE * min(
-                    shot_window(tx, ty, opps, L2, self.goal_half, self.p.shot_speed)[1], 0.15
-                )
-            # away from opponents closing in: keep the body between them and the ball
-            for ox, oy, _, _ in opps:
-                rx, ry = ox - me.x, oy - me.y
-                d = math.hypot(rx, ry)
-                if d < ESCAPE_RANGE:
-                    score -= 2.0 * max(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
-            turn = 1.0 - (ux * c + uy * s)
-            score -= 0.25 * turn
-            score += LEAN * (ux * self.lean[0] + uy * self.lean[1])
-            if ux * c + uy * s < -0.3 and self.back > self.p.dribble_back_limit - 0.5:
-                score -= 5.0
-            if self.dribble_dir is not None:
-                score -= 0.3 * (1.0 - (ux * self.dribble_dir[0] + uy * self.dribble_dir[1]))
-            if score > best_s:
-                best, best_s = (tx, ty, ux, uy), score
-        if best is None:
+        dx, dy = self.dribble_dir if self.dribble_dir is not None else (math.nan, math.nan)
+        found, tx, ty, ux, uy = _dribble_choice(
+            me.x,
+            me.y,
+            me.yaw,
+            clamp(left, 0.3, 1.5),
+            cx,
+            cy,
+            max(0.0, p.dribble_limit - 0.15),
+            obs.opp_array,
+            self.zones,
+            others_in_area or not self.may_enter_opp_area(obs),
+            can_score,
+            p.shoot_range,
+            self.goal_half,
+            p.shot_speed,
+            self.lean[0],
+            self.lean[1],
+            self.back > p.dribble_back_limit - 0.5,
+            dx,
+            dy,
+        )
+        if not found:
             return ("dribble", me.x, me.y)
-        self.dribble_dir = (best[2], best[3])
-        return ("dribble", best[0], best[1])
+        self.dribble_dir = (ux, uy)
+        return ("dribble", tx, ty)
 
     def kick_heading(self, obs: Observation, tx: float, ty: float, speed: float) -> float:
         """The heading to kick at ``speed`` so that the ball heads for (tx, ty): the kicker adds its speed to
@@ -471,3 +462,69 @@ class BallPlayer:
                 travel = d / max(0.5 * (speed + p.pass_arrival_speed), 0.5)
                 self.announce_until = obs.t + travel + PASS_ANNOUNCE
         return cmd
+
+
+@numba.njit(cache=True, nogil=True)
+def _dribble_choice(
+    x,
+    y,
+    yaw,
+    step,
+    cx,
+    cy,
+    radius,
+    opps,
+    zones,
+    keep_out_of_area,
+    can_score,
+    shoot_range,
+    goal_half,
+    shot_speed,
+    lean_x,
+    lean_y,
+    backed,
+    dir_x,
+    dir_y,
+):
+    """`BallPlayer.dribble_target`'s scoring of the sixteen directions, compiled: (found, x, y, ux, uy) of
+    the best point (the first of equals). ``dir_x`` is NaN with no dribbling direction yet; ``backed``: the
+    robot went backwards nearly as far as it may."""
+    L2, W2, pa_depth, pa_half, ga_x0, ga_half = zones[0], zones[1], zones[2], zones[3], zones[4], zones[5]
+    best_s = -math.inf
+    found = False
+    bx = by = bux = buy = 0.0
+    c, s = math.cos(yaw), math.sin(yaw)
+    for k in range(_DIRECTIONS.shape[0]):
+        ux, uy = _DIRECTIONS[k, 0], _DIRECTIONS[k, 1]
+        tx, ty = x + step * ux, y + step * uy
+        dx, dy = tx - cx, ty - cy
+        r = hypot(dx, dy)
+        if r > radius:
+            tx, ty = cx + dx / r * radius, cy + dy / r * radius
+        if abs(tx) > L2 - 0.8 or abs(ty) > W2 - 0.8:
+            continue
+        # our penalty area (the robot's centre on the line counts), the opponents' goal area
+        if (tx <= -L2 + pa_depth and abs(ty) <= pa_half) or (tx > ga_x0 and abs(ty) < ga_half):
+            continue
+        if (tx >= L2 - pa_depth and abs(ty) <= pa_half) and keep_out_of_area:
+            continue
+        score = position_value(tx, ty, opps, L2)
+        score += 0.35 * pymin(lane_clear(x, y, tx, ty, opps, 1.5, 0.0), 0.5)
+        if can_score and tx > 0.0 and L2 - tx < shoot_range:
+            score += OPEN_GOAL_VALUE * pymin(shot_window(tx, ty, opps, L2, goal_half, shot_speed, POST_MARGIN)[1], 0.15)
+        # away from opponents closing in: keep the body between them and the ball
+        for j in range(opps.shape[0]):
+            rx, ry = opps[j, 0] - x, opps[j, 1] - y
+            d = hypot(rx, ry)
+            if d < ESCAPE_RANGE:
+                score -= 2.0 * pymax(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
+        turn = 1.0 - (ux * c + uy * s)
+        score -= 0.25 * turn
+        score += LEAN * (ux * lean_x + uy * lean_y)
+        if ux * c + uy * s < -0.3 and backed:
+            score -= 5.0
+        if dir_x == dir_x:
+            score -= 0.3 * (1.0 - (ux * dir_x + uy * dir_y))
+        if score > best_s:
+            found, bx, by, bux, buy, best_s = True, tx, ty, ux, uy, score
+    return found, bx, by, bux, buy

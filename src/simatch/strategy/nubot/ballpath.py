@@ -17,6 +17,10 @@ import math
 import numba
 import numpy as np
 
+from ...exactmath import remainder
+
+TWO_PI = 2.0 * math.pi
+
 GRAVITY = 9.8
 STEP = 0.1
 SAMPLES = 41  # 0 to 4 s
@@ -175,3 +179,38 @@ def intercepts(
         out,
     )
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _team_rows(us, opps, bx, by, turn):
+    """The rows of `team_intercepts`: x, y, vx, vy and the extra delay of each robot, ours first (the time
+    to turn to face the ball at (bx, by): ``turn`` seconds per radian), then theirs (none)."""
+    n, m = us.shape[0], opps.shape[0]
+    px = np.empty(n + m)
+    py = np.empty(n + m)
+    vx = np.empty(n + m)
+    vy = np.empty(n + m)
+    extra = np.empty(n + m)
+    for k in range(n):
+        px[k], py[k], vx[k], vy[k] = us[k, 0], us[k, 1], us[k, 2], us[k, 3]
+        extra[k] = turn * abs(remainder(math.atan2(by - us[k, 1], bx - us[k, 0]) - us[k, 4], TWO_PI))
+    for k in range(m):
+        px[n + k], py[n + k], vx[n + k], vy[n + k] = opps[k, 0], opps[k, 1], opps[k, 2], opps[k, 3]
+        extra[n + k] = 0.0
+    return px, py, vx, vy, extra
+
+
+def team_intercepts(
+    path: BallPath,
+    us: np.ndarray,
+    opps: np.ndarray,
+    bx: float,
+    by: float,
+    turn: float,
+    vmax: float,
+    acc: float,
+) -> np.ndarray:
+    """`intercepts` of our robots ``us`` ((K, 5): x, y, vx, vy, yaw), who first turn to face the ball at
+    (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4): x, y, vx, vy): (K + M, 3)."""
+    px, py, vx, vy, extra = _team_rows(us, opps, bx, by, turn)
+    return intercepts(path, px, py, vx, vy, vmax, acc, extra)

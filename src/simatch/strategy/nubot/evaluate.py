@@ -2,11 +2,23 @@
 
 Opponents block what they can reach before the ball gets there: each one's shadow is widened by how far it
 can move (from rest, at the assumed acceleration) while the ball travels to it.
+
+The judges are compiled kernels (numba, cached on disk): the robot with the ball scores sixteen dribbling
+directions and every pass each control tick, a few hundred small loops over the opponents. ``opps`` is
+the observation's (M, 4) array of x, y, vx, vy (`Observation.opp_array`). The float operations are those
+of the Python they replaced, with CPython's hypot (simatch.exactmath), so a run is the same bit for bit.
+Their arguments have no defaults: a kernel called from Python with a default left out takes numba's slow
+path (tens of microseconds) at every call.
 """
 
 from __future__ import annotations
 
 import math
+
+import numba
+import numpy as np
+
+from ...exactmath import hypot, pymax, pymin
 
 BALL_RADIUS = 0.11
 ROBOT_RADIUS = 0.25
@@ -15,14 +27,20 @@ MAX_REACH = 0.9  # an opponent covers at most this much beyond its body during a
 #: a shot is seen only once it is under way: a defender (a goalkeeper fitting the ball's path) starts to
 #: move this long after the kick [s]
 SHOT_REACTION = 0.15
+#: the goal posts are kept this far out of a shot's window [m]
+POST_MARGIN = 0.22
+#: opponents this close to a point crowd it [m]
+PRESSURE_RADIUS = 2.2
 
 
+@numba.njit(cache=True, nogil=True)
 def reach(t: float) -> float:
-    return min(MAX_REACH, 0.5 * REACT_ACC * t * t)
+    return pymin(MAX_REACH, 0.5 * REACT_ACC * t * t)
 
 
+@numba.njit(cache=True, nogil=True)
 def shot_window(
-    bx: float, by: float, opps: list, goal_x: float, goal_half: float, speed: float, post_margin: float = 0.22
+    bx: float, by: float, opps: np.ndarray, goal_x: float, goal_half: float, speed: float, post_margin: float
 ) -> tuple[float, float]:
     """(aim y on the goal line, width in radians) of the widest part of the goal mouth that no opponent
     can cover before a shot at ``speed`` from (bx, by) passes it; width 0 if none is open."""
@@ -33,78 +51,99 @@ def shot_window(
     hi = math.atan2(goal_half - post_margin - by, dx)
     if hi <= lo:
         return 0.0, 0.0
-    free = [(lo, hi)]
-    for ox, oy, _, _ in opps:
-        rx, ry = ox - bx, oy - by
+    # the open intervals of headings, in order (each opponent splits one in two at most)
+    size = opps.shape[0] + 2
+    free0 = np.empty(size)
+    free1 = np.empty(size)
+    out0 = np.empty(size)
+    out1 = np.empty(size)
+    free0[0], free1[0] = lo, hi
+    n = 1
+    for k in range(opps.shape[0]):
+        rx, ry = opps[k, 0] - bx, opps[k, 1] - by
         if rx < -0.2:
             continue
-        d = math.hypot(rx, ry)
+        d = hypot(rx, ry)
         if d < 1e-6:
             continue
-        r = ROBOT_RADIUS + BALL_RADIUS + reach(max(0.0, d / speed - SHOT_REACTION))
-        half = math.asin(min(1.0, r / d))
+        r = ROBOT_RADIUS + BALL_RADIUS + reach(pymax(0.0, d / speed - SHOT_REACTION))
+        half = math.asin(pymin(1.0, r / d))
         c = math.atan2(ry, rx)
         a0, a1 = c - half, c + half
-        out = []
-        for f0, f1 in free:
+        m = 0
+        for j in range(n):
+            f0, f1 = free0[j], free1[j]
             if a1 <= f0 or a0 >= f1:
-                out.append((f0, f1))
+                out0[m], out1[m] = f0, f1
+                m += 1
                 continue
             if a0 > f0:
-                out.append((f0, a0))
+                out0[m], out1[m] = f0, a0
+                m += 1
             if a1 < f1:
-                out.append((a1, f1))
-        free = out
-        if not free:
+                out0[m], out1[m] = a1, f1
+                m += 1
+        free0, out0 = out0, free0
+        free1, out1 = out1, free1
+        n = m
+        if n == 0:
             return 0.0, 0.0
-    f0, f1 = max(free, key=lambda f: f[1] - f[0])
+    # the widest (the first of equals)
+    best = 0
+    for j in range(1, n):
+        if free1[j] - free0[j] > free1[best] - free0[best]:
+            best = j
+    f0, f1 = free0[best], free1[best]
     aim = 0.5 * (f0 + f1)
     return by + math.tan(aim) * dx, f1 - f0
 
 
+@numba.njit(cache=True, nogil=True)
 def lane_clear(
-    bx: float, by: float, cx: float, cy: float, opps: list, speed: float, exclude_near_end: float = 0.0
+    bx: float, by: float, cx: float, cy: float, opps: np.ndarray, speed: float, exclude_near_end: float
 ) -> float:
     """Smallest margin (m) by which opponents miss the ball on its way from B to C at ``speed`` (negative
     when one can get in the way). Opponents that can reach the lane while the ball passes count."""
     worst = math.inf
-    length = math.hypot(cx - bx, cy - by)
-    # (segment_distance and reach inline, the same float operations: this runs for every candidate of
-    # every decision with the ball)
+    length = hypot(cx - bx, cy - by)
+    # (segment_distance and reach inline, the same float operations)
     dx, dy = cx - bx, cy - by
     ll = dx * dx + dy * dy
-    v = max(speed, 0.5)
+    v = pymax(speed, 0.5)
     body = ROBOT_RADIUS + BALL_RADIUS
-    for ox, oy, _, _ in opps:
+    for k in range(opps.shape[0]):
+        ox, oy = opps[k, 0], opps[k, 1]
         if ll < 1e-12:
-            d, s = math.hypot(ox - bx, oy - by), 0.0
+            d, s = hypot(ox - bx, oy - by), 0.0
         else:
             s = ((ox - bx) * dx + (oy - by) * dy) / ll
             s = 0.0 if s < 0.0 else 1.0 if s > 1.0 else s
-            d = math.hypot(ox - bx - s * dx, oy - by - s * dy)
+            d = hypot(ox - bx - s * dx, oy - by - s * dy)
         along = s * length
-        if exclude_near_end and (1.0 - s) * length < exclude_near_end and d > 0.6:
+        if exclude_near_end != 0.0 and (1.0 - s) * length < exclude_near_end and d > 0.6:
             continue
         t = along / v
-        margin = d - (body + min(MAX_REACH, 0.5 * REACT_ACC * t * t))
+        margin = d - (body + pymin(MAX_REACH, 0.5 * REACT_ACC * t * t))
         if margin < worst:
             worst = margin
     return worst
 
 
-def pressure(x: float, y: float, opps: list, radius: float = 2.2) -> float:
+@numba.njit(cache=True, nogil=True)
+def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     """How crowded a point is: the sum of how far each opponent is inside ``radius`` of it."""
     total = 0.0
-    for ox, oy, _, _ in opps:
-        d = math.hypot(ox - x, oy - y)
+    for k in range(opps.shape[0]):
+        d = hypot(opps[k, 0] - x, opps[k, 1] - y)
         if d < radius:
             total += radius - d
     return total
 
 
-def position_value(x: float, y: float, opps: list, goal_x: float) -> float:
+@numba.njit(cache=True, nogil=True)
+def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float:
     """How good a place is to have the ball: near the opponents' goal, in the middle, with room."""
-    return -0.45 * math.hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps)
+    return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)
 
 
 def pass_speed(distance: float, arrival: float, decel: float, lo: float = 1.6, hi: float = 7.5) -> float:

@@ -108,7 +108,8 @@ class GameFlow:
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
-        self._regain(obs)
+        holder = _holder(obs)
+        touched = self._regain(obs, holder)
         shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
         moved = shift >= IN_PLAY_DISTANCE
         if self.phase == PHASES.OUR_RESTART:
@@ -126,8 +127,8 @@ class GameFlow:
                 self.phase = PHASES.PLAY
         if self.phase != PHASES.PLAY or not (self.taker or self.pass_pending):
             return
-        holder = _holder(obs)
-        touched = _opponent_touching(obs)
+        if touched is None:
+            touched = _opponent_touching(obs)
         if self.taker:
             if (
                 touched
@@ -143,10 +144,12 @@ class GameFlow:
             elif (holder is not None and holder.id != self.first_holder) or (touched and self.kind == MODES.DROPBALL):
                 self.pass_pending = False
 
-    def _regain(self, obs: Observation) -> None:
-        """Follow who is on the ball for RC-10.1.2 (as the referee reads it from the touches, with margins)."""
+    def _regain(self, obs: Observation, holder) -> bool | None:
+        """Follow who is on the ball for RC-10.1.2 (as the referee reads it from the touches, with margins).
+        ``holder``: the team-mate holding the ball (`_holder`). Returns whether an opponent touches the ball,
+        if it had to find out (else None)."""
         bx, by = obs.bx, obs.by
-        on = _holder(obs)
+        on = holder
         if on is None:
             # the team-mate nearest to the ball (the first of equals), if it is on it
             near = math.inf
@@ -157,9 +160,10 @@ class GameFlow:
             if on is not None and near > ON_BALL:
                 on = None
         if on is None:
-            if _opponent_touching(obs):
+            touched = _opponent_touching(obs)
+            if touched:
                 self._ours = 0
-            return
+            return touched
         if not self._ours:
             self.need_pass = bx < 0.0  # won in our half (the line itself is not)
         elif (
@@ -171,6 +175,7 @@ class GameFlow:
             self.need_pass = False  # a team-mate received a pass in their half
         self._ours = on.id
         self._left_at = (bx, by)
+        return None
 
 
 def _holder(obs: Observation):

@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import math
 
+import numba
+
+from ...exactmath import pymax, pymin
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -57,14 +61,26 @@ def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, h
     return max(0.0, s)
 
 
+@numba.njit(cache=True, nogil=True)
 def push_out_of_box(x: float, y: float, x0: float, x1: float, half_w: float) -> tuple[float, float]:
-    """The nearest point outside the box [x0, x1] x [-half_w, half_w] (the point itself if outside)."""
+    """The nearest point outside the box [x0, x1] x [-half_w, half_w] (the point itself if outside).
+    (Compiled, for the compiled motion; on equal distances the faces are taken as ``min`` of the tuples
+    (distance, x, y) would take them.)"""
     if not (x0 < x < x1 and -half_w < y < half_w):
         return x, y
-    # distances to the faces we may leave through
-    options = [(x - x0, x0, y), (x1 - x, x1, y), (half_w - y, x, half_w), (y + half_w, x, -half_w)]
-    _, nx, ny = min(options)
-    return nx, ny
+    # distances to the faces we may leave through: (x - x0, x0, y), (x1 - x, x1, y), (half_w - y, x, half_w),
+    # (y + half_w, x, -half_w)
+    best_d, best_x, best_y = x - x0, x0, y
+    for j in range(1, 4):
+        if j == 1:
+            d, nx, ny = x1 - x, x1, y
+        elif j == 2:
+            d, nx, ny = half_w - y, x, half_w
+        else:
+            d, nx, ny = y + half_w, x, -half_w
+        if d < best_d or (d == best_d and (nx < best_x or (nx == best_x and ny < best_y))):
+            best_d, best_x, best_y = d, nx, ny
+    return best_x, best_y
 
 
 def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
@@ -77,20 +93,30 @@ def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
     return (vmax - v0) / acc + (d - d_acc) / vmax
 
 
+@numba.njit(cache=True, nogil=True)
 def segment_hits_box(ax: float, ay: float, bx: float, by: float, x0: float, x1: float, half_w: float) -> bool:
-    """Whether the segment AB passes through the open box [x0, x1] x [-half_w, half_w] (Liang-Barsky)."""
+    """Whether the segment AB passes through the open box [x0, x1] x [-half_w, half_w] (Liang-Barsky).
+    (Compiled, for the compiled motion.)"""
     t0, t1 = 0.0, 1.0
     dx, dy = bx - ax, by - ay
-    for p, q in ((-dx, ax - x0), (dx, x1 - ax), (-dy, ay + half_w), (dy, half_w - ay)):
+    for j in range(4):
+        if j == 0:
+            p, q = -dx, ax - x0
+        elif j == 1:
+            p, q = dx, x1 - ax
+        elif j == 2:
+            p, q = -dy, ay + half_w
+        else:
+            p, q = dy, half_w - ay
         if abs(p) < 1e-12:
             if q <= 0.0:
                 return False
             continue
         r = q / p
         if p < 0.0:
-            t0 = max(t0, r)
+            t0 = pymax(t0, r)
         else:
-            t1 = min(t1, r)
+            t1 = pymin(t1, r)
         if t0 >= t1:
             return False
     return True

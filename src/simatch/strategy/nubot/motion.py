@@ -15,10 +15,15 @@ from __future__ import annotations
 
 import math
 
+import numba
+import numpy as np
+
+from ...exactmath import hypot, pymax, pymin, remainder
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
 from .observation import Observation
 from .params import NubotParams
+from .positions import route
 
 #: within this distance the position law is proportional (gain POSITION_GAIN)
 POSITION_GAIN = 3.0
@@ -52,6 +57,22 @@ class Motion:
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
         self._two_turn_acc = 2.0 * params.turn_acceleration
+        ar = areas
+        # the fixed numbers `_go` reads (see _C_*)
+        self.consts = np.array(
+            (
+                self.xlim,
+                self.ylim,
+                self.clearance,
+                self.ball_clearance,
+                self.touch,
+                params.contact_speed,
+                self._two_turn_acc,
+                period,
+                ar.L2 if ar is not None else field.half_length,
+                ar.goal_half if ar is not None else 0.5 * field.goal_width,
+            )
+        )
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -78,82 +99,61 @@ class Motion:
         speed and turns slowly; with ``turn_first`` it slows down to turn (to take the ball, the heading
         matters more). ``boxes`` are areas to go round (see `Areas.route`); ``fence`` = (x, y, r) is a
         circle the robot must not enter (a restart's ball), whatever avoiding others asks; ``max_x`` a
-        line it must not cross (the half-way line at a kick-off)."""
+        line it must not cross (the half-way line at a kick-off).
+
+        The work is one compiled kernel (`_go`): the same float operations as the Python it replaced, with
+        CPython's own hypot and remainder (simatch.exactmath), so the run is the same bit for bit."""
         me = obs.me
-        mx, my = me.x, me.y
         c = obs.coach
         if c is not None:  # the speed limits the coach allows (CoachInfo max_vel / max_w)
             if c.max_vel > 0.0:
                 vmax = min(vmax, c.max_vel)
             if c.max_w > 0.0:
                 wmax = min(wmax, c.max_w)
-        # keep targets on the floor, inside the boards
-        tx = min(max(tx, -self.xlim), self.xlim)
-        ty = min(max(ty, -self.ylim), self.ylim)
-        d = math.hypot(tx - mx, ty - my)
-        vx = vy = 0.0
-        if d > 0.01 or end_speed > 0.0:
-            sx, sy = tx, ty
-            if boxes:
-                sx, sy = self.areas.route(mx, my, tx, ty, boxes)
-            if avoid:
-                ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
-                sx, sy, self.side = sub_target(
-                    mx,
-                    my,
-                    sx,
-                    sy,
-                    obs.opp_array,
-                    obs.mate_array,
-                    me.id,
-                    obs.bx,
-                    obs.by,
-                    ball,
-                    self.clearance,
-                    LOOK_AHEAD,
-                    self.side,
-                )
-            a = self.p.braking if brake is None else brake
-            speed = min(vmax, math.sqrt(end_speed * end_speed + 2.0 * a * d), POSITION_GAIN * d + end_speed)
-            ex, ey = sx - mx, sy - my
-            e = math.hypot(ex, ey)
-            if e > 1e-9:
-                vx, vy = ex / e * speed, ey / e * speed
-        vx += feed[0]
-        vy += feed[1]
-        n = math.hypot(vx, vy)
-        if n > vmax:
-            vx, vy = vx / n * vmax, vy / n * vmax
-        if gentle and obs.opps:
-            vx, vy = no_charging(
-                mx, my, me.vx, me.vy, vx, vy, obs.opp_array, self.touch, self.p.contact_speed, CHARGE_BRAKING
-            )
-        if fence is not None:
-            vx, vy = self.keep_out_of_circle(mx, my, vx, vy, fence[0], fence[1], fence[2])
-        if max_x is not None:
-            vx = min(vx, 2.0 * (max_x - mx))
-        yaw = me.yaw
-        if face is None:
-            w = 0.0
-        else:  # (self.turn_rate(wrap(face - yaw), wmax), inline)
-            err = math.remainder(face - yaw, TWO_PI)
-            aerr = abs(err)
-            w = min(wmax, math.sqrt(self._two_turn_acc * aerr), HEADING_GAIN * aerr)
-            if not err >= 0.0:
-                w = -w
-        # turning while driving costs the wheels |v| |w| of acceleration: keep the product within what they
-        # can give, so that the robot keeps its speed (it turns fully once it slows down near the target)
-        speed = math.hypot(vx, vy)
-        if speed * abs(w) > SPIN_COUPLING:
-            if turn_first:
-                k = SPIN_COUPLING / (speed * abs(w))
-                vx, vy = vx * k, vy * k
-            else:
-                w = math.copysign(SPIN_COUPLING / speed, w)
-        self.last = (vx, vy, w)
-        h = yaw + 0.5 * w * self.period  # (self.body, inline)
-        c, s = math.cos(h), math.sin(h)
-        return (c * vx + s * vy, -s * vx + c * vy, w)
+        box_array = self.areas.box_array(boxes) if boxes else _NO_BOXES
+        if ball_obstacle is True:
+            ball = self.ball_clearance
+        else:
+            ball = float(ball_obstacle or 0.0)
+        if fence is None:
+            fx = fy = fr = math.nan
+        else:
+            fx, fy, fr = fence
+        vx, vy, w, side, wx, wy = _go(
+            me.x,
+            me.y,
+            me.yaw,
+            me.vx,
+            me.vy,
+            me.id,
+            tx,
+            ty,
+            math.nan if face is None else face,
+            vmax,
+            wmax,
+            avoid,
+            ball,
+            end_speed,
+            feed[0],
+            feed[1],
+            self.p.braking if brake is None else brake,
+            gentle and bool(obs.opps),
+            turn_first,
+            box_array,
+            fx,
+            fy,
+            fr,
+            math.nan if max_x is None else max_x,
+            obs.opp_array,
+            obs.mate_array,
+            obs.bx,
+            obs.by,
+            self.side,
+            self.consts,
+        )
+        self.side = side
+        self.last = (wx, wy, w)
+        return (vx, vy, w)
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)
@@ -166,28 +166,125 @@ class Motion:
     ) -> tuple[float, float]:
         """The velocity with its part towards the circle's centre capped so that the robot stops at the
         circle (and leaves it at once if it is inside)."""
-        dx, dy = cx - x, cy - y
-        d = math.hypot(dx, dy)
-        if d > r + FENCE_RANGE or d < 1e-6:
-            return vx, vy
-        nx, ny = dx / d, dy / d
-        inward = vx * nx + vy * ny
-        gap = d - r - 0.1
-        if gap > 0.0:
-            # slow down in time: the drive brakes at about FENCE_BRAKING, a robot running in fast would
-            # otherwise overrun the circle (a taker brushing the ball, a defender inside the 3 m)
-            allowed = min(math.sqrt(2.0 * FENCE_BRAKING * gap), POSITION_GAIN * gap)
-        else:
-            # inside: move out, at 1 m/s at least, along the way out the target chose (straight away from
-            # a ball near a line would drive into the boards)
-            allowed = max(2.0 * gap, -1.0)
-        if inward > allowed:
-            vx -= (inward - allowed) * nx
-            vy -= (inward - allowed) * ny
-        return vx, vy
+        return _keep_out_of_circle(x, y, vx, vy, cx, cy, r)
 
     def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:
         """Team-frame velocity to the body frame, at the heading the robot will have half a period on."""
         h = yaw + 0.5 * w * self.period
         c, s = math.cos(h), math.sin(h)
         return (c * vx + s * vy, -s * vx + c * vy, w)
+
+
+_NO_BOXES = np.zeros((0, 3))
+# the indices of Motion.consts
+_C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC, _C_PERIOD, _C_L2, _C_GOAL_HALF = (
+    range(10)
+)
+
+
+@numba.njit(cache=True, nogil=True)
+def _keep_out_of_circle(x, y, vx, vy, cx, cy, r):
+    """`Motion.keep_out_of_circle`, compiled."""
+    dx, dy = cx - x, cy - y
+    d = hypot(dx, dy)
+    if d > r + FENCE_RANGE or d < 1e-6:
+        return vx, vy
+    nx, ny = dx / d, dy / d
+    inward = vx * nx + vy * ny
+    gap = d - r - 0.1
+    if gap > 0.0:
+        # slow down in time: the drive brakes at about FENCE_BRAKING, a robot running in fast would
+        # otherwise overrun the circle (a taker brushing the ball, a defender inside the 3 m)
+        allowed = pymin(math.sqrt(2.0 * FENCE_BRAKING * gap), POSITION_GAIN * gap)
+    else:
+        # inside: move out, at 1 m/s at least, along the way out the target chose (straight away from
+        # a ball near a line would drive into the boards)
+        allowed = pymax(2.0 * gap, -1.0)
+    if inward > allowed:
+        vx -= (inward - allowed) * nx
+        vy -= (inward - allowed) * ny
+    return vx, vy
+
+
+@numba.njit(cache=True, nogil=True)
+def _go(
+    mx,
+    my,
+    yaw,
+    mvx,
+    mvy,
+    me_id,
+    tx,
+    ty,
+    face,
+    vmax,
+    wmax,
+    avoid,
+    ball,
+    end_speed,
+    feed_x,
+    feed_y,
+    brake,
+    gentle,
+    turn_first,
+    boxes,
+    fence_x,
+    fence_y,
+    fence_r,
+    max_x,
+    opps,
+    mates,
+    bx,
+    by,
+    side,
+    consts,
+):
+    """Motion.go, compiled: (body vx, vy, w, avoidance side, team-frame vx, vy). ``face``, ``fence_*`` and
+    ``max_x`` are NaN where the Python takes None."""
+    xlim, ylim = consts[_C_XLIM], consts[_C_YLIM]
+    tx = pymin(pymax(tx, -xlim), xlim)
+    ty = pymin(pymax(ty, -ylim), ylim)
+    d = hypot(tx - mx, ty - my)
+    vx = vy = 0.0
+    if d > 0.01 or end_speed > 0.0:
+        sx, sy = tx, ty
+        if boxes.shape[0] > 0:
+            sx, sy = route(mx, my, tx, ty, boxes, consts[_C_L2], consts[_C_GOAL_HALF])
+        if avoid:
+            sx, sy, side = sub_target(
+                mx, my, sx, sy, opps, mates, me_id, bx, by, ball, consts[_C_CLEAR], LOOK_AHEAD, side
+            )
+        speed = pymin(pymin(vmax, math.sqrt(end_speed * end_speed + 2.0 * brake * d)), POSITION_GAIN * d + end_speed)
+        ex, ey = sx - mx, sy - my
+        e = hypot(ex, ey)
+        if e > 1e-9:
+            vx, vy = ex / e * speed, ey / e * speed
+    vx += feed_x
+    vy += feed_y
+    n = hypot(vx, vy)
+    if n > vmax:
+        vx, vy = vx / n * vmax, vy / n * vmax
+    if gentle:
+        vx, vy = no_charging(mx, my, mvx, mvy, vx, vy, opps, consts[_C_TOUCH], consts[_C_CONTACT], CHARGE_BRAKING)
+    if fence_r == fence_r:  # not NaN: a fence
+        vx, vy = _keep_out_of_circle(mx, my, vx, vy, fence_x, fence_y, fence_r)
+    if max_x == max_x:
+        vx = pymin(vx, 2.0 * (max_x - mx))
+    if face != face:  # NaN: no heading wanted
+        w = 0.0
+    else:
+        err = remainder(face - yaw, TWO_PI)
+        aerr = abs(err)
+        w = pymin(pymin(wmax, math.sqrt(consts[_C_TWO_TURN_ACC] * aerr)), HEADING_GAIN * aerr)
+        if not err >= 0.0:
+            w = -w
+    speed = hypot(vx, vy)
+    if speed * abs(w) > SPIN_COUPLING:
+        if turn_first:
+            k = SPIN_COUPLING / (speed * abs(w))
+            vx, vy = vx * k, vy * k
+        else:
+            w = math.copysign(SPIN_COUPLING / speed, w)
+    h = yaw + 0.5 * w * consts[_C_PERIOD]
+    c, s = math.cos(h), math.sin(h)
+    return c * vx + s * vy, -s * vx + c * vy, w, side, vx, vy

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import math
 from itertools import chain
-from operator import is_
 
+import numba
 import numpy as np
 
 from ..worldmodel import WorldModel
@@ -73,31 +73,22 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "infos", "mates", "by_id", "array", "spots", "opps", "opp_array")
+    __slots__ = ("tick", "robots", "team_strategy", "mates", "by_id", "array")
 
     def __init__(self):
         self.tick = -1
         self.robots = None
-        self.infos: tuple = ()
+        self.team_strategy = None
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
         self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
-        self.spots: set = set()  # where the team-mates are, to tell them among obstacles
-        # the last opponents' array built from this view, reused by a robot that sees the same opponents
-        self.opps: list = []
-        self.opp_array = _array(self.opps, 4)
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
-        strategies = world.strategies
-        infos = self.infos
-        if (
-            self.tick == world.tick
-            and self.robots is robots
-            and len(infos) == len(strategies)
-            and all(map(is_, infos, strategies.values()))
-        ):
+        team = world.team_strategy
+        if self.tick == world.tick and self.robots is robots and self.team_strategy is team:
             return self.mates, self.by_id, self.array
+        strategies = world.strategies
         gk = world.goalkeeper
         mates = []
         told = strategies.get
@@ -112,10 +103,9 @@ class TeamView:
             mates.append(
                 Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
             )
-        self.tick, self.robots, self.infos = world.tick, robots, tuple(strategies.values())
+        self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
-        self.spots = {(m.x, m.y) for m in mates}
         return self.mates, self.by_id, self.array
 
 
@@ -136,8 +126,7 @@ class Observation:
         "ball_seen",
         "ball_age",
         "opps",
-        "_opp_array",
-        "_view",
+        "opp_array",
         "mode",
         "mtype",
         "coach",
@@ -150,7 +139,6 @@ class Observation:
         self.tick = world.tick
         self.goalie_id = world.goalkeeper
         view = view or TeamView()
-        self._view = view
         mates, by_id, self.mate_array = view.get(world)
         me = by_id.get(world.id)
         if me is None:
@@ -169,26 +157,13 @@ class Observation:
             self.bvx, self.bvy, self.bvz = b.vx, b.vy, b.vz
             self.ball_seen = b is v.ball
             self.ball_age = 0.0 if self.ball_seen else b.age
-        self.opps = opponents(v.obstacles, mates, view.spots)
-        self._opp_array = None
+        o = v.obstacles
+        self.opp_array = arr = _opponents(o.x, o.y, o.vx, o.vy, self.mate_array)
+        self.opps = arr.tolist()
         c = world.coach
         self.coach = c
         self.mode = c.match_mode if c is not None else 0
         self.mtype = c.match_type if c is not None else 0
-
-    @property
-    def opp_array(self) -> np.ndarray:
-        """(M, 4): the opponents as an array (x, y, vx, vy), for kernels."""
-        arr = self._opp_array
-        if arr is None:
-            view, opps = self._view, self.opps
-            if view.opps == opps:
-                arr = view.opp_array  # a team-mate in this process saw the same opponents
-            else:
-                arr = _array(opps, 4)
-                view.opps, view.opp_array = opps, arr
-            self._opp_array = arr
-        return arr
 
     @property
     def ball_speed(self) -> float:
@@ -206,15 +181,43 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
     return np.fromiter(chain.from_iterable(rows), float, width * len(rows)).reshape(-1, width)
 
 
-def opponents(o, mates: list[Mate], spots: set) -> list[tuple[float, float, float, float]]:
-    """(x, y, vx, vy) of the obstacles that are not team-mates. With exact perception a team-mate's
-    obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of one."""
-    n = len(o.x)
-    if n == 0:
-        return []
-    x, y, vx, vy = o.x.tolist(), o.y.tolist(), o.vx.tolist(), o.vy.tolist()
-    rest = [(x[k], y[k], vx[k], vy[k]) for k in range(n) if (x[k], y[k]) not in spots]
-    if n - len(rest) < len(mates) - 1:
+@numba.njit(cache=True, nogil=True)
+def _opponents(ox, oy, ovx, ovy, mates):
+    """(M, 4) float64: x, y, vx, vy of the obstacles (float32 arrays of an ObstaclesInfo) that are not
+    team-mates (``mates``, the TeamView's array: x, y in its first columns). With exact perception a
+    team-mate's obstacle is exactly where the team list puts it; otherwise (noise) anything within
+    _SAME_ROBOT of one."""
+    n = ox.shape[0]
+    k_mates = mates.shape[0]
+    keep = np.zeros(n, dtype=np.bool_)
+    kept = 0
+    for k in range(n):
+        x, y = np.float64(ox[k]), np.float64(oy[k])
+        mate = False
+        for j in range(k_mates):
+            if mates[j, 0] == x and mates[j, 1] == y:
+                mate = True
+                break
+        if not mate:
+            keep[k] = True
+            kept += 1
+    if n - kept < k_mates - 1:
         # some team-mates are not where the team list says (noisy perception): match by distance
-        rest = [q for q in rest if all(abs(m.x - q[0]) >= _SAME_ROBOT or abs(m.y - q[1]) >= _SAME_ROBOT for m in mates)]
-    return rest
+        for k in range(n):
+            if keep[k]:
+                x, y = np.float64(ox[k]), np.float64(oy[k])
+                for j in range(k_mates):
+                    if not (abs(mates[j, 0] - x) >= _SAME_ROBOT or abs(mates[j, 1] - y) >= _SAME_ROBOT):
+                        keep[k] = False
+                        kept -= 1
+                        break
+    out = np.empty((kept, 4))
+    r = 0
+    for k in range(n):
+        if keep[k]:
+            out[r, 0] = ox[k]
+            out[r, 1] = oy[k]
+            out[r, 2] = ovx[k]
+            out[r, 3] = ovy[k]
+            r += 1
+    return out

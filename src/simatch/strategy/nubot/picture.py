@@ -20,9 +20,8 @@ import numba
 import numpy as np
 
 from ..roles import ROLES
-from .ballpath import BallPath, intercepts
+from .ballpath import BallPath, team_intercepts
 from .gameflow import PHASES, GameFlow
-from .geometry import TWO_PI
 from .observation import Observation
 from .observation import _array as _rows
 from .params import NubotParams
@@ -219,14 +218,10 @@ class Analyst:
             return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
-        turn = 0.7 / p.max_turn
-        rows = [
-            (m.x, m.y, m.vx, m.vy, turn * abs(math.remainder(math.atan2(obs.by - m.y, obs.bx - m.x) - m.yaw, TWO_PI)))
-            for m in mates
-        ] + [(o[0], o[1], o[2], o[3], 0.0) for o in opps]
-        if rows:
-            a = _rows(rows, 5).T.copy()
-            res = intercepts(path, a[0], a[1], a[2], a[3], p.max_speed, p.acceleration, a[4]).tolist()
+        if mates or opps:
+            us = _rows([(m.x, m.y, m.vx, m.vy, m.yaw) for m in mates], 5)
+            turn = 0.7 / p.max_turn
+            res = team_intercepts(path, us, obs.opp_array, obs.bx, obs.by, turn, p.max_speed, p.acceleration).tolist()
             for k, m in enumerate(mates):
                 pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
             if opps:

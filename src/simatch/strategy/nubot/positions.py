@@ -12,6 +12,7 @@ import math
 import numba
 import numpy as np
 
+from ...exactmath import hypot
 from .geometry import box_exit, clamp, push_out_of_box, segment_hits_box
 
 
@@ -32,6 +33,10 @@ class Areas:
         self.opp_ga = (L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
         self._with_opp_area = (self.own_pa, self.opp_ga)
         self._without_opp_area = (self.own_pa, self.opp_pa)
+        # the same boxes as (K, 3) arrays, for the compiled route (see box_array)
+        self._arrays = {
+            id(boxes): np.array(boxes, dtype=np.float64) for boxes in (self._with_opp_area, self._without_opp_area)
+        }
 
     # exact lines (robot centre over the line counts as inside)
     def in_own_penalty_area(self, x: float, y: float) -> bool:
@@ -63,38 +68,19 @@ class Areas:
         goal area, and their penalty area unless ``opp_area`` (the robot playing the ball may enter it)."""
         return self._with_opp_area if opp_area else self._without_opp_area  # (shared: read only)
 
+    def box_array(self, boxes) -> np.ndarray:
+        """``boxes`` (x0, x1, half width) as a (K, 3) array (the ones `forbidden` gives are made once)."""
+        arr = self._arrays.get(id(boxes))
+        if arr is None:
+            return np.array(boxes, dtype=np.float64).reshape(-1, 3)
+        return arr
+
     def route(
         self, px: float, py: float, tx: float, ty: float, boxes: list[tuple[float, float, float]]
     ) -> tuple[float, float]:
         """The next point on the way from P to T that keeps out of ``boxes``: the way out of a box the robot
         is in, or the nearer field-side corner of a box the straight way would cross."""
-        for x0, x1, hw in boxes:
-            if x0 < px < x1 and -hw < py < hw:
-                if abs(px) > self.L2 - 0.1 and abs(py) < self.goal_half + 0.3:
-                    # in a goal (behind its line): sideways it would meet the net and the posts, so first
-                    # clear of the posts towards the middle, then straight out into the field
-                    inner = self.goal_half - 0.45
-                    if abs(py) > inner:
-                        return px, clamp(py, -inner, inner)
-                    return (x0 - 0.3 if x1 > 0.0 else x1 + 0.3), py
-                ex, ey = push_out_of_box(px, py, x0, x1, hw)
-                return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
-        for x0, x1, hw in boxes:
-            if (
-                (px <= x0 and tx <= x0)
-                or (px >= x1 and tx >= x1)
-                or (py <= -hw and ty <= -hw)
-                or (py >= hw and ty >= hw)
-            ):
-                continue  # both ends on the same side of the box: the way cannot cross it
-            if segment_hits_box(px, py, tx, ty, x0, x1, hw):
-                cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15  # the corners on the field side
-                best = min(
-                    ((cx, hw + 0.15), (cx, -hw - 0.15)),
-                    key=lambda c: math.hypot(c[0] - px, c[1] - py) + math.hypot(tx - c[0], ty - c[1]),
-                )
-                return best
-        return tx, ty
+        return route(px, py, tx, ty, self.box_array(boxes), self.L2, self.goal_half)
 
     def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
         # (clamp, inline)
@@ -102,6 +88,35 @@ class Areas:
         x = lo if x < lo else hi if x > hi else x
         lo, hi = -self.W2 + margin, self.W2 - margin
         return x, (lo if y < lo else hi if y > hi else y)
+
+
+@numba.njit(cache=True, nogil=True)
+def route(px, py, tx, ty, boxes, L2, goal_half):
+    """`Areas.route`, compiled (the motion's kernel calls it): ``boxes`` (K, 3) of x0, x1, half width."""
+    for k in range(boxes.shape[0]):
+        x0, x1, hw = boxes[k, 0], boxes[k, 1], boxes[k, 2]
+        if x0 < px < x1 and -hw < py < hw:
+            if abs(px) > L2 - 0.1 and abs(py) < goal_half + 0.3:
+                # in a goal (behind its line): sideways it would meet the net and the posts, so first
+                # clear of the posts towards the middle, then straight out into the field
+                inner = goal_half - 0.45
+                if abs(py) > inner:
+                    return px, (-inner if py < -inner else inner if py > inner else py)
+                return (x0 - 0.3 if x1 > 0.0 else x1 + 0.3), py
+            ex, ey = push_out_of_box(px, py, x0, x1, hw)
+            return ex + (ex - px) * 0.5, ey + (ey - py) * 0.5
+    for k in range(boxes.shape[0]):
+        x0, x1, hw = boxes[k, 0], boxes[k, 1], boxes[k, 2]
+        if (px <= x0 and tx <= x0) or (px >= x1 and tx >= x1) or (py <= -hw and ty <= -hw) or (py >= hw and ty >= hw):
+            continue  # both ends on the same side of the box: the way cannot cross it
+        if segment_hits_box(px, py, tx, ty, x0, x1, hw):
+            # the nearer of the corners on the field side (the first of equals)
+            cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15
+            ya, yb = hw + 0.15, -hw - 0.15
+            da = hypot(cx - px, ya - py) + hypot(tx - cx, ty - ya)
+            db = hypot(cx - px, yb - py) + hypot(tx - cx, ty - yb)
+            return (cx, yb) if db < da else (cx, ya)
+    return tx, ty
 
 
 def guard_point(areas: Areas, bx: float, by: float, fraction: float, min_s: float, gap: float) -> tuple[float, float]:

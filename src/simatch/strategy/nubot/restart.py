@@ -13,7 +13,7 @@ import math
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
 from .active import MOUTH, BallPlayer
-from .evaluate import pass_speed, shot_window
+from .evaluate import POST_MARGIN, pass_speed, shot_window
 from .gameflow import MODES, GameFlow
 from .geometry import unit, wrap
 from .motion import Motion
@@ -62,7 +62,7 @@ class RestartTaker:
             return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION, pass_intent=self.player.pass_intent(obs))
         receiver = None
         if flow.kind == MODES.OUR_PENALTY:
-            aim_y, _ = shot_window(bx, by, obs.opps, self.L2, self.goal_half, p.shot_speed)
+            aim_y, _ = shot_window(bx, by, obs.opp_array, self.L2, self.goal_half, p.shot_speed, POST_MARGIN)
             ax, ay, speed = self.L2 + 0.3, aim_y, p.shot_speed
         else:
             slot = pic.slots.get(me.id)

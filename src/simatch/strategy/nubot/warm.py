@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .active import _DIRECTIONS, _dribble_choice
 from .avoidance import no_charging, sub_target
-from .ballpath import BallPath, intercepts
+from .ballpath import BallPath, intercepts, team_intercepts
+from .evaluate import lane_clear, position_value, shot_window
+from .geometry import push_out_of_box
 from .picture import assign
 from .positions import score_spots
 
@@ -32,9 +35,20 @@ def load_kernels() -> None:
     path = BallPath(0.5, 0.2, 0.11, 1.0, 0.3, 0.0, 0.4, 0.11, 12.0, 8.0)
     rows = np.array([(0.0, 0.0, 0.0, 0.0, 0.1), (1.0, 0.5, 0.0, 0.0, 0.0)]).T.copy()
     intercepts(path, rows[0], rows[1], rows[2], rows[3], 3.0, 2.5, rows[4])
+    us = np.array([(0.0, 0.0, 0.0, 0.0, 0.5), (-2.0, 1.0, 0.3, 0.0, 1.0)])
+    team_intercepts(path, us, opps, 0.5, 0.2, 0.2, 3.0, 2.5)
     cx, cy = np.linspace(-5.0, 5.0, 4), np.linspace(-3.0, 3.0, 4)
     for near in (None, (1.0, 1.0)):
         score_spots(cx, cy, 0.0, 0.0, np.array([1.0]), np.array([0.5]), 11.0, 3.0, 8.5, near)
+    push_out_of_box(0.5, 0.2, -1.0, 1.0, 1.0)  # (Areas.keep_out, from Python)
+    # the ball player's judges, as it calls them (from Python, and inside the dribble's kernel)
+    shot_window(8.0, 0.5, opps, 11.0, 1.2, 10.0, 0.22)
+    lane_clear(0.0, 0.0, 4.0, 1.0, opps, 3.0, 0.0)
+    position_value(3.0, 1.0, opps, 11.0)
+    zones = np.array((11.0, 7.0, 2.25, 3.25, 9.2, 2.0))
+    _dribble_choice(
+        8.0, 0.5, 0.3, 1.0, 7.5, 0.0, 2.85, opps, zones, False, True, 7.0, 1.2, 10.0, 1.0, 0.0, False, *_DIRECTIONS[0]
+    )
     robots = [_Robot(2, 0.0, 0.0), _Robot(3, 1.0, 1.0)]
     slots = [(1, 2.0, 0.0, 0.0, 0.0), (2, -2.0, 1.0, 0.0, 0.0)]
     assign(robots, slots, 0.5)

@@ -177,7 +177,8 @@ export class EventLog {
 }
 
 // ------------------------------------------------------------------------------------------------
-// The display area: the field to scale (FieldGeometry.describe()), drawn on a canvas.
+// The display area: the field to scale (FieldGeometry.describe()), drawn on a canvas: markings, goals,
+// zones, static obstacles (with their heights), robots, drones (seen from above, with their heights).
 
 export class FieldView {
   constructor(canvas, hello, options = {}) {
@@ -255,6 +256,8 @@ export class FieldView {
     c.lineJoin = "miter"; c.lineCap = "square";
     for (const p of f.lines) this.primitive(p);
     for (const a of f.areas || []) this.area(a);
+    for (const o of f.obstacles || []) this.obstacle(o);
+    if (f.ceiling) this.note(`ceiling ${f.ceiling.toFixed(1)} m`);
     if (f.goals) this.goals();
     if (!this.frame) return;
     this.drawFrame(this.frame);
@@ -294,6 +297,37 @@ export class FieldView {
     c.font = "12px system-ui";
     c.fillText(a.name, Math.min(x0, x1) + 4, Math.min(y0, y1) + 14);
     c.restore();
+  }
+
+  // a static obstacle seen from above: a box turned by its yaw, or a cylinder; its height written on it
+  obstacle(o) {
+    const c = this.ctx;
+    c.save();
+    c.fillStyle = "rgba(58,62,70,0.95)"; c.strokeStyle = "#c5cad3"; c.lineWidth = 1.5;
+    c.beginPath();
+    if (o.shape === "cylinder") {
+      const [sx, sy] = this.toScreen(o.x, o.y);
+      c.arc(sx, sy, o.radius * this.scale, 0, 2 * Math.PI);
+    } else {
+      const cs = Math.cos(o.yaw), sn = Math.sin(o.yaw);
+      [[1, 1], [-1, 1], [-1, -1], [1, -1]].forEach(([a, b], i) => {
+        const px = a * o.half_x, py = b * o.half_y;
+        const [sx, sy] = this.toScreen(o.x + cs * px - sn * py, o.y + sn * px + cs * py);
+        i ? c.lineTo(sx, sy) : c.moveTo(sx, sy);
+      });
+      c.closePath();
+    }
+    c.fill(); c.stroke();
+    const [tx, ty] = this.toScreen(o.x, o.y);
+    c.fillStyle = "rgba(255,255,255,0.8)"; c.font = "10px system-ui"; c.textAlign = "center"; c.textBaseline = "middle";
+    c.fillText(`${o.height.toFixed(1)} m`, tx, ty);
+    c.restore();
+  }
+
+  note(text) {
+    const c = this.ctx;
+    c.save(); c.fillStyle = "rgba(255,255,255,0.7)"; c.font = "11px system-ui"; c.textBaseline = "top";
+    c.fillText(text, 6, 6); c.restore();
   }
 
   goals() {
@@ -364,8 +398,35 @@ export class FieldView {
     this.ball(fr.ball);
   }
 
+  // a drone seen from above: four rotor discs on an X turned by its heading, a nose mark, and its height;
+  // drawn larger the higher it flies (and never smaller than a few pixels), with its shadow on the floor
+  drone(r, meta, sentOff) {
+    const c = this.ctx, team = r.team || meta.team, z = r.z || 0;
+    const [sx, sy] = this.toScreen(r.x, r.y);
+    const yaw = this.flip ? r.yaw + Math.PI : r.yaw;
+    const arm = Math.max(7, meta.radius * this.scale) * (1 + Math.min(z, 6) * 0.08);
+    const rotor = arm * 0.42, color = sentOff ? "#777" : teamColor(this.hello, team);
+    c.save();
+    c.fillStyle = "rgba(0,0,0,0.28)";
+    c.beginPath(); c.ellipse(sx + 2 + z * 1.5, sy + 2 + z * 1.5, arm * 0.9, arm * 0.6, 0, 0, 2 * Math.PI); c.fill();
+    c.strokeStyle = "#0b0f12"; c.lineWidth = 2;
+    for (const a of [Math.PI / 4, 3 * Math.PI / 4, -3 * Math.PI / 4, -Math.PI / 4]) {
+      const rx = sx + arm * Math.cos(yaw + a), ry = sy - arm * Math.sin(yaw + a);
+      c.beginPath(); c.moveTo(sx, sy); c.lineTo(rx, ry); c.stroke();
+      c.beginPath(); c.arc(rx, ry, rotor, 0, 2 * Math.PI); c.fillStyle = color; c.fill(); c.stroke();
+    }
+    c.beginPath(); c.moveTo(sx, sy); c.lineTo(sx + arm * 0.9 * Math.cos(yaw), sy - arm * 0.9 * Math.sin(yaw));
+    c.strokeStyle = "#fff"; c.lineWidth = 2; c.stroke();
+    c.font = "bold 12px system-ui"; c.fillStyle = "#fff"; c.textBaseline = "bottom";
+    c.fillText(`${r.id}`, sx + arm + 2, sy - arm * 0.6);
+    c.font = "11px system-ui"; c.textBaseline = "top"; c.fillStyle = "#e3f2fd";
+    c.fillText(`${z.toFixed(1)} m`, sx + arm + 2, sy - arm * 0.6 + 1);
+    c.restore();
+  }
+
   robot(r, sentOff) {
     const c = this.ctx, meta = this.meta[r.name] || { radius: 0.25, team: r.team || this.hello.team };
+    if (meta.aerial) { this.drone(r, meta, sentOff); return; }
     const team = r.team || meta.team;
     const [sx, sy] = this.toScreen(r.x, r.y), rad = Math.max(4, meta.radius * this.scale);
     const yaw = (this.flip ? r.yaw + Math.PI : r.yaw);

@@ -1,0 +1,420 @@
+"""The aerial robots' onboard flight controller, run inside every physics step for all of them at once.
+
+A drone takes the same command as every robot (VelCmd: body-frame vx, vy and turn rate w, plus the
+vertical speed vz) and its controller turns it into four rotor thrusts through the usual cascade:
+
+1. **Hold point.** The commanded velocity (vx, vy turned by the drone's heading, and vz) moves a hold
+   point; the velocity target is the command plus a pull back onto that point (``position_gain``), so a
+   drone told to stand still holds where it is and one told to move follows the commanded path. The hold
+   point stays within ``leash`` of the body (after a push or a collision the drone does not fly back
+   across the arena). The commanded turn rate moves a heading set point the same way.
+2. **Velocity loop** (PI, ``velocity_gain``, ``velocity_integral``, with the rotor drag fed forward): the
+   wanted acceleration, its horizontal part capped by the tilt limit (``max_tilt``).
+3. **Thrust and attitude.** The wanted force m (a + g z) gives the collective thrust (its part along the
+   body's z axis) and the wanted direction of the body's z axis; with the heading set point it makes the
+   wanted attitude. The attitude error (on SO(3), as in Lee, Leok and McClamroch 2010) sets the wanted body
+   rates (``attitude_gain``), with the turn rate fed forward.
+4. **Rate loop** (``rate_gain``): the torques that bring the body rates to the wanted ones (gyroscopic
+   terms included).
+5. **Mixer**: four rotor thrusts that give the collective thrust and the three torques; when a rotor
+   would have to go past its limits, yaw is given up first, then the collective thrust, then the
+   roll/pitch torques are scaled down, never the other way round (attitude keeps a drone flying).
+
+The rotors' commanded thrusts are the actuators' controls; the engine applies each with its motor lag.
+Everything is one compiled call per physics step (no Python per drone), the same IEEE arithmetic every
+time, so runs stay deterministic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numba
+import numpy as np
+
+from .kernels import rotate
+
+# columns of the parameter table (one row per drone)
+(
+    MASS,
+    IXX,
+    IYY,
+    IZZ,
+    FMAX,
+    DRAG_XY,
+    DRAG_Z,
+    K_POS,
+    K_VEL,
+    K_INT,
+    K_ATT,
+    K_RATE,
+    TAN_TILT,
+    LEASH,
+) = range(14)
+N_PARAMS = 14
+#: the heading set point stays this close to the heading [rad]
+YAW_LEASH = 0.5
+#: the integral of the velocity loop gives at most this acceleration [m/s^2]
+INTEGRAL_LIMIT = 3.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _wrap(a):
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@numba.njit(cache=True, nogil=True)
+def fly(qpos, qvel, ctrl, qadr, vadr, rotor, P, mix, cmd, armed, pref, vref, yref, vint, dt, g):
+    """One physics step of every drone's controller: writes the four rotor thrust commands into ``ctrl``.
+
+    qadr, vadr (A,) free-joint addresses; rotor (A, 4) actuator ids; P (A, N_PARAMS); mix (A, 4, 4) the
+    mixer's inverse (rotor thrusts from collective thrust and torques); cmd (A, 4) vx, vy (heading frame),
+    w, vz; armed (A,) motors on; pref, vref (A, 3), yref (A,), vint (A, 3) the controller's state (updated)."""
+    n = qadr.shape[0]
+    R = np.empty((3, 3))
+    Rd = np.empty((3, 3))
+    wrench = np.empty(4)
+    f = np.empty(4)
+    for k in range(n):
+        qa = qadr[k]
+        va = vadr[k]
+        if not armed[k]:
+            for j in range(4):
+                ctrl[rotor[k, j]] = 0.0
+            for j in range(3):
+                pref[k, j] = qpos[qa + j]
+                vref[k, j] = 0.0
+                vint[k, j] = 0.0
+            continue
+        px, py, pz = qpos[qa], qpos[qa + 1], qpos[qa + 2]
+        qw, qx, qy, qz = qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6]
+        # rotation body -> world
+        R[0, 0] = 1.0 - 2.0 * (qy * qy + qz * qz)
+        R[0, 1] = 2.0 * (qx * qy - qw * qz)
+        R[0, 2] = 2.0 * (qx * qz + qw * qy)
+        R[1, 0] = 2.0 * (qx * qy + qw * qz)
+        R[1, 1] = 1.0 - 2.0 * (qx * qx + qz * qz)
+        R[1, 2] = 2.0 * (qy * qz - qw * qx)
+        R[2, 0] = 2.0 * (qx * qz - qw * qy)
+        R[2, 1] = 2.0 * (qy * qz + qw * qx)
+        R[2, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
+        yaw = math.atan2(R[1, 0], R[0, 0])
+        m = P[k, MASS]
+        # 1. reference velocity (the command, reached at the velocity loop's own pace), hold point, heading
+        c, s = math.cos(yaw), math.sin(yaw)
+        kv = P[k, K_VEL]
+        blend = min(1.0, kv * dt)
+        tx = c * cmd[k, 0] - s * cmd[k, 1] - vref[k, 0]
+        ty = s * cmd[k, 0] + c * cmd[k, 1] - vref[k, 1]
+        tz = cmd[k, 3] - vref[k, 2]
+        afx, afy, afz = kv * tx, kv * ty, kv * tz  # the reference's acceleration, fed forward
+        vref[k, 0] += blend * tx
+        vref[k, 1] += blend * ty
+        vref[k, 2] += blend * tz
+        vcx, vcy, vcz = vref[k, 0], vref[k, 1], vref[k, 2]
+        pref[k, 0] += vcx * dt
+        pref[k, 1] += vcy * dt
+        pref[k, 2] += vcz * dt
+        dx, dy, dz = pref[k, 0] - px, pref[k, 1] - py, pref[k, 2] - pz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        leash = P[k, LEASH]
+        if d > leash:
+            sc = leash / d
+            dx, dy, dz = dx * sc, dy * sc, dz * sc
+            pref[k, 0], pref[k, 1], pref[k, 2] = px + dx, py + dy, pz + dz
+        yref[k] += cmd[k, 2] * dt
+        ey = _wrap(yref[k] - yaw)
+        if ey > YAW_LEASH:
+            ey = YAW_LEASH
+        elif ey < -YAW_LEASH:
+            ey = -YAW_LEASH
+        yref[k] = yaw + ey
+        # 2. velocity loop, rotor drag fed forward (drag = R D R^T v)
+        vx, vy, vz = qvel[va], qvel[va + 1], qvel[va + 2]
+        kp = P[k, K_POS]
+        evx = vcx + kp * dx - vx
+        evy = vcy + kp * dy - vy
+        evz = vcz + kp * dz - vz
+        ki = P[k, K_INT]
+        if ki > 0.0:
+            lim = INTEGRAL_LIMIT / ki
+            vint[k, 0] = min(max(vint[k, 0] + evx * dt, -lim), lim)
+            vint[k, 1] = min(max(vint[k, 1] + evy * dt, -lim), lim)
+            vint[k, 2] = min(max(vint[k, 2] + evz * dt, -lim), lim)
+        bx = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
+        by = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
+        bz = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
+        bx *= P[k, DRAG_XY]
+        by *= P[k, DRAG_XY]
+        bz *= P[k, DRAG_Z]
+        ax = afx + kv * evx + ki * vint[k, 0] + (R[0, 0] * bx + R[0, 1] * by + R[0, 2] * bz) / m
+        ay = afy + kv * evy + ki * vint[k, 1] + (R[1, 0] * bx + R[1, 1] * by + R[1, 2] * bz) / m
+        az = afz + kv * evz + ki * vint[k, 2] + (R[2, 0] * bx + R[2, 1] * by + R[2, 2] * bz) / m
+        # 3. wanted force, tilt-limited, and the attitude that points the thrust along it
+        fz = m * (g + az)
+        if fz < 0.2 * m * g:
+            fz = 0.2 * m * g
+        fx, fy = m * ax, m * ay
+        fxy = math.sqrt(fx * fx + fy * fy)
+        cap = fz * P[k, TAN_TILT]
+        if fxy > cap:
+            fx *= cap / fxy
+            fy *= cap / fxy
+        fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+        b3x, b3y, b3z = fx / fn, fy / fn, fz / fn
+        thrust = fx * R[0, 2] + fy * R[1, 2] + fz * R[2, 2]
+        if thrust < 0.0:
+            thrust = 0.0
+        cy, sy = math.cos(yref[k]), math.sin(yref[k])
+        # b2 = b3 x b1c (b1c = heading set point), normalised; b1 = b2 x b3
+        b2x, b2y, b2z = -b3z * sy, b3z * cy, b3x * sy - b3y * cy
+        nb = math.sqrt(b2x * b2x + b2y * b2y + b2z * b2z)
+        b2x, b2y, b2z = b2x / nb, b2y / nb, b2z / nb
+        b1x, b1y, b1z = b2y * b3z - b2z * b3y, b2z * b3x - b2x * b3z, b2x * b3y - b2y * b3x
+        Rd[0, 0], Rd[1, 0], Rd[2, 0] = b1x, b1y, b1z
+        Rd[0, 1], Rd[1, 1], Rd[2, 1] = b2x, b2y, b2z
+        Rd[0, 2], Rd[1, 2], Rd[2, 2] = b3x, b3y, b3z
+        # e_R = vee(Rd^T R - R^T Rd) / 2
+        e = np.zeros(3)
+        for a, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):
+            mij = 0.0
+            mji = 0.0
+            for r in range(3):
+                mij += Rd[r, i] * R[r, j]
+                mji += Rd[r, j] * R[r, i]
+            e[a] = 0.5 * (mij - mji)
+        # 4. wanted body rates (turn rate fed forward: world z in the body frame), and the rate loop
+        katt = P[k, K_ATT]
+        w = cmd[k, 2]
+        wdx = -katt * e[0] + w * R[2, 0]
+        wdy = -katt * e[1] + w * R[2, 1]
+        wdz = -katt * e[2] + w * R[2, 2]
+        ox, oy, oz = qvel[va + 3], qvel[va + 4], qvel[va + 5]
+        ixx, iyy, izz = P[k, IXX], P[k, IYY], P[k, IZZ]
+        kr = P[k, K_RATE]
+        wrench[0] = thrust
+        wrench[1] = ixx * kr * (wdx - ox) + (izz - iyy) * oy * oz
+        wrench[2] = iyy * kr * (wdy - oy) + (ixx - izz) * oz * ox
+        wrench[3] = izz * kr * (wdz - oz) + (iyy - ixx) * ox * oy
+        # 5. mixer with priorities
+        fmax = P[k, FMAX]
+        _mix(mix[k], wrench, f, fmax)
+        for j in range(4):
+            ctrl[rotor[k, j]] = f[j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _span(d, yaw, s):
+    lo = np.inf
+    hi = -np.inf
+    for j in range(4):
+        v = d[j] + s * yaw[j]
+        lo = min(lo, v)
+        hi = max(hi, v)
+    return hi - lo
+
+
+@numba.njit(cache=True, nogil=True)
+def _mix(M, wrench, f, fmax):
+    """Rotor thrusts f (4,) within [0, fmax] for wrench (thrust, tx, ty, tz) through the inverse mixer M:
+    exact when it fits; else the roll/pitch torques kept whole (scaled down only if they alone do not
+    fit), as much of the yaw torque as fits beside them, and the collective thrust nearest to the wanted
+    one that keeps every rotor within its limits."""
+    for j in range(4):
+        f[j] = M[j, 0] * wrench[0] + M[j, 1] * wrench[1] + M[j, 2] * wrench[2] + M[j, 3] * wrench[3]
+    if f.min() >= 0.0 and f.max() <= fmax:
+        return
+    d = np.empty(4)
+    yaw = np.empty(4)
+    for j in range(4):
+        d[j] = M[j, 1] * wrench[1] + M[j, 2] * wrench[2]
+        yaw[j] = M[j, 3] * wrench[3]
+    span = _span(d, yaw, 0.0)
+    if span > fmax:
+        for j in range(4):
+            d[j] *= fmax / span
+    elif _span(d, yaw, 1.0) > fmax:
+        lo, hi = 0.0, 1.0  # the largest share of the yaw torque that fits (bisection)
+        for _ in range(16):
+            mid = 0.5 * (lo + hi)
+            if _span(d, yaw, mid) > fmax:
+                hi = mid
+            else:
+                lo = mid
+        for j in range(4):
+            d[j] += lo * yaw[j]
+    else:
+        for j in range(4):
+            d[j] += yaw[j]
+    c = M[0, 0] * wrench[0]  # the collective share of each rotor (equal for a symmetric frame)
+    c = min(max(c, -d.min()), fmax - d.max())
+    for j in range(4):
+        f[j] = min(max(c + d[j], 0.0), fmax)
+
+
+def mixer_inverse(positions, spin, torque_ratio: float) -> np.ndarray:
+    """(4, 4) rotor thrusts from (thrust, torque x, torque y, torque z): the inverse of the map from rotor
+    thrusts at ``positions`` (body x, y) with drag torque ``-spin * torque_ratio`` per newton."""
+    A = np.array(
+        [
+            [1.0] * 4,
+            [y for _, y in positions],
+            [-x for x, _ in positions],
+            [-s * torque_ratio for s in spin],
+        ]
+    )
+    return np.linalg.inv(A)
+
+
+def _yaw_of_quat(qw: float, qx: float, qy: float, qz: float) -> float:
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+class AerialFleet:
+    """Every aerial robot's command, controller state and parameters (one row each), stepped by the
+    simulator before each physics step. Commands are capped by the drone's limits where they arrive."""
+
+    def __init__(self, data, index, models, dt: float, gravity: float):
+        self.d = data
+        self.ix = index
+        n = len(models)
+        self.n = n
+        self.dt = dt
+        self.gravity = gravity
+        self.P = np.zeros((n, N_PARAMS))
+        self.mix = np.zeros((n, 4, 4))
+        self.limits = np.zeros((n, 4))  # max horizontal speed, max turn rate, max climb, max descent
+        for k, model in enumerate(models):
+            p = model.params
+            row = self.P[k]
+            row[MASS], row[IXX], row[IYY], row[IZZ] = p.mass, p.ixx, p.iyy, p.izz
+            row[FMAX] = model.max_rotor_thrust
+            row[DRAG_XY], row[DRAG_Z] = p.drag_xy, p.drag_z
+            row[K_POS], row[K_VEL], row[K_INT] = p.position_gain, p.velocity_gain, p.velocity_integral
+            row[K_ATT], row[K_RATE] = p.attitude_gain, p.rate_gain
+            row[TAN_TILT] = math.tan(math.radians(p.max_tilt))
+            row[LEASH] = p.leash
+            self.mix[k] = mixer_inverse(model.rotor_positions(), model.rotor_spin, p.torque_ratio)
+            self.limits[k] = (p.max_speed, p.max_yaw_rate, p.max_climb, p.max_descent)
+        self.cmd = np.zeros((n, 4))
+        self.armed = np.array([m.params.start_altitude > 0.0 for m in models], dtype=bool)
+        self.pref = np.zeros((n, 3))
+        self.vref = np.zeros((n, 3))
+        self.yref = np.zeros(n)
+        self.vint = np.zeros((n, 3))
+        for k in range(n):
+            self.hold(k)
+
+    def command(self, k: int, vx: float, vy: float, w: float, vz: float) -> None:
+        """Drone k's command (finite; the caller validates), capped by its limits. A landed drone (motors
+        off) takes off when told to climb."""
+        vmax, wmax, up, down = self.limits[k]
+        speed = math.hypot(vx, vy)
+        if speed > vmax:
+            vx, vy = vx * vmax / speed, vy * vmax / speed
+        c = self.cmd[k]
+        c[0], c[1] = vx, vy
+        c[2] = min(max(w, -wmax), wmax)
+        c[3] = min(max(vz, -down), up)
+        if vz > 0.0 and not self.armed[k]:
+            self.armed[k] = True
+            self.hold(k)
+
+    def stop(self, k: int) -> None:
+        self.cmd[k] = 0.0
+
+    def arm(self, k: int, on: bool) -> None:
+        """Motors of drone k on (it holds where it is) or off (no thrust at all)."""
+        self.armed[k] = on
+        if on:
+            self.hold(k)
+
+    def hold(self, k: int) -> None:
+        """Hold where drone k is now (after a teleport): the hold point, heading and integral start afresh."""
+        q = self.d.qpos
+        a = self.ix.qpos[k]
+        self.pref[k] = q[a : a + 3]
+        self.vref[k] = self.d.qvel[self.ix.qvel[k] : self.ix.qvel[k] + 3]
+        self.yref[k] = _yaw_of_quat(*q[a + 3 : a + 7])
+        self.vint[k] = 0.0
+
+    def step(self, ctrl) -> None:
+        d, ix = self.d, self.ix
+        fly(
+            d.qpos,
+            d.qvel,
+            ctrl,
+            ix.qpos,
+            ix.qvel,
+            ix.rotor,
+            self.P,
+            self.mix,
+            self.cmd,
+            self.armed,
+            self.pref,
+            self.vref,
+            self.yref,
+            self.vint,
+            self.dt,
+            self.gravity,
+        )
+
+
+@numba.njit(cache=True, nogil=True)
+def aerial_poses(qpos, qvel, qadr, vadr):
+    """Poses (A, 7: x y z qw qx qy qz) and world-frame twists (A, 6: v, w) of the free-flying bodies (their
+    angular velocity turned from the body frame to the world frame)."""
+    n = qadr.shape[0]
+    pose = np.empty((n, 7))
+    twist = np.empty((n, 6))
+    for k in range(n):
+        qa = qadr[k]
+        va = vadr[k]
+        for j in range(7):
+            pose[k, j] = qpos[qa + j]
+        for j in range(3):
+            twist[k, j] = qvel[va + j]
+        twist[k, 3], twist[k, 4], twist[k, 5] = rotate(
+            qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], qvel[va + 3], qvel[va + 4], qvel[va + 5]
+        )
+    return pose, twist
+
+
+def planar(pose: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    """(A, 6) x y yaw vx vy w (world frame, w about z) of free bodies, as every robot's planar state."""
+    out = np.empty((len(pose), 6))
+    out[:, 0:2] = pose[:, 0:2]
+    qw, qx, qy, qz = pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]
+    out[:, 2] = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    out[:, 3:5] = twist[:, 0:2]
+    out[:, 5] = twist[:, 5]
+    return out
+
+
+def rotor_links(model, pose: np.ndarray, twist: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(pose, twist) of each rotor hub of an aerial robot whose body has ``pose`` and world ``twist``."""
+    R = np.empty(9)
+    mujoco.mju_quat2Mat(R, np.ascontiguousarray(pose[3:7]))
+    R = R.reshape(3, 3)
+    w = twist[3:6]
+    out = []
+    for rx, ry in model.rotor_positions():
+        r = R @ np.array((rx, ry, 0.0))
+        out.append((np.concatenate((pose[:3] + r, pose[3:7])), np.concatenate((twist[:3] + np.cross(w, r), w))))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def frame_contacts(pairs, n, owner):
+    """(drone, other geom) of every contact among the first ``n`` geom ``pairs`` that involves a drone's frame
+    (``owner``: geom id -> drone index, -1 for any other geom); both ways for two drones."""
+    out = []
+    for c in range(n):
+        a, b = pairs[c, 0], pairs[c, 1]
+        ka, kb = owner[a], owner[b]
+        if ka >= 0:
+            out.append((ka, b))
+        if kb >= 0:
+            out.append((kb, a))
+    return out
