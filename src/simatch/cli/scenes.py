@@ -91,4 +91,5 @@ def plugin_params(loaded: LoadedScene) -> dict:
         if tspec.strategy not in NO_NODES:
             out[f"teams.{team}.strategy_params"] = getattr(strategy_class(tspec.strategy), "Params", None)
     out["judge"] = getattr(load(spec.judge.kind, JUDGES, "judge"), "Params", None)
+    out["world.params"] = world_class(spec.world.kind).Params
     return out

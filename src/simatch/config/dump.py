@@ -23,12 +23,16 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 from tomlkit.items import Array, InlineTable, Table
 
+from ..worlds import world_class
 from .loader import LoadedScene, validate_params
 
 #: table (dotted, e.g. "teams.cyan.strategy_params" or "judge") -> the plug-in's parameter model
 PluginParams = Mapping[str, type[BaseModel] | None]
 
 WIDTH = 100
+#: the tables of plug-ins' own settings (the robot model's, the strategy's, the world's)
+PLUGIN_TABLES = ("model_params", "strategy_params", "world.params")
+_LEFT_OUT = object()
 _LIMITS = ((at.Gt, ">", "gt"), (at.Ge, ">=", "ge"), (at.Lt, "<", "lt"), (at.Le, "<=", "le"))
 
 
@@ -42,20 +46,33 @@ def scene_toml(loaded: LoadedScene, plugins: PluginParams | None = None, header:
             doc.add(tomlkit.comment(line) if line else tomlkit.nl())
     if header:
         doc.add(tomlkit.nl())
-    _fill(doc, spec, type(spec), "", plugins, loaded.source)
+    # the world's kind decides some of its keys: it refuses another kind's (a soccer field's lines are no
+    # setting of an arena), and a key it is not given may default to its own value rather than the schema's
+    world = world_class(spec.world.kind)
+    kind_keys = {f"world.{key}": _LEFT_OUT for key in world.foreign_keys}
+    kind_keys |= {f"world.{key}": value for key, value in world.own_defaults.items()}
+    _fill(doc, spec, type(spec), "", plugins, loaded.source, kind_keys)
     return tomlkit.dumps(doc)
 
 
-def _fill(table, model: BaseModel, cls: type[BaseModel], path: str, plugins: dict, source: str) -> None:
-    """Keys first, then sub-tables (TOML puts a table's own keys before its sub-tables)."""
+def _fill(
+    table, model: BaseModel, cls: type[BaseModel], path: str, plugins: dict, source: str, kind_keys: dict
+) -> None:
+    """Keys first, then sub-tables (TOML puts a table's own keys before its sub-tables). ``kind_keys``: keys
+    left out (`_LEFT_OUT`) or, when the scene does not set them, written with another default."""
     later: list[tuple[str, Any]] = []
     for name, info in cls.model_fields.items():
         value = getattr(model, name)
         where = f"{path}.{name}" if path else name
+        if where in kind_keys:
+            if kind_keys[where] is _LEFT_OUT:
+                continue
+            if name not in model.model_fields_set:
+                value = kind_keys[where]
         if isinstance(value, BaseModel) or _is_table_of_models(value):
             later.append((name, value))
             continue
-        if where.endswith(("model_params", "strategy_params")) and isinstance(value, dict):
+        if where.endswith(PLUGIN_TABLES) and isinstance(value, dict):
             later.append((name, value))
             continue
         _key(table, name, value, info, where)
@@ -67,23 +84,26 @@ def _fill(table, model: BaseModel, cls: type[BaseModel], path: str, plugins: dic
         info = cls.model_fields[name]
         if isinstance(value, BaseModel):
             sub = _table(info)
-            _fill(sub, value, type(value), where, plugins, source)
+            _fill(sub, value, type(value), where, plugins, source, kind_keys)
             table.add(name, sub)
         elif isinstance(value, dict) and value and all(isinstance(v, BaseModel) for v in value.values()):
             outer = _table(info, super_table=True)
             for key, item in value.items():
                 sub = tomlkit.table()
-                _fill(sub, item, type(item), f"{where}.{key}", plugins, source)
+                _fill(sub, item, type(item), f"{where}.{key}", plugins, source, kind_keys)
                 outer.add(key, sub)
             table.add(name, outer)
-        else:  # a plug-in's parameter table: model_params, strategy_params
+        else:  # a plug-in's parameter table: model_params, strategy_params, the world's params
             params = plugins.get(where)
             if params is None and not value:
                 continue
             sub = tomlkit.table()
-            kind = name.removesuffix("_params")
-            what = {"model": "robot model"}.get(kind, kind)
-            sub.add(tomlkit.comment(f"the settings of the {what} {getattr(model, kind, '')!r}"))
+            kind = "kind" if name == "params" else name.removesuffix("_params")
+            what = {"model": "robot model", "kind": "world"}.get(kind, kind)
+            if params is not None and not params.model_fields and not value:
+                sub.add(tomlkit.comment(f"the {what} {getattr(model, kind, '')!r} has no settings of its own"))
+            else:
+                sub.add(tomlkit.comment(f"the settings of the {what} {getattr(model, kind, '')!r}"))
             _plugin_keys(sub, value, params, where, source)
             table.add(name, sub)
 
