@@ -1,47 +1,53 @@
 # The two quick-start commands of the README live here:
-#   make run    set up .venv and run the main job
-#   make test   set up .venv (and the system packages the tests need) and run the whole test suite
+#   make run    set up .venv with what running needs and run the main job
+#   make test   add the test extras (and the system packages the tests need) and run the whole test suite
 # Everything else is a building block of those two.
 
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test setup system-deps ros2-interfaces learn bench clean
+# The extras of pyproject.toml that the test set-up installs on top of the run set-up. The one place to
+# name them: a part whose tests need an extra adds it here (learn: docs/learning.md; ros2: docs/ros.md).
+TEST_EXTRAS := test,learn,ros2
+# Pinned packages installed before those extras: torch's CPU build for the learn extra (2.13.0 lies on the
+# development machines' disk; an unpinned torch would pull a CUDA build of several GB).
+TEST_PREINSTALL := torch==2.13.0
 
-run: setup
+.PHONY: run test setup setup-run system-deps ros2-interfaces bench clean
+
+run: setup-run
 	$(BIN)/simatch run msl_5v5 --events all
 
-test: setup system-deps ros2-interfaces learn
+test: setup system-deps ros2-interfaces
 	$(BIN)/python -m pytest
 
-bench: setup
+bench: setup-run
 	$(BIN)/simatch bench
 
-setup: $(VENV)/.installed
+# setup-run: the project alone (what `simatch` needs to run); setup: that and the test extras (development)
+setup-run: $(VENV)/.installed-run
+setup: $(VENV)/.installed-test
 
 # setup.py and the C encoder too: a changed extension is rebuilt by the next make
-$(VENV)/.installed: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
+$(VENV)/.installed-run: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test,ros2]'
+	$(BIN)/pip install --quiet -e .
+	touch $@
+
+# again after a new run set-up (it reinstalls the project) or a change of the lists above
+$(VENV)/.installed-test: $(VENV)/.installed-run Makefile
+	$(if $(TEST_PREINSTALL),$(BIN)/pip install --quiet $(TEST_PREINSTALL))
+	$(BIN)/pip install --quiet -e '.[$(TEST_EXTRAS)]'
 	touch $@
 
 # simatch_msgs and tf2_msgs as ROS 2 interface packages, built into .venv with the ros2 extra's rosidl tools
 # (cmake and the C compiler of the system; a few minutes the first time, nothing when up to date)
 ros2-interfaces: $(VENV)/.ros2-interfaces
 
-$(VENV)/.ros2-interfaces: $(VENV)/.installed $(wildcard src/simatch/msgs/simatch_msgs/msg/*.msg)
+$(VENV)/.ros2-interfaces: $(VENV)/.installed-test $(wildcard src/simatch/msgs/simatch_msgs/msg/*.msg)
 	$(BIN)/simatch ros2 --build-interfaces
-	touch $@
-
-# The learning extra (docs/learning.md), for the tests, not for `make run`: torch's CPU build first (2.13.0 lies on
-# the development machines' disk; an unpinned torch would pull a CUDA build of several GB), then the extra.
-learn: $(VENV)/.learn
-
-$(VENV)/.learn: $(VENV)/.installed
-	$(BIN)/pip install --quiet 'torch==2.13.0'
-	$(BIN)/pip install --quiet -e '.[test,learn]'
 	touch $@
 
 system-deps:

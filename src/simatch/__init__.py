@@ -11,7 +11,7 @@ through `simatch.bus` with the messages of `simatch.msgs` and read the scene fil
 
 from __future__ import annotations
 
-__all__ = ["Simulation", "load_scene", "version"]
+__all__ = ["Simulation", "StateOverridden", "load_scene", "version"]
 
 
 def version() -> str:
@@ -27,10 +27,10 @@ def version() -> str:
 
 def __getattr__(name: str):
     # lazy, so that light clients (e.g. a robot process importing simatch.msgs) do not load the physics
-    if name == "Simulation":
-        from .simulation import Simulation
+    if name in ("Simulation", "StateOverridden"):
+        from . import simulation
 
-        return Simulation
+        return getattr(simulation, name)
     if name == "load_scene":
         from .config.loader import load_scene
 

@@ -17,6 +17,7 @@ import json
 import signal
 import threading
 import time as _time
+import warnings
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -52,6 +53,36 @@ def _plain(value: Any) -> Any:
     if hasattr(value, "tolist"):
         return value.tolist()
     return repr(value)  # never fails the caller; the simulator refuses such values anyway
+
+
+class StateOverridden(UserWarning):
+    """The judge moved a model whose state the caller had just set with `Simulation.set_model_state` (a referee
+    places the ball for every restart and parks the robots it sends off): what the caller set did not last."""
+
+
+#: [s] of simulated time after the caller sets a model's state within which the judge moving that model undoes
+#: it (a referee puts a ball that left the spot of a prepared restart back at most once a second)
+OVERRIDE_WINDOW = 1.0
+
+
+class _JudgedWorld:
+    """The simulator as the judge's `WorldControl`, telling the `Simulation` which models the judge moves, so that
+    the API can say when the judge undoes a state the caller set. Everything else is the simulator's own."""
+
+    def __init__(self, simulator: Simulator, moved: Callable[[str], None]):
+        self._simulator = simulator
+        self._moved = moved
+        self.model_states = simulator.model_states
+        self.apply_wrench = simulator.apply_wrench
+        self.set_enabled = simulator.set_enabled
+        self.set_frozen = simulator.set_frozen
+
+    def set_model_state(self, name: str, **state: float) -> None:
+        self._simulator.set_model_state(name, **state)
+        self._moved(name)
+
+    def __getattr__(self, name: str):
+        return getattr(self._simulator, name)
 
 
 class ManualDriver(Node):
@@ -119,7 +150,9 @@ class Simulation:
         check_models(self.scene)
         self.simulator = Simulator(spec, self.seed)
         self._sensor = self.clock.add(SimulatorNode(self.simulator))
-        self.judge = self.clock.add(make_judge(self.scene, self.simulator))
+        self._set_by_caller: dict[str, float] = {}  # model -> simulated time the caller last set its state
+        self._undone: list[tuple[str, float, float]] = []  # (model, set at, moved by the judge at), not yet said
+        self.judge = self.clock.add(make_judge(self.scene, _JudgedWorld(self.simulator, self._judge_moved)))
         #: per-team coaches, where no referee gives the commands (``sim.coaches["cyan"].start_play()``)
         self.coaches: dict[str, Coach] = {}
         if not self.judge.gives_commands:
@@ -205,6 +238,7 @@ class Simulation:
         finally:
             self._stepping = self.clock.holding
         self._wall += _time.perf_counter() - t0
+        self._say_undone()
 
     def run(
         self,
@@ -245,6 +279,7 @@ class Simulation:
         finally:
             self._running, self._stop = False, None
             self._wall += _time.perf_counter() - t0
+        self._say_undone()
 
     def _run_chunk(self, n: int, until_done: bool, progress) -> int:
         step = self.clock.step
@@ -304,9 +339,45 @@ class Simulation:
         return {n: (pose[i], twist[i]) for i, n in enumerate(names)}
 
     def set_model_state(self, name: str, **state: float) -> None:
+        """Place a model and/or set its velocity (keys: x y z yaw qw qx qy qz vx vy vz wx wy wz), world frame, at
+        once. Where a judge moves models itself (a referee places the ball for every restart), a state it undoes
+        within a second is reported by a `StateOverridden` warning when `run` or `step` returns."""
         self.simulator.set_model_state(name, **state)
         self._operator("set_model_state", name, **state)
         self._sensor.flush_events()
+        self._set_by_caller[name] = self.time
+
+    def _judge_moved(self, name: str) -> None:
+        at = self._set_by_caller.pop(name, None)
+        if at is not None and self.time - at <= OVERRIDE_WINDOW + 1e-9:
+            self._undone.append((name, at, self.time))
+
+    def _say_undone(self) -> None:
+        """A `StateOverridden` warning for each state the caller set that the judge has undone (raised here, at
+        the caller's `run` or `step`, so that it points at the caller's code)."""
+        undone, self._undone = self._undone, []
+        for name, at, t in undone:
+            why = next(
+                (
+                    e.detail
+                    for e in self._events
+                    if abs(float(e.stamp) - t) < 1e-9 and e.detail and e.type not in ("command", "stage")
+                ),
+                "",
+            )
+            tip = (
+                "set the ball while it is in play, run the scene without a referee (judge.kind = 'none'), or "
+                "ask the referee to place it: sim.judge.place_ball(x, y)"
+                if name == "ball"
+                else "a referee parks the robots it sends off and keeps them there until they come back"
+            )
+            warnings.warn(
+                StateOverridden(
+                    f"the judge ({self.scene.spec.judge.kind}) moved {name!r} at t = {t:.3f} s, "
+                    f"{t - at:.3f} s after set_model_state({name!r}) set it" + (f" ({why})" if why else "") + f": {tip}"
+                ),
+                stacklevel=3,
+            )
 
     def set_link_state(self, name: str, **state: float) -> None:
         self.simulator.set_link_state(name, **state)

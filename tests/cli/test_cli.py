@@ -89,6 +89,12 @@ def test_a_match_summary_prints_the_event_log_it_is_asked_for():
     listed = [line for line in full.splitlines() if line.startswith("  ") and line.strip()[:1].isdigit()]
     assert len(listed) == len(every) > 10 and "earlier events" not in full
     assert listed[-1].split()[1] == "match_end" and "final score" in listed[-1]
+    # the result comes last, so that however long the event log, the final screen of a terminal shows it
+    lines = full.splitlines()
+    result = json.loads(run(*short, "--json").stdout)["result"]
+    assert lines[-len(result) - 1] == "result:"
+    assert [line.split(":")[0].strip() for line in lines[-len(result) :]] == list(result)
+    assert lines.index("result:") > lines.index(listed[-1])
     two = run(*short, "--events", "2").stdout
     assert f"({len(every) - 2} earlier events" in two
     assert len([line for line in two.splitlines() if line.strip()[:1].isdigit() and "  " in line[:4]]) == 2

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import json
+import os
 import re
 import subprocess
 import sys
@@ -22,14 +23,16 @@ def _start(*argv: str) -> subprocess.Popen:
     )
 
 
-def _urls(proc: subprocess.Popen, timeout: float = 60.0) -> dict[str, str]:
-    """The page addresses the command prints on stderr (read until the waiting line)."""
+def _urls(proc: subprocess.Popen, timeout: float = 60.0, lines: list | None = None) -> dict[str, str]:
+    """The page addresses the command prints on stderr (read until the waiting line; ``lines`` gets them all)."""
     urls: dict[str, str] = {}
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         line = proc.stderr.readline()
         if not line:
             break
+        if lines is not None:
+            lines.append(line.rstrip("\n"))
         m = URL.match(line.rstrip("\n"))
         if m:
             urls[m["label"]] = m["url"]
@@ -132,3 +135,63 @@ def test_serve_refuses_what_does_not_fit_a_scene_or_a_recording(argv, why):
     proc = _start(*argv, "--view-port", "0")
     out, err = _finish(proc, timeout=60)
     assert proc.returncode == 2 and why in err and "Traceback" not in err, err
+
+
+def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
+    """`--open` opens the referee console with Python's webbrowser, which runs $BROWSER here: a stand-in that
+    notes the address; the address then opens in real chromium as a user's browser would, and the run plays."""
+    noted = tmp_path / "opened.txt"
+    stand_in = tmp_path / "browser.sh"
+    stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
+    stand_in.chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["BROWSER"] = str(stand_in)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "1", "--view", "--open"]
+        + ["--view-port", "0", "--json", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    printed: list[str] = []
+    try:
+        urls = _urls(proc, lines=printed)
+        deadline = time.monotonic() + 30
+        while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert noted.read_text().split() == [urls["referee"]], "the referee console, once"
+        page = browser.new_page()
+        page.goto(noted.read_text().strip())
+        page.wait_for_function("window.simatch && window.simatch.frame && window.simatch.frame.status === 'ended'")
+        assert page.evaluate("window.simatch.hello.role") == "referee"
+        page.close()
+        out, err = _finish(proc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert json.loads(out)["sim_seconds"] == pytest.approx(1.0)
+    # the addresses stand out: a rule above and below, the console first
+    rules = [i for i, line in enumerate(printed) if line == "-" * 79]
+    assert len(rules) == 2 and printed[rules[0] - 1] == ""
+    block = printed[rules[0] + 1 : rules[1]]
+    assert block[2].split()[0] == "referee" and len(block) == 6 and "--open opens" not in " ".join(block)
+
+
+def test_open_without_a_browser_says_so_and_the_run_goes_on():
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "BROWSER")}
+    proc = subprocess.run(
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "0.2", "--view", "--open"]
+        + ["--view-port", "0", "--view-wait", "0", "--json"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "no graphical browser here" in proc.stderr and "/referee?token=" in proc.stderr
+    bad = subprocess.run(
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--open"], capture_output=True, text=True, timeout=60
+    )
+    assert bad.returncode == 2 and "it goes with --view" in bad.stderr

@@ -12,6 +12,7 @@ BENCHMARKS: dict[str, str] = {
     "physics": "simatch.bench.physics:run",
     "match": "simatch.bench.match:run",
     "record": "simatch.bench.record:run",
+    "export": "simatch.bench.export:run",
     "referee": "simatch.bench.referee:run",
     "web": "simatch.bench.web:run",
     "encirclement": "simatch.bench.encirclement:run",

@@ -23,6 +23,7 @@ import argparse
 import json
 import queue
 import sys
+import textwrap
 import threading
 from collections.abc import Callable
 from typing import TextIO
@@ -33,7 +34,7 @@ from ..config.loader import load_scene
 from ..config.schema import JudgeSpec
 from ..msgs import game_commands as commands
 from . import UsageError
-from .run import overrides_of, print_summary
+from .run import SCENE_HELP, overrides_of, print_summary
 
 HELP = """\
 commands (one per line; '#' starts a comment):
@@ -48,6 +49,18 @@ referee mode (--referee) also:
   [TEAM] COMMAND ... [at X Y]  the command, with the restart spot (world frame)
   pause | resume | ball X Y | auto on|off | goal TEAM
   yellow TEAM/ID | red TEAM/ID | off TEAM/ID [SECONDS] | back TEAM/ID"""
+
+
+#: ``simatch coach --help`` (plain text for a terminal: the module's docstring is for the docs)
+DESCRIPTION = textwrap.fill(
+    "A console that runs SCENE in this process and takes game commands typed (or piped), one per line. "
+    "By default each team has a coach and no referee judges (--team T: coach team T only); with --referee the "
+    "scene's referee judges and the console is its operator. From a terminal the run goes on at real time "
+    "(--pace) and each line applies when typed; from a pipe or --script FILE the lines apply in order and "
+    "'run S' advances S simulated seconds, so a script gives the same run every time. Type 'help' at the "
+    "prompt for the commands.",
+    width=79,
+)
 
 
 class ConsoleError(ValueError):
@@ -209,11 +222,11 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "coach",
         help="a command-line coach (or referee operator) for a run in this process",
-        description=__doc__.split("\n\n")[0] + " " + "Type 'help' at the prompt for the commands.",
+        description=DESCRIPTION,
         epilog=HELP,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scene", help="a shipped scene name or a path to a .toml file")
+    p.add_argument("scene", metavar="SCENE", help=SCENE_HELP)
     p.add_argument(
         "--team",
         action="append",

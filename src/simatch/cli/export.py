@@ -50,8 +50,9 @@ def main(args) -> int:
     for text in rec.problems:
         print(f"simatch: warning: {text}", file=sys.stderr)
     print(f"wrote {len(counts)} tables to {folder}/ (and metadata.json):")
+    width = max((len(name) for name in counts), default=0) + len(args.format) + 1
     for name, rows in sorted(counts.items()):
-        print(f"  {name}.{args.format:8s} {rows} rows")
+        print(f"  {f'{name}.{args.format}':{width}s} {rows:>9} rows")
     return 0
 
 

@@ -167,8 +167,10 @@ def _info(rec, args) -> int:
     from ..record.reader import RecordingError
 
     meta = rec.metadata
-    counts = _recorded((rec.end or {}).get("messages"))
-    counts = counts if isinstance(counts, dict) else None
+    counts = rec.message_counts()  # the summary's: every channel, the 3D scene's too
+    if counts is None:
+        counts = _recorded((rec.end or {}).get("messages"))  # the simatch_end record's: bus topics only
+        counts = counts if isinstance(counts, dict) else None
     try:
         overrides = rec.overrides()
     except RecordingError as exc:

@@ -12,8 +12,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "robot",
         help="run one robot's nodes, connected to a server",
-        description="Run one robot's WorldModel + Control in this process, for the run a `simatch "
-        "server` holds. Its team's StrategyPub then runs on the server.",
+        description="Run one robot's WorldModel + Control in this process, for the run a 'simatch "
+        "server' holds. Its team's StrategyPub then runs on the server.",
     )
     p.add_argument("robot", help="the robot, TEAM/ID (e.g. cyan/2)")
     add_client_options(p)

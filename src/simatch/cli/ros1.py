@@ -16,7 +16,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "ros1",
         help="play a team of ROS 1 nodes (the original Simatch's interface) on a server",
-        description="Join the run a `simatch server` holds as TEAM's process, and bridge TEAM's robots to a ROS 1 "
+        description="Join the run a 'simatch server' holds as TEAM's process, and bridge TEAM's robots to a ROS 1 "
         "master with the original Simatch's topics, names, units and messages (nubot_common, gazebo_msgs): "
         "perception, game commands and /clock out, velcmd/actioncmd/strategy in. In lockstep the bridge waits "
         "for each robot's answer to every control tick. With --print-env, print the shell settings that let "
@@ -66,7 +66,7 @@ def add_parser(sub) -> None:
         help="do not relay <robot>/nubotcontrol/strategy to <prefix>/nubotcontrol/strategy (the team runs its own "
         "relay; the bridge also steps aside by itself when it sees one)",
     )
-    p.add_argument("--print-env", action="store_true", help="print `export` lines for a shell, and exit")
+    p.add_argument("--print-env", action="store_true", help="print 'export' lines for a shell, and exit")
     p.set_defaults(func=main)
 
 

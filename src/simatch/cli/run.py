@@ -28,8 +28,13 @@ EXTENSIONS: list[str] = [
 ]
 
 
-def add_run_options(p, with_extensions: bool = True) -> None:
-    p.add_argument("scene", help="a shipped scene name (see `simatch scenes`) or a path to a .toml file")
+SCENE_HELP = "a shipped scene name (see 'simatch scenes') or a path to a .toml scene file"
+
+
+def add_run_options(
+    p, with_extensions: bool = True, scene_help: str = SCENE_HELP, scene_metavar: str = "SCENE"
+) -> None:
+    p.add_argument("scene", metavar=scene_metavar, help=scene_help)
     p.add_argument(
         "--duration", type=float, metavar="S", help="simulated seconds to run (default: until the judge ends the run)"
     )
@@ -43,7 +48,7 @@ def add_run_options(p, with_extensions: bool = True) -> None:
         type=_event_count,
         default=30,
         metavar="N|all",
-        help="how many of the run's last events the summary prints (default 30; `all`: the whole "
+        help="how many of the run's last events the summary prints (default 30; 'all': the whole "
         "event log; --json always carries every event)",
     )
     for ext in extensions() if with_extensions else ():
@@ -165,16 +170,8 @@ def _readable(value: Any) -> Any:
 
 
 def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
-    """The run for people: what ran, how fast, the result, and the last ``limit`` events (None: all)."""
-    print(f"scene {out['scene']}  seed {out['seed']}", file=file)
-    rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
-    print(
-        f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})", file=file
-    )
-    print(f"state digest {out['state_digest']}", file=file)
-    print("result:", file=file)
-    for key, value in out["result"].items():
-        print(f"  {key}: {json.dumps(_readable(value))}", file=file)
+    """The run for people: the last ``limit`` events (None: all), then what ran, how fast and the result — last,
+    so that the final screen of a terminal shows the result however long the event log is."""
     events = out["events"]
     shown = events if limit is None else events[max(0, len(events) - limit) :]
     print(f"events: {len(events)}", file=file)
@@ -187,6 +184,15 @@ def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
     for ev in shown:
         rest = {k: v for k, v in ev.items() if k not in ("t", "type")}
         print(f"  {ev['t']:9.3f}  {ev['type']:22s} {json.dumps(_readable(rest)) if rest else ''}", file=file)
+    print(f"scene {out['scene']}  seed {out['seed']}", file=file)
+    rtf = f"{out['rtf']:.1f}" if out["rtf"] else "-"
+    print(
+        f"simulated {out['sim_seconds']:.2f} s in {out['wall_seconds']:.2f} s wall (real-time factor {rtf})", file=file
+    )
+    print(f"state digest {out['state_digest']}", file=file)
+    print("result:", file=file)
+    for key, value in out["result"].items():
+        print(f"  {key}: {json.dumps(_readable(value))}", file=file)
 
 
 def main(args) -> int:

@@ -38,7 +38,13 @@ def add_parser(sub) -> None:
         "otherwise. Given a recording (FILE.mcap), show it: it plays on the bus for "
         "the live pages and the replay page goes through all of it.",
     )
-    add_run_options(p, with_extensions=False)
+    add_run_options(
+        p,
+        with_extensions=False,
+        scene_metavar="SCENE|FILE.mcap",
+        scene_help="a shipped scene name (see 'simatch scenes'), a path to a .toml scene file, or a recording "
+        "(FILE.mcap, made by 'simatch run SCENE --record FILE.mcap') to show",
+    )
     add_view_options(p.add_argument_group("web UI"), default_wait=None)
     rec = p.add_argument_group("a recording (SCENE is a FILE.mcap)")
     rec.add_argument(
@@ -77,11 +83,11 @@ def main(args) -> int:
 
 def serve_scene(args) -> int:
     from ..simulation import Simulation
-    from ..web.view import print_urls, start_view
+    from ..web.view import announce, start_view
 
     scene = load_scene(args.scene, overrides_of(args))
     with Simulation(scene, seed=args.seed) as sim, start_view(sim, args.view_host, args.view_port) as view:
-        print_urls(view)
+        announce(view, args)
         end = args.duration if args.duration is not None else sim.duration
         anchor = None  # (wall, sim time) since the run has been watched without a break
         try:
@@ -117,7 +123,7 @@ def serve_recording(args) -> int:
     """What ``simatch replay FILE --view`` does, with serve's options."""
     from ..record.player import Player
     from ..record.reader import Recording, RecordingError
-    from ..web.view import linger, print_urls, start_recording_view, wait_for_page
+    from ..web.view import announce, linger, start_recording_view, wait_for_page
 
     given = [
         name
@@ -144,7 +150,7 @@ def serve_recording(args) -> int:
     if start > player.duration:
         raise UsageError(f"--from {start}: the recording ends at {player.duration:.3f} s")
     with start_recording_view(player, args.view_host, args.view_port) as view:
-        print_urls(view)
+        announce(view, args, first="replay")
         try:
             wait_for_page(view, args.view_wait, any_page=True)
             player.play()

@@ -33,9 +33,9 @@ def add_parser(sub) -> None:
         help="run the simulator and judge; teams connect over the network",
         description="Run a scene's simulator, judge and coaches, and wait for the teams (simatch team / simatch "
         "robot) to connect. Lockstep by default: every control tick waits for every connected robot's "
-        "command (up to --deadline), so the run equals `simatch run` bit for bit; --realtime paces it "
+        "command (up to --deadline), so the run equals 'simatch run' bit for bit; --realtime paces it "
         "at wall-clock speed, each process's robots sensing and deciding at their own physics step of "
-        "the control period. Prints what `simatch run` prints.",
+        "the control period. Prints what 'simatch run' prints.",
     )
     add_run_options(p)
     p.add_argument(

@@ -43,7 +43,7 @@ def add_parser(sub) -> None:
         "team",
         help="run one team's robots, connected to a server",
         description="Run every robot node (WorldModel + Control) of TEAM and its StrategyPub in this "
-        "process, for the run a `simatch server` holds. The scene comes from the server; "
+        "process, for the run a 'simatch server' holds. The scene comes from the server; "
         "the strategy from the scene or --strategy.",
     )
     p.add_argument("team", help="the team to play, e.g. cyan")

@@ -52,7 +52,7 @@ def add_parser(sub) -> None:
         "--address",
         metavar="ADDR",
         help="an existing Ray cluster (host:port); default: a local Ray instance on every core (or the cluster of "
-        "`ray job submit`, RAY_ADDRESS)",
+        "'ray job submit', RAY_ADDRESS)",
     )
     p.add_argument("--workers", type=int, metavar="N", help="matches at once (default: every CPU of the cluster)")
     p.add_argument("--no-ray", action="store_true", help="play the matches one by one in this process, without Ray")

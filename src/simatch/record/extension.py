@@ -22,7 +22,7 @@ class RecordExtension:
             "--record",
             metavar="FILE.mcap|DIR/",
             help="record every topic of the run, the 3D scene and the metadata needed to reproduce "
-            "it into one MCAP file (rosbag2-compatible; see `simatch replay`, `simatch export`); "
+            "it into one MCAP file (rosbag2-compatible; see 'simatch replay', 'simatch export'); "
             "DIR/ (a trailing slash): a rosbag2 folder, DIR/DIR_0.mcap and its metadata.yaml",
         )
         group.add_argument(

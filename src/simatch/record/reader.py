@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mcap.exceptions import McapError
-from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
+from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema, Statistics
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from .. import msgs
@@ -64,6 +64,7 @@ class Recording:
         self.channels: dict[int, ChannelInfo] = {}
         self.chunks: list[ChunkInfo] = []
         self.finalised = False
+        self.statistics: Statistics | None = None  # the summary's counts (a finalised file)
         self.problems: list[str] = []
         self._schemas: dict[int, tuple[str, bytes]] = {}
         self._checked: dict[str, bool] = {}
@@ -126,6 +127,8 @@ class Recording:
                     self.metadata = dict(record.metadata)
                 elif record.name == layout.META_END:
                     self.end = dict(record.metadata)
+            elif isinstance(record, Statistics):
+                self.statistics = record
             elif isinstance(record, Footer):
                 self.finalised = True
         status = (self.end or {}).get("status", "")
@@ -206,6 +209,14 @@ class Recording:
     def topics(self) -> dict[str, str]:
         """Recorded bus topic -> message type."""
         return {c.topic: c.schema for c in self.channels.values()}
+
+    def message_counts(self) -> dict[str, int] | None:
+        """Messages per recorded topic, every channel's (the 3D scene's too), from the file's summary; None for a
+        file that was not finalised (it has no summary)."""
+        if self.statistics is None:
+            return None
+        counts = self.statistics.channel_message_counts
+        return {c.topic: counts.get(cid, 0) for cid, c in self.channels.items()}
 
     def overrides(self) -> dict:
         try:

@@ -61,6 +61,63 @@ def action_name(value: int) -> str:
         return f"ACTION_{value}"
 
 
+#: what each role means, in words a coach reads on the page (`role_words`)
+ROLE_WORDS = {
+    Role.GOALIE: "goalkeeper",
+    Role.ACTIVE: "on the ball",
+    Role.PASSIVE: "defend",
+    Role.MIDFIELD: "midfield",
+    Role.ASSISTANT: "offer a pass",
+    Role.ACIDPASSIVE: "second defender",
+    Role.GAZER: "watch the ball",
+    Role.BLOCK: "block",
+    Role.NOROLE: "no role",
+    Role.CATCHOFPASS: "catch the pass",
+    Role.PASSOFPASS: "just passed",
+}
+#: what each action means, in words (`action_words`)
+ACTION_WORDS = {
+    Action.STUCKED: "stuck",
+    Action.PENALTY: "penalty",
+    Action.CAN_NOT_SEE_BALL: "look for the ball",
+    Action.SEE_NOT_DRIBBLE_BALL: "sees the ball",
+    Action.TURN_FOR_SHOOT: "turn to shoot",
+    Action.TURN_FOR_SHOOT_ROBOT: "turn to shoot",
+    Action.AT_SHOOT_SITUATION: "shoot",
+    Action.TURN_TO_PASS: "turn to pass",
+    Action.TURN_TO_PASS_ROBOT: "turn to pass",
+    Action.STATIC_PASS: "set-piece pass",
+    Action.AVOID_OBS: "avoid an obstacle",
+    Action.CATCH_POSITIONED: "wait for the pass",
+    Action.POSITIONED: "in position",
+    Action.POSITIONED_STATIC: "in set-piece position",
+    Action.KICK_COOP: "pass",
+    Action.KICK_COOP_TURN: "turn to pass",
+    Action.CATCH_BALL: "take the ball",
+    Action.CATCH_BALL_SLOW: "take the ball gently",
+    Action.CIRCLE_TEST: "circle test",
+    Action.MOVE_WITH_BALL: "dribble",
+    Action.TELEOP_JOY: "driven by hand",
+    Action.NO_ACTION: "",
+}
+
+
+def role_words(value: int) -> str:
+    """The role in words ("catch the pass"); a strategy's own number as "role 42"."""
+    try:
+        return ROLE_WORDS[Role(value)]
+    except ValueError:
+        return f"role {value}"
+
+
+def action_words(value: int) -> str:
+    """The action in words ("take the ball"; "" for none); a strategy's own number as "action 42"."""
+    try:
+        return ACTION_WORDS[Action(value)]
+    except ValueError:
+        return f"action {value}"
+
+
 def members(enum_cls: type[enum.Enum]) -> types.SimpleNamespace:
     """The members of an Enum class as plain attributes (``members(Role).ACTIVE is Role.ACTIVE``), for code
     that runs for every robot and tick: on Python 3.11 every attribute lookup on an Enum class takes the

@@ -19,7 +19,7 @@ import math
 from .. import frames
 from ..msgs.game_commands import name as command_name
 from ..robots import model_class
-from ..strategy.roles import action_name, role_name
+from ..strategy.roles import action_words, role_words
 from .observer import RunObserver
 
 
@@ -178,7 +178,7 @@ class Picture:
                     }
             if intent is not None:
                 entry.update(
-                    role=role_name(intent.role), action=action_name(intent.action), dribble=bool(intent.is_dribble)
+                    role=role_words(intent.role), action=action_words(intent.action), dribble=bool(intent.is_dribble)
                 )
                 tx, ty = float(intent.target_x), float(intent.target_y)
                 if math.isfinite(tx) and math.isfinite(ty):

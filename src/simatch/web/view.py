@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
+import threading
+import webbrowser
 
 from .hosting import Hosted
 from .live import LiveView
@@ -50,6 +53,12 @@ def add_view_options(group, default_wait: float | None = None) -> None:
         metavar="S",
         help="wait at most S seconds for a page to open before the run starts (default: until one opens)",
     )
+    group.add_argument(
+        "--open",
+        dest="open_page",
+        action="store_true",
+        help="open the referee console (for a recording: the replay page) in this machine's web browser",
+    )
 
 
 def _started(make) -> Hosted:
@@ -75,11 +84,59 @@ def start_recording_view(player, host: str, port: int):
     return _started(lambda: RecordingView(player, host=host, port=port))
 
 
-def print_urls(view: Hosted, file=sys.stderr) -> None:
-    print("simatch: web UI (each address carries that page's token; keep them to yourself):", file=file)
-    for label, url in view.urls.items():
-        print(f"  {label:14s} {url}", file=file)
+def print_urls(view: Hosted, file=sys.stderr, first: str = "referee", opened: bool = False) -> None:
+    """The pages' addresses, set apart from what comes before and after (a progress bar, the summary), the page
+    to open first at the top."""
+    urls = view.urls
+    order = [first] + [label for label in urls if label != first] if first in urls else list(urls)
+    rule = "-" * 79
+    print(f"\n{rule}", file=file)
+    print(f"simatch: web UI: open the {_page_name(first)} in a browser to watch", file=file)
+    print("(each address carries its page's token: keep them to yourself)", file=file)
+    for label in order:
+        print(f"  {label:14s} {urls[label]}", file=file)
+    if not opened:
+        print(f"  (--open opens the {_page_name(first)} in this machine's browser)", file=file)
+    print(rule, file=file)
     file.flush()
+
+
+def _page_name(label: str) -> str:
+    return {"referee": "referee console", "replay": "replay page"}.get(label, f"{label} page")
+
+
+def open_in_browser(url: str, file=sys.stderr) -> bool:
+    """Open ``url`` in the user's web browser (Python's `webbrowser`, which honours $BROWSER), in a thread of its
+    own: a browser command that runs until the browser is closed must not hold the run up. Where there is no
+    graphical browser (no display, no $BROWSER) nothing is started (a text browser would take over this
+    terminal): the address printed above is the way in."""
+    graphical = (
+        os.environ.get("BROWSER")
+        or sys.platform in ("darwin", "win32")
+        or os.environ.get("DISPLAY")
+        or os.environ.get("WAYLAND_DISPLAY")
+    )
+    if not graphical:
+        print("simatch: --open: no graphical browser here (no display, no $BROWSER): open the address above", file=file)
+        return False
+
+    def opening() -> None:
+        try:
+            if not webbrowser.open(url, new=2):
+                print("simatch: --open: no browser could be started: open the address above", file=file)
+        except webbrowser.Error as exc:
+            print(f"simatch: --open: {exc}: open the address above", file=file)
+
+    threading.Thread(target=opening, name="simatch-open-browser", daemon=True).start()
+    return True
+
+
+def announce(view: Hosted, args, first: str = "referee") -> None:
+    """Print the addresses and, with --open, open the first page in the browser."""
+    opened = bool(getattr(args, "open_page", False))
+    print_urls(view, first=first, opened=opened)
+    if opened:
+        open_in_browser(view.urls[first])
 
 
 def wait_for_page(view: Hosted, wait: float | None, any_page: bool = False) -> None:
@@ -105,6 +162,7 @@ class _ViewOption:
     help = ""
     what = "the run"  # what has ended, in the last message
     any_page = False  # whether a replay page alone is a viewer to wait for
+    first = "referee"  # the page to open first
 
     def add_arguments(self, parser) -> None:
         group = parser.add_argument_group(self.group)
@@ -117,10 +175,14 @@ class _ViewOption:
     @contextlib.contextmanager
     def attach(self, target, args):
         if not getattr(args, "view", False):
+            if getattr(args, "open_page", False):
+                from ..errors import UsageError
+
+                raise UsageError("--open opens a page of the web UI: it goes with --view")
             yield None
             return
         with self.start(target, args) as view:
-            print_urls(view)
+            announce(view, args, first=self.first)
             wait_for_page(view, args.view_wait, any_page=self.any_page)
             yield view
             linger(view, self.what)
@@ -148,6 +210,7 @@ class ReplayViewExtension(_ViewOption):
     )
     what = "the playback"
     any_page = True
+    first = "replay"
 
     def start(self, player, args) -> Hosted:
         return start_recording_view(player, args.view_host, args.view_port)

@@ -26,10 +26,11 @@ from .msl_field import SOCCER_KEYS
 class Arena(World):
     name = "arena"
     foreign_keys = SOCCER_KEYS
+    own_defaults = {"margin": 0.0}  # the walls at the edge of the floor
 
     def geometry(self) -> FieldGeometry:
         s = self.spec
-        margin = s.margin if "margin" in s.model_fields_set else 0.0
+        margin = s.margin if "margin" in s.model_fields_set else self.own_defaults["margin"]
         floor = FieldGeometry(
             length=s.length,
             width=s.width,

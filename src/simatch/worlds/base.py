@@ -40,6 +40,8 @@ class World:
     Params: ClassVar[type[BaseModel]] = NoParams
     #: ``[world]`` keys this kind does not understand (they belong to another kind): setting one is a mistake
     foreign_keys: ClassVar[tuple[str, ...]] = ()
+    #: ``[world]`` keys whose value, when the scene does not set them, is this kind's own, not the schema's
+    own_defaults: ClassVar[dict[str, Any]] = {}
 
     def __init__(self, spec, params: Any):
         self.spec = spec

@@ -1,5 +1,8 @@
 // The coach machine of one team (paper section V-A): command area, display area, status area.
-import { EventLog, FieldView, attackArrow, clock, gameClock, fmt, setPieceButtons, startPage, teamColor, toast } from "/static/simatch.js";
+import {
+  EventLog, FieldView, attackArrow, clock, gameClock, fmt, opponentColor, setPieceButtons, startPage, teamColor, toast,
+  withAlpha,
+} from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, test: { mode: "move", point: null } };
@@ -27,6 +30,7 @@ startPage(page, {
     $("cmdnote").textContent = page.commands ? "" : !h.capabilities ? "a recording: this page watches, nothing can be commanded"
       : h.capabilities.referee ? "the referee gives the commands in this run: this page watches"
       : "the judge gives the commands in this run: this page watches";
+    legend(h);
     runStatus(h.status);
   },
   render,
@@ -34,6 +38,28 @@ startPage(page, {
 });
 
 const send = page.send;
+
+// What the colours on the field mean: this team's robots as they perceive themselves, the opponents as they
+// perceive them, the ball (seen by the robot nearest to it), pass lines.
+function legend(h) {
+  const key = (swatch, text) => {
+    const k = document.createElement("span");
+    k.className = "key";
+    const s = document.createElement("span");
+    s.className = "swatch" + (swatch.line ? " line" : "");
+    Object.assign(s.style, swatch.style);
+    k.append(s, text);
+    return k;
+  };
+  const ours = teamColor(h, h.team), theirs = opponentColor(h);
+  const others = h.teams.filter((t) => t.name !== h.team).map((t) => t.name).join(", ") || "other robots";
+  $("legend").replaceChildren(
+    key({ style: { background: ours, borderColor: "#0b0f12" } }, `${h.team} (ours)`),
+    key({ style: { background: withAlpha(theirs, 0.35), borderColor: theirs } }, `${others} as ${h.team} sees them`),
+    key({ style: { background: "#ff9800", borderColor: "#3e2723" } }, "ball"),
+    key({ line: true, style: { borderColor: "#ffeb3b" } }, "pass"),
+  );
+}
 function command(cmd) { return send({ type: "command", cmd }); }
 
 // --- command area ----------------------------------------------------------------------------------

@@ -44,6 +44,7 @@ export class Connection {
       el.classList.toggle("up", state === "up");
       el.textContent = { up: "live", down: "reconnecting…", refused: "refused" }[state] || state;
     }
+    if (state === "refused") refuse();
     if (this.handlers.onStatus) this.handlers.onStatus(state, detail);
   }
 
@@ -74,6 +75,15 @@ export class Connection {
   }
 }
 
+// A page the server refused (a wrong or missing token) can do nothing: every control says so.
+function refuse() {
+  document.body.classList.add("refused");
+  document.querySelectorAll("button, input, select").forEach((el) => {
+    el.disabled = true;
+    el.title = "this page was refused: open an address printed on the console";
+  });
+}
+
 let toastTimer = null;
 export function toast(text, ok = false) {
   const el = document.getElementById("toast");
@@ -89,10 +99,12 @@ export function fmt(v, digits = 2) {
   return v === null || v === undefined || Number.isNaN(v) ? "–" : Number(v).toFixed(digits);
 }
 
+// m:ss.s — rounded to the tenth first, then split, so that 119.97 s reads 2:00.0 (never 1:60.0)
 export function clock(t) {
-  if (t === null || t === undefined) return "–";
-  const m = Math.floor(t / 60), s = t - 60 * m;
-  return `${m}:${s.toFixed(1).padStart(4, "0")}`;
+  if (t === null || t === undefined || !Number.isFinite(t)) return "–";
+  const tenths = Math.round(Math.abs(t) * 10);
+  const m = Math.floor(tenths / 600), s = (tenths - 600 * m) / 10;
+  return `${t < 0 && tenths ? "-" : ""}${m}:${s.toFixed(1).padStart(4, "0")}`;
 }
 
 // The match clock at frame time t: the referee publishes its game state on every change and once a second;
@@ -119,6 +131,19 @@ export function teamColor(hello, team) {
   const t = hello.teams.find((x) => x.name === team);
   const c = t ? t.color : team;
   return TEAM_COLORS[c] || c;
+}
+
+// The colour of the robots a team's perception reports as obstacles: the other team's (grey where there are
+// several other teams, or none).
+export function opponentColor(hello) {
+  const others = hello.teams.filter((t) => t.name !== hello.team);
+  return others.length === 1 ? teamColor(hello, others[0].name) : "#b0bec5";
+}
+
+// "#rrggbb" (or a name the page knows) with an alpha, for translucent fills
+export function withAlpha(color, alpha) {
+  const m = /^#([0-9a-f]{2})([0-9a-f]{2})([0-9a-f]{2})$/i.exec(color);
+  return m ? `rgba(${parseInt(m[1], 16)},${parseInt(m[2], 16)},${parseInt(m[3], 16)},${alpha})` : color;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -328,9 +353,17 @@ export class FieldView {
 
   drawFrame(fr) {
     const c = this.ctx;
-    // obstacles seen by the chosen robot(s) (coach pages)
+    this.labels = [];  // where this frame's text went (screen rectangles), so that none covers the ball
+    const b = this.dragBall ? { x: this.dragBall[0], y: this.dragBall[1] } : fr.ball;
+    if (b) {
+      const [bx, by] = this.toScreen(b.x, b.y);
+      this.ballSpot = { x: bx, y: by, r: Math.max(3.5, this.hello.ball_radius * this.scale) + 4 };
+    } else this.ballSpot = null;
+    // obstacles seen by the chosen robot(s) (coach pages): the opponents as this team perceives them, drawn
+    // translucent in their team's colour
     if (fr.obstacles && this.options.obstacles !== "none") {
-      c.strokeStyle = "#90caf9"; c.lineWidth = 1.5; c.fillStyle = "rgba(33,150,243,0.18)";
+      const color = opponentColor(this.hello);
+      c.strokeStyle = color; c.lineWidth = 1.5; c.fillStyle = withAlpha(color, 0.35);
       for (const [rid, list] of Object.entries(fr.obstacles)) {
         if (this.options.obstacles !== "all" && String(this.options.obstacles) !== rid) continue;
         for (const [x, y, r] of list) {
@@ -404,14 +437,39 @@ export class FieldView {
     // heading: from the centre to the kicker
     c.beginPath(); c.moveTo(sx, sy); c.lineTo(sx + rad * Math.cos(yaw), sy - rad * Math.sin(yaw));
     c.lineWidth = 3; c.strokeStyle = "#0b0f12"; c.stroke();
-    // id and role beside the robot
-    c.font = "bold 13px system-ui"; c.fillStyle = "#fff"; c.textBaseline = "bottom";
-    c.fillText(String(r.id), sx + rad * 0.8, sy - rad * 0.8);
-    c.textBaseline = "top"; c.font = "10px system-ui";
-    const label = sentOff ? "OFF" : (r.role || "");
-    if (label) { c.fillStyle = "rgba(255,255,255,0.85)"; c.fillText(label, sx - c.measureText(label).width / 2, sy + rad + 2); }
+    // id and role beside the robot, wherever they do not cover the ball
+    const id = String(r.id), label = sentOff ? "OFF" : (r.role || "");
+    this.label(id, "bold 13px system-ui", "#fff",
+               [[sx + rad * 0.8, sy - rad * 0.8 - 13], [sx - rad * 0.8 - 9, sy - rad * 0.8 - 13],
+                [sx + rad * 0.8, sy + rad * 0.8], [sx - rad * 0.8 - 9, sy + rad * 0.8]]);
+    if (label) {
+      c.font = "11px system-ui";
+      const w = c.measureText(label).width;
+      this.label(label, "11px system-ui", "rgba(255,255,255,0.9)",
+                 [[sx - w / 2, sy + rad + 2], [sx - w / 2, sy - rad - 27], [sx + rad + 4, sy - 6], [sx - rad - 4 - w, sy - 6]]);
+    }
     if (r.holding || r.dribble) { c.beginPath(); c.arc(sx, sy, rad + 3, 0, 2 * Math.PI); c.strokeStyle = "#ffeb3b"; c.lineWidth = 1.5; c.stroke(); }
-    if (r.stuck) { c.fillStyle = "#fb8c00"; c.fillText("stuck", sx - 12, sy - rad - 14); }
+    if (r.stuck) this.label("stuck", "11px system-ui", "#fb8c00", [[sx - 12, sy - rad - 14], [sx - 12, sy + rad + 14]]);
+  }
+
+  // Text at the first of `spots` (top-left corners) whose box keeps clear of the ball, with a dark halo so
+  // that it reads on the field.
+  label(text, font, color, spots) {
+    const c = this.ctx;
+    c.font = font;
+    const w = c.measureText(text).width, h = parseInt(font.match(/(\d+)px/)[1], 10) + 1;
+    const clear = ([x, y]) => {
+      const s = this.ballSpot;
+      if (!s) return true;
+      const nx = Math.max(x, Math.min(s.x, x + w)), ny = Math.max(y, Math.min(s.y, y + h));
+      return Math.hypot(s.x - nx, s.y - ny) > s.r;
+    };
+    const [x, y] = spots.find(clear) || spots[0];
+    c.textBaseline = "top";
+    c.lineJoin = "round"; c.lineWidth = 3; c.strokeStyle = "rgba(0,0,0,0.55)";
+    c.strokeText(text, x, y);
+    c.fillStyle = color; c.fillText(text, x, y);
+    this.labels.push({ text, x, y, w, h });
   }
 
   ball(b) {

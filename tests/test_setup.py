@@ -1,0 +1,97 @@
+"""The two set-ups of the README's quick start: `make run` installs what running needs, `make test` adds the
+test extras. Checked on the Makefile's own commands (``make -n``) and on the code: nothing under src/ imports
+a distribution that only the test extras bring, so a run set-up runs every command."""
+
+from __future__ import annotations
+
+import ast
+import re
+import subprocess
+import tomllib
+from importlib import metadata
+from pathlib import Path
+
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+
+ROOT = Path(__file__).resolve().parents[1]
+PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+
+
+def _make(target: str, tmp_path) -> list[str]:
+    """The commands ``make TARGET`` runs on a machine with nothing set up (a .venv of its own in tmp_path)."""
+    out = subprocess.run(
+        ["make", "-n", "-B", target, f"VENV={tmp_path / 'venv'}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    ).stdout
+    return [line for line in out.splitlines() if " install " in line and "pip" in line]
+
+
+def test_make_run_installs_the_project_without_extras(tmp_path):
+    installs = _make("run", tmp_path)
+    project = [line for line in installs if "-e" in line.split()]
+    assert len(project) == 1 and project[0].split()[-1] == ".", installs
+    assert not any("[" in line for line in installs), f"the run set-up installs extras: {installs}"
+
+
+def test_make_test_adds_the_test_extras_named_in_one_place(tmp_path):
+    extras = re.search(r"^TEST_EXTRAS\s*:=\s*(\S+)\s*$", (ROOT / "Makefile").read_text(), re.M).group(1).split(",")
+    assert "test" in extras and set(extras) <= set(PROJECT["optional-dependencies"])
+    installs = _make("test", tmp_path)
+    assert installs[: len(_make("run", tmp_path))] == _make("run", tmp_path), "the test set-up builds on the run one"
+    assert installs[-1].endswith(f"-e '.[{','.join(extras)}]'"), installs
+
+
+def _names(requirements: list[str]) -> set[str]:
+    return {canonicalize_name(Requirement(r).name) for r in requirements}
+
+
+def _closure(names: set[str]) -> set[str]:
+    """The distributions ``names`` need, with what they need, as installed (extras not asked for left out)."""
+    seen: set[str] = set()
+    todo = list(names)
+    while todo:
+        name = canonicalize_name(todo.pop())
+        if name in seen:
+            continue
+        seen.add(name)
+        try:
+            requires = metadata.requires(name) or []
+        except metadata.PackageNotFoundError:
+            continue
+        for text in requires:
+            req = Requirement(text)
+            if req.marker is None or req.marker.evaluate({"extra": ""}):
+                todo.append(req.name)
+    return seen
+
+
+def test_the_code_imports_nothing_that_only_the_test_extras_bring():
+    optional = PROJECT["optional-dependencies"]
+    allowed = _closure(_names(PROJECT["dependencies"]))
+    for extra, reqs in optional.items():
+        if extra != "test":
+            allowed |= _closure(_names(reqs))  # a feature's own extra (imported where that feature is used)
+    test_only = _closure(_names(optional["test"])) - allowed
+    assert {"playwright", "pytest"} <= test_only
+    owners = metadata.packages_distributions()
+    wrong = []
+    for path in sorted((ROOT / "src" / "simatch").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                modules = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                modules = [node.module]
+            else:
+                continue
+            for module in modules:
+                dists = {canonicalize_name(d) for d in owners.get(module.split(".")[0], ())}
+                if dists and dists <= test_only:
+                    wrong.append(
+                        f"{path.relative_to(ROOT)}:{node.lineno} imports {module} ({', '.join(sorted(dists))})"
+                    )
+    assert not wrong, "only the test extras install these:\n" + "\n".join(wrong)
