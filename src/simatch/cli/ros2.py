@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "ros2",
         help="put a run on the ROS 2 graph (cmd_vel in; odom, /clock, /tf, markers out)",
-        description="Join a run held by `simatch server` as a bridge to ROS 2 (rclpy, in this process "
+        description="Join a run held by 'simatch server' as a bridge to ROS 2 (rclpy, in this process "
         "only): with --team (and --robot) it drives those robots from ROS topics "
         "(/<team>/robot<id>/cmd_vel, dribble, kick) and publishes their perception "
         "(odom, ball, obstacles); with the organiser's credential it also publishes the "
@@ -150,7 +150,7 @@ def main(args) -> int:
     if interfaces.missing():
         print(
             "simatch ros2: simatch_msgs/tf2_msgs are not built here: their topics (omni_vision, coach, "
-            "game_state, /tf, ...) are off; `simatch ros2 --build-interfaces` builds them once",
+            "game_state, /tf, ...) are off; 'simatch ros2 --build-interfaces' builds them once",
             flush=True,
         )
     bridge = Bridge(

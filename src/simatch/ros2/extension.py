@@ -156,7 +156,7 @@ class Ros2Extension:
         group.add_argument(
             "--ros2",
             action="store_true",
-            help="put the run on the ROS 2 graph: a `simatch ros2` observer in its own process publishes "
+            help="put the run on the ROS 2 graph: a 'simatch ros2' observer in its own process publishes "
             "/clock, /tf, markers, model states, game state and commands (needs the ros2 extra; see docs/ros.md)",
         )
         group.add_argument(
