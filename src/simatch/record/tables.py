@@ -321,7 +321,8 @@ class Exporter:
 
     def _run(self) -> dict[str, int]:
         types = self.rec.topics()
-        wanted = [t for t, ty in types.items() if ty in msgs.typestore.fielddefs]
+        # simatch's own types (the tables are named after them); ROS 2's /clock repeats /simatch/clock
+        wanted = [t for t, ty in types.items() if ty.startswith("simatch_msgs/") and ty in msgs.typestore.fielddefs]
         route: dict[str, tuple[list, int, str, str]] = {}  # topic -> (its table's pending batch, its size, ...)
         for topic, t_ns, msg in self.rec.messages(topics=wanted):
             found = route.get(topic)
