@@ -46,7 +46,7 @@ def test_omni_vision_is_the_robots_perception_in_simatchs_type(handled):
     vision = h["vision"]
     assert vision and {v[1] for v in vision} == {2}
     assert all(v[4] == 5 and v[5] == 9 for v in vision)  # its team, self included; every other robot
-    before = [v[3] for v in vision if v[0] < h["placed_at"] and v[2] == 1]
+    before = [v[3] for v in vision[: h["vision_before_placing"]] if v[2] == 1]  # the ball on the centre mark
     held = [v[3] for v in vision if h["held_at"] <= v[0] <= h["kick_at"]]
     assert before and held and min(before) > 3.0 and max(held) < 0.5, (before[-3:], held[:3])
 

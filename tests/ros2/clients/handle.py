@@ -82,12 +82,16 @@ def main() -> None:
         pub_vel.publish(t)
         pub_action.publish(ActionCmd(dribble=dribble, kick_speed=kick, kick_type=ActionCmd.KICK_GROUND))
 
-    ok = spin_until(lambda: truth and seen["modes"] and seen["modes"][-1] == CoachInfo.STARTROBOT, 120)
+    # the game on, and this client hearing the robot's pose and its perception of the ball before it moves the ball
+    # (on a busy machine the sensor topics' first samples come a while after the latched coach's)
+    seen_ball = lambda: any(v[2] == 1 for v in seen["vision"])  # noqa: E731
+    ok = spin_until(lambda: truth and seen_ball() and seen["modes"] and seen["modes"][-1] == CoachInfo.STARTROBOT, 120)
     ok = ok and spin_until(lambda: pub_place.get_subscription_count() > 0, 30)
     if ok:
         x, y, yaw = truth[-1]
         pub_place.publish(ModelState(name="ball", x=x + 0.5 * math.cos(yaw), y=y + 0.5 * math.sin(yaw), z=0.11))
         seen["placed_at"] = now[0]
+        seen["vision_before_placing"] = len(seen["vision"])  # what the robot had perceived when the ball was moved
         holding = lambda: any(h for t, h in seen["holding"][-3:]) and seen["holding"][-1][1]  # noqa: E731
         seen["held_at"] = now[0] if spin_until(holding, 30, lambda: command(0.4, True)) else None
         if seen["held_at"] is not None:
