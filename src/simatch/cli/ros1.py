@@ -7,9 +7,8 @@ from __future__ import annotations
 import os
 import sys
 
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from . import UsageError
-from .server import add_network_options
+from .server import add_join_options
 
 
 def add_parser(sub) -> None:
@@ -23,13 +22,7 @@ def add_parser(sub) -> None:
         "ROS tools (rosmsg, rostopic, roslaunch) find the message packages and the example team, and exit.",
     )
     p.add_argument("team", nargs="?", help="the team whose robots ROS plays, e.g. cyan")
-    p.add_argument(
-        "--connect",
-        default=DEFAULT_ENDPOINT,
-        metavar="ENDPOINT",
-        help=f"the server's Zenoh endpoint (default {DEFAULT_ENDPOINT})",
-    )
-    add_network_options(p, "the run to join")
+    add_join_options(p)
     p.add_argument(
         "--key",
         metavar="FILE",

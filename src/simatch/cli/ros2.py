@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import os
 
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from . import UsageError
-from .server import add_network_options
+from .server import add_join_options
 
 #: ROS 2 discovery stays on this machine unless asked (``--open-discovery``) or set by the user
 DISCOVERY = "ROS_AUTOMATIC_DISCOVERY_RANGE"
@@ -29,13 +28,7 @@ def add_parser(sub) -> None:
         "ground truth (/tf, markers, model states, every team's game commands). "
         "/clock carries the simulated time. See docs/ros.md.",
     )
-    p.add_argument(
-        "--connect",
-        default=DEFAULT_ENDPOINT,
-        metavar="ENDPOINT",
-        help=f"the server's Zenoh endpoint (default {DEFAULT_ENDPOINT})",
-    )
-    add_network_options(p, "the run to join")
+    add_join_options(p)
     p.add_argument(
         "--key",
         metavar="FILE",

@@ -27,6 +27,17 @@ def add_network_options(p, run_help: str) -> None:
     )
 
 
+def add_join_options(p) -> None:
+    """--connect and --run of a process that joins a server's run (a team, a robot, a ROS bridge)."""
+    p.add_argument(
+        "--connect",
+        default=DEFAULT_ENDPOINT,
+        metavar="ENDPOINT",
+        help=f"the server's Zenoh endpoint (default {DEFAULT_ENDPOINT})",
+    )
+    add_network_options(p, "the run to join")
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "server",

@@ -2,20 +2,13 @@
 
 from __future__ import annotations
 
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from ..config.loader import parse_override
 from . import UsageError
-from .server import add_network_options
+from .server import add_join_options
 
 
 def add_client_options(p) -> None:
-    p.add_argument(
-        "--connect",
-        default=DEFAULT_ENDPOINT,
-        metavar="ENDPOINT",
-        help=f"the server's Zenoh endpoint (default {DEFAULT_ENDPOINT})",
-    )
-    add_network_options(p, "the run to join")
+    add_join_options(p)
     p.add_argument(
         "--key",
         metavar="FILE",
