@@ -25,6 +25,14 @@ def test_a_recording_exported_as_a_ros1_bag_plays_into_ros(ros, tmp_path):
     assert out.returncode == 0, out.stderr
     bag = tmp_path / "match.bag"
     assert str(bag) in out.stdout
+    # a second export refuses to replace the bag (one line, exit 2), which stays as it was
+    before = bag.read_bytes()
+    again = subprocess.run(
+        [*SIMATCH, "export", str(rec), "--format", "rosbag1"], cwd=ROOT, timeout=300, capture_output=True, text=True
+    )
+    assert again.returncode == 2 and again.stderr.startswith("simatch: error:"), again.stderr
+    assert "already exists" in again.stderr and len(again.stderr.strip().splitlines()) == 1
+    assert bag.read_bytes() == before
     info = ros.run("rosbag", "info", str(bag))
     for line in (
         "/NuBot2/omnivision/OmniVisionInfo     120 msgs    : nubot_common/OminiVisionInfo",

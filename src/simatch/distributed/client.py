@@ -125,14 +125,7 @@ class TeamProcess:
 
     def _credential(self) -> credentials.Credential:
         """This team's credential; the server writes it when it starts, so wait for it a while."""
-        deadline = time.monotonic() + self.wait
-        while True:
-            try:
-                return credentials.read(self.key)
-            except credentials.CredentialError:
-                if self.key.exists() or time.monotonic() >= deadline:
-                    raise
-            time.sleep(0.2)
+        return credentials.await_file(self.key, self.wait)
 
     def _setup(self) -> None:
         bus = self.bus

@@ -18,6 +18,7 @@ import hmac
 import os
 import secrets
 import tempfile
+import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,6 +80,35 @@ def read(path: str | os.PathLike) -> Credential:
     if not ok:
         raise CredentialError(f"credential file {p}: expected 'name:hexsecret'")
     return Credential(name, secret)
+
+
+def await_file(path: str | os.PathLike, wait: float, poll: float = 0.2) -> Credential:
+    """The credential at ``path``, waiting up to ``wait`` seconds for it to appear (a server writes its
+    credentials when it starts: a team started beside it may look first). A missing file at the end names
+    the credentials its folder does hold: a team that is not in the run (a typing error, another scene's
+    team) is told so rather than only that a file is missing."""
+    p = Path(path)
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            return read(p)
+        except CredentialError:
+            if p.exists():
+                raise
+            if time.monotonic() >= deadline:
+                break
+        time.sleep(poll)
+    held = sorted(k.stem for k in p.parent.glob("*.key")) if p.parent.is_dir() else []
+    if not held:
+        raise CredentialError(
+            f"credential file {p} does not exist (is the server running? it writes one per team in "
+            f"{p.parent} when it starts: use --key FILE for a server elsewhere)"
+        )
+    teams = [name for name in held if name != ADMIN]
+    raise CredentialError(
+        f"no credential {p.name} in {p.parent}, which holds {', '.join(held)}: is {p.stem!r} one of the run's "
+        f"teams ({', '.join(teams) or 'none'})? (use --key FILE for a credential kept elsewhere)"
+    )
 
 
 def ensure(folder: str | os.PathLike, names: Iterable[str]) -> dict[str, Credential]:

@@ -79,12 +79,12 @@ class RosbagsKit:
 def export_rosbag1(path: str | Path, out: str | Path | None = None) -> tuple[Path, dict[str, int], Recording]:
     """Write the recording at ``path`` as a ROS 1 bag (default: beside it, ``.bag``); returns the bag's path,
     the number of messages per ROS topic, and the recording (its ``problems`` say what was skipped)."""
+    target = Path(out) if out else rosbag2.beside(path, ".bag")
+    if target.exists():  # as the table and rosbag2 exports: an earlier export or a user's file is never replaced
+        raise BagError(f"{target} already exists (nothing was overwritten): remove it or give another --out FILE.bag")
     rec = Recording(path)
     spec = rec.scene().spec
     names = Names(spec)
-    target = Path(out) if out else rosbag2.beside(path, ".bag")
-    if target.exists():
-        target.unlink()
     store = typestore()
     kit = RosbagsKit(store)
     counts: dict[str, int] = {}
@@ -101,6 +101,7 @@ def export_rosbag1(path: str | Path, out: str | Path | None = None) -> tuple[Pat
                 writer.write(conn, offset + t_ns, store.serialize_ros1(msg, kit.full(msgtype)))
                 counts[topic] = counts.get(topic, 0) + 1
     except WriterError as exc:
+        target.unlink(missing_ok=True)  # a half-written bag of ours: not left to be taken for a whole one
         raise BagError(f"cannot write {target}: {exc}") from None
     return target, counts, rec
 

@@ -97,8 +97,8 @@ class RosRobotNode(Node):
         self.seen = slot.version
         if vel is None:  # no command: nothing is sent, the simulator's watchdog stops the robot
             return
-        vx, vy, w = _f32s(*vel)
-        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w))
+        vx, vy, w, vz = _f32s(*vel)
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w, vz=vz))
         self.pub_action.put(
             msgs.new(
                 msgs.ActionCmd,
@@ -256,14 +256,10 @@ class Bridge:
         self._subscribe(bus)
 
     def _credential(self) -> credentials.Credential:
-        deadline = time.monotonic() + self.wait
-        while True:
-            try:
-                return credentials.read(self.key)
-            except credentials.CredentialError as exc:
-                if self.key.exists() or time.monotonic() >= deadline:
-                    raise ClientError(str(exc)) from None
-            time.sleep(0.2)
+        try:
+            return credentials.await_file(self.key, self.wait)
+        except credentials.CredentialError as exc:
+            raise ClientError(str(exc)) from None
 
     def _ask_scene(self, bus: ZenohBus):
         deadline = time.monotonic() + self.wait
@@ -372,13 +368,9 @@ class Bridge:
             return
         self._models_at = m.stamp
         poses = model_poses(m.name, m.pose, m.twist)
-        heights = {}
-        if names.BALL in poses:
-            k = list(m.name).index(names.BALL)
-            heights[names.BALL] = float(m.pose[7 * k + 2])
         graph = self.graph
         graph.set_time(m.stamp)
-        graph.publish_ground_truth(m.stamp, poses, heights)
+        graph.publish_ground_truth(m.stamp, poses)
         if graph.heard(graph.pub_models):
             graph.publish_models(msgs.encode(m))
 

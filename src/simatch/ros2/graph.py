@@ -37,7 +37,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from .. import msgs
 from . import names
-from .convert import Pose2D, quaternion_of_yaw, robot_pose, stamp_of, world_pose
+from .convert import WorldPose, is_bad_velocity, quaternion_of_yaw, robot_pose, stamp_of, velocity_of_twist, world_pose
 
 log = logging.getLogger(__name__)
 
@@ -96,6 +96,7 @@ class CommandSlot:
     vx: float = 0.0
     vy: float = 0.0
     w: float = 0.0
+    vz: float = 0.0  # an aerial robot's upward speed (cmd_vel's linear.z)
     vel_at: float | None = None  # simulated time of the bridge when the last cmd_vel arrived (None: none yet)
     vel_bad: bool = False  # the last cmd_vel is one the simulator refuses: passed on once, then not repeated
     vel_sent: bool = False
@@ -267,10 +268,10 @@ class RosGraph:
 
     # --- commands from ROS (the executor's thread) ---------------------------------------------------------------
     def _on_cmd_vel(self, slot: CommandSlot, m) -> None:
-        vx, vy, w = float(m.linear.x), float(m.linear.y), float(m.angular.z)
-        bad = not (abs(vx) <= self.max_speed and abs(vy) <= self.max_speed and abs(w) <= self.max_turn)
+        vx, vy, w, vz = velocity_of_twist(m)
+        bad = is_bad_velocity(vx, vy, w, vz, self.max_speed, self.max_turn)
         with self._cond:
-            slot.vx, slot.vy, slot.w = vx, vy, w
+            slot.vx, slot.vy, slot.w, slot.vz = vx, vy, w, vz
             slot.vel_at = self.now
             slot.vel_bad, slot.vel_sent = bad, False
             slot.version += 1
@@ -306,13 +307,13 @@ class RosGraph:
             return self._cond.wait_for(lambda: all(s.version > v for s, v in slots), timeout)
 
     def take(self, slot: CommandSlot, now: float, timeout: float):
-        """The command to send at simulated time ``now``: ((vx, vy, w) or None, dribble, kick, lob), the kick
+        """The command to send at simulated time ``now``: ((vx, vy, w, vz) or None, dribble, kick, lob), the kick
         request consumed. No velocity when none came within ``timeout`` simulated seconds (the simulator's
         watchdog then stops the robot) or when the last one was refused already."""
         with self._cond:
             vel = None
             if slot.vel_at is not None and now - slot.vel_at <= timeout and not (slot.vel_bad and slot.vel_sent):
-                vel = (slot.vx, slot.vy, slot.w)
+                vel = (slot.vx, slot.vy, slot.w, slot.vz)
                 slot.vel_sent = True
             kick, lob = slot.kick, slot.lob
             slot.kick = 0.0
@@ -340,11 +341,13 @@ class RosGraph:
             ports.holding.publish(Bool(data=bool(me.holding_ball)))
         ball = info.ball
         if ball.pos_known and heard(ports.ball):
-            p = world_pose(sign, ball.x, ball.y, 0.0, ball.vx, ball.vy, 0.0)
-            self._odom(ports.ball, stamp, names.BALL, p, z=float(ball.z), body=False)
+            p = world_pose(sign, ball.x, ball.y, 0.0, ball.vx, ball.vy, 0.0, ball.z, ball.vz)
+            self._odom(ports.ball, stamp, names.BALL, p, body=False)
         if heard(ports.obstacles):
             obs = info.obstacles
-            ports.obstacles.publish(self._poses(stamp, [world_pose(sign, x, y, 0.0) for x, y in zip(obs.x, obs.y)]))
+            heights = obs.z if len(obs.z) == len(obs.x) else [0.0] * len(obs.x)  # none from an older sender
+            poses = [world_pose(sign, x, y, 0.0, z=z) for x, y, z in zip(obs.x, obs.y, heights)]
+            ports.obstacles.publish(self._poses(stamp, poses))
         if heard(ports.teammates):
             mates = [robot_pose(sign, r) for r in info.robots if r.id != ports.rid and r.valid]
             ports.teammates.publish(self._poses(stamp, mates))
@@ -362,28 +365,29 @@ class RosGraph:
             known = self._listeners[pub] = (now, pub.get_subscription_count() > 0)
         return known[1]
 
-    def publish_ground_truth(self, t: float, poses: dict[str, Pose2D], heights: dict[str, float]) -> None:
+    def publish_ground_truth(self, t: float, poses: dict[str, WorldPose]) -> None:
         """Every model's true pose: /tf (map -> each base_link, map -> ball), each robot's ``ground_truth``
-        odometry, and the markers (at most every ``markers_period`` simulated seconds)."""
+        odometry, and the markers (at most every ``markers_period`` simulated seconds). Heights are the
+        poses' own: the ball's centre, an aerial robot's altitude, 0 for a ground robot."""
         stamp = _time(t)
         tfs = []
         for name, p in poses.items():
             if name == names.BALL:
-                child, z = names.BALL, heights.get(name, BALL_RADIUS)
+                child = names.BALL
             else:
                 team, _, rid = name.partition("/")
-                child, z = names.base_link(team, int(rid)), 0.0
+                child = names.base_link(team, int(rid))
                 ports = self.robots.get(name)
                 if ports is not None and not ports.driven and self.heard(ports.odom):
                     self._odom(ports.odom, stamp, child, p)
-            tfs.append(self._transform(stamp, child, p, z))
+            tfs.append(self._transform(stamp, child, p))
         if self.heard(self.pub_tf):
             self.pub_tf.publish(TFMessage(transforms=tfs))
         if self.heard(self.pub_markers) and t - self._markers_at >= self.markers_period - 1e-9:
             self._markers_at = t
-            self.pub_markers.publish(self._markers(stamp, poses, heights))
+            self.pub_markers.publish(self._markers(stamp, poses))
 
-    def publish_own_frames(self, t: float, poses: dict[str, Pose2D]) -> None:
+    def publish_own_frames(self, t: float, poses: dict[str, WorldPose]) -> None:
         """/tf of the robots a team bridge perceives itself (no ground truth for a team's credential)."""
         if not poses or not self.heard(self.pub_tf):
             return
@@ -391,7 +395,7 @@ class RosGraph:
         tfs = []
         for name, p in poses.items():
             team, _, rid = name.partition("/")
-            tfs.append(self._transform(stamp, names.base_link(team, int(rid)), p, 0.0))
+            tfs.append(self._transform(stamp, names.base_link(team, int(rid)), p))
         self.pub_tf.publish(TFMessage(transforms=tfs))
 
     def publish_models(self, raw: bytes) -> None:
@@ -418,38 +422,39 @@ class RosGraph:
 
     # --- building messages ---------------------------------------------------------------------------------------
     @staticmethod
-    def _odom(pub, stamp, child: str, p: Pose2D, z: float = 0.0, body: bool = True) -> None:
+    def _odom(pub, stamp, child: str, p: WorldPose, body: bool = True) -> None:
         m = Odometry()
         m.header.stamp = stamp
         m.header.frame_id = names.MAP
         m.child_frame_id = child
         pose = m.pose.pose
-        pose.position.x, pose.position.y, pose.position.z = p.x, p.y, z
+        pose.position.x, pose.position.y, pose.position.z = p.x, p.y, p.z
         qx, qy, qz, qw = quaternion_of_yaw(p.yaw)
         pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = qx, qy, qz, qw
         vx, vy, w = p.body_twist() if body else (p.vx, p.vy, p.w)
-        m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.angular.z = vx, vy, w
+        lin = m.twist.twist.linear
+        lin.x, lin.y, lin.z, m.twist.twist.angular.z = vx, vy, p.vz, w
         pub.publish(m)
 
     @staticmethod
-    def _transform(stamp, child: str, p: Pose2D, z: float) -> TransformStamped:
+    def _transform(stamp, child: str, p: WorldPose) -> TransformStamped:
         t = TransformStamped()
         t.header.stamp = stamp
         t.header.frame_id = names.MAP
         t.child_frame_id = child
         tr = t.transform
-        tr.translation.x, tr.translation.y, tr.translation.z = p.x, p.y, z
+        tr.translation.x, tr.translation.y, tr.translation.z = p.x, p.y, p.z
         tr.rotation.x, tr.rotation.y, tr.rotation.z, tr.rotation.w = quaternion_of_yaw(p.yaw)
         return t
 
     @staticmethod
-    def _poses(stamp, poses: list[Pose2D]) -> PoseArray:
+    def _poses(stamp, poses: list[WorldPose]) -> PoseArray:
         out = PoseArray()
         out.header.stamp = stamp
         out.header.frame_id = names.MAP
         for p in poses:
             q = Pose()
-            q.position.x, q.position.y = p.x, p.y
+            q.position.x, q.position.y, q.position.z = p.x, p.y, p.z
             q.orientation.x, q.orientation.y, q.orientation.z, q.orientation.w = quaternion_of_yaw(p.yaw)
             out.poses.append(q)
         return out
@@ -497,7 +502,7 @@ class RosGraph:
             out.append(goal)
         return out
 
-    def _markers(self, stamp, poses: dict[str, Pose2D], heights: dict[str, float]) -> MarkerArray:
+    def _markers(self, stamp, poses: dict[str, WorldPose]) -> MarkerArray:
         out = MarkerArray()
         for m in self._field_markers:
             m.header.stamp = stamp
@@ -511,7 +516,7 @@ class RosGraph:
             if name == names.BALL:
                 m.ns, m.id, m.type = "ball", 0, Marker.SPHERE
                 m.pose.position.x, m.pose.position.y = p.x, p.y
-                m.pose.position.z = heights.get(name, BALL_RADIUS)
+                m.pose.position.z = p.z
                 m.scale.x = m.scale.y = m.scale.z = 2 * BALL_RADIUS
                 m.color = _color((1.0, 0.5, 0.0))
                 out.markers.append(m)
@@ -519,7 +524,7 @@ class RosGraph:
             team, _, rid = name.partition("/")
             rgb = _COLORS.get(self.spec.team_color(team), (0.7, 0.7, 0.7))
             m.ns, m.id, m.type = f"robots/{team}", int(rid), Marker.CYLINDER
-            m.pose.position.x, m.pose.position.y, m.pose.position.z = p.x, p.y, ROBOT_HEIGHT / 2
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = p.x, p.y, p.z + ROBOT_HEIGHT / 2
             qx, qy, qz, qw = quaternion_of_yaw(p.yaw)
             m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = qx, qy, qz, qw
             m.scale.x = m.scale.y = 2 * ROBOT_RADIUS
@@ -541,7 +546,7 @@ class RosGraph:
                 Marker.TEXT_VIEW_FACING,
                 Marker.ADD,
             )
-            label.pose.position.x, label.pose.position.y, label.pose.position.z = p.x, p.y, ROBOT_HEIGHT + 0.3
+            label.pose.position.x, label.pose.position.y, label.pose.position.z = p.x, p.y, p.z + ROBOT_HEIGHT + 0.3
             label.pose.orientation.w = 1.0
             label.scale.z = 0.4
             label.color = _color((1.0, 1.0, 1.0))

@@ -1,11 +1,12 @@
 """Drive one robot with cmd_vel and record its odom and /clock (a plain rclpy node, no simatch code).
 
-    python drive.py NAMESPACE VX VY W SECONDS OUT.json [--nan]
+    python drive.py NAMESPACE VX VY W SECONDS OUT.json [--nan] [--vz VZ]
 
 A node with ``use_sim_time`` (it notes its clock at each odom). Waits (up to 60 s) for the robot's first
 odom, then publishes cmd_vel at 50 Hz of wall time for SECONDS of simulated time (/clock), recording every
 odom (simulated stamp, map pose, body twist) and /clock. With --nan it then publishes one cmd_vel whose
-linear.x is NaN and keeps recording for one more simulated second.
+linear.x is NaN and keeps recording for one more simulated second. With --vz the cmd_vel's linear.z (an
+aerial robot's upward speed) is VZ; each odom row ends with its height and upward speed.
 """
 
 import json
@@ -24,6 +25,7 @@ from rosgraph_msgs.msg import Clock
 def main() -> None:
     ns, vx, vy, w, seconds, out = sys.argv[1], *map(float, sys.argv[2:6]), sys.argv[6]
     nan = "--nan" in sys.argv
+    vz = float(sys.argv[sys.argv.index("--vz") + 1]) if "--vz" in sys.argv else 0.0
     rclpy.init()
     # a node on simulated time, as ROS 2 users run theirs with a simulator: its clock is /clock's
     node = rclpy.create_node("drive_test", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
@@ -45,6 +47,8 @@ def main() -> None:
                 t.angular.z,
                 m.header.frame_id,
                 m.child_frame_id,
+                p.position.z,
+                t.linear.z,
             ]
         )
         node_time.append([stamp, node.get_clock().now().nanoseconds * 1e-9])
@@ -83,7 +87,7 @@ def main() -> None:
             rclpy.spin_once(node, timeout_sec=0.005)
 
     cmd = Twist()
-    cmd.linear.x, cmd.linear.y, cmd.angular.z = vx, vy, w
+    cmd.linear.x, cmd.linear.y, cmd.linear.z, cmd.angular.z = vx, vy, vz, w
     spin_for(seconds, cmd)
     first_sent = next((s for s in sent if s is not None), None)
     nan_at = None
