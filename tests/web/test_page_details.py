@@ -92,22 +92,67 @@ def test_the_coach_page_draws_opponents_in_their_colour_with_a_legend_and_roles_
 
 
 def test_robot_labels_keep_clear_of_the_ball(live, open_page):
+    """A label's first place (the id above right of the robot) holds the ball: the label goes elsewhere."""
     sim, view = live(**{"teams.cyan.strategy": "startpose", "teams.magenta.strategy": "none"})
     sim.coaches["cyan"].start_play()
     sim.run(seconds=1.0)
-    s = sim.model_states()["cyan/4"]
-    sim.set_model_state("ball", x=s.x, y=s.y - 0.45, vx=0.0, vy=0.0)  # just below the robot: where its role goes
-    sim.run(seconds=0.3)
     page = open_page(view.urls["cyan coach"])
     wait_frame(page, sim.time)
-    page.wait_for_function("window.simatch.frame.robots.every((r) => r.role) && window.simatch.view.labels.length")
+    s = sim.model_states()["cyan/4"]
+    # the world point at the middle of the id's first place, from the page's own scale
+    bx, by = page.evaluate(
+        """([x, y]) => { const v = window.simatch.view, rad = Math.max(4, 0.25 * v.scale);
+           const [sx, sy] = v.toScreen(x, y);
+           return v.toWorld(sx + rad * 0.8 + 4, sy - rad * 0.8 - 6); }""",
+        [s.x, s.y],
+    )
+    sim.set_model_state("ball", x=bx, y=by, vx=0.0, vy=0.0)
+    sim.run(seconds=0.3)
+    wait_frame(page, sim.time)
+    page.wait_for_function("window.simatch.view.labels.some((l) => l.text === '4') && window.simatch.view.ballSpot")
     labels, spot = page.evaluate("[window.simatch.view.labels, window.simatch.view.ballSpot]")
-    assert spot is not None
+    assert any(lab["text"] == "4" for lab in labels)
     for lab in labels:
         nx = max(lab["x"], min(spot["x"], lab["x"] + lab["w"]))
         ny = max(lab["y"], min(spot["y"], lab["y"] + lab["h"]))
         assert ((spot["x"] - nx) ** 2 + (spot["y"] - ny) ** 2) ** 0.5 > spot["r"], f"{lab} covers the ball"
     shot(page, "labels_clear_of_the_ball")
+
+
+def test_a_game_without_set_pieces_shows_none_and_every_label_fits(live, open_page):
+    """An encirclement: no kick-off or test buttons on the coach page or the console (its judge has no set
+    pieces), no "no role" under robots whose strategy names none, and the ids of the robots at the field's
+    edge stay on the canvas."""
+    sim, view = live("encirclement_9v7")
+    sim.run(seconds=1.0)
+    coach = open_page(view.urls["cyan coach"])
+    wait_frame(coach, sim.time)
+    assert coach.evaluate("window.simatch.hello.set_pieces") is False
+    for sel in ("#setpieces", "#testarea", "button[data-cmd='DROPBALL']"):
+        assert not coach.locator(sel).is_visible(), sel
+    assert coach.locator("#start").is_visible() and coach.locator("#park").is_visible()
+    coach.wait_for_function("window.simatch.view.labels.length >= 9")
+    labels, w, h = coach.evaluate("[window.simatch.view.labels, window.simatch.view.w, window.simatch.view.h]")
+    assert {lab["text"] for lab in labels} >= {str(i) for i in range(1, 10)}
+    assert not [lab for lab in labels if "role" in lab["text"]], labels
+    out = [lab for lab in labels if lab["x"] < 0 or lab["y"] < 0 or lab["x"] + lab["w"] > w or lab["y"] + lab["h"] > h]
+    assert out == [], f"labels cut at the canvas edge: {out}"
+    shot(coach, "coach_encirclement")
+    console = open_page(view.urls["referee"])
+    wait_frame(console, sim.time)
+    assert not console.locator("#setpieces").is_visible()
+    assert not console.locator("button[data-cmd='DROPBALL']").is_visible()
+    shot(console, "console_encirclement")
+
+
+def test_a_match_keeps_its_set_pieces(live, open_page):
+    sim, view = live(**{"judge.kind": "msl_referee"})
+    sim.run(seconds=0.2)
+    for url in (view.urls["cyan coach"], view.urls["referee"]):
+        page = open_page(url)
+        wait_frame(page, sim.time)
+        assert page.evaluate("window.simatch.hello.set_pieces") is True
+        assert page.locator("#setpieces button").count() == 12 and page.locator("#setpieces").is_visible()
 
 
 def test_the_console_robot_list_scrolls_and_the_top_bar_cuts_nothing(live, open_page):

@@ -71,7 +71,7 @@ ROLE_WORDS = {
     Role.ACIDPASSIVE: "second defender",
     Role.GAZER: "watch the ball",
     Role.BLOCK: "block",
-    Role.NOROLE: "no role",
+    Role.NOROLE: "",  # nothing to say: the pages leave the robot unlabelled, the tables show a dash
     Role.CATCHOFPASS: "catch the pass",
     Role.PASSOFPASS: "just passed",
 }
@@ -103,7 +103,7 @@ ACTION_WORDS = {
 
 
 def role_words(value: int) -> str:
-    """The role in words ("catch the pass"); a strategy's own number as "role 42"."""
+    """The role in words ("catch the pass"; "" for none); a strategy's own number as "role 42"."""
     try:
         return ROLE_WORDS[Role(value)]
     except ValueError:

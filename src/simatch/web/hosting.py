@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import time
 
+from ..config.loader import SceneError
 from ..msgs.game_commands import MatchMode
+from ..scene.judges import judge_class
 from .picture import Picture
 
 
@@ -34,9 +36,19 @@ def hello_of(spec, picture: Picture, fps: float, **extra) -> dict:
         ],
         "robots": picture.robots_meta(),
         "commands": [m.name for m in MatchMode],
+        "set_pieces": _has_set_pieces(spec),
         "source": "run",
         **extra,
     }
+
+
+def _has_set_pieces(spec) -> bool:
+    """The scene's game has soccer's set pieces (its judge says so): the pages offer their commands only then;
+    a judge that cannot be loaded here (a recording of somebody's plug-in) leaves them offered."""
+    try:
+        return judge_class(spec.judge.kind).set_pieces
+    except SceneError:
+        return True
 
 
 class Hosted:

@@ -17,17 +17,23 @@ SHIPPED = {
 }
 
 
+def judge_class(kind: str, source: str = "scene") -> type[Judge]:
+    """The Judge subclass a scene's ``judge.kind`` names (`SceneError` if none)."""
+    try:
+        cls = load(kind, SHIPPED, "judge")
+    except PluginError as exc:
+        raise SceneError(f"{source}: judge.kind: {exc}") from None
+    if not (isinstance(cls, type) and issubclass(cls, Judge)):
+        raise SceneError(f"{source}: judge.kind: {kind!r} is not a simatch.scene.judges.Judge subclass")
+    return cls
+
+
 def make_judge(scene: LoadedScene, world: WorldControl) -> Judge:
     spec = scene.spec.judge
-    try:
-        cls = load(spec.kind, SHIPPED, "judge")
-    except PluginError as exc:
-        raise SceneError(f"{scene.source}: judge.kind: {exc}") from None
-    if not (isinstance(cls, type) and issubclass(cls, Judge)):
-        raise SceneError(f"{scene.source}: judge.kind: {spec.kind!r} is not a simatch.scene.judges.Judge subclass")
+    cls = judge_class(spec.kind, scene.source)
     extra = dict(spec.model_extra or {})
     params = validate_params(cls.Params, extra, scene.source, "judge")
     return cls(scene, params, world)
 
 
-__all__ = ["Judge", "NoJudge", "SHIPPED", "WorldControl", "make_judge"]
+__all__ = ["Judge", "NoJudge", "SHIPPED", "WorldControl", "judge_class", "make_judge"]

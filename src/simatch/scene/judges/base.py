@@ -53,6 +53,9 @@ class Judge(Node):
     name = "judge"
     #: the judge sends the game commands itself (a referee); otherwise each team gets a Coach
     gives_commands: ClassVar[bool] = False
+    #: the game has soccer's set pieces and restarts (kick-offs, throw-ins, ..., dropped balls) and the test
+    #: modes: the coach pages and the referee console offer them only then
+    set_pieces: ClassVar[bool] = False
 
     def __init__(self, scene: LoadedScene, params: Any, world: WorldControl):
         self.scene = scene
@@ -78,6 +81,7 @@ class NoJudge(Judge):
     """No judging: the run lasts the scene's (or the command line's) duration."""
 
     name = "none"
+    set_pieces = True  # coaches give any command by hand, as in a friendly match without a referee
 
 
 #: CoachInfo built positionally (every team, every control period)

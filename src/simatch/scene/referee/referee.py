@@ -71,6 +71,7 @@ class MslReferee(OperatorTakeover, Judge):
     Params = RefereeParams
     name = "msl_referee"
     gives_commands = True
+    set_pieces = True
 
     def __init__(self, scene, params: RefereeParams, world):
         super().__init__(scene, params, world)

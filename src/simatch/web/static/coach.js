@@ -25,6 +25,8 @@ startPage(page, {
     } else {
       page.view.hello = h;
     }
+    // soccer's set pieces and the test modes only where the game has them (not in an encirclement, a flight test)
+    for (const el of document.querySelectorAll(".soccer")) el.hidden = h.set_pieces === false;
     page.commands = Boolean(h.capabilities && h.capabilities.commands);
     document.querySelectorAll(".command button, .command input, .command select").forEach((el) => { el.disabled = !page.commands; });
     $("cmdnote").textContent = page.commands ? "" : !h.capabilities ? "a recording: this page watches, nothing can be commanded"

@@ -11,6 +11,7 @@ startPage(page, {
   onHello(h) {
     page.hello = h;
     page.caps = h.capabilities;            // null: a recording, nothing can be commanded
+    for (const el of document.querySelectorAll(".soccer")) el.hidden = h.set_pieces === false;  // no set pieces here
     $("scene").textContent = h.scene;
     page.team = page.team || h.teams[0].name;
     $("teamsel").replaceChildren(...h.teams.map((t) => {

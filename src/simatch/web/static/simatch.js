@@ -180,6 +180,8 @@ export class EventLog {
 // The display area: the field to scale (FieldGeometry.describe()), drawn on a canvas: markings, goals,
 // zones, static obstacles (with their heights), robots, drones (seen from above, with their heights).
 
+const FIELD_PAD = 24;  // [CSS px] round the floor: two lines of labels above a robot at its very edge
+
 export class FieldView {
   constructor(canvas, hello, options = {}) {
     this.canvas = canvas;
@@ -206,8 +208,9 @@ export class FieldView {
     this.canvas.width = Math.max(1, Math.round(r.width * dpr));
     this.canvas.height = Math.max(1, Math.round(r.height * dpr));
     this.ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-    const f = this.field;
-    this.scale = Math.min(this.w / (f.length + 2 * f.margin), this.h / (f.width + 2 * f.margin));
+    // a border of screen pixels round the floor: a robot at the edge keeps its id and role on the canvas
+    const f = this.field, pad = FIELD_PAD;
+    this.scale = Math.max(1e-6, Math.min((this.w - 2 * pad) / (f.length + 2 * f.margin), (this.h - 2 * pad) / (f.width + 2 * f.margin)));
     this.dirty = true;
   }
 
