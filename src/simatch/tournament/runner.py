@@ -38,6 +38,33 @@ log = logging.getLogger(__name__)
 KILL_GRACE = 60.0  # [s] after a match's time limit before its worker is ended from outside
 LOCAL_OBJECT_STORE = 128 * 1024 * 1024  # [bytes] results are small: no need for Ray's default (30 % of RAM)
 
+# Ray's settings for the local instance the command starts (``_system_config``, read by the GCS and the raylet;
+# a cluster joined with --address keeps its own). Each match is a long CPU-bound task that nobody watches
+# through Ray's dashboard, so Ray's bookkeeping for observability only costs CPU beside the matches (measured
+# by `simatch bench --only tournament`, docs/tournament.md "Measured"):
+LOCAL_SYSTEM_CONFIG = {
+    # Ray lowers its workers' priority by 15 (to keep its own processes responsive); here the workers are the
+    # work, so they run at the command's own priority (under `nice`, as nice as the command; under load, as
+    # fast as a plain loop would play the same matches).
+    "worker_niceness": 0,
+    # metrics, task events and the timeline feed the dashboard and the state API, which are not started
+    "enable_metrics_collection": False,
+    "task_events_report_interval_ms": 0,
+    "enable_timeline": False,
+    "event_stats": False,
+    "emit_main_service_metrics": False,
+    "debug_dump_period_milliseconds": 0,  # the raylet's debug_state.txt every 10 s
+    # periodic checks made ten times a second by default; once a second is plenty for matches of minutes
+    "memory_monitor_refresh_ms": 1000,
+    "raylet_report_resources_period_milliseconds": 1000,
+    "kill_idle_workers_interval_ms": 1000,
+    "local_fs_monitor_interval_ms": 1000,
+}
+# Ray's log monitor looks for new log files (a glob of the log folder) ten times a second; the workers' output
+# is not forwarded here (log_to_driver=False), so once every 5 s is enough (environment of the processes the
+# local instance starts).
+LOCAL_ENVIRONMENT = {"RAY_LOG_MONITOR_MANY_FILES_THRESHOLD": "0", "LOG_NAME_UPDATE_INTERVAL_S": "5"}
+
 
 class PlainLoop:
     """The matches one after another in this process (no Ray): for a plug-in's first test, and the measure of
@@ -87,11 +114,14 @@ class RayPool:
                 where = f"Ray cluster at {address or os.environ['RAY_ADDRESS']}"
             else:
                 cpus = workers or os.cpu_count() or 1
+                for key, value in LOCAL_ENVIRONMENT.items():
+                    os.environ.setdefault(key, value)
                 ray.init(
                     address="local",  # a new instance, never one that `ray start` left on this machine
                     num_cpus=cpus,
                     include_dashboard=False,
                     object_store_memory=LOCAL_OBJECT_STORE,
+                    _system_config=LOCAL_SYSTEM_CONFIG,
                     **options,
                 )
                 self.started = True
