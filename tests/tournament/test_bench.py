@@ -15,5 +15,13 @@ def test_the_tournament_benchmark_reports_its_figures():
     for key in ("plain", "ray1", "ray_all"):
         assert out[f"tournament_{key}_wall_s"] > 0 and out[f"tournament_{key}_cpu_s"] > 0
         assert out[f"tournament_{key}_matches_per_hour"] > 0
-    for key in ("speedup_all_cores", "ray_overhead_pct", "ray_cpu_overhead_pct", "ray_start_s"):
+    for key in ("speedup_all_cores", "ray_overhead_pct", "ray_cpu_overhead_pct", "ray_start_s", "ray_start_cpu_s"):
         assert isinstance(out[f"tournament_{key}"], float), key
+    # where Ray's CPU went: the driver, the workers (one per slot, reused match after match) and Ray's own
+    # processes, which add up to the run's CPU time
+    assert out["tournament_ray1_workers"] == 1 and 1 <= out["tournament_ray_all_workers"] <= out["tournament_cores"]
+    for key in ("ray1", "ray_all"):
+        kinds = out[f"tournament_{key}_cpu_by_process"]
+        assert {"driver", "worker", "raylet", "gcs_server"} <= set(kinds), kinds
+        assert kinds["worker"] > 0 and all(v >= 0 for v in kinds.values()), kinds
+        assert sum(kinds.values()) == pytest.approx(out[f"tournament_{key}_cpu_s"], abs=0.05)
