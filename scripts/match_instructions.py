@@ -13,8 +13,11 @@ The script runs itself under ``valgrind --tool=callgrind`` with instrumentation 
 switches counting on with ``callgrind_control``, plays ``--seconds`` more, switches it off, and prints
 instructions per simulated second (and the run's state digest, to check that two trees played the same
 match). Slow: valgrind runs the program some fifty times slower (about 12 minutes for the default 20 s).
+With ``--record`` the match is recorded (as ``simatch run --record`` does, the recorder attached before the
+first step): the difference from a run without it is what the recording costs the simulation's process (its
+writer process runs outside valgrind and is not counted).
 
-    python scripts/match_instructions.py [--seconds 20] [--seed 1] [--json]
+    python scripts/match_instructions.py [--seconds 20] [--seed 1] [--record] [--json]
 """
 
 from __future__ import annotations
@@ -31,20 +34,24 @@ import tempfile
 INSIDE = "SIMATCH_UNDER_CALLGRIND"
 
 
-def measure(seconds: float, seed: int, warm_up: float) -> str:
+def measure(seconds: float, seed: int, warm_up: float, record: bool) -> str:
     """Runs inside valgrind: plays the match, counting only the measured stretch; returns its digest."""
     from simatch import Simulation
     from simatch.bench.match import load_kernels
     from simatch.config.loader import load_scene
+    from simatch.record import Recorder
 
     scene = load_scene("msl_5v5")
     load_kernels(scene)
-    with Simulation(scene, seed=seed) as sim:
+    with tempfile.TemporaryDirectory() as tmp, Simulation(scene, seed=seed) as sim:
+        recorder = Recorder.for_run(sim, os.path.join(tmp, "match.mcap"), command_line=[]) if record else None
         sim.run(seconds=warm_up, until_done=False)
         pid = str(os.getpid())
         subprocess.run(["callgrind_control", "-i", "on", pid], capture_output=True, check=True)
         sim.run(seconds=seconds, until_done=False)
         subprocess.run(["callgrind_control", "-i", "off", pid], capture_output=True, check=True)
+        if recorder is not None:
+            recorder.close()
         return sim.state_digest()
 
 
@@ -53,18 +60,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=20.0, help="simulated seconds counted (default 20)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--warm-up", type=float, default=5.0, help="simulated seconds played first, not counted")
+    ap.add_argument("--record", action="store_true", help="record the match (the recording's cost is counted)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args(argv)
     if not args.seconds > 0 or args.warm_up < 0:
         ap.error("--seconds must be positive and --warm-up not negative")
     if os.environ.get(INSIDE):
-        print(json.dumps({"digest": measure(args.seconds, args.seed, args.warm_up)}))
+        print(json.dumps({"digest": measure(args.seconds, args.seed, args.warm_up, args.record)}))
         return 0
     if shutil.which("valgrind") is None or shutil.which("callgrind_control") is None:
         ap.error("needs valgrind (Debian: apt-get install valgrind)")
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "callgrind.out")
-        cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}"]
+        keep = os.environ.get("SIMATCH_CALLGRIND_OUT")  # keep the profile (for callgrind_annotate) there
+        cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={keep or out}"]
         cmd += [sys.executable, os.path.abspath(__file__), *(argv if argv is not None else sys.argv[1:])]
         print(f"counting {args.seconds:g} s of msl_5v5 (seed {args.seed}) under callgrind ...", file=sys.stderr)
         proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, INSIDE: "1"})
@@ -82,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
         "match_instructions_per_sim_second": round(total / args.seconds),
         "seconds": args.seconds,
         "seed": args.seed,
+        "recorded": args.record,
         "state_digest": digest,
     }
     if args.json:

@@ -190,3 +190,87 @@ def test_malformed_inputs_are_refused_with_a_clear_error():
         replay.apply(inputs(step=5))
     replay.apply(inputs(**call, calls=['["set_model_state", ["nobody"], {"x": 1.0}]']))  # refused, as in a run
     assert replay.refused == 1
+
+
+CALLS = [  # (method, args, kwargs): the common forms and every odd one
+    ("command_velocity", (0, 0.5, -0.25, 0.125), {}),
+    ("command_velocity", (1, np.float32(0.1), 1, True), {}),  # numpy, int and bool numbers, as given
+    ("command_velocity", (2, "fast", 0.0, 0.0), {}),  # refused by the simulator, logged as given
+    ("command_velocity", (3, float("nan"), 0.0, 0.0), {}),
+    ("command_velocity", (0, 0.1, 0.2, 0.3, 0.0), {}),  # five arguments: a call
+    ("command_velocity", (0, 0.1, 0.2), {"w": 0.3}),  # a keyword: a call
+    ("command_velocity", (np.int64(1), 0.1, 0.2, 0.3), {}),  # not a plain int index: a call
+    ("command_velocity", (True, 0.1, 0.2, 0.3), {}),
+    ("command_action", (0, True), {}),
+    ("command_action", (1, 0, 3.5), {}),
+    ("command_action", (2, 1, 2.0, True), {}),
+    ("command_action", (3, True, 1.0, False, 0.3), {}),
+    ("command_action", (3, True, 1.0, False, None), {}),
+    ("command_action", (4, [], np.float64(2.0), 1), {}),
+    ("command_action", (0, True), {"kick_speed": 1.0}),
+    ("command_action", (0, True, "hard"), {}),  # refused, logged as given
+]
+
+
+@pytest.mark.parametrize("accelerated", [True, False])
+def test_the_c_taps_log_what_the_python_twins_log(accelerated, monkeypatch):
+    """The C taps (`simatch.msgs.cdr.Tap`) and the Python twins give the same entries for every form of call,
+    and the same results: the simulator's method is called with the same arguments."""
+    from simatch.msgs import cdr
+    from simatch.sim import inputs as world
+
+    if not accelerated:
+        monkeypatch.setattr(cdr, "Tap", None)
+    elif cdr.Tap is None:
+        pytest.skip("the C extension is not built")
+    sim = Simulator(simatch.Simulation("msl_5v5").scene.spec)
+    sim.inputs = None
+    log = world.InputLog()
+    sim.inputs = log
+    assert (type(sim.__dict__["command_velocity"]).__name__ == "Tap") == accelerated
+    results = []
+    for name, args, kwargs in CALLS:
+        try:
+            results.append(getattr(sim, name)(*args, **kwargs))
+        except Exception as exc:
+            results.append(type(exc).__name__)
+    msg = log.take(0.0, 0, False)
+    entries = (msg.kind.tolist(), msg.robot.tolist(), [str(v) for v in msg.values.tolist()], list(msg.calls))
+    assert results == [
+        True,
+        True,
+        False,
+        False,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        True,
+        False,
+    ]
+    assert entries == (
+        [1, 1, 1, 1, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 3, 2],
+        [0, 1, 2, 3, -1, -1, -1, -1, 0, 1, 2, 3, 3, 4, -1, 0],
+        [
+            *("0.5", "-0.25", "0.125", "0.10000000149011612", "1.0", "1.0", "nan", "0.0", "0.0", "nan", "0.0", "0.0"),
+            *("1.0", "0.0", "0.0", "nan", "0.0", "3.5", "0.0", "nan", "1.0", "2.0", "1.0", "nan"),
+            *("1.0", "1.0", "0.0", "0.3", "1.0", "1.0", "0.0", "nan", "0.0", "2.0", "1.0", "nan"),
+            *("1.0", "nan", "0.0", "nan"),
+        ],
+        [
+            '["command_velocity", [0, 0.1, 0.2, 0.3, 0.0], {}]',
+            '["command_velocity", [0, 0.1, 0.2], {"w": 0.3}]',
+            '["command_velocity", [1, 0.1, 0.2, 0.3], {}]',
+            '["command_velocity", [true, 0.1, 0.2, 0.3], {}]',
+            '["command_action", [0, true], {"kick_speed": 1.0}]',
+        ],
+    )
+    assert log.take(0.0, 1, False) is None  # taken: the log is empty, its lists are still the taps' lists
+    sim.command_velocity(0, 1.0, 0.0, 0.0)
+    assert log.take(0.0, 1, False).kind.tolist() == [VEL]

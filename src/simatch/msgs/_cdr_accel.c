@@ -1329,6 +1329,68 @@ static PyObject *log_append(Log *log, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* A chunk's records as `take` hands them over: the log's buffer itself, not a copy (a chunk of a match is some
+ * 400 kB; copying it into a bytes object, whose fresh pages the system maps anew each time, cost the simulation
+ * thread some 0.3 ms per chunk). Read through the buffer protocol (the writer writes it to its pipe); when it
+ * is dropped, its memory becomes the spare buffer that the next `take` gives the log, so the same pages serve
+ * every chunk. */
+typedef struct {
+    PyObject_HEAD
+    Buf buf;
+    Py_ssize_t exports;
+} Chunk;
+
+static Buf spare = {NULL, 0, 0};     /* a dropped chunk's memory, for the log's next buffer (the GIL is held) */
+
+static int chunk_getbuffer(Chunk *self, Py_buffer *view, int flags) {
+    int r = PyBuffer_FillInfo(view, (PyObject *)self, self->buf.p ? self->buf.p : "", self->buf.n, 1, flags);
+    if (r == 0)
+        self->exports++;
+    return r;
+}
+
+static void chunk_releasebuffer(Chunk *self, Py_buffer *view) {
+    self->exports--;
+}
+
+static Py_ssize_t chunk_length(Chunk *self) {
+    return self->buf.n;
+}
+
+static void chunk_dealloc(Chunk *self) {
+    if (spare.cap < self->buf.cap) {   /* keep the larger of the two */
+        PyMem_Free(spare.p);
+        spare = self->buf;
+        spare.n = 0;
+    } else {
+        PyMem_Free(self->buf.p);
+    }
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *chunk_bytes(Chunk *self, PyObject *unused) {
+    return PyBytes_FromStringAndSize(self->buf.p ? self->buf.p : "", self->buf.n);
+}
+
+static PyBufferProcs chunk_as_buffer = {(getbufferproc)chunk_getbuffer, (releasebufferproc)chunk_releasebuffer};
+static PySequenceMethods chunk_as_sequence = {.sq_length = (lenfunc)chunk_length};
+static PyMethodDef chunk_methods[] = {
+    {"__bytes__", (PyCFunction)chunk_bytes, METH_NOARGS, "the records as bytes (a copy)"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject ChunkType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.Chunk",
+    .tp_basicsize = sizeof(Chunk),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "the records of one chunk, as Log.take hands them over (a read-only buffer; bytes(chunk) copies)",
+    .tp_dealloc = (destructor)chunk_dealloc,
+    .tp_as_buffer = &chunk_as_buffer,
+    .tp_as_sequence = &chunk_as_sequence,
+    .tp_methods = chunk_methods,
+};
+
 static PyObject *log_take(Log *log, PyObject *unused) {
     PyObject *counts = PyDict_New();
     if (counts == NULL)
@@ -1345,8 +1407,16 @@ static PyObject *log_take(Log *log, PyObject *unused) {
             return NULL;
         }
     }
-    PyObject *data = PyBytes_FromStringAndSize(log->buf.p, log->buf.n);
-    PyObject *result = data ? Py_BuildValue("(NNLL)", data, counts, log->first, log->last) : NULL;
+    Chunk *data = PyObject_New(Chunk, &ChunkType);
+    PyObject *result = NULL;
+    if (data != NULL) {
+        data->buf = log->buf;          /* the buffer itself; the log goes on in the spare one */
+        data->exports = 0;
+        log->buf = spare;
+        spare.p = NULL;
+        spare.n = spare.cap = 0;
+        result = Py_BuildValue("(NNLL)", (PyObject *)data, counts, log->first, log->last);
+    }
     if (result == NULL) {
         Py_XDECREF(data);
         Py_DECREF(counts);
@@ -1369,21 +1439,21 @@ static PyObject *log_size(Log *log, void *closure) {
     return PyLong_FromSsize_t(log->buf.n);
 }
 
-static int log_traverse(Log *log, visitproc visit, void *arg) {
-#define VISIT_LOG(field) Py_VISIT(log->field);
-#define VISIT_POSES(field) Py_VISIT(log->poses.field);
-    LOG_OBJECTS(VISIT_LOG)
+/* the garbage collector's visit and clear of the objects a `self` holds (listed by an X macro: LOG_OBJECTS) */
+#define VISIT_MEMBER(field) Py_VISIT(self->field);
+#define CLEAR_MEMBER(field) Py_CLEAR(self->field);
+
+static int log_traverse(Log *self, visitproc visit, void *arg) {
+#define VISIT_POSES(field) Py_VISIT(self->poses.field);
+    LOG_OBJECTS(VISIT_MEMBER)
     POSES_OBJECTS(VISIT_POSES)
-#undef VISIT_LOG
 #undef VISIT_POSES
     return 0;
 }
 
-static int log_clear(Log *log) {
-#define CLEAR_LOG(field) Py_CLEAR(log->field);
-    LOG_OBJECTS(CLEAR_LOG)
-#undef CLEAR_LOG
-    poses_clear(&log->poses);
+static int log_clear(Log *self) {
+    LOG_OBJECTS(CLEAR_MEMBER)
+    poses_clear(&self->poses);
     return 0;
 }
 
@@ -1433,7 +1503,7 @@ static PyMethodDef log_methods[] = {
     {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
     {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
     {"take", (PyCFunction)log_take, METH_NOARGS,
-     "take() -> (bytes, {channel_id: messages}, first time, last time) since the last take"},
+     "take() -> (chunk, {channel_id: messages}, first time, last time) since the last take; chunk: a buffer"},
     {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
     {NULL, NULL, 0, NULL},
 };
@@ -1448,21 +1518,154 @@ static PyGetSetDef log_getset[] = {
     {NULL, NULL, NULL, NULL, NULL},
 };
 
+/* the slots of a callable object type that holds Python objects (Log, Tap): its struct T, functions prefix_* */
+#define CALLABLE_TYPE(T, prefix)                                                                           \
+    .tp_basicsize = sizeof(T), .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL, \
+    .tp_new = prefix##_new, .tp_dealloc = (destructor)prefix##_dealloc,                                        \
+    .tp_traverse = (traverseproc)prefix##_traverse, .tp_clear = (inquiry)prefix##_clear,                        \
+    .tp_call = PyVectorcall_Call, .tp_vectorcall_offset = offsetof(T, vectorcall)
+
 static PyTypeObject LogType = {
     PyVarObject_HEAD_INIT(NULL, 0)
     .tp_name = "simatch.msgs._cdr_accel.Log",
-    .tp_basicsize = sizeof(Log),
-    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
     .tp_doc = "Log(programs, fallback): MCAP message records of bus messages, encoded to CDR in C",
-    .tp_new = log_new,
-    .tp_dealloc = (destructor)log_dealloc,
-    .tp_traverse = (traverseproc)log_traverse,
-    .tp_clear = (inquiry)log_clear,
-    .tp_call = PyVectorcall_Call,
-    .tp_vectorcall_offset = offsetof(Log, vectorcall),
+    CALLABLE_TYPE(Log, log),
     .tp_methods = log_methods,
     .tp_members = log_members,
     .tp_getset = log_getset,
+};
+
+/* ------------------------------------------------------------------------------------------------------------
+ * The world's input taps (`simatch.sim.inputs`): the logging twins of the simulator's velocity and action
+ * commands, which a match calls hundreds of times per simulated second while a recorder listens. A Python
+ * twin cost a frame (and a tuple of its arguments) per call; a tap is one C call that appends the command to
+ * the input log's lists, as `InputLog.vel`/`InputLog.action` do, and calls the simulator's method. Any other
+ * call (keywords, another count of arguments, a robot index that is not a small int, a call made while the
+ * log is busy) goes to `general`, the Python twin that logs it as a call. */
+
+#define TAP_VEL 1
+#define TAP_ACTION 2
+
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    int form;                      /* TAP_VEL or TAP_ACTION */
+    PyObject *original, *general, *log, *kind, *robot, *values, *code; /* code: the kind's int */
+} Tap;
+
+static PyObject *busy_name = NULL, *zero = NULL, *one = NULL, *nan_value = NULL;
+
+static int tap_append(Tap *tap, PyObject *index, PyObject *const *numbers, int n) {
+    if (PyList_Append(tap->kind, tap->code) < 0 || PyList_Append(tap->robot, index) < 0)
+        return FAILED;
+    for (int k = 0; k < n; k++)
+        if (PyList_Append(tap->values, numbers[k]) < 0)
+            return FAILED;
+    return 0;
+}
+
+static PyObject *tap_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
+    Tap *tap = (Tap *)self;
+    Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
+    int compact = (kwnames == NULL || PyTuple_GET_SIZE(kwnames) == 0)
+                  && (tap->form == TAP_VEL ? nargs == 4 : (nargs >= 2 && nargs <= 5)) && PyLong_CheckExact(args[0]);
+    if (compact) {
+        int overflow = 0;
+        long i = PyLong_AsLongAndOverflow(args[0], &overflow);
+        compact = !overflow && i >= 0 && i < 32768;
+    }
+    if (compact) {
+        PyObject *busy = PyObject_GetAttr(tap->log, busy_name);
+        if (busy == NULL)
+            return NULL;
+        int b = PyObject_IsTrue(busy);
+        Py_DECREF(busy);
+        if (b < 0)
+            return NULL;
+        compact = !b;
+    }
+    if (!compact)
+        return PyObject_Vectorcall(tap->general, args, nargsf, kwnames);
+    int r;
+    if (tap->form == TAP_VEL) {
+        r = tap_append(tap, args[0], args + 1, 3);
+    } else {                       /* dribble (0/1), kick_speed as given, lob (0/1), window (NaN: none) */
+        int dribble = PyObject_IsTrue(args[1]), lob = nargs > 3 ? PyObject_IsTrue(args[3]) : 0;
+        if (dribble < 0 || lob < 0)
+            return NULL;
+        PyObject *numbers[4] = {
+            dribble ? one : zero,
+            nargs > 2 ? args[2] : zero,
+            lob ? one : zero,
+            nargs > 4 && args[4] != Py_None ? args[4] : nan_value,
+        };
+        r = tap_append(tap, args[0], numbers, 4);
+    }
+    if (r < 0)
+        return NULL;
+    return PyObject_Vectorcall(tap->original, args, nargs, NULL);
+}
+
+#define TAP_OBJECTS(X) X(original) X(general) X(log) X(kind) X(robot) X(values) X(code)
+
+static int tap_traverse(Tap *self, visitproc visit, void *arg) {
+    TAP_OBJECTS(VISIT_MEMBER)
+    return 0;
+}
+
+static int tap_clear(Tap *self) {
+    TAP_OBJECTS(CLEAR_MEMBER)
+    return 0;
+}
+
+static void tap_dealloc(Tap *tap) {
+    PyObject_GC_UnTrack(tap);
+    tap_clear(tap);
+    Py_TYPE(tap)->tp_free((PyObject *)tap);
+}
+
+static PyObject *tap_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    static char *kwlist[] = {"form", "original", "general", "log", "kind", "robot", "values", "code", NULL};
+    const char *form;
+    PyObject *original, *general, *log, *kind, *robot, *values, *code;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "sOOOO!O!O!O", kwlist, &form, &original, &general, &log,
+                                     &PyList_Type, &kind, &PyList_Type, &robot, &PyList_Type, &values, &code))
+        return NULL;
+    int f = strcmp(form, "vel") == 0 ? TAP_VEL : strcmp(form, "action") == 0 ? TAP_ACTION : 0;
+    if (!f || !PyCallable_Check(original) || !PyCallable_Check(general)) {
+        PyErr_SetString(PyExc_ValueError, "Tap(form: \"vel\" or \"action\", original, general, log, lists, code)");
+        return NULL;
+    }
+    Tap *tap = (Tap *)type->tp_alloc(type, 0);
+    if (tap == NULL)
+        return NULL;
+    tap->vectorcall = tap_vectorcall;
+    tap->form = f;
+    tap->original = Py_NewRef(original);
+    tap->general = Py_NewRef(general);
+    tap->log = Py_NewRef(log);
+    tap->kind = Py_NewRef(kind);
+    tap->robot = Py_NewRef(robot);
+    tap->values = Py_NewRef(values);
+    tap->code = Py_NewRef(code);
+    return (PyObject *)tap;
+}
+
+static PyObject *tap_get_wrapped(Tap *tap, void *closure) {
+    return Py_NewRef(tap->original);
+}
+
+static PyGetSetDef tap_getset[] = {
+    {"__wrapped__", (getter)tap_get_wrapped, NULL, "the simulator's method", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject TapType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.Tap",
+    .tp_doc = "Tap(form, original, general, log, kind, robot, values, code): a world input's logging twin in C",
+    CALLABLE_TYPE(Tap, tap),
+    .tp_getset = tap_getset,
 };
 
 /* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
@@ -1508,14 +1711,18 @@ static PyMethodDef methods[] = {
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    if (PyType_Ready(&LogType) < 0 || (step_name = PyUnicode_InternFromString("step")) == NULL
+    if (PyType_Ready(&LogType) < 0 || PyType_Ready(&ChunkType) < 0 || PyType_Ready(&TapType) < 0
+        || (busy_name = PyUnicode_InternFromString("busy")) == NULL || (zero = PyFloat_FromDouble(0.0)) == NULL
+        || (one = PyFloat_FromDouble(1.0)) == NULL || (nan_value = PyFloat_FromDouble(Py_NAN)) == NULL
+        || (step_name = PyUnicode_InternFromString("step")) == NULL
         || (name_name = PyUnicode_InternFromString("name")) == NULL
         || (pose_name = PyUnicode_InternFromString("pose")) == NULL)
         return NULL;
     PyObject *m = PyModule_Create(&module);
     if (m == NULL)
         return NULL;
-    if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0) {
+    if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0
+        || PyModule_AddObjectRef(m, "Tap", (PyObject *)&TapType) < 0) {
         Py_DECREF(m);
         return NULL;
     }

@@ -20,8 +20,10 @@ Interface of both:
   channel, or encodes the message with the pure-Python encoder, or counts it as malformed).
 * ``log.record(channel_id, data)``: a message already encoded (the 3D scene); ``log.append(data)``: raw
   records (schemas and channels, which must precede their first message in the chunk).
-* ``log.take() -> (bytes, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
-  and the log times of its first and last message (-1 if it holds none).
+* ``log.take() -> (data, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
+  and the log times of its first and last message (-1 if it holds none). ``data`` is the log's buffer itself,
+  handed over without a copy (a bytes-like object: a bytearray here, a read-only buffer of the C log whose
+  memory the log takes again once it is dropped; ``bytes(data)`` copies it).
 * ``log.poses(topic, channel_id, every, fallback)`` and ``log.pose_template(names, template, slots, grid,
   turn_grid)``: a pose template (the recorder's 3D scene). After a message on ``topic`` (model states:
   ``name``, ``pose`` as rows of x y z qw qx qy qz) of a physics step that is a multiple of ``every``, a
@@ -213,8 +215,8 @@ class MessageLog:
     def append(self, data) -> None:
         self._buf += data
 
-    def take(self) -> tuple[bytes, dict[int, int], int, int]:
-        out = (bytes(self._buf), self._counts, self._first, self._last)
+    def take(self) -> tuple[bytearray, dict[int, int], int, int]:
+        out = (self._buf, self._counts, self._first, self._last)
         self._buf = bytearray()
         self._counts = {}
         self._first = self._last = -1

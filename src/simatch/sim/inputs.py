@@ -16,9 +16,9 @@ out on a fresh simulator of the same scene, in the same order at the same steps,
 for bit: MuJoCo is deterministic for the same calls, and nothing else changes the world (perception, its
 noise and the referee only read it).
 
-Cost: one test of ``sim.inputs`` per call while nobody listens; a few list appends per call and one small
-message per step with inputs while a recorder listens (a 5v5 match: 40 messages, some 30 kB, per
-simulated second before compression).
+Cost: one test of ``sim.inputs`` per call while nobody listens; a few list appends per call (in C where the
+extension is built: `simatch.msgs.cdr.Tap`) and one small message per step with inputs while a recorder
+listens (a 5v5 match: 40 messages, some 30 kB, per simulated second before compression).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from .. import msgs
+from ..msgs import cdr
 
 VEL, ACTION, CALL = msgs.WorldInputs.VEL, msgs.WorldInputs.ACTION, msgs.WorldInputs.CALL
 #: the Simulator methods marked as world inputs (what a CALL input may name)
@@ -81,14 +82,10 @@ class InputLog:
         self.values += (vx, vy, w)  # as given: made float64 (exactly) when the message is built
 
     def action(self, i: int, dribble, kick_speed=0.0, lob=False, window=None) -> None:
-        self.kind.append(ACTION)
+        numbers = (1.0 if dribble else 0.0, kick_speed, 1.0 if lob else 0.0, math.nan if window is None else window)
+        self.kind.append(ACTION)  # (after the truths: one that raises logs nothing)
         self.robot.append(i)
-        self.values += (
-            1.0 if dribble else 0.0,
-            kick_speed,
-            1.0 if lob else 0.0,
-            math.nan if window is None else window,
-        )
+        self.values += numbers
 
     def call(self, name: str, args: tuple, kwargs: dict) -> None:
         self.kind.append(CALL)
@@ -115,11 +112,16 @@ class InputLog:
             values,
             self.calls,
         )
-        self.kind, self.robot, self.values, self.calls = [], [], [], []
+        self.clear()
         return msg
 
     def clear(self) -> None:
-        self.kind, self.robot, self.values, self.calls = [], [], [], []
+        """Empty the log. Its lists stay the same objects (the C taps append to them); the calls are handed to
+        the message, so they are a new list."""
+        self.kind.clear()
+        self.robot.clear()
+        self.values.clear()
+        self.calls = []
 
 
 def _index(i: Any) -> bool:
@@ -172,8 +174,11 @@ def _logged_call(original: Callable, name: str, log: InputLog) -> Callable:
 
 def _logged_vel(original: Callable, name: str, log: InputLog) -> Callable:
     """``command_velocity(i, vx, vy, w)`` in the compact form (VEL): a match makes hundreds of these calls per
-    simulated second. It calls no other input, so it needs no ``busy`` mark of its own."""
+    simulated second, so where the C extension is built the twin is its `Tap` (the same entries, one C call
+    instead of a Python frame per command). It calls no other input, so it needs no ``busy`` mark of its own."""
     general = _logged_call(original, name, log)
+    if cdr.Tap is not None:
+        return cdr.Tap("vel", original, general, log, log.kind, log.robot, log.values, VEL)
 
     @functools.wraps(original)
     def entry(*args, **kwargs):
@@ -188,8 +193,10 @@ def _logged_vel(original: Callable, name: str, log: InputLog) -> Callable:
 
 
 def _logged_action(original: Callable, name: str, log: InputLog) -> Callable:
-    """``command_action(i, dribble, kick_speed, lob[, window])`` in the compact form (ACTION)."""
+    """``command_action(i, dribble, kick_speed, lob[, window])`` in the compact form (ACTION); in C as above."""
     general = _logged_call(original, name, log)
+    if cdr.Tap is not None:
+        return cdr.Tap("action", original, general, log, log.kind, log.robot, log.values, ACTION)
 
     @functools.wraps(original)
     def entry(*args, **kwargs):
