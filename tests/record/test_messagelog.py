@@ -322,3 +322,20 @@ def test_the_pose_template_refuses_slots_outside_it():
                 log.pose_template(["ball"], b"\x00" * 64, slots, 1024.0, 4096.0)
         with pytest.raises(ValueError):
             log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 0.0, 4096.0)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_taken_chunk_is_the_logs_buffer_and_stays_whole(kind):
+    """``take`` hands the buffer over without a copy; a chunk still held keeps its bytes while the log goes on,
+    and the memory of a dropped one serves the next chunk with the right bytes."""
+    log = _log(kind, lambda topic, msg: None)
+    log.append(b"first" * 100_000)
+    held = log.take()[0]
+    log.append(b"second")
+    assert bytes(held) == b"first" * 100_000 and len(memoryview(held)) == 500_000
+    second = log.take()[0]
+    assert bytes(second) == b"second"
+    del held, second  # (the C log takes the larger buffer back for its next chunk)
+    log.append(b"third")
+    third = log.take()[0]
+    assert bytes(third) == b"third" and len(third) == 5 and bytes(memoryview(third)[1:3]) == b"hi"
