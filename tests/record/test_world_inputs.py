@@ -274,3 +274,48 @@ def test_the_c_taps_log_what_the_python_twins_log(accelerated, monkeypatch):
     assert log.take(0.0, 1, False) is None  # taken: the log is empty, its lists are still the taps' lists
     sim.command_velocity(0, 1.0, 0.0, 0.0)
     assert log.take(0.0, 1, False).kind.tolist() == [VEL]
+
+
+class _TextCommands(Node):
+    """Sends cyan/2 a speed written as text ("1.5") every tick, and a good command to cyan/3: the simulator
+    refuses the text, so the log must not record it as the number it reads as."""
+
+    phase = Phase.ROBOT
+    name = "test/text_commands"
+
+    def __init__(self, sim):
+        self.sim, self.period = sim, sim.scene.spec.control.period
+
+    def tick(self, now: float) -> None:
+        s = self.sim.simulator
+        s.command_velocity(s.index_of("cyan/2"), "1.5", 0.0, 0.0)
+        s.command_velocity(s.index_of("cyan/3"), 1.5, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("accelerated", [True, False])
+def test_a_number_written_as_text_is_logged_as_refused(accelerated, tmp_path, monkeypatch):
+    from simatch.msgs import cdr
+    from simatch.sim import inputs as world
+
+    if not accelerated:
+        monkeypatch.setattr(cdr, "Tap", None)
+    elif cdr.Tap is None:
+        pytest.skip("the C extension is not built")
+    log = world.InputLog()
+    log.vel(0, "1.5", 0.25, np.float32(0.5))
+    log.action(1, True, b"2", False)
+    assert [str(v) for v in log.take(0.0, 0, False).values.tolist()] == [
+        *("nan", "0.25", "0.5"),
+        *("1.0", "nan", "0.0", "nan"),
+    ]
+    path = tmp_path / "text.mcap"
+    overrides = {"judge.kind": "none", "teams.cyan.strategy": "none", "teams.magenta.strategy": "none"}
+    with simatch.Simulation("msl_5v5", seed=1, overrides=overrides) as sim:
+        with Recorder.for_run(sim, path):
+            sim.clock.add(_TextCommands(sim))
+            sim.run(seconds=1.0)
+            moved = sim.model_states()
+            assert sim.simulator.refused[sim.simulator.index_of("cyan/2")] > 0
+    start = dict(zip(("x", "y"), simatch.Simulation("msl_5v5").scene.spec.teams["cyan"].start[1][:2]))
+    assert abs(moved["cyan/2"].x - start["x"]) < 0.05  # it stood: the text was refused
+    assert verify(path).identical

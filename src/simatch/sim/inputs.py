@@ -46,7 +46,11 @@ class InputError(ValueError):
 
 
 def _number(value: Any) -> float:
-    """A command's number as float64, exactly; what is not a number becomes NaN (the simulator refuses both)."""
+    """A command's number as float64, exactly; what is not a number becomes NaN (the simulator refuses both).
+    Text is not a number even when it reads as one: the simulator refuses ``"1.5"`` (it does not compare with
+    a float), so the log must not turn it into a command that a replay would carry out."""
+    if isinstance(value, str | bytes | bytearray):
+        return math.nan
     try:
         return float(value)
     except (TypeError, ValueError):
@@ -99,10 +103,18 @@ class InputLog:
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
         if not self.kind:
             return None
+        # numbers as numpy makes them (float64 exactly, from Python and numpy numbers and bools); anything else
+        # (text, which numpy would read as a number, huge ints, objects) one by one as the simulator took them
         try:
-            values = np.array(self.values, dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):  # something that is not a number was given (and refused)
-            values = np.array([_number(v) for v in self.values], dtype=np.float64)
+            values = np.array(self.values)
+            plain = values.dtype.kind in "fiub"
+        except (TypeError, ValueError, OverflowError):
+            plain = False
+        values = (
+            values.astype(np.float64, copy=False)
+            if plain
+            else np.array([_number(v) for v in self.values], dtype=np.float64)
+        )
         msg = _WorldInputs(
             stamp,
             step,
