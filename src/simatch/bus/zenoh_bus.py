@@ -736,7 +736,7 @@ class ZenohBus:
                         if decoded is None or decoded[0] != name:
                             decoded = (name, (None, msgs.decode(name, data), None))
                             if made is not None:
-                                made.append(decoded[1][1])
+                                made.append((decoded[1][1], data))
                         pre = decoded[1]
                     except msgs.MessageError as exc:
                         pre = (None, None, exc)
