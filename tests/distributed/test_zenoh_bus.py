@@ -335,3 +335,25 @@ def test_an_owner_is_woken_only_when_a_sample_says_so(pair):
     time.sleep(0.05)
     server.pump(0.0)
     assert seen == [b"first", b"second", b"last"]
+
+
+def test_a_feeds_messages_share_again_the_parts_their_publisher_shared(pair):
+    """The simulator gives a team's robots one RobotInfo list; after the wire they hold one list again
+    (nubot builds its team's view and picture once per team when they do: see simatch.bus.sharing)."""
+    server, client = pair
+    covers = ["cyan/*/OmniVisionInfo"]
+    feed = server.declare_feed("lockstep/feed/cyan", covers)
+    pubs = [server.publisher(f"cyan/{r}/OmniVisionInfo", msgs.OmniVisionInfo) for r in (1, 2, 3)]
+    got = {}
+    client.take_feed("lockstep/feed/cyan", covers)
+    for r in (1, 2, 3):
+        client.subscribe(f"cyan/{r}/OmniVisionInfo", msgs.OmniVisionInfo, lambda m, r=r: got.__setitem__(r, m))
+    pump_until(server, lambda: feed.matching)
+    team = [msgs.new(msgs.RobotInfo, id=r, x=float(r)) for r in (1, 2)]
+    pubs[0].put(msgs.new(msgs.OmniVisionInfo, robot_id=1, robots=team))
+    pubs[1].put(msgs.new(msgs.OmniVisionInfo, robot_id=2, robots=team))
+    pubs[2].put(msgs.new(msgs.OmniVisionInfo, robot_id=3, robots=[msgs.new(msgs.RobotInfo, id=1, x=1.5)]))
+    server.flush_feeds()
+    pump_until(client, lambda: len(got) == 3)
+    assert got[1].robots is got[2].robots and [r.x for r in got[2].robots] == [1.0, 2.0]
+    assert got[3].robots is not got[1].robots and got[3].robots[0].x == 1.5

@@ -8,7 +8,9 @@ processes, over Zenoh on loopback.
   strategy's.
 * ``distributed_lockstep``: the real-time factor of ``msl_5v5`` as shipped (both teams' default strategy,
   the automatic referee) in lockstep with two team processes, against the same run embedded (same scene
-  and seed: the digests must be equal).
+  and seed: the digests must be equal), with the CPU time per control tick of the embedded run, of the
+  server's simulation thread, of its other (Zenoh's) threads and of the busier team process, and their ratio
+  (``cpu_ratio``: all three processes against the embedded run): figures a busy machine does not distort.
 * ``distributed_realtime``: the same match ``--realtime`` with one process per robot (11 processes): the
   real-time factor it holds and the command latency (tick opened -> commands back), p50/p99/max over
   every answer (``late``: how many came after the server stopped waiting, ``missed``: ticks not answered
@@ -35,11 +37,13 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
 
 from ..config.loader import load_scene
+from .distributed_cpu import Sample, per_tick_ms
 
 SCENE = "msl_5v5"
 #: the round trip's load: one robot driving back to its start pose (the bus's figure, not a strategy's)
@@ -117,7 +121,7 @@ def _server(realtime: bool = False, overrides: dict | None = None):
     )
     procs: list[subprocess.Popen] = []
 
-    def launch(kind: str, who: str) -> None:
+    def launch(kind: str, who: str) -> subprocess.Popen:
         team = who.split("/")[0]
         procs.append(
             subprocess.Popen(
@@ -138,6 +142,7 @@ def _server(realtime: bool = False, overrides: dict | None = None):
                 stderr=subprocess.DEVNULL,
             )
         )
+        return procs[-1]
 
     try:
         yield server, launch
@@ -173,34 +178,43 @@ def _parts(prefix: str, st: dict, names) -> dict:
     return {f"{prefix}_{name}_{q}_ms": st[f"{name}_{q}_ms"] for name in names for q in ("p50", "p99")}
 
 
-def _match(sim, seconds: float, server=None, play=None) -> float:
+def _match(sim, seconds: float, server=None, play=None, cpu: dict | None = None) -> float:
     """Run the warm-up, then ``seconds`` more of the match (or of ``play(sim, seconds)``); returns the wall
-    seconds of the latter."""
+    seconds of the latter. ``cpu``: process name -> pid, replaced by the CPU seconds each of their threads
+    used meanwhile (`distributed_cpu`)."""
     sim.run(seconds=WARM_UP, until_done=False)
     if server is not None:
         server.reset_stats()
     if play is not None:
         return play(sim, seconds)
+    before = Sample.take(cpu) if cpu is not None else None
     t0 = time.perf_counter()
     sim.run(seconds=seconds, until_done=False)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    if before is not None:
+        cpu.clear()
+        cpu.update(Sample.take(before.pids).minus(before))
+    return wall
 
 
 def lockstep(seconds: float | None = None) -> dict:
     from ..simulation import Simulation
 
     seconds = seconds or 60.0
+    me, main = os.getpid(), threading.get_native_id()
     with Simulation(load_scene(SCENE), seed=0) as sim:
-        embedded_wall = _match(sim, seconds)
+        embedded_cpu = {"embedded": me}
+        embedded_wall = _match(sim, seconds, cpu=embedded_cpu)
         embedded_digest = sim.state_digest()
     with _server() as (server, launch):
-        launch("team", "cyan")
-        launch("team", "magenta")
+        cpu = {"server": me, "cyan": launch("team", "cyan").pid, "magenta": launch("team", "magenta").pid}
         server.wait_for_teams()
-        wall = _match(server.sim, seconds, server)
+        wall = _match(server.sim, seconds, server, cpu=cpu)
         digest = server.sim.state_digest()
         st = server.stats()
     rtf, emb = seconds / wall, seconds / embedded_wall
+    ticks = round(seconds / load_scene(SCENE).spec.control.period)
+    teams = [per_tick_ms(cpu[team], ticks) for team in ("cyan", "magenta")]
     return {
         "distributed_lockstep_rtf": round(rtf, 2),
         "distributed_lockstep_embedded_rtf": round(emb, 2),
@@ -208,6 +222,16 @@ def lockstep(seconds: float | None = None) -> dict:
         "distributed_lockstep_digest_equal": digest == embedded_digest,
         **_parts("distributed_lockstep", st, ("latency", "tick", "feed", "processing", "transit")),
         "distributed_lockstep_missed": st["missed"],
+        # CPU time per control tick (what the wall clock hides on a busy machine): the embedded run's thread,
+        # the server's simulation thread, its other threads (Zenoh's), each team process (the slower one)
+        "distributed_lockstep_embedded_cpu_ms_per_tick": per_tick_ms(embedded_cpu["embedded"], ticks, only=main),
+        "distributed_lockstep_server_main_cpu_ms_per_tick": per_tick_ms(cpu["server"], ticks, only=main),
+        "distributed_lockstep_server_zenoh_cpu_ms_per_tick": per_tick_ms(cpu["server"], ticks, but=main),
+        "distributed_lockstep_team_cpu_ms_per_tick": max(teams),
+        "distributed_lockstep_cpu_ratio": round(
+            (per_tick_ms(cpu["server"], ticks) + sum(teams)) / per_tick_ms(embedded_cpu["embedded"], ticks, only=main),
+            3,
+        ),
         "distributed_lockstep_load": round(os.getloadavg()[0], 2),
     }
 

@@ -43,6 +43,7 @@ from . import bundle as _bundle
 from . import topics as _topics
 from .base import AnyCallback, BusStats, Callback
 from .inproc import InProcessBus
+from .sharing import share_equal_lists
 
 log = logging.getLogger(__name__)
 
@@ -712,6 +713,7 @@ class ZenohBus:
         decode = self.prepare_on_arrival
         routes = self._routes
         out = []
+        made = [] if fed and decode else None  # a feed's messages, to share their equal parts (`sharing`)
         for entry_topic, msgtype, data in entries:
             raw = not msgtype
             subs = routes.get((entry_topic, raw, fed))
@@ -733,10 +735,14 @@ class ZenohBus:
                         name = rsub.msgtype or _type_of(encoding)
                         if decoded is None or decoded[0] != name:
                             decoded = (name, (None, msgs.decode(name, data), None))
+                            if made is not None:
+                                made.append((decoded[1][1], data))
                         pre = decoded[1]
                     except msgs.MessageError as exc:
                         pre = (None, None, exc)
                 out.append((rsub, entry_topic, data, None, encoding, arrival, pre))
+        if made:
+            share_equal_lists(made)
         return out
 
     def _route(self, topic: str, raw: bool, fed: bool) -> tuple:
