@@ -66,3 +66,13 @@ def test_bytes_that_are_not_what_the_encoder_writes_are_never_shared():
     padded = (b[0], b"\x00\x01\x00\x00" + b[1][4:] + b"\x00")
     assert share_equal_lists([a, forged]) == 0
     assert share_equal_lists([a, padded]) == 0
+
+
+def test_a_first_message_with_an_empty_list_does_not_stop_later_sharing(monkeypatch):
+    """What a list holds is learnt from a message that has some: a team whose first perception lists nobody
+    (its robots not on the field yet) still gets its lists shared once they are there."""
+    monkeypatch.delitem(sharing._LIST_FIELDS, msgs.typestore.types["simatch_msgs/msg/OmniVisionInfo"], raising=False)
+    assert share_equal_lists([vision(1, []), vision(2, [])]) == 0
+    team = [robot(1), robot(2)]
+    a, b = vision(1, team), vision(2, team)
+    assert share_equal_lists([a, b]) == 1 and b[0].robots is a[0].robots

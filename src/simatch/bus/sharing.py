@@ -38,7 +38,10 @@ def _list_fields(cls: type, msg: Any) -> tuple[tuple[str, ...], bool]:
             for name in slots
             if isinstance(value := getattr(msg, name, None), list) and value and hasattr(type(value[0]), "__slots__")
         )
-        known = _LIST_FIELDS[cls] = (names, bool(names) and names[-1] == slots[-1])
+        known = (names, bool(names) and names[-1] == slots[-1])
+        # an empty list tells nothing of its elements' type: learn again from a later message
+        if not any(isinstance(value := getattr(msg, name, None), list) and not value for name in slots):
+            _LIST_FIELDS[cls] = known
     return known
 
 
