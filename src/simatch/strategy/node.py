@@ -52,6 +52,7 @@ class RobotNode(Node):
         self.period = period
         self.errors = 0
         self.detached = False
+        self._user: tuple = ((), _EMPTY_F64)  # the last StrategyInfo.user tuple and its array
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -182,8 +183,20 @@ class RobotNode(Node):
             0,
             0,
             pass_cmd,
-            np.array(cmd.user, dtype=np.float64) if cmd.user else _EMPTY_F64,
+            self._user_array(cmd.user),
         )
+
+    def _user_array(self, user: tuple) -> np.ndarray:
+        """``user`` as the StrategyInfo's float64 array; the array of the tick before again when the command
+        carries the very same tuple (a robot repeating its command; messages are read-only, so they may share it)."""
+        if not user:
+            return _EMPTY_F64
+        if user is self._user[0]:
+            return self._user[1]
+        arr = np.array(user, dtype=np.float64)
+        if type(user) is tuple:  # (a list may change in place: never kept)
+            self._user = (user, arr)
+        return arr
 
     def _error(self, now: float, exc: Exception) -> None:
         self.errors += 1

@@ -116,9 +116,7 @@ class BallPlayer:
                 self.pa_since = obs.t
         else:
             self.pa_since = None
-        if self.announce is not None and (
-            obs.t > self.announce_until or (not me.holding and any(m.holding for m in obs.mates))
-        ):
+        if self.announce is not None and (obs.t > self.announce_until or (not me.holding and obs.holder is not None)):
             self.announce = None
 
     def new_possession(self) -> None:

@@ -108,7 +108,7 @@ class GameFlow:
             self.pass_pending = False
 
     def _follow(self, obs: Observation) -> None:
-        holder = _holder(obs)
+        holder = obs.holder
         touched = self._regain(obs, holder)
         shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
         moved = shift >= IN_PLAY_DISTANCE
@@ -146,7 +146,7 @@ class GameFlow:
 
     def _regain(self, obs: Observation, holder) -> bool | None:
         """Follow who is on the ball for RC-10.1.2 (as the referee reads it from the touches, with margins).
-        ``holder``: the team-mate holding the ball (`_holder`). Returns whether an opponent touches the ball,
+        ``holder``: the team-mate holding the ball (`Observation.holder`). Returns whether an opponent touches the ball,
         if it had to find out (else None)."""
         bx, by = obs.bx, obs.by
         on = holder
@@ -176,14 +176,6 @@ class GameFlow:
         self._ours = on.id
         self._left_at = (bx, by)
         return None
-
-
-def _holder(obs: Observation):
-    """The team-mate holding the ball, if any."""
-    for m in obs.mates:
-        if m.holding:
-            return m
-    return None
 
 
 def _opponent_touching(obs: Observation) -> bool:

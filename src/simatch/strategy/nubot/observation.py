@@ -73,7 +73,7 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "team_strategy", "mates", "by_id", "array")
+    __slots__ = ("tick", "robots", "team_strategy", "mates", "by_id", "array", "holder")
 
     def __init__(self):
         self.tick = -1
@@ -82,6 +82,7 @@ class TeamView:
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
         self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        self.holder: Mate | None = None  # the first team-mate holding the ball, if any
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
@@ -106,6 +107,7 @@ class TeamView:
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id = mates, {m.id: m for m in mates}
         self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
+        self.holder = next((m for m in mates if m.holding), None)
         return self.mates, self.by_id, self.array
 
 
@@ -131,6 +133,7 @@ class Observation:
         "mtype",
         "coach",
         "goalie_id",
+        "holder",
     )
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
@@ -140,6 +143,7 @@ class Observation:
         self.goalie_id = world.goalkeeper
         view = view or TeamView()
         mates, by_id, self.mate_array = view.get(world)
+        self.holder = view.holder  # the first team-mate holding the ball (None: none does)
         me = by_id.get(world.id)
         if me is None:
             raise LookupError(f"robot {world.id} is missing from its own perception")
@@ -158,7 +162,11 @@ class Observation:
             self.ball_seen = b is v.ball
             self.ball_age = 0.0 if self.ball_seen else b.age
         o = v.obstacles
-        self.opp_array = arr = _opponents(o.x, o.y, o.vx, o.vy, self.mate_array)
+        ox = o.x
+        # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs
+        # numba more to hand back than this one does to make)
+        buf = np.empty((len(ox), 4))
+        self.opp_array = arr = buf[: _opponents(ox, o.y, o.vx, o.vy, self.mate_array, buf)]
         self.opps = arr.tolist()
         c = world.coach
         self.coach = c
@@ -182,11 +190,12 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _opponents(ox, oy, ovx, ovy, mates):
-    """(M, 4) float64: x, y, vx, vy of the obstacles (float32 arrays of an ObstaclesInfo) that are not
-    team-mates (``mates``, the TeamView's array: x, y in its first columns). With exact perception a
-    team-mate's obstacle is exactly where the team list puts it; otherwise (noise) anything within
-    _SAME_ROBOT of one."""
+def _opponents(ox, oy, ovx, ovy, mates, out):
+    """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
+    team-mates (``mates``, the TeamView's array: x, y in its first columns) into the first rows of ``out``
+    (at least as many rows as obstacles) and returns how many. With exact perception a team-mate's
+    obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of
+    one."""
     n = ox.shape[0]
     k_mates = mates.shape[0]
     keep = np.zeros(n, dtype=np.bool_)
@@ -211,7 +220,6 @@ def _opponents(ox, oy, ovx, ovy, mates):
                         keep[k] = False
                         kept -= 1
                         break
-    out = np.empty((kept, 4))
     r = 0
     for k in range(n):
         if keep[k]:
@@ -220,4 +228,4 @@ def _opponents(ox, oy, ovx, ovy, mates):
             out[r, 2] = ovx[k]
             out[r, 3] = ovy[k]
             r += 1
-    return out
+    return r

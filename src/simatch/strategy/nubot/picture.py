@@ -92,14 +92,21 @@ class TeamMemo:
         self.mates = None
         self.rest: tuple = ()
         self.picture = None
+        self._asked: tuple = ()  # the key of the last `get` that found nothing, for the `put` after it
 
     def get(self, obs: Observation, flow: GameFlow) -> Picture | None:
-        if self.tick == obs.tick and self.mates is obs.mates and self.rest == _rest_key(obs, flow):
+        rest = _rest_key(obs, flow)
+        if self.tick == obs.tick and self.mates is obs.mates and self.rest == rest:
             return self.picture
+        self._asked = rest
         return None
 
     def put(self, obs: Observation, flow: GameFlow, picture: Picture) -> None:
-        self.tick, self.mates, self.rest, self.picture = obs.tick, obs.mates, _rest_key(obs, flow), picture
+        rest = self._asked
+        self._asked = ()
+        if not rest:
+            rest = _rest_key(obs, flow)
+        self.tick, self.mates, self.rest, self.picture = obs.tick, obs.mates, rest, picture
 
 
 def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
