@@ -9,7 +9,7 @@ import numpy as np
 
 import simatch
 from simatch.field import FieldGeometry
-from simatch.strategy.nubot import ballpath, picture, positions
+from simatch.strategy.nubot import ballpath, observation, picture, positions
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
@@ -48,7 +48,112 @@ def test_small_arrays_hold_the_values_of_np_array():
 
 
 def _kernels():
-    return {"intercepts": ballpath._intercepts, "score_spots": positions._score_spots, "assign": picture._assign}
+    return {
+        "intercepts": ballpath._intercepts,
+        "team_intercepts": ballpath._team_intercepts,
+        "score_spots": positions._score_spots,
+        "assist_choice": picture._assist_choice,
+        "assign": picture._assign,
+    }
+
+
+def _random_path(rng):
+    return ballpath.BallPath(
+        rng.uniform(-11, 11),
+        rng.uniform(-7, 7),
+        rng.choice([0.11, 0.11, rng.uniform(0.11, 2.0)]),
+        rng.choice([0.0, rng.uniform(-8, 8)]),
+        rng.choice([0.0, rng.uniform(-8, 8)]),
+        rng.choice([0.0, 0.0, rng.uniform(-1, 5)]),
+        rng.uniform(0.2, 0.8),
+        0.11,
+        12.3,
+        8.3,
+    )
+
+
+def test_team_intercepts_in_one_kernel_equal_the_rows_then_the_intercepts():
+    """`team_intercepts` (one kernel) gives, bit for bit, what its two steps give called one by one."""
+    rng = random.Random(5)
+    for _ in range(3000):
+        path = _random_path(rng)
+        us = np.array(
+            [
+                [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-4, 4)]
+                for _ in range(rng.randint(0, 5))
+            ]
+        ).reshape(-1, 5)
+        opps = np.array(
+            [
+                [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3)]
+                for _ in range(rng.randint(0, 5))
+            ]
+        ).reshape(-1, 4)
+        bx, by, turn = path.x + rng.uniform(-1, 1), path.y, rng.uniform(0.05, 0.5)
+        vmax, acc = rng.uniform(1.0, 4.0), rng.uniform(1.0, 3.0)
+        fused = ballpath.team_intercepts(path, us, opps, bx, by, turn, vmax, acc)
+        px, py, vx, vy, extra = ballpath._team_rows(us, opps, bx, by, turn)
+        plain = ballpath.intercepts(path, px, py, vx, vy, vmax, acc, extra)
+        assert fused.tobytes() == plain.tobytes()
+
+
+def test_assistant_spots_compiled_equal_the_plain_choice():
+    """The assistants' spots chosen in one kernel equal the plain choice (NumPy's argsort, Python's hypot) on
+    random situations; where equal scores make the order of equals matter the kernel says so (-1) and the
+    team takes the plain way."""
+    areas = Areas(FieldGeometry(), 0.4)
+    cx, cy = positions.spot_grid(areas)
+    rng = random.Random(11)
+    ties = 0
+    for case in range(4000):
+        opps = [[rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0] for _ in range(rng.randint(0, 5))]
+        if case % 10 == 0:  # symmetric situations, where scores come out equal
+            opps, bx, by = [], rng.choice([0.0, 2.0, -4.0]), 0.0
+        else:
+            bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        prev = None if rng.random() < 0.3 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
+        n = rng.choice([1, 2])
+        plain = picture.assist_spots(cx, cy, bx, by, opps, areas.L2, prev, n)
+        nx, ny = prev if prev is not None else (math.nan, math.nan)
+        out = np.empty((n, 2))
+        arr = np.array(opps, dtype=float).reshape(-1, 4)
+        k = picture._assist_choice(cx, cy, bx, by, arr, areas.L2, 3.0, 8.5, nx, ny, out)
+        if k < 0:
+            ties += 1
+            continue
+        assert [(x, y) for x, y in out[:k].tolist()] == plain
+    assert 0 < ties < 1000
+
+
+def _plain_opponents(ox, oy, ovx, ovy, mates):
+    """The rule of `observation._opponents`, plainly: exact positions first, by distance under noise."""
+    rows = [(float(x), float(y), float(vx), float(vy)) for x, y, vx, vy in zip(ox, oy, ovx, ovy)]
+    exact = [r for r in rows if not any(m[0] == r[0] and m[1] == r[1] for m in mates)]
+    if len(rows) - len(exact) >= len(mates) - 1:
+        return exact
+    near = observation._SAME_ROBOT
+    return [r for r in exact if all(abs(m[0] - r[0]) >= near or abs(m[1] - r[1]) >= near for m in mates)]
+
+
+def test_opponents_are_told_from_team_mates_as_the_plain_rule_says():
+    rng = random.Random(2)
+    for _ in range(3000):
+        mates = [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0, k + 1) for k in range(rng.randint(1, 5))]
+        others = [(rng.uniform(-11, 11), rng.uniform(-7, 7)) for _ in range(rng.randint(0, 5))]
+        seen = [(x, y) for x, y, *_ in mates[1:]] + others
+        if rng.random() < 0.5:  # noisy perception: team-mates a few centimetres off
+            seen = [(x + rng.uniform(-0.05, 0.05), y + rng.uniform(-0.05, 0.05)) for x, y in seen]
+        rng.shuffle(seen)
+        f32 = np.float32
+        ox = np.array([x for x, _ in seen], dtype=f32)
+        oy = np.array([y for _, y in seen], dtype=f32)
+        ovx = np.array([rng.uniform(-3, 3) for _ in seen], dtype=f32)
+        ovy = np.array([rng.uniform(-3, 3) for _ in seen], dtype=f32)
+        m = np.array(mates, dtype=float).reshape(-1, 5)
+        m[:, :2] = m[:, :2].astype(f32)  # as the team list's float32 numbers
+        out = np.full((len(seen), 4), np.nan)
+        k = observation._opponents(ox, oy, ovx, ovy, m, out)
+        assert out[:k].tolist() == [list(r) for r in _plain_opponents(ox, oy, ovx, ovy, m.tolist())]
 
 
 def test_load_kernels_loads_what_open_play_calls():

@@ -211,6 +211,34 @@ def team_intercepts(
     acc: float,
 ) -> np.ndarray:
     """`intercepts` of our robots ``us`` ((K, 5): x, y, vx, vy, yaw), who first turn to face the ball at
-    (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4): x, y, vx, vy): (K + M, 3)."""
+    (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4): x, y, vx, vy): (K + M, 3).
+    One kernel call (`_team_intercepts`): the rows and the reach times, no arrays handed back and forth."""
+    out = np.empty((us.shape[0] + opps.shape[0], 3))
+    _team_intercepts(
+        path.x,
+        path.y,
+        path.speed,
+        path.ux,
+        path.uy,
+        path.land_t,
+        path.stop_t,
+        path.decel,
+        path.xlim,
+        path.ylim,
+        us,
+        opps,
+        bx,
+        by,
+        turn,
+        vmax,
+        acc,
+        out,
+    )
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _team_intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, us, opps, bx, by, turn, vmax, acc, out):
+    """`team_intercepts` compiled: `_team_rows`, then `_intercepts` of them into ``out``."""
     px, py, vx, vy, extra = _team_rows(us, opps, bx, by, turn)
-    return intercepts(path, px, py, vx, vy, vmax, acc, extra)
+    _intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, vx, vy, extra, vmax, acc, out)

@@ -19,13 +19,14 @@ import math
 import numba
 import numpy as np
 
+from ...exactmath import hypot
 from ..roles import ROLES
 from .ballpath import BallPath, team_intercepts
 from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
 from .params import NubotParams
-from .positions import Areas, midfield_point, outlet_point, passive_point, score_spots
+from .positions import Areas, _score_spots, midfield_point, outlet_point, passive_point, score_spots
 from .setpieces import formation, spread
 
 BALL_RADIUS = 0.11
@@ -186,6 +187,80 @@ def _assign(robots, slots, cx, cy, cr):
             depth += 1
             perm[depth] = -1
     return best
+
+
+def assist_spots(
+    cx: np.ndarray,
+    cy: np.ndarray,
+    bx: float,
+    by: float,
+    opps: list,
+    L2: float,
+    prev: tuple[float, float] | None,
+    n: int,
+) -> list[tuple[float, float]]:
+    """Up to ``n`` receiving spots for the assistants: the best scored of the candidates (`score_spots`
+    from 3 to 8.5 m of the ball at (bx, by), near ``prev``, the assistant's place), at least 3 m apart,
+    taken among the twelve best. The plain version of `_assist_choice` (and its fallback)."""
+    ox = np.array([o[0] for o in opps])
+    oy = np.array([o[1] for o in opps])
+    score = score_spots(cx, cy, bx, by, ox, oy, L2, 3.0, 8.5, prev)
+    out = []
+    for k in np.argsort(-score)[:12].tolist():
+        x, y = float(cx[k]), float(cy[k])
+        if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
+            out.append((x, y))
+            if len(out) == n:
+                break
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
+    """`assist_spots` compiled, over the opponents' (M, 4) array, ``prev`` as (nx, ny) (NaN: none): writes
+    the spots into the first rows of ``out`` ((n, 2)) and returns how many, or -1 when two of the thirteen
+    best scores are equal or a score is NaN (NumPy's and numba's sorts may order equals differently: the
+    caller then takes the plain way, whose order is the one the game always had)."""
+    m = cx.shape[0]
+    score = np.empty(m)
+    _score_spots(
+        cx,
+        cy,
+        bx,
+        by,
+        np.ascontiguousarray(opps[:, 0]),
+        np.ascontiguousarray(opps[:, 1]),
+        L2,
+        dmin,
+        dmax,
+        nx,
+        ny,
+        score,
+    )
+    for i in range(m):
+        if score[i] != score[i]:
+            return -1
+    order = np.argsort(-score)
+    top = min(12, m)
+    for i in range(min(top, m - 1)):
+        if score[order[i]] == score[order[i + 1]]:
+            return -1
+    n = out.shape[0]
+    k = 0
+    for i in range(top):
+        x, y = cx[order[i]], cy[order[i]]
+        free = True
+        for j in range(k):
+            if not hypot(x - out[j, 0], y - out[j, 1]) > 3.0:
+                free = False
+                break
+        if free:
+            out[k, 0] = x
+            out[k, 1] = y
+            k += 1
+            if k == n:
+                break
+    return k
 
 
 class Analyst:
@@ -350,19 +425,13 @@ class Analyst:
 
     def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
         cx, cy = self.spots
-        bx, by = obs.bx, obs.by
-        ox = np.array([o[0] for o in obs.opps])
-        oy = np.array([o[1] for o in obs.opps])
         prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
-        score = score_spots(cx, cy, bx, by, ox, oy, self.areas.L2, 3.0, 8.5, prev)
-        out = []
-        for k in np.argsort(-score)[:12].tolist():
-            x, y = float(cx[k]), float(cy[k])
-            if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
-                out.append((x, y))
-                if len(out) == n:
-                    break
-        return out
+        nx, ny = prev if prev is not None else (math.nan, math.nan)
+        out = np.empty((n, 2))
+        k = _assist_choice(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
+        if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
+            return assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
+        return [(x, y) for x, y in out[:k].tolist()]
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
