@@ -152,8 +152,16 @@ def test_opponents_are_told_from_team_mates_as_the_plain_rule_says():
         m = np.array(mates, dtype=float).reshape(-1, 5)
         m[:, :2] = m[:, :2].astype(f32)  # as the team list's float32 numbers
         out = np.full((len(seen), 4), np.nan)
-        k = observation._opponents(ox, oy, ovx, ovy, m, out)
-        assert out[:k].tolist() == [list(r) for r in _plain_opponents(ox, oy, ovx, ovy, m.tolist())]
+        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        if rng.random() < 0.2:  # the ball at a robot
+            bx, by = float(m[0, 0]), float(m[0, 1])
+        k, near, near_d, opp_d = observation._opponents(ox, oy, ovx, ovy, m, out, bx, by)
+        opps = _plain_opponents(ox, oy, ovx, ovy, m.tolist())
+        assert out[:k].tolist() == [list(r) for r in opps]
+        # the nearest team-mate (the first of equals) and opponent, by Python's own hypot
+        dists = [math.hypot(x - bx, y - by) for x, y in m[:, :2].tolist()]
+        assert (near, near_d) == min(enumerate(dists), key=lambda e: e[1])
+        assert opp_d == min((math.hypot(x - bx, y - by) for x, y, _, _ in opps), default=math.inf)
 
 
 def test_load_kernels_loads_what_open_play_calls():

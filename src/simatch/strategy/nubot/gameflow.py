@@ -150,15 +150,9 @@ class GameFlow:
         if it had to find out (else None)."""
         bx, by = obs.bx, obs.by
         on = holder
-        if on is None:
+        if on is None and obs.near_mate >= 0 and not obs.near_mate_d > ON_BALL:
             # the team-mate nearest to the ball (the first of equals), if it is on it
-            near = math.inf
-            for m in obs.mates:
-                d = math.hypot(m.x - bx, m.y - by)
-                if on is None or d < near:
-                    on, near = m, d
-            if on is not None and near > ON_BALL:
-                on = None
+            on = obs.mates[obs.near_mate]
         if on is None:
             touched = _opponent_touching(obs)
             if touched:
@@ -180,8 +174,4 @@ class GameFlow:
 
 def _opponent_touching(obs: Observation) -> bool:
     """An opponent is close enough to the ball to be touching it."""
-    bx, by = obs.bx, obs.by
-    for o in obs.opps:
-        if math.hypot(o[0] - bx, o[1] - by) < TOUCH_DISTANCE:
-            return True
-    return False
+    return obs.opp_ball_d < TOUCH_DISTANCE

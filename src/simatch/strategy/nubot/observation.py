@@ -13,6 +13,7 @@ from itertools import chain
 import numba
 import numpy as np
 
+from ...exactmath import hypot
 from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
@@ -134,6 +135,9 @@ class Observation:
         "coach",
         "goalie_id",
         "holder",
+        "near_mate",
+        "near_mate_d",
+        "opp_ball_d",
     )
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
@@ -166,7 +170,10 @@ class Observation:
         # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs
         # numba more to hand back than this one does to make)
         buf = np.empty((len(ox), 4))
-        self.opp_array = arr = buf[: _opponents(ox, o.y, o.vx, o.vy, self.mate_array, buf)]
+        k, self.near_mate, self.near_mate_d, self.opp_ball_d = _opponents(
+            ox, o.y, o.vx, o.vy, self.mate_array, buf, self.bx, self.by
+        )
+        self.opp_array = arr = buf[:k]
         self.opps = arr.tolist()
         c = world.coach
         self.coach = c
@@ -190,12 +197,15 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _opponents(ox, oy, ovx, ovy, mates, out):
+def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
     team-mates (``mates``, the TeamView's array: x, y in its first columns) into the first rows of ``out``
-    (at least as many rows as obstacles) and returns how many. With exact perception a team-mate's
-    obstacle is exactly where the team list puts it; otherwise (noise) anything within _SAME_ROBOT of
-    one."""
+    (at least as many rows as obstacles). With exact perception a team-mate's obstacle is exactly where
+    the team list puts it; otherwise (noise) anything within _SAME_ROBOT of one.
+
+    Returns how many, with what the game flow and the team picture ask of the ball at (bx, by) every
+    tick: the row of the team-mate nearest to it (the first of equals; -1 without team-mates) and its
+    distance, and the distance of the nearest opponent (inf without opponents), all by CPython's hypot."""
     n = ox.shape[0]
     k_mates = mates.shape[0]
     keep = np.zeros(n, dtype=np.bool_)
@@ -221,11 +231,20 @@ def _opponents(ox, oy, ovx, ovy, mates, out):
                         kept -= 1
                         break
     r = 0
+    opp_d = math.inf
     for k in range(n):
         if keep[k]:
             out[r, 0] = ox[k]
             out[r, 1] = oy[k]
             out[r, 2] = ovx[k]
             out[r, 3] = ovy[k]
+            d = hypot(out[r, 0] - bx, out[r, 1] - by)
+            if d < opp_d:
+                opp_d = d
             r += 1
-    return r
+    near, near_d = -1, math.inf
+    for j in range(k_mates):
+        d = hypot(mates[j, 0] - bx, mates[j, 1] - by)
+        if j == 0 or d < near_d:
+            near, near_d = j, d
+    return r, near, near_d, opp_d

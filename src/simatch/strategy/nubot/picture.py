@@ -288,12 +288,8 @@ class Analyst:
             if m.holding:
                 pic.holder = m.id
         opps = obs.opps
-        if pic.holder == 0:
-            bx, by = obs.bx, obs.by
-            for o in opps:
-                if math.hypot(o[0] - bx, o[1] - by) < OPP_CONTROL:
-                    pic.opp_holds = True
-                    break
+        if pic.holder == 0 and obs.opp_ball_d < OPP_CONTROL:  # (the nearest opponent's distance to the ball)
+            pic.opp_holds = True
         self._passes(obs, pic)
         if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
             self._set_piece(obs, flow, pic, mates)  # (nobody plays the ball: no interceptions needed)
