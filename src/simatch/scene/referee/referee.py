@@ -188,7 +188,7 @@ class MslReferee(OperatorTakeover, Judge):
                     self._boundary(now, float(bx), float(by), float(pose[b + 2]))
             elif self._out_latched:
                 self._out_latched = False
-        if self.ctx.step() % self.control_steps == 0:
+        if self._ticked % self.control_steps == 0:
             self._control(now)
 
     def _begin(self, now: float) -> None:
