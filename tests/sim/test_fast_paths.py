@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import simatch
+from simatch import msgs
 from simatch.config.loader import shipped_scenes
 from simatch.sim.kernels import ball_apart
 
@@ -76,3 +77,90 @@ def test_ball_touches_equal_the_contact_list_near_and_far_from_the_ball():
             run.set_model_state("ball", x=st.x, y=st.y + 0.3, z=0.11, vx=0.0, vy=-1.0, vz=0.0)
             steps(40)
         assert apart > 100 and near > 20 and touched > 5  # both paths taken, touches seen
+
+
+# --- perception: one compiled call for exact perception of ground robots ------------------------------------
+
+
+def _both_ways(sim, stamp=1.5, tick=7):
+    """Every robot's OmniVisionInfo by `Simulator.observations` and by the general way (a snapshot observed by
+    `Perception.observe`), from the same state: the 'stuck' timers and the noise generator are put back between
+    the two. Returns (fast, general) as CDR bytes, and the 'stuck' flags of each."""
+    p = sim.perception
+    slow, rng = sim._slow_since.copy(), p.rng.bit_generator.state
+    fast = [msgs.encode(m) for m in sim.observations(stamp, tick)]
+    stuck_fast = np.array(sim.stuck)
+    sim._slow_since[:] = slow
+    p.rng.bit_generator.state = rng
+    general = [msgs.encode(m) for m in p.observe(p.delayed(sim.snapshot()), stamp, tick)]
+    return fast, general, stuck_fast, np.array(sim.stuck)
+
+
+@pytest.mark.parametrize("name", sorted(shipped_scenes()))
+def test_perception_of_every_shipped_world_equals_the_general_way(name):
+    with simatch.Simulation(name, seed=3) as run:
+        sim = run.simulator
+        p = sim.perception
+        # the compiled path is taken exactly where it applies: exact perception of ground robots alone
+        exact = p.exact and p.sight is None and p.delay_steps == 0
+        assert sim._sense_fast == (sim.aerial is None and exact and sim.n > 0)
+        for _ in range(4):
+            fast, general, stuck_fast, stuck_general = _both_ways(sim)
+            assert fast == general
+            assert np.array_equal(stuck_fast, stuck_general)
+            run.run(seconds=0.7, until_done=False)
+
+
+def test_perception_fast_path_equals_the_general_way_on_random_worlds():
+    """Random poses and velocities (signed zeros, robots on the ball and on each other, far off the field),
+    turned team frames, a holder, disabled robots, commanded set points that make robots stuck."""
+    rng = np.random.default_rng(11)
+    with simatch.Simulation("msl_5v5", seed=0) as run:
+        sim = run.simulator
+        assert sim._sense_fast
+        n = sim.n
+        seen_stuck = seen_invalid = 0
+        for case in range(300):
+            q, v = sim._qpos3, sim._qvel3
+            q[:, :2] = rng.uniform(-13, 13, (n, 2))
+            q[:, 2] = rng.uniform(-20, 20, n)
+            v[:] = rng.normal(0, 2, (n, 3)) * (rng.random((n, 3)) < 0.7)
+            b = sim._bq
+            sim._qpos[b : b + 3] = rng.uniform(-10, 10, 3)
+            sim._qvel[sim._bv : sim._bv + 3] = rng.normal(0, 3, 3)
+            if case % 5 == 0:  # a robot on the ball, another on top of a third, signed zeros
+                sim._qpos[b : b + 2] = q[0, :2]
+                q[1, :2] = q[2, :2]
+                q[3] = -0.0
+                v[4] = -0.0
+            sim._act3[:] = rng.normal(0, 1.5, (n, 3))
+            sim.enabled[:] = rng.random(n) > 0.1
+            sim.ball.holder = int(rng.integers(-1, n))
+            for team in ("cyan", "magenta"):
+                sim.set_team_sign(team, int(rng.choice((-1, 1))))
+            sim.step_index += int(rng.integers(1, 60))
+            fast, general, stuck_fast, stuck_general = _both_ways(sim, float(rng.uniform(0, 100)), case)
+            assert fast == general, case
+            assert np.array_equal(stuck_fast, stuck_general)
+            seen_stuck += int(stuck_fast.any())
+            seen_invalid += sum(not m.robots[0].valid for m in sim.observations(0.0, 0))
+        assert seen_stuck > 10 and seen_invalid > 10  # both flags exercised
+
+
+def test_perception_messages_of_a_tick_are_new_arrays_and_shared_ones_are_read_only():
+    """A subscriber may keep a message: the next tick's never writes into it. The obstacles' radii and heights,
+    the same at every tick, are shared and read-only (as a decoded message's arrays are)."""
+    with simatch.Simulation("msl_5v5", seed=2) as run:
+        sim = run.simulator
+        first = sim.observations(0.0, 0)
+        kept = [(m.obstacles.x.copy(), m.robots[0].wheel_speeds.copy()) for m in first]
+        run.run(seconds=0.5, until_done=False)
+        second = sim.observations(0.5, 20)
+        for m, (x, wheels) in zip(first, kept):
+            assert np.array_equal(m.obstacles.x, x) and np.array_equal(m.robots[0].wheel_speeds, wheels)
+        assert not np.shares_memory(first[0].obstacles.x, second[0].obstacles.x)
+        assert first[0].obstacles.radius is second[0].obstacles.radius
+        with pytest.raises(ValueError):
+            first[0].obstacles.radius[0] = 1.0
+        with pytest.raises(ValueError):
+            first[0].obstacles.z[0] = 1.0

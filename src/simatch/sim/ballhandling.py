@@ -83,6 +83,11 @@ class BallHandling:
         # ground robots' joints are consecutive (aerial robots, after them, have no dribbler or kicker)
         self._robot_q0 = int(index.robot_qpos[0, 0]) if len(index.robot_qpos) else 0
         self._robot_v0 = int(index.robot_qvel[0, 0]) if len(index.robot_qvel) else 0
+        # the engine's state and the model's constraint data as views taken once (their memory is fixed for
+        # the model's and the data's life; each accessor call makes a new view), and the mouths' offsets
+        # as one contiguous array: what the per-step kernels are given
+        self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
+        self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
 
     # --- requests from commands -----------------------------------------------------------------------------
     def set_dribbler(self, i: int, on: bool) -> None:
@@ -134,7 +139,7 @@ class BallHandling:
             if self.holder >= 0 and self.roller_dw > 0.0:
                 ix = self.ix
                 roll_held_ball(
-                    self.d.qpos, self.d.qvel, ix.ball_qpos, ix.ball_qvel, self.ball_r, self.roller_spin, self.roller_dw
+                    self._qpos, self._qvel, ix.ball_qpos, ix.ball_qvel, self.ball_r, self.roller_spin, self.roller_dw
                 )
         elif step >= self._catch_idle_until and self._dribblers:
             self._catch(step, enabled)
@@ -179,7 +184,7 @@ class BallHandling:
         self.on_event("kick", i, value=req.speed, detail="lob" if req.lob else "ground")
 
     def _catch(self, step: int, enabled: np.ndarray) -> None:
-        q = self.d.qpos
+        q = self._qpos
         if q[self.ix.ball_qpos + 2] > self.ball_r + 0.05:
             return
         cand = np.flatnonzero(self.dribble_on & enabled)
@@ -193,7 +198,7 @@ class BallHandling:
         ix = self.ix
         i, fwd, lat, nearest = catch_candidate(
             q,
-            self.d.qvel,
+            self._qvel,
             self._robot_q0,
             self._robot_v0,
             ix.ball_qpos,
@@ -201,7 +206,7 @@ class BallHandling:
             cand,
             self.hold_dist,
             self.hold_cos,
-            self.mouth[:, 0],
+            self._mouth_x,
             self.catch_speed,
         )
         if i >= 0:
@@ -209,7 +214,7 @@ class BallHandling:
         elif nearest > self.hold_dist:
             # nothing can come within reach before the gap closes at the fastest possible closing speed
             # (ball speed plus a robot's top speed): sleep until then (switching a dribbler on wakes it)
-            bv = self.d.qvel[ix.ball_qvel : ix.ball_qvel + 2]
+            bv = self._qvel[ix.ball_qvel : ix.ball_qvel + 2]
             closing = math.hypot(bv[0], bv[1]) + _ROBOT_TOP_SPEED
             self._catch_idle_until = step + max(0, int((nearest - self.hold_dist) / (closing * self._dt)))
 
@@ -229,9 +234,9 @@ class BallHandling:
             return
         d = self.d
         status, force = keep_ball(
-            self.m.eq_data,
+            self._eq_data,
             self.ix.dribble_eq[i],
-            d.qpos,
+            self._qpos,
             self._robot_q0,
             self.ix.ball_qpos,
             i,

@@ -24,6 +24,7 @@ from .simulator import Simulator
 _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
 _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerprint")
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
+_BallContacts = msgs.positional(msgs.BallContacts, "stamp step touching holder kicker kick_speed lob")
 _F32 = np.float32  # the states' numbers, as the messages define them
 
 
@@ -132,25 +133,24 @@ class SimulatorNode(Node):
                 self.pub_inputs.put(inputs.take(now, k, True))
             else:
                 inputs.clear()
-        perception = sim.perception
-        if perception.delay_steps:
-            perception.record(sim.snapshot())
+        if sim.perception.delay_steps:
+            sim.perception.record(sim.snapshot())
         cs = self.control_steps
-        if k % cs == 0 and self.pub_clock.active:
+        into = k % cs
+        if into == 0 and self.pub_clock.active:
             self.pub_clock.put(_Clock(now, k, k // cs))
-        due = self._due.get(k % cs)
+        due = self._due.get(into)
         if due is not None:
             pubs = self.pub_vision
             if any(pubs[i].active for i in due):
-                infos = perception.observe(
-                    perception.delayed(sim.snapshot()), now, k // cs, None if len(due) == len(pubs) else due
-                )
+                infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
                 for i in due:
-                    if pubs[i].active:
-                        pubs[i].put(infos[i])
+                    pub = pubs[i]
+                    if pub.active:
+                        pub.put(infos[i])
         if self.pub_models.active:
             self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
-        if self.pub_fingerprint.active and k % self.control_steps == 0:
+        if into == 0 and self.pub_fingerprint.active:
             _, pose, twist = sim.model_state_arrays()
             self.pub_fingerprint.put(_StateFingerprint(now, k, fingerprint(pose, twist)))
         if self.pub_links.active:
@@ -162,18 +162,19 @@ class SimulatorNode(Node):
             )
         if self.pub_contacts.active:
             touching = sim.ball_touches()
-            holder, kicker = sim.ball.holder, sim.ball.kicked_by
+            ball = sim.ball
+            holder, kicker = ball.holder, ball.kicked_by
             if touching or holder >= 0 or kicker >= 0:
                 names = sim.robot_names
                 self.pub_contacts.put(
-                    msgs.BallContacts(
-                        stamp=now,
-                        step=k,
-                        touching=[names[i] for i in touching],
-                        holder=names[holder] if holder >= 0 else "",
-                        kicker=names[kicker] if kicker >= 0 else "",
-                        kick_speed=sim.ball.kicked_speed if kicker >= 0 else 0.0,
-                        lob=bool(sim.ball.kicked_lob) if kicker >= 0 else False,
+                    _BallContacts(
+                        now,
+                        k,
+                        [names[i] for i in touching],
+                        names[holder] if holder >= 0 else "",
+                        names[kicker] if kicker >= 0 else "",
+                        ball.kicked_speed if kicker >= 0 else 0.0,
+                        bool(ball.kicked_lob) if kicker >= 0 else False,
                     )
                 )
         if sim.events:

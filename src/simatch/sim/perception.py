@@ -89,13 +89,24 @@ class Perception:
             np.zeros((n, m, 4)),
         )
         self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(_F32)
+        self._orad.setflags(write=False)  # its rows are in every tick's messages: nobody may change them
         self._orad_rows = list(self._orad)
         self._ids = self.ids.tolist()
         self.sight = sight  # what each robot can see at all (None: everything)
         self._ground_z = [0.0] * n
         self._oz = np.zeros((n, m), dtype=_F32)
+        self._oz.setflags(write=False)
         self._oz_rows = list(self._oz)
         self._nw = [int(k) for k in n_wheels]
+        # the exact perception of a world of ground robots (`Simulator.observations`' one compiled call):
+        # the numbers read into Python floats come through these arrays, reused at every tick (no message
+        # holds them); the arrays a message holds (obstacles, wheel speeds) are made fresh at every tick
+        self.own32 = np.zeros((n, 6), dtype=_F32)
+        self.balls32 = np.zeros((n, 8), dtype=_F32)
+        self.valid = np.zeros(n, dtype=bool)
+        self.stuck = np.zeros(n, dtype=bool)
+        self._team_members = list(self.members.values())
+        self._team_index = [self.teams.index(t) for t in self.team_of]
         self.exact = (
             spec.position_noise == 0
             and spec.velocity_noise == 0
@@ -122,6 +133,42 @@ class Perception:
         return self.history[0]
 
     # -----------------------------------------------------------------------------------------------------
+    def observe_exact(self, obs: np.ndarray, wheels: np.ndarray, holder: int, stamp: float, tick: int) -> list:
+        """`observe` of every robot for exact perception (no noise, no dropout, no sight rules, no latency),
+        from the numbers `kernels.sense_ground` wrote: ``own32``, ``balls32``, ``valid``, ``stuck`` (this
+        object's, read into Python values here) and ``obs`` (n * 6, n - 1), ``wheels`` (n, W), fresh float32
+        arrays whose rows the messages keep. The same messages, field for field, as `observe` makes of the
+        same world, with far fewer steps between (tests/sim/test_fast_paths.py holds them equal)."""
+        own = self.own32.tolist()
+        valid = self.valid.tolist()
+        stuck = self.stuck.tolist()
+        ids, nw = self._ids, self._nw
+        wrows = list(wheels)
+        W = wheels.shape[1]
+        team_infos = [
+            [
+                _RobotInfo(
+                    ids[i],
+                    *own[i],
+                    valid[i],
+                    stuck[i],
+                    holder == i,
+                    wrows[i] if nw[i] == W else wrows[i][: nw[i]],
+                    0.0,
+                    0.0,
+                )
+                for i in idx
+            ]
+            for idx in self._team_members
+        ]
+        rows = iter(obs)  # each robot's six rows, then the obstacles' radii and heights (constant)
+        obstacles = list(map(_ObstaclesInfo, rows, rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows))
+        team = self._team_index
+        return [
+            _OmniVisionInfo(stamp, tick, ids[i], _BallInfo(1, *ball, True, True), obstacles[i], team_infos[team[i]])
+            for i, ball in enumerate(self.balls32.tolist())
+        ]
+
     def observe(self, snap: Snapshot, stamp: float, tick: int, only: list[int] | None = None) -> list:
         """One OmniVisionInfo per robot (in robot order); with ``only``, messages for those robots alone (None
         in the others' places: a real-time server takes each robot's perception at its own step). The noise

@@ -30,7 +30,7 @@ from ..robots.drive import OmniDrive
 from .ballhandling import BallHandling
 from .flight import AerialFleet, aerial_poses, frame_contacts, planar, rotor_links
 from .inputs import InputLog, action_input, install, velocity_input, world_input
-from .kernels import ball_apart, model_poses, model_poses32, robot_flags
+from .kernels import ball_apart, model_poses, model_poses32, robot_flags, sense_ground
 from .perception import Perception, Snapshot
 from .sight import Sight
 from .world import BALL_NAME, build_world
@@ -106,6 +106,7 @@ class Simulator:
         self.scene = scene
         self.seed = seed
         self.m, self.d, self.ix, self.field = build_world(scene)
+        self._qpos, self._qvel = self.d.qpos, self.d.qvel  # views of the engine's arrays (fixed memory)
         self.dt = float(self.m.opt.timestep)
         self.step_index = 0
         robots = self.ix.robots
@@ -221,6 +222,13 @@ class Simulator:
             sight=Sight.of(self.robot_models, self.field, scene.perception),
         )
         self._plan_drive(np.ones(ng, dtype=bool), self.control_steps)
+        # what the robots' flags are computed from (`kernels.robot_flags`), around the step index
+        F = self.field
+        self._flags_in = (self._act3, self.drive.M, self.drive.n_wheels, self.enabled, self._slow_since)
+        self._flags_of = (self._stuck_steps, F.half_length, F.half_width)
+        #: `observations` by one compiled call (exact perception of ground robots alone)
+        p = self.perception
+        self._sense_fast = self.aerial is None and p.exact and p.sight is None and p.delay_steps == 0 and self.n > 0
 
     # --- inputs -------------------------------------------------------------------------------------------
     @property
@@ -485,10 +493,10 @@ class Simulator:
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
-        vz = d.qvel[self._bvz]
-        z = d.qpos[self._bz]
+        vz = self._qvel[self._bvz]
+        z = self._qpos[self._bz]
         mujoco.mj_step(self.m, d)
-        if vz < -BOUNCE_MIN_SPEED and d.qpos[self._bz] < self.ball_radius and self.restitution > 0:
+        if vz < -BOUNCE_MIN_SPEED and self._qpos[self._bz] < self.ball_radius and self.restitution > 0:
             self._bounce(z, vz)
         if self.aerial is not None:
             self._frame_contacts()
@@ -754,6 +762,40 @@ class Simulator:
         out_twist.append(twist[self.n])
         return out_names, np.array(out_pose), np.array(out_twist)
 
+    def observations(self, stamp: float, tick: int, only: list[int] | None = None) -> list:
+        """Every robot's OmniVisionInfo now (``only``: those robots', None in the others' places), as
+        `Perception.observe` makes them from a `snapshot` (which updates the robots' 'stuck' flags) delayed by
+        the perception's latency. For exact perception of ground robots (no noise, dropout, sight rules or
+        latency: the shipped matches) one compiled call reads the engine's arrays into the messages' numbers
+        instead (`kernels.sense_ground`): the same messages, without the snapshot's arrays."""
+        p = self.perception
+        if only is not None or not self._sense_fast:
+            return p.observe(p.delayed(self.snapshot()), stamp, tick, only)
+        n, m = self.n, self.n - 1
+        obs = np.empty((6 * n, m), dtype=np.float32)
+        wheels = np.empty((n, self.drive.max_wheels), dtype=np.float32)
+        sense_ground(
+            self._qpos,
+            self._qvel,
+            self._q0,
+            self._v0,
+            self._bq,
+            self._bv,
+            *self._flags_in,
+            self.step_index,
+            *self._flags_of,
+            p.sign,
+            p.others,
+            p.own32,
+            p.balls32,
+            p.valid,
+            p.stuck,
+            obs,
+            wheels,
+        )
+        self.stuck = p.stuck
+        return p.observe_exact(obs, wheels, self.ball.holder, stamp, tick)
+
     def snapshot(self) -> Snapshot:
         """The current world for perception (also updates each robot's 'stuck' flag)."""
         flying = self.aerial_arrays() if self.aerial is not None else None
@@ -761,16 +803,7 @@ class Simulator:
         F = self.field
         ng = self.ng
         wheels, valid, stuck = robot_flags(
-            R[:ng] if self.aerial is not None else R,
-            self._act3,
-            self.drive.M,
-            self.drive.n_wheels,
-            self.enabled,
-            self._slow_since,
-            self.step_index,
-            self._stuck_steps,
-            F.half_length,
-            F.half_width,
+            R[:ng] if self.aerial is not None else R, *self._flags_in, self.step_index, *self._flags_of
         )
         heights = None
         if self.aerial is not None:  # aerial robots: valid over the field while enabled; never stuck

@@ -46,6 +46,8 @@ class Observation:
         self._goal_x, self._goal_y = f.area_limits("goal")
         self.msg = None
         self._rows: list[int] | None = None  # message row of each robot and of the ball
+        self._in_order = False
+        self._near = min(self._pen_x, self._goal_x)  # nearer the half-way line than this, no robot is in an area
         self.stamp = 0.0
         self.step = -1
         self.X = [0.0] * n
@@ -77,22 +79,32 @@ class Observation:
         """Read the latest message into lists and classify every robot's area (once per control period)."""
         msg = self.msg
         if self._rows is None:
-            self._rows = self._find_rows(list(msg.name))
+            self._locate(msg)
         P = msg.pose.tolist()
         T = msg.twist.tolist()
         rows = self._rows
         n = self.n
         X, Y, VX, VY = self.X, self.Y, self.VX, self.VY
+        if self._in_order:  # the same lists, filled in place (a rule may hold them)
+            X[:] = P[0 : 7 * n : 7]
+            Y[:] = P[1 : 7 * n : 7]
+            VX[:] = T[0 : 6 * n : 6]
+            VY[:] = T[1 : 6 * n : 6]
+        else:
+            for i in range(n):
+                r = rows[i]
+                X[i] = P[7 * r]
+                Y[i] = P[7 * r + 1]
+                VX[i] = T[6 * r]
+                VY[i] = T[6 * r + 1]
         pen, goal = self.penalty_area, self.goal_area
-        px, py, gx, gy = self._pen_x, self._pen_y, self._goal_x, self._goal_y
+        px, py, gx, gy, near = self._pen_x, self._pen_y, self._goal_x, self._goal_y, self._near
         for i in range(n):
-            r = rows[i]
-            x = P[7 * r]
-            y = P[7 * r + 1]
-            X[i] = x
-            Y[i] = y
-            VX[i] = T[6 * r]
-            VY[i] = T[6 * r + 1]
+            x = X[i]
+            if -near < x < near:  # short of both areas (the usual case)
+                pen[i] = goal[i] = 0
+                continue
+            y = Y[i]
             ax, ay = abs(x), abs(y)
             side = 1 if x > 0 else -1
             pen[i] = side if ax >= px and ay <= py else 0
@@ -104,6 +116,12 @@ class Observation:
         self.stamp = msg.stamp
         self.step = msg.step
 
+    def _locate(self, msg) -> None:
+        """Find each robot's and the ball's row in the messages (the same in every message of a run)."""
+        self._rows = self._find_rows(list(msg.name))
+        # in the simulator's order (robots, then the ball) every column is read by one slice of the lists
+        self._in_order = self._rows == list(range(self.n + 1))
+
     def _find_rows(self, names: list[str]) -> list[int]:
         expected = self.names + ["ball"]
         missing = [nm for nm in expected if nm not in names]
@@ -113,13 +131,13 @@ class Observation:
 
     def ball_row(self) -> int:
         if self._rows is None:
-            self._rows = self._find_rows(list(self.msg.name))
+            self._locate(self.msg)
         return self._rows[self.n]
 
     def xy_now(self, i: int) -> tuple[float, float]:
         """Robot i's position in the latest message (physics rate, without a refresh)."""
         if self._rows is None:
-            self._rows = self._find_rows(list(self.msg.name))
+            self._locate(self.msg)
         r = 7 * self._rows[i]
         pose = self.msg.pose
         return (float(pose[r]), float(pose[r + 1]))
@@ -127,7 +145,7 @@ class Observation:
     def ball_xy_now(self) -> tuple[float, float]:
         """The ball's position in the latest message (physics rate, without a refresh)."""
         if self._rows is None:
-            self._rows = self._find_rows(list(self.msg.name))
+            self._locate(self.msg)
         r = 7 * self._rows[self.n]
         pose = self.msg.pose
         return (float(pose[r]), float(pose[r + 1]))

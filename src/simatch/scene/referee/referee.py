@@ -97,6 +97,17 @@ class MslReferee(OperatorTakeover, Judge):
         disabled = set(params.disabled_rules)
         self.rules = [cls(m) for cls in CONTROL_RULES if cls.name not in disabled]
         self.position_rules = [r for r in self.rules if isinstance(r, PositionRule)]
+        # the rules that judge in each phase, in their order, during a shoot-out or not (a shoot-out judges
+        # the set-piece distance and charging alone)
+        self._judging = {
+            (phase, shootout): [
+                r
+                for r in self.rules
+                if phase in r.phases and not (shootout and r.name not in ("set_piece_distance", "charging"))
+            ]
+            for phase in Phase
+            for shootout in (False, True)
+        }
         self.goal_rule = GoalRule(m) if "goal" not in disabled else None
         self.out_rule = BallOutRule(m) if "ball_out" not in disabled else None
         self.log = EventLog()
@@ -188,7 +199,7 @@ class MslReferee(OperatorTakeover, Judge):
                     self._boundary(now, float(bx), float(by), float(pose[b + 2]))
             elif self._out_latched:
                 self._out_latched = False
-        if self.ctx.step() % self.control_steps == 0:
+        if self._ticked % self.control_steps == 0:
             self._control(now)
 
     def _begin(self, now: float) -> None:
@@ -249,10 +260,7 @@ class MslReferee(OperatorTakeover, Judge):
             self._shootout_check(now)
         if g.phase not in (_Phase.PAUSED, _Phase.ENDED):
             phase = g.phase
-            shootout = g.stage.kind == "shootout"
-            for rule in self.rules:
-                if phase not in rule.phases or (shootout and rule.name not in ("set_piece_distance", "charging")):
-                    continue
+            for rule in self._judging[phase, g.stage.kind == "shootout"]:
                 calls = rule.check()
                 if calls is None:
                     continue
