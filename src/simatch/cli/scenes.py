@@ -79,9 +79,8 @@ def scene_file(loaded: LoadedScene, args) -> str:
 
 def plugin_params(loaded: LoadedScene) -> dict:
     """The parameter model of each plug-in the scene names, by the table its settings sit in."""
-    from ..plugins import load
     from ..robots import model_class
-    from ..scene.judges import SHIPPED as JUDGES
+    from ..scene.judges import judge_class
     from ..strategy import NO_NODES, strategy_class
 
     spec = loaded.spec
@@ -90,6 +89,6 @@ def plugin_params(loaded: LoadedScene) -> dict:
         out[f"teams.{team}.model_params"] = getattr(model_class(tspec.model), "Params", None)
         if tspec.strategy not in NO_NODES:
             out[f"teams.{team}.strategy_params"] = getattr(strategy_class(tspec.strategy), "Params", None)
-    out["judge"] = getattr(load(spec.judge.kind, JUDGES, "judge"), "Params", None)
+    out["judge"] = getattr(judge_class(spec.judge.kind, loaded.source), "Params", None)
     out["world.params"] = world_class(spec.world.kind).Params
     return out

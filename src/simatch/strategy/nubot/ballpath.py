@@ -96,6 +96,21 @@ class BallPath:
             min(max(self.y + self.uy * s, -self.ylim), self.ylim),
         )
 
+    def kernel_args(self) -> tuple:
+        """The path as the intercept kernels take it (their first ten arguments, in their order)."""
+        return (
+            self.x,
+            self.y,
+            self.speed,
+            self.ux,
+            self.uy,
+            self.land_t,
+            self.stop_t,
+            self.decel,
+            self.xlim,
+            self.ylim,
+        )
+
     def speed_at(self, t: float) -> float:
         if t <= self.land_t:
             return self.speed
@@ -159,16 +174,7 @@ def intercepts(
     if extra is None:
         extra = np.zeros(n)
     _intercepts(
-        path.x,
-        path.y,
-        path.speed,
-        path.ux,
-        path.uy,
-        path.land_t,
-        path.stop_t,
-        path.decel,
-        path.xlim,
-        path.ylim,
+        *path.kernel_args(),
         px,
         py,
         vx,
@@ -215,16 +221,7 @@ def team_intercepts(
     One kernel call (`_team_intercepts`): the rows and the reach times, no arrays handed back and forth."""
     out = np.empty((us.shape[0] + opps.shape[0], 3))
     _team_intercepts(
-        path.x,
-        path.y,
-        path.speed,
-        path.ux,
-        path.uy,
-        path.land_t,
-        path.stop_t,
-        path.decel,
-        path.xlim,
-        path.ylim,
+        *path.kernel_args(),
         us,
         opps,
         bx,
