@@ -34,7 +34,7 @@ from ..bus.zenoh_bus import (
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
-from .warmup import preload_compiled_kernels
+from .warmup import preload_compiled_kernels, rehearse
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +48,10 @@ def _stderr(text: str) -> None:
 
 
 class TeamProcess:
+    #: it runs the scene's (or its own) strategy for its robots; a bridge whose robots are driven from
+    #: outside says False, and has nothing to rehearse before it joins (`warm_up`)
+    runs_strategy = True
+
     def __init__(
         self,
         team: str,
@@ -153,14 +157,15 @@ class TeamProcess:
             bus.take_feed(
                 protocol.feed_topic(self.team, self.phase), protocol.feed_covers(self.team, self.phase), self._answer
             )
+        bus.declare_token(protocol.alive_topic(self.team, self.proc))  # the server sees it coming (`warm_up`)
         nodes = self.nodes()
+        self.warm_up(offer, local)
         self.clock = LockstepClock(bus, spec.physics.timestep, self.seed, offset=self.phase)
         for node in nodes:
             self.clock.add(node)
         bus.subscribe_raw(self.tick_topic, self._on_tick, verify=False)
         bus.subscribe_raw(protocol.END, self._on_end, verify=False)
         bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
-        bus.declare_token(protocol.alive_topic(self.team, self.proc))
         if self.bundles:  # declared before the join, so that it knows the server listens when ticks come
             bus.raw_publisher(protocol.bundle_topic(self.team))
         self._join()
@@ -175,11 +180,23 @@ class TeamProcess:
                 f"the server's scene does not say which strategy {self.team} plays "
                 f"(teams.{self.team}.strategy = {strategy!r}): give --strategy"
             )
-        nodes = build_team(
+        return build_team(
             self.scene, self.team, self.seed, robot_ids=self.robots, with_strategy_pub=self.robots is None
         )
-        preload_compiled_kernels(("simatch", strategy.split(":")[0].split(".")[0]))  # not at the kick-off
-        return nodes
+
+    def warm_up(self, offer: Mapping[str, Any], local: Mapping[str, Any]) -> None:
+        """Before joining: load the compiled kernels the strategy's modules have in the disk cache (not at
+        the kick-off); if some were never compiled here, rehearse the scene first (`warmup.rehearse`:
+        tens of seconds the first time, which no lockstep tick would wait for)."""
+        strategy = str(self.scene.spec.teams[self.team].strategy)
+        prefixes = ("simatch", strategy.split(":")[0].split(".")[0])
+        if not preload_compiled_kernels(prefixes).uncached or not self.runs_strategy or strategy in NO_NODES:
+            return
+        self.say(f"{self.what}: compiling its strategy's kernels before joining (once per install; up to a minute)")
+        t0 = time.monotonic()
+        others = {f"teams.{t}.strategy": "none" for t in self.scene.spec.teams if t != self.team}
+        rehearse(protocol.scene_from_offer(offer, {**local, **others}), self.team, self.seed)
+        self.say(f"{self.what}: compiled in {time.monotonic() - t0:.0f} s")
 
     def _ask_scene(self) -> dict:
         deadline = time.monotonic() + self.wait

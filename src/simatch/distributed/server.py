@@ -45,6 +45,9 @@ from .world_service import WorldService
 
 log = logging.getLogger(__name__)
 
+#: how much longer than the team timeout a team is waited for while its process, connected, sets up [s]
+SETTING_UP_GRACE = 300.0
+
 
 def _stderr(text: str) -> None:
     print(f"simatch server: {text}", file=sys.stderr, flush=True)
@@ -71,6 +74,9 @@ class Server:
         self.run_name = run
         self.realtime = realtime
         self.team_timeout = team_timeout
+        #: processes whose liveliness token is up (proc id -> team): one not yet joined is still setting up
+        #: (e.g. compiling its kernels: `warmup`), and the teams' wait goes on for it (`wait_for_teams`)
+        self.announced: dict[str, str] = {}
         self.say = say
         self.mode = protocol.REALTIME if realtime else protocol.LOCKSTEP
         #: ticks in a row a process may miss before the server stops waiting for it: in real time a late
@@ -301,8 +307,11 @@ class Server:
             self._gone(proc.id, "process_left", "left")
 
     def _on_alive(self, topic: str, alive: bool) -> None:
-        if not alive:
-            proc_id = topic.rsplit("/", 1)[-1]
+        proc_id = topic.rsplit("/", 1)[-1]
+        if alive:
+            self.announced[proc_id] = protocol.team_of(topic)
+        else:
+            self.announced.pop(proc_id, None)
             proc = self.registry.procs.get(proc_id)
             if proc is not None and proc.team == protocol.team_of(topic):
                 self._gone(proc_id, "process_lost", "was lost (its connection closed)")
@@ -329,35 +338,48 @@ class Server:
         return (len(self._robot_order),)
 
     # --- running ------------------------------------------------------------------------------------------------
+    def setting_up(self) -> set[str]:
+        """The teams of processes that are connected (their liveliness token is up) but have not joined."""
+        return {team for proc_id, team in self.announced.items() if proc_id not in self.registry.procs}
+
     def wait_for_teams(self, timeout: float | None = None, poll: float = 0.05) -> dict[str, list[int]]:
         """Serve joins until every robot with a strategy is served, or ``timeout`` seconds (default: the
-        team timeout) pass; then say which teams are missing, and play without them. Returns the missing."""
+        team timeout) pass; then say which teams are missing, and play without them. Returns the missing.
+
+        A missing team with a process connected but still setting up (compiling its kernels the first time
+        on its machine) is waited for up to `SETTING_UP_GRACE` seconds more: it is coming."""
         timeout = self.team_timeout if timeout is None else timeout
         t0 = time.monotonic()
         next_note = t0
         missing = self.registry.missing()
         while missing:
             now = time.monotonic()
-            if now - t0 >= timeout:
+            coming = self.setting_up() & set(missing)
+            limit = timeout + SETTING_UP_GRACE if coming else timeout
+            if now - t0 >= limit:
                 break
             if now >= next_note:
                 self.say(
                     "waiting for "
-                    + "; ".join(f"{team} (robots {','.join(map(str, ids))})" for team, ids in missing.items())
-                    + f" to connect [{timeout - (now - t0):.0f} s left]"
+                    + "; ".join(
+                        f"{team} (robots {','.join(map(str, ids))}{': setting up' if team in coming else ''})"
+                        for team, ids in missing.items()
+                    )
+                    + f" to connect [{limit - (now - t0):.0f} s left]"
                 )
                 next_note = now + 5.0
-            self.bus.pump(min(poll, max(0.0, timeout - (now - t0))))
+            self.bus.pump(min(poll, max(0.0, limit - (now - t0))))
             missing = self.registry.missing()
+        waited = time.monotonic() - t0
         for team, ids in missing.items():
             robots = ",".join(map(str, ids))
             self.emit(
                 "team_absent",
                 team=team,
                 value=len(ids),
-                detail=f"robots {robots} of {team} not connected after {timeout:g} s: playing without them",
+                detail=f"robots {robots} of {team} not connected after {waited:.0f} s: playing without them",
             )
-            self.say(f"team {team} did not connect (robots {robots}) within {timeout:g} s: playing without it")
+            self.say(f"team {team} did not connect (robots {robots}) within {waited:.0f} s: playing without it")
         return missing
 
     def run(self, seconds: float, progress=None) -> None:

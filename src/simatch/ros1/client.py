@@ -15,6 +15,8 @@ from .bridge import Options, RosBridge
 
 
 class BridgeProcess(TeamProcess):
+    runs_strategy = False  # ROS nodes drive its robots
+
     def __init__(
         self,
         team: str,

@@ -119,6 +119,8 @@ class RosRobotNode(Node):
 class RosTeamProcess(TeamProcess):
     """The bridge's team (or robot) process: `TeamProcess` with ROS-driven nodes in place of a strategy."""
 
+    runs_strategy = False
+
     def __init__(self, bridge: Bridge, team: str, robots: Sequence[int] | None, **kwargs):
         super().__init__(team, robots, **kwargs)
         self.bridge = bridge

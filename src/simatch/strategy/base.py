@@ -135,6 +135,14 @@ class RobotStrategy:
     def decide(self, world: WorldModel) -> Command:
         raise NotImplementedError
 
+    @classmethod
+    def warm_up(cls) -> None:
+        """Load or compile now what the strategy would otherwise first meet in the middle of a match (e.g.
+        compiled kernels that only open play or a set piece reaches). A team or robot process calls it
+        before it joins a distributed run on a machine where its kernels were not compiled yet, after a
+        short rehearsal of the scene has met the common paths: a lockstep tick does not wait for a
+        compiler. Default: nothing."""
+
 
 class TeamStrategy:
     """A team: makes its robots' strategies. Override `make_robot` or set ``robot_class``."""
@@ -144,6 +152,12 @@ class TeamStrategy:
 
     def __init__(self, ctx: TeamContext):
         self.ctx = ctx
+
+    @classmethod
+    def warm_up(cls) -> None:
+        """As `RobotStrategy.warm_up`; by default, the ``robot_class``'s."""
+        if cls.robot_class is not None:
+            cls.robot_class.warm_up()
 
     def make_robot(self, ctx: RobotContext) -> RobotStrategy:
         if self.robot_class is None:

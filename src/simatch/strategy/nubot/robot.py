@@ -32,6 +32,7 @@ from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
+from .warm import load_kernels
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -96,6 +97,11 @@ class NubotRobot(RobotStrategy):
         self.steady: tuple | None = None  # (tick, game command, command, course) of a steady robot
         self.picture_tick = -1
         self.role_since = 0.0
+
+    @classmethod
+    def warm_up(cls) -> None:
+        """The kernels that only open play reaches (interceptions, receiving spots, the dribble's choice)."""
+        load_kernels()
 
     # -----------------------------------------------------------------------------------------------------
     def team_picture(self, obs: Observation) -> Picture:
@@ -316,6 +322,10 @@ class NubotTeam(TeamStrategy):
         super().__init__(ctx)
         params = ctx.params if isinstance(ctx.params, NubotParams) else NubotParams.model_validate(ctx.params or {})
         self.shared = _Shared(params, ctx.field)
+
+    @classmethod
+    def warm_up(cls) -> None:
+        NubotRobot.warm_up()
 
     def make_robot(self, ctx: RobotContext) -> RobotStrategy:
         return NubotRobot(ctx, self.shared)
