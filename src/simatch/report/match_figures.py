@@ -77,7 +77,8 @@ def _base(fig: go.Figure, height: int, title: str = "") -> go.Figure:
     return fig
 
 
-def _direction_note(stats: dict) -> str:
+def direction_note(stats: dict) -> str:
+    """Which way the field plots are drawn: the first team attacks to the right."""
     first = stats["meta"]["teams"][0]["name"]
     changed = len(stats.get("sides", [])) > 1
     tail = " (mirrored after the change of ends)" if changed else ""
@@ -91,7 +92,7 @@ def heat_map(stats: dict, key: str) -> go.Figure:
     heat = stats["heat"]
     colours = team_colours(stats)
     title = "ball" if key == "ball" else team_title(stats, key)
-    fig = field_figure(f, f"{title}: where during play ({_direction_note(stats)})", style="light")
+    fig = field_figure(f, title, style="light")  # (the section says which way: `direction_note`)
     z = heat["maps"].get(key)
     if z is None:
         return fig
@@ -122,7 +123,7 @@ def shot_map(stats: dict) -> go.Figure:
     """Every shot from where it was taken, a line to where its path met the goal line, its outcome."""
     f = field_from(stats["meta"]["field"])
     colours = team_colours(stats)
-    fig = field_figure(f, f"shots: origin and outcome ({_direction_note(stats)})", height=460)
+    fig = field_figure(f, f"shots: origin and outcome ({direction_note(stats)})", height=460)
     fig.update_layout(showlegend=True, legend=dict(orientation="h", y=-0.02, yanchor="top", x=0.0))
     shots = stats["shots"]
     for team in [t["name"] for t in stats["meta"]["teams"]]:
@@ -278,10 +279,12 @@ def possession(stats: dict) -> go.Figure:
             col=2,
         )
     fig.update_layout(barmode="stack", bargap=0.05)
+    _base(fig, 340, "possession (the team that last touched the ball alone has it)")
+    fig.update_layout(legend=dict(x=0.76))  # above the bins, clear of the whole match's title
     fig.update_yaxes(range=[0, 100], title_text="% of play", row=1, col=1)
     fig.update_yaxes(range=[0, 100], row=1, col=2)
     fig.update_xaxes(title_text="simulated time [s]", row=1, col=1)
-    return _base(fig, 340, "possession (the team that last touched the ball alone has it)")
+    return fig
 
 
 def stages(stats: dict) -> go.Figure:

@@ -180,7 +180,8 @@ def build(stats: dict, title: str | None = None) -> Page:
     page.section(
         "where the play was",
         f'<div class="grid2">{heat}</div>',
-        note="Seconds spent in each 0.5 m cell while the ball was in play; a team's map adds up all its robots.",
+        note="Seconds spent in each 0.5 m cell while the ball was in play; a team's map adds up all its robots "
+        f"({mf.direction_note(stats)}).",
         anchor="heat",
     )
     page.section("robots", page.figure(mf.robots(stats), "robots"), anchor="robots")

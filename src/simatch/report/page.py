@@ -39,6 +39,7 @@ th, td { padding: 5px 10px; border-bottom: 1px solid #e5e7eb; text-align: right;
 th { background: #f6f8fa; font-weight: 600; }
 td.l, th.l { text-align: left; }
 td.wrap { white-space: normal; text-align: left; max-width: 760px; }
+span.wrap { white-space: normal; text-align: left; display: block; min-width: 320px; max-width: 640px; }
 .score { font-size: 40px; font-weight: 700; letter-spacing: 2px; }
 .swatch { display: inline-block; width: 12px; height: 12px; border-radius: 3px; margin-right: 6px;
           vertical-align: -1px; }
