@@ -81,6 +81,23 @@ class Command:
         return cls(**info)
 
 
+class RoundedMove(Command):
+    """A velocity command whose numbers are already at the messages' float32 precision: what a robot
+    taking its place sends (body-frame ``vx``, ``vy``, ``w``, rounded to float32; ``intent``, its target,
+    likewise), with the dribbler off, no kick, no target pose and the default limits. `RobotNode` builds its
+    three messages from these numbers as they are, without rounding them again or looking at the fields
+    a move leaves at their defaults; the messages are the ones the same `Command` would give (tests hold
+    them equal).
+
+    Made whole at once and not changed afterwards except for what the robot tells its team
+    (``pass_intent``, ``user``): a command that needs any other field is an ordinary `Command`."""
+
+    def __init__(self, vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple = ()):
+        # (every other field keeps Command's default, a class attribute of the dataclass)
+        self.vx, self.vy, self.w = vx, vy, w
+        self.role, self.action, self.intent, self.user = role, action, intent, user
+
+
 @dataclass
 class RobotContext:
     """What a robot's strategy is given when it is created."""

@@ -57,6 +57,10 @@ class Motion:
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
         self._two_turn_acc = 2.0 * params.turn_acceleration
+        # the last command's numbers at the messages' float32 precision (body vx, vy, w, then the target
+        # asked for): `_go` writes them, a robot taking its place reads them with tolist (no message holds
+        # this array) into a RoundedMove
+        self.row = np.zeros(5, dtype=np.float32)
         ar = areas
         # the fixed numbers `_go` reads (see _C_*)
         self.consts = np.array(
@@ -150,6 +154,7 @@ class Motion:
             obs.by,
             self.side,
             self.consts,
+            self.row,
         )
         self.side = side
         self.last = (wx, wy, w)
@@ -238,9 +243,13 @@ def _go(
     by,
     side,
     consts,
+    row,
 ):
     """Motion.go, compiled: (body vx, vy, w, avoidance side, team-frame vx, vy). ``face``, ``fence_*`` and
-    ``max_x`` are NaN where the Python takes None."""
+    ``max_x`` are NaN where the Python takes None. Writes the body vx, vy, w and the target (tx, ty) as
+    asked, rounded to float32 as the messages round them, into ``row`` (5,)."""
+    row[3] = tx
+    row[4] = ty
     xlim, ylim = consts[_C_XLIM], consts[_C_YLIM]
     tx = pymin(pymax(tx, -xlim), xlim)
     ty = pymin(pymax(ty, -ylim), ylim)
@@ -287,4 +296,8 @@ def _go(
             w = math.copysign(SPIN_COUPLING / speed, w)
     h = yaw + 0.5 * w * consts[_C_PERIOD]
     c, s = math.cos(h), math.sin(h)
-    return c * vx + s * vy, -s * vx + c * vy, w, side, vx, vy
+    bvx, bvy = c * vx + s * vy, -s * vx + c * vy
+    row[0] = bvx
+    row[1] = bvy
+    row[2] = w
+    return bvx, bvy, w, side, vx, vy

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import math
 
+from ... import msgs
 from ...msgs.game_commands import is_ours
-from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
+from ..base import Command, RobotContext, RobotStrategy, RoundedMove, TeamContext, TeamStrategy
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
 from .active import BallPlayer
@@ -33,6 +34,8 @@ from .positions import Areas, spot_grid
 from .restart import RestartTaker
 from .testmodes import TestModes
 from .warm import load_kernels
+
+_f32s = msgs.f32s
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -195,6 +198,9 @@ class NubotRobot(RobotStrategy):
         if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
+        if type(cmd) is RoundedMove:  # (its intent is rounded already)
+            bx, by, w_body = _f32s(bx, by, w_body)
+            return RoundedMove(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
@@ -220,7 +226,8 @@ class NubotRobot(RobotStrategy):
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
             x, y = self.out_of_the_way(obs, x, y)
         kickoff = keep is not None and self.flow.kind in (MODES.OUR_KICKOFF, MODES.OPP_KICKOFF)
-        vx, vy, w = self.motion.go(
+        motion = self.motion
+        motion.go(
             obs,
             x,
             y,
@@ -232,7 +239,9 @@ class NubotRobot(RobotStrategy):
             fence=fence,
             max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None,
         )
-        return Command(vx=vx, vy=vy, w=w, role=role, action=ACTIONS.POSITIONED, intent=(x, y))
+        # the command's numbers, rounded as the messages take them, from the motion's row
+        vx, vy, w, ix, iy = motion.row.tolist()
+        return RoundedMove(vx, vy, w, role, ACTIONS.POSITIONED, (ix, iy))
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
