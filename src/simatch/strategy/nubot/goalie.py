@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from ..base import Command
+from ..base import Command, RoundedMove
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .ballpath import GRAVITY
@@ -83,17 +83,12 @@ class Goalkeeper:
         target, urgent = self.block_point(obs)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
         vmax = self.p.max_speed + (1.0 if urgent else 0.0)
-        vx, vy, w = self.motion.go(
-            obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None
-        )
-        return Command(
-            vx=vx,
-            vy=vy,
-            w=w,
-            dribble=False,
-            role=ROLES.GOALIE,
-            action=ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED,
-            intent=target,
+        motion = self.motion
+        motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None)
+        # the command's numbers (and the target as its intent), rounded as the messages take them
+        vx, vy, w, ix, iy = motion.row.tolist()
+        return RoundedMove(
+            vx, vy, w, ROLES.GOALIE, ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, (ix, iy)
         )
 
     # --- where to stand ------------------------------------------------------------------------------------

@@ -19,6 +19,7 @@ import numba
 import numpy as np
 
 from ...exactmath import hypot, pymax, pymin, remainder
+from ..base import RoundedMove
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
 from .observation import Observation
@@ -159,6 +160,12 @@ class Motion:
         self.side = side
         self.last = (wx, wy, w)
         return (vx, vy, w)
+
+    def move(self, role: int, action: int) -> RoundedMove:
+        """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
+        all rounded as the messages take them (from `row`)."""
+        vx, vy, w, ix, iy = self.row.tolist()
+        return RoundedMove(vx, vy, w, role, action, (ix, iy))
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)

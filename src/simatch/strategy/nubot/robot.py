@@ -239,9 +239,7 @@ class NubotRobot(RobotStrategy):
             fence=fence,
             max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None,
         )
-        # the command's numbers, rounded as the messages take them, from the motion's row
-        vx, vy, w, ix, iy = motion.row.tolist()
-        return RoundedMove(vx, vy, w, role, ACTIONS.POSITIONED, (ix, iy))
+        return motion.move(role, ACTIONS.POSITIONED)  # (its numbers rounded as the messages take them)
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
@@ -317,8 +315,9 @@ class NubotRobot(RobotStrategy):
 
     def park(self, obs: Observation) -> Command:
         x, y = self.park_at
-        vx, vy, w = self.motion.go(obs, x, y, 0.5 * math.pi, self.p.max_speed, self.p.max_turn)
-        return Command(vx=vx, vy=vy, w=w, role=ROLES.NOROLE, action=ACTIONS.POSITIONED, intent=(x, y))
+        motion = self.motion
+        motion.go(obs, x, y, 0.5 * math.pi, self.p.max_speed, self.p.max_turn)
+        return motion.move(ROLES.NOROLE, ACTIONS.POSITIONED)
 
 
 class NubotTeam(TeamStrategy):
