@@ -140,6 +140,57 @@ def test_c_and_python_recordings_hold_the_same_bytes(tmp_path):
     assert [(x.start, x.end) for x in c.chunks] == [(x.start, x.end) for x in py.chunks]
 
 
+def _memo_traffic() -> list[tuple[str, object]]:
+    """Messages as a recorder meets them, for the memo: messages logged alone and met again in a team's list in
+    the same memo period, the next one and the one after (forgotten by then), lists shared by many messages
+    and by later periods, hundreds of entries per period (more than a first table holds)."""
+    names = ["ball", "cyan/1", "magenta/1"]
+    earlier: list[list] = []
+    out: list[tuple[str, object]] = []
+    for tick in range(6):
+        out.append(("clock", msgs.new(msgs.Clock, stamp=tick * 0.025, step=5 * tick, tick=tick)))
+        infos = [
+            msgs.new(
+                msgs.StrategyInfo, tick=tick, agent_id=i % 5 + 1, target_x=0.5 * i, user=np.arange(i % 3, dtype=float)
+            )
+            for i in range(150)
+        ]
+        out += [("cyan/1/StrategyInfo", info) for info in infos]
+        for back in range(min(3, len(earlier) + 1)):  # this period's, the last one's, the one before
+            team = infos[:5] if back == 0 else earlier[-back][3:9]
+            out.append(("cyan/TeamStrategy", msgs.new(msgs.TeamStrategy, tick=tick, strategies=team)))
+        earlier.append(infos)
+        robots = [msgs.new(msgs.RobotInfo, id=i, x=0.1 * i, wheel_speeds=np.ones(3, np.float32)) for i in range(5)]
+        for rid in range(1, 6):
+            out.append(
+                (
+                    f"cyan/{rid}/OmniVisionInfo",
+                    msgs.new(msgs.OmniVisionInfo, tick=tick, robot_id=rid, robots=robots),
+                )
+            )
+        pose = np.arange(21, dtype=np.float32) * tick
+        states = msgs.new(msgs.ModelStates, step=5 * tick, name=names, pose=pose, twist=np.zeros(18, np.float32))
+        out.append(("model_states", states))
+    return out
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_what_the_memo_gives_again_is_what_encoding_gives(kind):
+    """Every record of what the memo serves (lists and messages met again) holds the bytes of encoding the
+    message on its own, in the C log (whose memo is its own tables) and in the Python one."""
+    log = _log(kind, lambda topic, msg: pytest.fail(f"{topic} went to the fallback"))
+    traffic = _memo_traffic()
+    channels: dict[str, int] = {}
+    for topic, msg in traffic:
+        if topic not in channels:
+            channels[topic] = len(channels) + 1
+            clock = CLOCK_STEP | CLOCK_TICK if topic == "clock" else CLOCK_STEP if topic == "model_states" else 0
+            log.add(topic, channels[topic], msg.__msgtype__, clock)
+        log(topic, msg)
+    records = _records(log.take()[0])
+    assert [(cid, data) for cid, _, data in records] == [(channels[t], msgs.encode(m)) for t, m in traffic]
+
+
 @pytest.mark.parametrize("accelerate", [True, False])
 def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, accelerate):
     """Lists for arrays, numpy scalars, an equal dtype object of its own: what the C encoder does not take as

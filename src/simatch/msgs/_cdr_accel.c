@@ -119,8 +119,38 @@ static int size_of(long kind) {
     }
 }
 
+/* `size` bytes at the next multiple of `size` (1, 2, 4 or 8) from the body's start: align and put in one */
+static inline int put_aligned(const void *src, int size) {
+    Py_ssize_t pad = (body - out->n) & (size - 1);
+    if (out->n + pad + size > out->cap && reserve(pad + size) < 0)
+        return FAILED;
+    char *p = out->p + out->n;
+    if (pad)
+        memset(p, 0, pad);
+    memcpy(p + pad, src, size);
+    out->n += pad + size;
+    return 0;
+}
+
 /* a primitive value; FALLBACK (exception cleared) if it is not one struct would pack the same way */
 static int put_primitive(long kind, PyObject *v) {
+    /* the common cases first (a message's numbers are Python floats, bools and small ints): each is written
+     * straight into the buffer, with the bytes of the general path below. A float32 is the cast that
+     * PyFloat_Pack4 makes; NaN (whose bit pattern that function treats with care) and overflow take the
+     * general path. */
+    if (PyFloat_CheckExact(v)) {
+        double d = PyFloat_AS_DOUBLE(v);
+        if (kind == K_F64)
+            return put_aligned(&d, 8);
+        if (kind == K_F32 && !isnan(d)) {
+            float f = (float)d;
+            if (!isinf(f) || isinf(d))
+                return put_aligned(&f, 4);
+        }
+    } else if (kind == K_BOOL && (v == Py_True || v == Py_False)) {
+        unsigned char b = v == Py_True;
+        return put_aligned(&b, 1);
+    }
     int size = size_of(kind);
     if (align(size) < 0)
         return FAILED;
@@ -308,26 +338,154 @@ done:
     return r;
 }
 
-/* The memo (see simatch.msgs.cdr): two dicts, this period's and the last one's, id(object) -> (object,
- * phase, bytes): a list met again at the same phase (offset modulo 8), or a message encoded on its own
- * (phase 0, its body) met again inside a sequence. NULL: no memo. */
-static PyObject *memo_now = NULL, *memo_old = NULL;
+/* The memo (see simatch.msgs.cdr): this period's and the last one's, id(object) -> (object, phase, bytes): a
+ * list met again at the same phase (offset modulo 8), or a message encoded on its own (phase 0, its body) met
+ * again inside a sequence. Two forms: `encode` takes two dicts (id -> (object, phase, bytes)); the message log
+ * holds two tables of its own (`MemoTable`: no Python object per entry, the bytes in one buffer per period),
+ * because the dicts' keys, tuples and bytes, made and dropped for a few hundred entries per simulated second,
+ * cost more than the encoding they saved. NULL (both forms): no memo. */
+typedef struct {
+    PyObject *obj;                 /* a strong reference: while it is held, no other object has its id */
+    long phase;
+    Py_ssize_t at, size;           /* its bytes in the table's `bytes` */
+} MemoEntry;
 
-static PyObject *memo_find(PyObject *obj, long phase) {
+typedef struct {
+    MemoEntry *entries;            /* open addressing (linear probing), `cap` a power of two; obj NULL: free */
+    Py_ssize_t cap, used;
+    Buf bytes;
+} MemoTable;
+
+static PyObject *memo_now = NULL, *memo_old = NULL;
+static MemoTable *table_now = NULL, *table_old = NULL;
+
+static int memo_on(void) {
+    return memo_now != NULL || table_now != NULL;
+}
+
+static Py_ssize_t table_slot(const MemoTable *t, PyObject *obj) {
+    size_t h = (size_t)obj >> 4;
+    h ^= h >> 9;
+    Py_ssize_t mask = t->cap - 1, i = (Py_ssize_t)(h & (size_t)mask);
+    while (t->entries[i].obj != NULL && t->entries[i].obj != obj)
+        i = (i + 1) & mask;
+    return i;
+}
+
+static const MemoEntry *table_find(const MemoTable *t, PyObject *obj) {
+    if (t == NULL || t->cap == 0)
+        return NULL;
+    const MemoEntry *e = &t->entries[table_slot(t, obj)];
+    return e->obj == obj ? e : NULL;
+}
+
+static int table_grow(MemoTable *t) {
+    Py_ssize_t cap = t->cap ? t->cap * 2 : 64;
+    MemoEntry *fresh = PyMem_Calloc(cap, sizeof(MemoEntry)), *old = t->entries;
+    if (fresh == NULL) {
+        PyErr_NoMemory();
+        return FAILED;
+    }
+    Py_ssize_t old_cap = t->cap;
+    t->entries = fresh;
+    t->cap = cap;
+    for (Py_ssize_t i = 0; i < old_cap; i++)
+        if (old[i].obj != NULL)
+            t->entries[table_slot(t, old[i].obj)] = old[i];
+    PyMem_Free(old);
+    return 0;
+}
+
+/* the entries' objects, for the garbage collector */
+static int table_traverse(const MemoTable *t, visitproc visit, void *arg) {
+    for (Py_ssize_t i = 0; i < t->cap; i++)
+        Py_VISIT(t->entries[i].obj);
+    return 0;
+}
+
+/* empty the table (its memory is kept for the next period) */
+static void table_clear(MemoTable *t) {
+    if (t->used) {
+        for (Py_ssize_t i = 0; i < t->cap; i++) {
+            PyObject *obj = t->entries[i].obj;
+            t->entries[i].obj = NULL;
+            Py_XDECREF(obj);
+        }
+    }
+    t->used = 0;
+    t->bytes.n = 0;
+}
+
+static void table_free(MemoTable *t) {
+    table_clear(t);
+    PyMem_Free(t->entries);
+    PyMem_Free(t->bytes.p);
+    memset(t, 0, sizeof *t);
+}
+
+/* the bytes kept for `obj` at `phase` (1; *p and *size set), none (0), or an error (-1, its exception set) */
+static int memo_find(PyObject *obj, long phase, const char **p, Py_ssize_t *size) {
+    if (table_now != NULL) {
+        const MemoTable *t = table_now;
+        const MemoEntry *e = table_find(t, obj);
+        if (e == NULL)
+            e = table_find(t = table_old, obj);
+        if (e == NULL || e->phase != phase)
+            return 0;
+        *p = t->bytes.p + e->at;
+        *size = e->size;
+        return 1;
+    }
     PyObject *key = PyLong_FromVoidPtr(obj);
     if (key == NULL)
-        return NULL;
+        return -1;
     PyObject *hit = PyDict_GetItemWithError(memo_now, key);
     if (hit == NULL && !PyErr_Occurred() && memo_old != NULL)
         hit = PyDict_GetItemWithError(memo_old, key);
     Py_DECREF(key);
-    if (hit == NULL || !PyTuple_Check(hit) || PyTuple_GET_SIZE(hit) != 3 || PyTuple_GET_ITEM(hit, 0) != obj
-        || PyLong_AsLong(PyTuple_GET_ITEM(hit, 1)) != phase)
-        return NULL;
-    return PyTuple_GET_ITEM(hit, 2);            /* borrowed */
+    if (hit == NULL)
+        return PyErr_Occurred() ? -1 : 0;
+    if (!PyTuple_Check(hit) || PyTuple_GET_SIZE(hit) != 3 || PyTuple_GET_ITEM(hit, 0) != obj
+        || PyLong_AsLong(PyTuple_GET_ITEM(hit, 1)) != phase || !PyBytes_Check(PyTuple_GET_ITEM(hit, 2))) {
+        PyErr_Clear();
+        return 0;
+    }
+    *p = PyBytes_AS_STRING(PyTuple_GET_ITEM(hit, 2));
+    *size = PyBytes_GET_SIZE(PyTuple_GET_ITEM(hit, 2));
+    return 1;
 }
 
+/* remember the bytes written since `start` as those of `obj` at `phase` */
 static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
+    if (table_now != NULL) {
+        MemoTable *t = table_now;
+        if ((t->used + 1) * 2 > t->cap && table_grow(t) < 0)
+            return FAILED;
+        Py_ssize_t size = out->n - start;
+        if (t->bytes.n + size > t->bytes.cap) {         /* grow the period's bytes (`reserve` writes `out`) */
+            Py_ssize_t cap = t->bytes.cap ? t->bytes.cap : 16384;
+            while (cap < t->bytes.n + size)
+                cap *= 2;
+            char *q = PyMem_Realloc(t->bytes.p, cap);
+            if (q == NULL) {
+                PyErr_NoMemory();
+                return FAILED;
+            }
+            t->bytes.p = q;
+            t->bytes.cap = cap;
+        }
+        memcpy(t->bytes.p + t->bytes.n, out->p + start, size);
+        MemoEntry *e = &t->entries[table_slot(t, obj)];
+        if (e->obj == NULL) {
+            e->obj = Py_NewRef(obj);
+            t->used++;
+        }
+        e->phase = phase;
+        e->at = t->bytes.n;
+        e->size = size;
+        t->bytes.n += size;
+        return 0;
+    }
     PyObject *key = PyLong_FromVoidPtr(obj);
     PyObject *data = PyBytes_FromStringAndSize(out->p + start, out->n - start);
     PyObject *at = PyLong_FromLong(phase);                 /* a small int: cached, no allocation */
@@ -344,20 +502,16 @@ static long phase_now(void) {
     return (long)((out->n - body) & 7);
 }
 
-static int put_bytes_object(PyObject *data) {
-    return put(PyBytes_AS_STRING(data), PyBytes_GET_SIZE(data));
-}
-
 /* a sequence (or fixed array) of strings (program NULL) or of messages (align: their first field's) */
 static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_first) {
     long phase = phase_now();
     Py_ssize_t start = out->n;
-    if (memo_now != NULL) {
-        PyObject *hit = memo_find(v, phase);
-        if (hit != NULL)
-            return put_bytes_object(hit);
-        if (PyErr_Occurred())
-            return FAILED;
+    const char *kept;
+    Py_ssize_t size;
+    if (memo_on()) {
+        int hit = memo_find(v, phase, &kept, &size);
+        if (hit)
+            return hit < 0 ? FAILED : put(kept, size);
     }
     PyObject *seq = PySequence_Fast(v, "");
     if (seq == NULL) {
@@ -376,25 +530,25 @@ static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_
             r = put_string(items[i]);
             continue;
         }
-        if (memo_now != NULL && align_first > 0) {     /* this message encoded on its own before? */
+        if (align_first > 0 && memo_on()) {            /* this message encoded on its own before? */
             Py_ssize_t pad = (body - out->n) & (align_first - 1);
             if (((out->n - body + pad) & 7) == 0) {
-                PyObject *hit = memo_find(items[i], 0);
-                if (hit != NULL) {
-                    if ((r = align(align_first)) == 0)
-                        r = put_bytes_object(hit);
-                    continue;
-                }
-                if (PyErr_Occurred()) {
+                int hit = memo_find(items[i], 0, &kept, &size);
+                if (hit < 0) {
                     r = FAILED;
                     break;
+                }
+                if (hit) {
+                    if ((r = align(align_first)) == 0)
+                        r = put(kept, size);
+                    continue;
                 }
             }
         }
         r = encode_program(program, items[i]);
     }
     Py_DECREF(seq);
-    if (r == 0 && memo_now != NULL && n > 0)
+    if (r == 0 && n > 0 && memo_on())
         r = memo_keep(v, phase, start);
     return r;
 }
@@ -566,14 +720,17 @@ typedef struct {
     Buf *out;
     Py_ssize_t body;
     PyObject *memo_now, *memo_old;
+    MemoTable *table_now, *table_old;
 } State;
 
-static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old) {
-    State saved = {out, body, memo_now, memo_old};
+static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old, MemoTable *tnow, MemoTable *told) {
+    State saved = {out, body, memo_now, memo_old, table_now, table_old};
     out = to;
     body = at;
     memo_now = now;
     memo_old = old;
+    table_now = tnow;
+    table_old = told;
     return saved;
 }
 
@@ -582,6 +739,8 @@ static void leave(State saved) {
     body = saved.body;
     memo_now = saved.memo_now;
     memo_old = saved.memo_old;
+    table_now = saved.table_now;
+    table_old = saved.table_old;
 }
 
 /* encode(program, msg[, memo, keep, out]): memo = (this period's dict, the last one's dict) or None; keep:
@@ -614,11 +773,11 @@ static PyObject *encode(PyObject *self, PyObject *args) {
     if (scratch.p == NULL)
         return PyErr_NoMemory();
     Py_ssize_t mark = scratch.n;           /* not 0 if this call runs inside another one's field conversion */
-    State saved = enter(&scratch, mark + 4, now, old);
+    State saved = enter(&scratch, mark + 4, now, old, NULL, NULL);
     int r = put("\x00\x01\x00\x00", 4);
     if (r == 0)
         r = encode_program(compiled, msg);
-    if (r == 0 && keep && memo_now != NULL)
+    if (r == 0 && keep && memo_on())
         r = memo_keep(msg, 0, mark + 4);
     leave(saved);
     PyObject *result = NULL;
@@ -915,7 +1074,8 @@ typedef struct {
     Buf buf;
     PyObject *channels;            /* topic -> Channel (in a capsule) */
     PyObject *programs, *fallback, *on_chunk;
-    PyObject *memo_now, *memo_old;
+    MemoTable memo[2];             /* the memo's tables: this period's is memo[current] */
+    int current;
     long long now, first, last;    /* log time; of the first and last message since the last take (-1: none) */
     long long step_ns, chunk_ns, next_chunk;
     long long step;                /* the physics step of the last clock message (-1: none usable) */
@@ -1000,7 +1160,8 @@ static int finish_record(Log *log, Py_ssize_t start, long cid, int r) {
 /* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
 static int log_message(Log *log, const Channel *ch, PyObject *msg) {
     Py_ssize_t start = log->buf.n;
-    State saved = enter(&log->buf, start + RECORD_HEAD + 4, log->memo_now, log->memo_old);
+    State saved = enter(&log->buf, start + RECORD_HEAD + 4, NULL, NULL, &log->memo[log->current],
+                        &log->memo[!log->current]);
     int r = reserve(RECORD_HEAD + 4);
     if (r == 0) {
         memcpy(out->p + start + RECORD_HEAD, "\x00\x01\x00\x00", 4);
@@ -1014,11 +1175,8 @@ static int log_message(Log *log, const Channel *ch, PyObject *msg) {
 }
 
 static int forget(Log *log) {
-    PyObject *fresh = PyDict_New();
-    if (fresh == NULL)
-        return FAILED;
-    Py_SETREF(log->memo_old, log->memo_now);
-    log->memo_now = fresh;
+    log->current = !log->current;                   /* this period's table becomes the last one's */
+    table_clear(&log->memo[log->current]);          /* (Python code may run as its objects go) */
     return 0;
 }
 
@@ -1089,7 +1247,7 @@ static int pose_record(Log *log, PyObject *msg) {
         if (ps->slots[i].row >= rows)
             r = FALLBACK;
     Py_ssize_t start = log->buf.n, size = PyBytes_GET_SIZE(ps->template);
-    State saved = enter(&log->buf, 0, NULL, NULL);
+    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
     if (r == 0 && (r = reserve(RECORD_HEAD + size)) == 0) {
         char *at = out->p + start + RECORD_HEAD;
         memcpy(at, PyBytes_AS_STRING(ps->template), size);
@@ -1213,7 +1371,7 @@ static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
 }
 
 /* the Python objects a Log holds, in one list each for the garbage collector's visit and clear */
-#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk) X(memo_now) X(memo_old)
+#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk)
 #define POSES_OBJECTS(X) X(topic) X(fallback) X(names) X(template)
 
 static void poses_clear(Poses *ps) {
@@ -1303,7 +1461,7 @@ static PyObject *log_record(Log *log, PyObject *args) {
     if (!PyArg_ParseTuple(args, "ly*", &cid, &data))
         return NULL;
     Py_ssize_t start = log->buf.n;
-    State saved = enter(&log->buf, 0, NULL, NULL);
+    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
     int r = check_channel(cid);
     if (r == 0 && (r = reserve(RECORD_HEAD)) == 0) {
         out->n += RECORD_HEAD;
@@ -1320,7 +1478,7 @@ static PyObject *log_append(Log *log, PyObject *args) {
     Py_buffer data;
     if (!PyArg_ParseTuple(args, "y*", &data))
         return NULL;
-    State saved = enter(&log->buf, 0, NULL, NULL);
+    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
     int r = put(data.buf, data.len);
     leave(saved);
     PyBuffer_Release(&data);
@@ -1448,18 +1606,27 @@ static int log_traverse(Log *self, visitproc visit, void *arg) {
     LOG_OBJECTS(VISIT_MEMBER)
     POSES_OBJECTS(VISIT_POSES)
 #undef VISIT_POSES
+    for (int i = 0; i < 2; i++) {
+        int r = table_traverse(&self->memo[i], visit, arg);
+        if (r)
+            return r;
+    }
     return 0;
 }
 
 static int log_clear(Log *self) {
     LOG_OBJECTS(CLEAR_MEMBER)
     poses_clear(&self->poses);
+    table_clear(&self->memo[0]);
+    table_clear(&self->memo[1]);
     return 0;
 }
 
 static void log_dealloc(Log *log) {
     PyObject_GC_UnTrack(log);
     log_clear(log);
+    table_free(&log->memo[0]);
+    table_free(&log->memo[1]);
     PyMem_Free(log->buf.p);
     PyMem_Free(log->counts);
     Py_TYPE(log)->tp_free((PyObject *)log);
@@ -1480,11 +1647,9 @@ static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     log->vectorcall = log_vectorcall;
     log->first = log->last = log->step = -1;
     log->channels = PyDict_New();
-    log->memo_now = PyDict_New();
-    log->memo_old = PyDict_New();
     log->programs = Py_NewRef(programs);
     log->fallback = Py_NewRef(fallback);
-    if (log->channels == NULL || log->memo_now == NULL || log->memo_old == NULL) {
+    if (log->channels == NULL) {
         Py_DECREF(log);
         return NULL;
     }

@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+from array import array
 from collections.abc import Callable
 from typing import Any
 
@@ -103,24 +104,19 @@ class InputLog:
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
         if not self.kind:
             return None
-        # numbers as numpy makes them (float64 exactly, from Python and numpy numbers and bools); anything else
-        # (text, which numpy would read as a number, huge ints, objects) one by one as the simulator took them
+        # numbers as float64, exactly: the array module converts Python and numpy numbers and bools in C, as numpy
+        # would (a fraction of numpy's array constructor on a list); anything else (text, which must not be read
+        # as a number, huge ints, objects) one by one as the simulator took them
         try:
-            values = np.array(self.values)
-            plain = values.dtype.kind in "fiub"
+            values = np.frombuffer(array("d", self.values), dtype=np.float64)
         except (TypeError, ValueError, OverflowError):
-            plain = False
-        values = (
-            values.astype(np.float64, copy=False)
-            if plain
-            else np.array([_number(v) for v in self.values], dtype=np.float64)
-        )
+            values = np.array([_number(v) for v in self.values], dtype=np.float64)
         msg = _WorldInputs(
             stamp,
             step,
             before_sense,
-            np.array(self.kind, dtype=np.uint8),
-            np.array(self.robot, dtype=np.int16),
+            np.frombuffer(array("B", self.kind), dtype=np.uint8),
+            np.frombuffer(array("h", self.robot), dtype=np.int16),
             values,
             self.calls,
         )
