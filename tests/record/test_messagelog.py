@@ -140,6 +140,35 @@ def test_c_and_python_recordings_hold_the_same_bytes(tmp_path):
     assert [(x.start, x.end) for x in c.chunks] == [(x.start, x.end) for x in py.chunks]
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_log_writes_ros_2s_clock_after_each_clock_message(kind):
+    """``ros_clock``: ROS 2's /clock at the time of each clock message's step, right after it, for a channel
+    added before or after; a time beyond int32 seconds is not written (nothing a run does can stop on it)."""
+    from simatch.record.layout import ros_clock
+
+    refused = []
+    log = _log(kind, lambda topic, msg: refused.append(msg.step))
+    log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
+    log.ros_clock("clock", 7)
+    log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
+    log.timing(5_000_000, 500_000_000, lambda: None)
+    states = msgs.new(msgs.ModelStates, step=3, name=[], pose=np.zeros(0, np.float32), twist=np.zeros(0, np.float32))
+    log("model_states", states)  # sets the time, no clock of ROS 2
+    tick = msgs.new(msgs.Clock, stamp=1.0, step=200_001, tick=40_000)
+    log("clock", tick)
+    log.now = 2**31 * 1_000_000_000  # beyond int32 seconds
+    log.ros_clock("clock", 8)
+    log("clock", msgs.new(msgs.Clock, step=-1))  # no time of its own (nor an encoding: the fallback's)
+    records = _records(log.take()[0])
+    assert [(cid, t) for cid, t, _ in records] == [(2, 15_000_000), (1, 1_000_005_000_000), (7, 1_000_005_000_000)]
+    assert records[2][2] == ros_clock(1_000_005_000_000)
+    assert records[1][2] == msgs.encode(tick)
+    log.now = 61_500_000_000
+    log("clock", msgs.new(msgs.Clock, step=-1))  # the fallback's, and ROS 2's clock after it all the same
+    assert _records(log.take()[0]) == [(8, 61_500_000_000, ros_clock(61_500_000_000))]
+    assert refused == [-1, -1]
+
+
 def _memo_traffic() -> list[tuple[str, object]]:
     """Messages as a recorder meets them, for the memo: messages logged alone and met again in a team's list in
     the same memo period, the next one and the one after (forgotten by then), lists shared by many messages

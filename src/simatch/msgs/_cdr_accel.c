@@ -1081,6 +1081,8 @@ typedef struct {
     long long step;                /* the physics step of the last clock message (-1: none usable) */
     Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
     Poses poses;
+    PyObject *ros_topic;           /* `ros_clock`: after each message on it, ROS 2's clock (NULL: none) */
+    long ros_channel;
 } Log;
 
 typedef struct {
@@ -1088,6 +1090,7 @@ typedef struct {
     int keep;                      /* remember each message's body in the memo */
     int clock;                     /* CLOCK_* flags */
     int poses;                     /* the topic of the pose template */
+    int ros_clock;                 /* the topic of `ros_clock` */
     Program *program;
     PyObject *owner;               /* the program's capsule */
 } Channel;
@@ -1289,6 +1292,49 @@ static int poses_after(Log *log, PyObject *msg) {
     return called(PyObject_CallOneArg(ps->fallback, msg));
 }
 
+/* ROS 2's clock (rosgraph_msgs/msg/Clock: builtin_interfaces/Time, int32 sec and uint32 nanosec) at the log
+ * time, on `ros_channel` (what `simatch.record.layout.ros_clock` encodes; a time beyond int32 seconds is not
+ * written, by either log) */
+static int ros_clock_record(Log *log) {
+    long long sec = log->now / 1000000000LL, nsec = log->now % 1000000000LL;
+    if (nsec < 0) {                                /* floored, as Python's divmod */
+        sec -= 1;
+        nsec += 1000000000LL;
+    }
+    if (sec < INT32_MIN || sec > INT32_MAX)
+        return 0;
+    Py_ssize_t start = log->buf.n;
+    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
+    int r = reserve(RECORD_HEAD + 12);
+    if (r == 0) {
+        char *p = out->p + start + RECORD_HEAD;
+        memcpy(p, "\x00\x01\x00\x00", 4);
+        put_le(p + 4, (unsigned long long)(sec & 0xffffffffLL), 4);
+        put_le(p + 8, (unsigned long long)nsec, 4);
+        out->n = start + RECORD_HEAD + 12;
+    }
+    leave(saved);
+    return finish_record(log, start, log->ros_channel, r);
+}
+
+/* ros_clock(topic, channel_id): after each message on topic, a record of ROS 2's clock at the log time */
+static PyObject *log_ros_clock(Log *log, PyObject *args) {
+    PyObject *topic, *key, *value;
+    long cid;
+    if (!PyArg_ParseTuple(args, "Ul", &topic, &cid) || check_channel(cid) < 0)
+        return NULL;
+    Py_XSETREF(log->ros_topic, Py_NewRef(topic));
+    log->ros_channel = cid;
+    Py_ssize_t pos = 0;
+    while (PyDict_Next(log->channels, &pos, &key, &value)) {      /* a channel added before */
+        Channel *ch = PyCapsule_GetPointer(value, NULL);
+        if (ch == NULL)
+            return NULL;
+        ch->ros_clock = PyUnicode_Compare(key, topic) == 0;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
     Log *log = (Log *)self;
     if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
@@ -1307,6 +1353,8 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
         r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
     if (r == 0 && ch->poses)
         r = poses_after(log, args[1]);
+    if (r == 0 && ch->ros_clock)
+        r = ros_clock_record(log);
     Py_DECREF(entry);
     if (r != 0)
         return NULL;
@@ -1337,7 +1385,8 @@ static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
         return keep < 0 ? NULL : PyErr_NoMemory();
     }
     int poses = log->poses.topic != NULL && PyUnicode_Compare(topic, log->poses.topic) == 0;
-    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), poses, program,
+    int ros = log->ros_topic != NULL && PyUnicode_Compare(topic, log->ros_topic) == 0;
+    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), poses, ros, program,
                     Py_NewRef(PyTuple_GET_ITEM(found, 0))};
     Py_DECREF(found);
     PyObject *entry = PyCapsule_New(ch, NULL, channel_free);
@@ -1371,7 +1420,7 @@ static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
 }
 
 /* the Python objects a Log holds, in one list each for the garbage collector's visit and clear */
-#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk)
+#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk) X(ros_topic)
 #define POSES_OBJECTS(X) X(topic) X(fallback) X(names) X(template)
 
 static void poses_clear(Poses *ps) {
@@ -1661,6 +1710,8 @@ static PyMethodDef log_methods[] = {
      "add(topic, channel_id, typename, clock=0): record topic on that channel"},
     {"timing", (PyCFunction)(void (*)(void))log_timing, METH_VARARGS | METH_KEYWORDS,
      "timing(step_ns, chunk_ns, on_chunk): how clock messages set the time and end chunks"},
+    {"ros_clock", (PyCFunction)log_ros_clock, METH_VARARGS,
+     "ros_clock(topic, channel_id): after each message on topic, ROS 2's clock at the log time on that channel"},
     {"poses", (PyCFunction)(void (*)(void))log_poses, METH_VARARGS | METH_KEYWORDS,
      "poses(topic, channel_id, every, fallback): a pose template's record every `every` steps of topic"},
     {"pose_template", (PyCFunction)(void (*)(void))log_pose_template, METH_VARARGS | METH_KEYWORDS,

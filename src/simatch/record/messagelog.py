@@ -30,6 +30,8 @@ Interface of both:
   record on ``channel_id``: `fill_poses` of the template, if its names are the template's; anything else
   (no template yet, other names, a pose that is not a float buffer of enough rows) goes to
   ``fallback(msg)``, which may set a new template and records what it makes itself.
+* ``log.ros_clock(topic, channel_id)``: after each message on ``topic`` (the clock), a record on ``channel_id``
+  of ROS 2's clock at the log time (`simatch.record.layout.ros_clock`; none beyond int32 seconds).
 * ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
   last take.
 """
@@ -46,6 +48,7 @@ import numpy as np
 
 from .. import msgs
 from ..msgs import cdr
+from .layout import ros_clock
 
 #: a Message record up to its data: opcode, record length, channel id, sequence, log time, publish time
 MESSAGE_HEADER = struct.Struct("<BQHIQQ")
@@ -108,6 +111,7 @@ class MessageLog:
         self._on_chunk: Callable[[], None] | None = None
         self._step = -1
         self._poses: tuple[str, int, int, Callable[[Any], None]] | None = None
+        self._ros: tuple[str, int] | None = None
         self._template: tuple[Any, bytes, list[PoseSlot], float, float] | None = None
 
     @property
@@ -148,6 +152,13 @@ class MessageLog:
             self._counted(cid)
         if self._poses is not None and clock and topic == self._poses[0]:
             self._poses_after(msg)
+        if self._ros is not None and topic == self._ros[0]:
+            sec, nsec = divmod(self.now, 1_000_000_000)
+            if -(2**31) <= sec < 2**31:
+                self.record(self._ros[1], ros_clock(self.now))
+
+    def ros_clock(self, topic: str, channel_id: int) -> None:
+        self._ros = (topic, _channel(channel_id))
 
     def poses(self, topic: str, channel_id: int, every: int, fallback: Callable[[Any], None]) -> None:
         if every <= 0 or not callable(fallback):

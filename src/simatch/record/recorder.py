@@ -166,11 +166,8 @@ class Recorder:
         self._log.poses(topics.MODEL_STATES, self._game, self._game_every, self._scene_update)
         wanted = list(WORLD_TOPICS) + [TEAM_TOPICS] + ([topics.LINK_STATES] if links else []) + list(extra_topics)
         self._subs = [bus.subscribe_all(pattern, self._log) for pattern in wanted]
-        # after the log's own subscription: the log has set the time of the clock's step when this runs
-        ros_clock, log_ = self._raw_channel(layout.ROS_CLOCK, msgs.typestore, layout.ROS_CLOCK_TYPE), self._log
-        self._subs.append(
-            bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: log_.record(ros_clock, layout.ros_clock(log_.now)))
-        )
+        # ROS 2's clock, written by the log after each clock message (at the time of that message's step)
+        self._log.ros_clock(topics.CLOCK, self._raw_channel(layout.ROS_CLOCK, msgs.typestore, layout.ROS_CLOCK_TYPE))
         self._subs.append(bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_game))
 
     # --- channels --------------------------------------------------------------------------------------------
