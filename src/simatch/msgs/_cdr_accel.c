@@ -150,7 +150,33 @@ static int put_primitive(long kind, PyObject *v) {
     } else if (kind == K_BOOL && (v == Py_True || v == Py_False)) {
         unsigned char b = v == Py_True;
         return put_aligned(&b, 1);
+    } else if (PyLong_CheckExact(v) && kind != K_BOOL && kind < K_F32) {
+        long long x;
+#if PY_VERSION_HEX >= 0x030C0000
+        if (!PyUnstable_Long_IsCompact((PyLongObject *)v))
+            goto general;
+        x = (long long)PyUnstable_Long_CompactValue((PyLongObject *)v);
+#else
+        Py_ssize_t digits = Py_SIZE(v);                /* an int of one digit (30 bits) at most */
+        if (digits < -1 || digits > 1)
+            goto general;
+        x = digits * (long long)((PyLongObject *)v)->ob_digit[0];
+#endif
+        unsigned char b[8];
+        switch (kind) {                                /* in range: written as struct packs it; else below */
+        case K_I8: if (x < -128 || x > 127) goto general; { signed char c = (signed char)x; memcpy(b, &c, 1); } break;
+        case K_U8: if (x < 0 || x > 255) goto general; b[0] = (unsigned char)x; break;
+        case K_I16: if (x < -32768 || x > 32767) goto general; { short h = (short)x; memcpy(b, &h, 2); } break;
+        case K_U16: if (x < 0 || x > 65535) goto general; { unsigned short h = (unsigned short)x; memcpy(b, &h, 2); } break;
+        case K_I32: if (x < INT32_MIN || x > INT32_MAX) goto general; { int i = (int)x; memcpy(b, &i, 4); } break;
+        case K_U32: if (x < 0 || x > UINT32_MAX) goto general; { unsigned int i = (unsigned int)x; memcpy(b, &i, 4); } break;
+        case K_I64: memcpy(b, &x, 8); break;
+        case K_U64: if (x < 0) goto general; { unsigned long long u = (unsigned long long)x; memcpy(b, &u, 8); } break;
+        default: goto general;
+        }
+        return put_aligned(b, size_of(kind));
     }
+general:;
     int size = size_of(kind);
     if (align(size) < 0)
         return FAILED;
