@@ -6,6 +6,7 @@ random, a script, a scripted driver. A change that bypasses the simulator's inpu
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -319,3 +320,31 @@ def test_a_number_written_as_text_is_logged_as_refused(accelerated, tmp_path, mo
     start = dict(zip(("x", "y"), simatch.Simulation("msl_5v5").scene.spec.teams["cyan"].start[1][:2]))
     assert abs(moved["cyan/2"].x - start["x"]) < 0.05  # it stood: the text was refused
     assert verify(path).identical
+
+
+@pytest.mark.parametrize("accelerated", [True, False])
+def test_the_inputs_numbers_are_converted_as_numpy_converts_them(accelerated, monkeypatch):
+    """The WorldInputs arrays made from the log's lists (in C by `cdr.pack`, else by the array module) hold
+    the numbers numpy's constructor makes of the same lists; what is not a plain number is left to the
+    one-by-one conversion."""
+    from simatch.msgs import cdr
+    from simatch.sim import inputs as world
+
+    if not accelerated:
+        monkeypatch.setattr(cdr, "pack", None)
+    elif cdr.pack is None:
+        pytest.skip("the C extension is not built")
+    plain = [0.1, -0.0, 2**53 + 1, 2**70, -(2**63) - 1, True, False, 7, math.inf, np.float32(0.1), np.int64(-3)]
+    made = world._machine_array(plain, "d", np.float64)
+    assert made.dtype == np.float64 and made.flags.writeable
+    assert made.tobytes() == np.array(plain).astype(np.float64).tobytes()
+    for other in ("1.5", b"2", 2**1100, 1j, None):
+        assert world._machine_array([1.0, other], "d", np.float64) is None
+    assert world._machine_array([0, 3, 255], "B", np.uint8).tolist() == [0, 3, 255]
+    assert world._machine_array([-1, 32767, -32768], "h", np.int16).tolist() == [-1, 32767, -32768]
+    for code, bad in (("B", 256), ("B", -1), ("h", 32768), ("h", 1.0)):
+        assert world._machine_array([0, bad], code, np.uint8 if code == "B" else np.int16) is None
+    if accelerated:
+        assert cdr.pack([1, 2.5, True], "d") == bytearray(np.array([1.0, 2.5, 1.0]).tobytes())
+        with pytest.raises(ValueError):
+            cdr.pack([1], "q")

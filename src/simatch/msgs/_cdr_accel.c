@@ -1910,6 +1910,62 @@ static PyTypeObject TapType = {
     .tp_getset = tap_getset,
 };
 
+/* pack(list, code) -> bytearray | None: the list's numbers as one machine array ("d": float64 from exact floats,
+ * exact ints (correctly rounded, as float() rounds them) and bools; "B": uint8 and "h": int16 from exact ints
+ * in range), or None if an item is anything else (the caller converts those lists itself). The world inputs'
+ * message takes its arrays so (`simatch.sim.inputs`): the array module's constructor parses each item's
+ * format, some hundred instructions per number. */
+static PyObject *pack(PyObject *self, PyObject *args) {
+    PyObject *list;
+    int code;
+    if (!PyArg_ParseTuple(args, "O!C", &PyList_Type, &list, &code))
+        return NULL;
+    if (code != 'd' && code != 'B' && code != 'h') {
+        PyErr_SetString(PyExc_ValueError, "pack: code 'd', 'B' or 'h'");
+        return NULL;
+    }
+    Py_ssize_t n = PyList_GET_SIZE(list), size = code == 'd' ? 8 : code == 'h' ? 2 : 1;
+    PyObject *result = PyByteArray_FromStringAndSize(NULL, n * size);
+    if (result == NULL)
+        return NULL;
+    char *p = PyByteArray_AS_STRING(result);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *v = PyList_GET_ITEM(list, i);
+        if (code == 'd') {
+            double d;
+            if (PyFloat_CheckExact(v))
+                d = PyFloat_AS_DOUBLE(v);
+            else if (v == Py_True || v == Py_False)
+                d = v == Py_True;
+            else if (PyLong_CheckExact(v)) {
+                d = PyLong_AsDouble(v);
+                if (d == -1.0 && PyErr_Occurred())
+                    goto other;                        /* beyond float64: the caller's */
+            } else
+                goto other;
+            memcpy(p + 8 * i, &d, 8);
+            continue;
+        }
+        if (!PyLong_CheckExact(v))
+            goto other;
+        int overflow;
+        long x = PyLong_AsLongAndOverflow(v, &overflow);
+        if (overflow || (code == 'B' ? (x < 0 || x > 255) : (x < -32768 || x > 32767)))
+            goto other;
+        if (code == 'B')
+            p[i] = (char)(unsigned char)x;
+        else {
+            short h = (short)x;
+            memcpy(p + 2 * i, &h, 2);
+        }
+    }
+    return result;
+other:
+    PyErr_Clear();
+    Py_DECREF(result);
+    Py_RETURN_NONE;
+}
+
 /* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
 static PyObject *setup(PyObject *self, PyObject *args) {
     PyObject *type, *kinds, *sample;
@@ -1943,6 +1999,7 @@ static PyObject *setup(PyObject *self, PyObject *args) {
 static PyMethodDef methods[] = {
     {"encode", encode, METH_VARARGS, "encode(compiled program, msg) -> CDR bytes with the header, or None: use Python"},
     {"setup", setup, METH_VARARGS, "setup(ndarray, {kind: dtype}, np.arange(3.0)) -> arrays read directly"},
+    {"pack", pack, METH_VARARGS, "pack(list, 'd'|'B'|'h') -> the numbers as a bytearray, or None: convert them yourself"},
     {"compile", compile, METH_O, "compile(program tuple) -> the compiled program that encode and Log take"},
     {"compile_decoder", compile_decoder, METH_O, "compile_decoder((class, ops)) -> the program decode takes"},
     {"decode", decode, METH_VARARGS, "decode(compiled decoder program, payload bytes) -> message, or MessageError"},

@@ -59,7 +59,7 @@ PURE_PYTHON_ENV = "SIMATCH_CDR_PURE_PYTHON"
 try:  # the C encoder (setup.py builds it where a compiler is at hand)
     if os.environ.get(PURE_PYTHON_ENV, "") not in ("", "0"):
         raise ImportError(f"{PURE_PYTHON_ENV} is set")
-    from ._cdr_accel import Log, Tap
+    from ._cdr_accel import Log, Tap, pack
     from ._cdr_accel import compile as _accel_compile
     from ._cdr_accel import compile_decoder as _accel_compile_decoder
     from ._cdr_accel import decode as _accel_decode
@@ -67,7 +67,7 @@ try:  # the C encoder (setup.py builds it where a compiler is at hand)
     from ._cdr_accel import setup as _accel_setup
     from ._cdr_accel import setup_decoding as _accel_setup_decoding
 except ImportError:  # a machine without a C compiler
-    _accel_encode = _accel_setup = _accel_compile = Log = Tap = None
+    _accel_encode = _accel_setup = _accel_compile = Log = Tap = pack = None
     _accel_decode = _accel_compile_decoder = _accel_setup_decoding = None
 
 if sys.byteorder != "little":  # encoders append numpy buffers as they lie in memory

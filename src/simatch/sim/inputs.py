@@ -60,6 +60,20 @@ def _number(value: Any) -> float:
         return math.inf if value > 0 else -math.inf
 
 
+def _machine_array(items: list, code: str, dtype) -> np.ndarray | None:
+    """``items`` (Python numbers) as a numpy array of ``dtype`` (array module ``code``), or None if some item
+    is not a plain number. In C where the extension is built (`simatch.msgs.cdr.pack`: a match's inputs every
+    control tick), else by the array module; both convert ints, floats and bools as numpy's constructor does,
+    for a fraction of its time on a list."""
+    data = cdr.pack(items, code) if cdr.pack is not None else None
+    if data is None:
+        try:
+            data = array(code, items)
+        except (TypeError, ValueError, OverflowError):
+            return None
+    return np.frombuffer(data, dtype=dtype)
+
+
 def _plain(value: Any) -> Any:
     """JSON for what the API takes besides plain numbers: numpy arrays and scalars exactly, tuples as lists."""
     if isinstance(value, np.ndarray | np.generic):
@@ -104,19 +118,20 @@ class InputLog:
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
         if not self.kind:
             return None
-        # numbers as float64, exactly: the array module converts Python and numpy numbers and bools in C, as numpy
-        # would (a fraction of numpy's array constructor on a list); anything else (text, which must not be read
-        # as a number, huge ints, objects) one by one as the simulator took them
-        try:
-            values = np.frombuffer(array("d", self.values), dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
+        # numbers as float64, exactly, converted in C as numpy would; anything else (text, which must not be read as
+        # a number, huge ints, objects) one by one as the simulator took them
+        values = _machine_array(self.values, "d", np.float64)
+        if values is None:
             values = np.array([_number(v) for v in self.values], dtype=np.float64)
+        kinds, robots = _machine_array(self.kind, "B", np.uint8), _machine_array(self.robot, "h", np.int16)
+        if kinds is None or robots is None:  # (not met: the log appends its own codes and robot indices only)
+            kinds, robots = np.array(self.kind, dtype=np.uint8), np.array(self.robot, dtype=np.int16)
         msg = _WorldInputs(
             stamp,
             step,
             before_sense,
-            np.frombuffer(array("B", self.kind), dtype=np.uint8),
-            np.frombuffer(array("h", self.robot), dtype=np.int16),
+            kinds,
+            robots,
             values,
             self.calls,
         )
