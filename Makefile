@@ -29,8 +29,8 @@ bench: setup-run
 setup-run: $(VENV)/.installed-run
 setup: $(VENV)/.installed-test
 
-# setup.py and the C encoder too: a changed extension is rebuilt by the next make
-$(VENV)/.installed-run: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c
+# setup.py and the C extensions too: a changed extension is rebuilt by the next make
+$(VENV)/.installed-run: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c src/simatch/msgs/_positional.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e .

@@ -1,9 +1,14 @@
 """Positional construction of messages (hot paths): the field order is checked, so a change of a .msg
 file cannot silently swap fields."""
 
+import gc
+import sys
+
+import numpy as np
 import pytest
 
 from simatch import msgs
+from simatch.msgs import _maker
 
 
 def test_fields_follow_the_msg_file():
@@ -32,3 +37,80 @@ def test_a_field_appended_with_a_default_leaves_older_constructions_valid():
 def test_positional_refuses_another_order(order):
     with pytest.raises(TypeError, match="VelCmd has fields"):
         msgs.positional(msgs.VelCmd, order)
+
+
+# --- the C helper (`simatch.msgs._positional`): the same messages as the classes make -------------------------
+
+
+def _values(name: str) -> list:
+    """One distinct value per field of ``name`` (numbers, text, arrays, nested messages, lists)."""
+    out = []
+    for k, (field, _) in enumerate(msgs.typestore.fielddefs[name][1]):
+        default = msgs.new(name)
+        v = getattr(default, field)
+        if isinstance(v, bool):
+            out.append(k % 2 == 0)
+        elif isinstance(v, int):
+            out.append(k + 1)
+        elif isinstance(v, float):
+            out.append(k + 0.5)
+        elif isinstance(v, str):
+            out.append(f"text{k}")
+        elif isinstance(v, np.ndarray):
+            out.append(np.arange(3, dtype=v.dtype))
+        else:  # a nested message or a list of them
+            out.append(v)
+    return out
+
+
+@pytest.mark.skipif(_maker is None, reason="the C helper is not built here")
+@pytest.mark.parametrize("name", msgs.names())
+def test_the_maker_builds_the_message_the_class_builds(name):
+    cls = msgs.typestore.types[name]
+    make = msgs.positional(name, " ".join(msgs.fields(name)))
+    assert make is not cls and make.cls is cls
+    values = _values(name)
+    owned = [v for v in values if not isinstance(v, int)]  # (small ints and bools are shared by everybody)
+    before = [sys.getrefcount(v) for v in owned]
+    for _ in range(100):
+        msg = make(*values)
+    assert type(msg) is cls and msg == cls(*values)
+    assert all(getattr(msg, f) is v for f, v in zip(msgs.fields(name), values))  # the objects themselves
+    assert msgs.encode(msg) == msgs.encode(cls(*values))
+    assert gc.is_tracked(msg)  # (its slots hold objects: the cycle collector sees it, as the class's)
+    del msg
+    assert [sys.getrefcount(v) for v in owned] == before  # each held once while the message lives, then let go
+
+
+@pytest.mark.skipif(_maker is None, reason="the C helper is not built here")
+def test_the_maker_takes_defaults_and_hands_other_calls_to_the_class():
+    short = msgs.positional(msgs.VelCmd, "stamp tick vx vy w")
+    assert short(1.5, 7, 0.5, -0.25, 0.375) == msgs.VelCmd(1.5, 7, 0.5, -0.25, 0.375, 0.0)
+    assert short(1.5, 7, 0.5, -0.25, 0.375, 2.0).vz == 2.0  # a defaulted field may still be given
+    assert short(1.5, 7, 0.5, -0.25, w=0.375).w == 0.375  # keywords: the class's constructor
+    with pytest.raises(TypeError, match="missing"):
+        short(1.5, 7)
+    with pytest.raises(TypeError, match="positional argument"):
+        short(1.5, 7, 0.5, -0.25, 0.375, 2.0, 9.0)
+
+
+@pytest.mark.skipif(_maker is None, reason="the C helper is not built here")
+def test_the_maker_refuses_classes_it_cannot_build_exactly():
+    class Plain:
+        def __init__(self, a):
+            self.a = a
+
+    class Slotted:
+        __slots__ = ("a",)
+
+    with pytest.raises(TypeError, match="slotted"):
+        _maker(Plain, ("a",), ())
+    with pytest.raises(TypeError, match="not a slot"):
+        _maker(Slotted, ("b",), ())
+    with pytest.raises(ValueError, match="defaults"):
+        _maker(Slotted, ("a",), (1, 2))
+
+
+def test_without_the_helper_positional_gives_the_class(monkeypatch):
+    monkeypatch.setattr(msgs, "_maker", None)
+    assert msgs.positional(msgs.Clock, "stamp step tick") is msgs.Clock

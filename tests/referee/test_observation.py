@@ -62,3 +62,15 @@ def test_refresh_equals_the_plain_reading(shuffled):
         assert np.array_equal(np.array(ball), np.array(want["ball"]), equal_nan=True)
         assert obs.X is held
     assert obs._in_order == (not shuffled)
+
+
+def test_the_ball_over_a_line_is_judged_on_plain_floats_as_numpy_judges_float32():
+    """The referee reads the ball's float32 position as plain floats at every step and compares it with the
+    limits rounded to float32: the same test as NumPy's comparison of a float32 with the float64 limit."""
+    rng = np.random.default_rng(5)
+    for limit in (11.0 + 0.11, 7.0 + 0.125 + 0.11, 9.08, 6.0 + 1.0 / 3.0):
+        lim32 = msgs.f32(limit)
+        near = np.nextafter(np.float32(limit), np.float32(np.inf)) + rng.normal(0.0, 1e-6, 2000).astype(np.float32)
+        for v in np.concatenate((near, -near, np.float32([limit, -limit, lim32, -lim32]))).astype(np.float32):
+            x = v.item()
+            assert (v > limit) == (x > lim32) and (v < -limit) == (x < -lim32)

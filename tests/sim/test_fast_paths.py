@@ -164,3 +164,26 @@ def test_perception_messages_of_a_tick_are_new_arrays_and_shared_ones_are_read_o
             first[0].obstacles.radius[0] = 1.0
         with pytest.raises(ValueError):
             first[0].obstacles.z[0] = 1.0
+
+
+def test_velocity_commands_are_stored_as_the_rounded_numbers_the_general_way_stores():
+    """`command_velocity` rounds through one struct and writes through memoryviews: the drive's numbers, the
+    command's step and the dirty flag are what `msgs.f32s` and NumPy's item assignment give, for any kind of
+    number it accepts (floats, NumPy scalars, ints, bools) and a NumPy integer as the index."""
+    rng = np.random.default_rng(3)
+    with simatch.Simulation("msl_5v5", seed=1) as run:
+        sim = run.simulator
+        run.run(seconds=0.1, until_done=False)
+        kinds = [float, np.float64, np.float32, lambda v: int(round(v)), lambda v: v > 0]
+        for k in range(500):
+            i = int(rng.integers(sim.ng))
+            values = [kinds[k % 5](v) for v in rng.normal(0.0, 3.0, 3)]
+            index = np.int64(i) if k % 7 == 0 else i
+            sim.drive.dirty[i] = False
+            assert sim.command_velocity(index, *values) is True
+            assert sim.drive.cmd[i].tolist() == list(msgs.f32s(*(float(v) for v in values)))
+            assert sim.drive.dirty[i] and sim.drive.any_dirty and sim.last_command_step[i] == sim.step_index
+            sim.step()
+        with pytest.raises(IndexError):
+            sim.command_velocity(sim.n, 0.0, 0.0, 0.0)
+        assert sim.command_velocity(0, "1", 0.0, 0.0) is False and sim.command_velocity(0, np.nan, 0, 0) is False

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import struct
 import sys
 from collections.abc import Callable
@@ -106,6 +107,10 @@ def _defaults(text: str) -> dict[str, Any]:
     return out
 
 
+#: the slotted classes `_with_slots` made (their ``__init__`` stores each argument and nothing else)
+_SLOTTED: set[type] = set()
+
+
 def _with_slots(cls: type, defaults: dict[str, Any]) -> type:
     """The same message class with ``__slots__``: the same fields in the same order, constants and
     ``__msgtype__``, and no per-instance dict.
@@ -124,6 +129,7 @@ def _with_slots(cls: type, defaults: dict[str, Any]) -> type:
     namespace = {k: v for k, v in vars(cls).items() if k not in _GENERATED}
     slotted = dataclasses.make_dataclass(cls.__name__, fields, namespace=namespace, slots=True)
     slotted.__qualname__ = cls.__qualname__
+    _SLOTTED.add(slotted)
     setattr(sys.modules[cls.__module__], cls.__name__, slotted)  # where pickle looks it up
     return slotted
 
@@ -222,21 +228,43 @@ def fields(msgtype: Any) -> tuple[str, ...]:
     return tuple(fname for fname, _ in typestore.fielddefs[msgtype_name(msgtype)][1])
 
 
-def positional(msgtype: Any, order: str):
-    """The class of ``msgtype`` for construction with positional arguments, after checking that its fields
-    are exactly ``order`` (space-separated names).
+def positional(msgtype: Any, order: str) -> Callable[..., Any]:
+    """A constructor of ``msgtype`` messages from positional arguments, after checking that its fields are
+    exactly ``order`` (space-separated names).
 
-    Hot paths (perception, commands: hundreds of messages per simulated second) build messages
+    Hot paths (perception, commands: thousands of messages per simulated second) build messages
     positionally, about three times faster than by keyword. The check, at import, turns a later change of
     a ``.msg`` file into a clear error instead of fields silently swapped; fields appended later with a
-    default value in the ``.msg`` (VelCmd's ``vz``) may be left out of ``order``: they take their default."""
+    default value in the ``.msg`` (VelCmd's ``vz``) may be left out of ``order``: they take their default.
+
+    Where the C helper is built (`simatch.msgs._positional`, next to the CDR encoder) the constructor is
+    its ``Maker``: the same instance of the same class as the class's own ``__init__`` makes, its slots
+    filled in C without a Python frame (a few times cheaper); elsewhere, or with ``SIMATCH_POSITIONAL_PURE``
+    set, the class itself. Called with anything but ``order``'s arguments (keywords, more or fewer
+    arguments) the Maker hands the call to the class, which raises its usual error."""
     want, have = tuple(order.split()), fields(msgtype)
     cls = typestore.types[msgtype_name(msgtype)]
     rest = have[len(want) :]
     defaulted = cls.__dataclass_fields__
     if want != have[: len(want)] or any(defaulted[f].default is dataclasses.MISSING for f in rest):
         raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
-    return cls
+    if _maker is None or cls not in _SLOTTED or hasattr(cls, "__post_init__"):
+        return cls
+    # every field: the ones a call gives (at least ``order``'s), then the defaults of those it may leave out
+    first_default = next((k for k, f in enumerate(have) if defaulted[f].default is not dataclasses.MISSING), len(have))
+    required = max(first_default, len(want))
+    return _maker(cls, have, tuple(defaulted[f].default for f in have[required:]))
+
+
+#: set (to anything but "" or "0") to build messages by their classes even where the C helper is built
+POSITIONAL_PURE_ENV = "SIMATCH_POSITIONAL_PURE"
+
+try:  # the C helper (setup.py builds it where a compiler is at hand)
+    if os.environ.get(POSITIONAL_PURE_ENV, "") not in ("", "0"):
+        raise ImportError(f"{POSITIONAL_PURE_ENV} is set")
+    from ._positional import maker as _maker
+except ImportError:  # a machine without a C compiler: the classes themselves
+    _maker = None
 
 
 _FLOAT32 = [struct.Struct(f"<{n}f") for n in range(17)]

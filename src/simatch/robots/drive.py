@@ -143,14 +143,20 @@ class OmniDrive:
         self.dirty = np.zeros(n, dtype=bool)  # a command arrived since the last plan
         self.ramping = np.zeros(n, dtype=bool)  # the last plan did not reach the target
         self.any_dirty = False
+        # flat memoryviews of cmd and dirty (their memory is fixed for the drive's life): `command` writes a
+        # robot's numbers through them, a fraction of what NumPy's item assignment costs (400 a second)
+        self._cmd_flat = memoryview(self.cmd.reshape(-1))  # (C-ordered: a view)
+        self._dirty_flat = memoryview(self.dirty)
 
     # --- commands -----------------------------------------------------------------------------------------
     def command(self, i: int, vx: float, vy: float, w: float) -> None:
         """Robot i's body-frame velocity command (assumed finite; the caller validates)."""
-        self.cmd[i, 0] = vx
-        self.cmd[i, 1] = vy
-        self.cmd[i, 2] = w
-        self.dirty[i] = True
+        cmd = self._cmd_flat
+        k = 3 * i
+        cmd[k] = vx
+        cmd[k + 1] = vy
+        cmd[k + 2] = w
+        self._dirty_flat[i] = True
         self.any_dirty = True
 
     def stop(self, i: int) -> None:

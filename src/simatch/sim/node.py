@@ -127,7 +127,7 @@ class SimulatorNode(Node):
     def tick(self, now: float) -> None:
         sim = self.sim
         k = sim.step_index
-        inputs = sim.inputs
+        inputs = sim._inputs  # (`Simulator.inputs` without the property's call: read at every step)
         if inputs is not None and inputs.kind:  # made between the steps: before this step's states go out
             if self.pub_inputs.active:
                 self.pub_inputs.put(inputs.take(now, k, True))
@@ -208,7 +208,7 @@ class PhysicsNode(Node):
 
     def tick(self, now: float) -> None:
         sim = self.sim
-        inputs = sim.inputs
+        inputs = sim._inputs  # (`Simulator.inputs` without the property's call: read at every step)
         listened = self.pub_inputs.active
         if inputs is not None and inputs.kind:
             if listened:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import struct
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -36,6 +37,8 @@ from .sight import Sight
 from .world import BALL_NAME, build_world
 
 _f32s = msgs.f32s
+_f32x3 = struct.Struct("<3f")  # three float32 numbers: a velocity command rounded as `msgs.f32s` rounds it
+_pack3, _unpack3 = _f32x3.pack, _f32x3.unpack
 
 #: Commands beyond these are refused as absurd (anything a robot could follow is far below them).
 MAX_COMMAND_SPEED = 50.0  # m/s
@@ -107,6 +110,8 @@ class Simulator:
         self.seed = seed
         self.m, self.d, self.ix, self.field = build_world(scene)
         self._qpos, self._qvel = self.d.qpos, self.d.qvel  # views of the engine's arrays (fixed memory)
+        # the same memory as memoryviews, whose items are plain floats (a physics step reads a few)
+        self._qpos_flat, self._qvel_flat = memoryview(self._qpos), memoryview(self._qvel)
         self.dt = float(self.m.opt.timestep)
         self.step_index = 0
         robots = self.ix.robots
@@ -143,6 +148,9 @@ class Simulator:
         self.frozen = np.zeros(self.n, dtype=bool)
         self.usable = np.ones(self.n, dtype=bool)  # enabled and not frozen
         self.last_command_step = np.zeros(self.n, dtype=np.int64)
+        # the same memory as a memoryview: a command (400 a second) writes its step through it, a fraction of
+        # what NumPy's item assignment costs
+        self._last_command = memoryview(self.last_command_step)
         self.watchdog_tripped = np.zeros(self.n, dtype=bool)
         self.commanded = np.zeros(self.n, dtype=bool)  # has ever received a command
         # per robot: commanded, not stopped by the watchdog, and usable (a command needs no other check then);
@@ -307,7 +315,8 @@ class Simulator:
     def command_velocity(self, i: int, vx: float, vy: float, w: float, vz: float = 0.0) -> bool:
         """Robot i's body-frame velocity command (``vz``, the upward speed, moves aerial robots only). False
         (and an event) if refused."""
-        self._check_index(i)
+        if type(i) is not int or not 0 <= i < self.n:  # (`_check_index`, inline: 400 calls a second)
+            self._check_index(i)
         try:
             ok = (
                 -MAX_COMMAND_SPEED <= vx <= MAX_COMMAND_SPEED
@@ -319,14 +328,17 @@ class Simulator:
             ok = False
         if not ok:
             return self._refuse(i, _describe_bad_velocity(vx, vy, w, vz))
-        self.last_command_step[i] = self.step_index
+        self._last_command[i] = self.step_index
         if not self._live[i]:
             if not self.commanded[i] or self.watchdog_tripped[i]:
                 self._fresh(i)
             if not self.usable[i]:
                 return True
         if i < self.ng:
-            self.drive.command(i, *_f32s(vx, vy, w))  # at VelCmd's precision, however the command came
+            try:  # at VelCmd's precision, however the command came (`msgs.f32s`, inline: the numbers are in range)
+                self.drive.command(i, *_unpack3(_pack3(vx, vy, w)))
+            except (TypeError, struct.error):  # numbers of other kinds: rounded one by one
+                self.drive.command(i, *_f32s(vx, vy, w))
         else:
             self.aerial.command(i - self.ng, *_f32s(vx, vy, w, vz))
         return True
@@ -379,7 +391,8 @@ class Simulator:
         """Robot i's dribbler state and kick request (fires at the first step the ball is in the mouth,
         within ``window`` seconds, by default one control period). An aerial robot has neither: its
         ball-handling requests are taken (it is alive) and do nothing."""
-        self._check_index(i)
+        if type(i) is not int or not 0 <= i < self.n:  # (`_check_index`, inline: 400 calls a second)
+            self._check_index(i)
         try:
             ok = 0.0 <= kick_speed <= MAX_KICK_REQUEST
         except TypeError:
@@ -393,7 +406,7 @@ class Simulator:
                 ok = False
             if not ok:
                 return self._refuse(i, f"kick window {window!r} is not a number of seconds in [0, {MAX_KICK_WINDOW:g}]")
-        self.last_command_step[i] = self.step_index
+        self._last_command[i] = self.step_index
         if self._live[i]:
             usable = True
         else:
@@ -469,7 +482,7 @@ class Simulator:
         whose commands stopped coming are stopped within ``control.command_timeout``)."""
         if self.step_index % self.control_steps == 0:
             self.watchdog(self.scene.control.command_timeout, self.control_steps)
-        self.step()
+        self._step()
 
     def step(self, n: int = 1) -> None:
         step = self._step
@@ -493,10 +506,11 @@ class Simulator:
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
-        vz = self._qvel[self._bvz]
-        z = self._qpos[self._bz]
+        qpos = self._qpos_flat  # (plain floats: a NumPy scalar costs more to make and compare, every step)
+        vz = self._qvel_flat[self._bvz]
+        z = qpos[self._bz]
         mujoco.mj_step(self.m, d)
-        if vz < -BOUNCE_MIN_SPEED and self._qpos[self._bz] < self.ball_radius and self.restitution > 0:
+        if vz < -BOUNCE_MIN_SPEED and qpos[self._bz] < self.ball_radius and self.restitution > 0:
             self._bounce(z, vz)
         if self.aerial is not None:
             self._frame_contacts()
@@ -686,7 +700,7 @@ class Simulator:
             return pose.astype(np.float32).ravel(), twist.astype(np.float32).ravel()
         m = self.n + 1
         pose, twist = np.zeros(7 * m, np.float32), np.zeros(6 * m, np.float32)
-        model_poses32(self.d.qpos, self.d.qvel, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
+        model_poses32(self._qpos, self._qvel, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
         return pose, twist
 
     def model_states(self) -> dict[str, ModelStateView]:

@@ -139,16 +139,16 @@ class Observation:
         if self._rows is None:
             self._locate(self.msg)
         r = 7 * self._rows[i]
-        pose = self.msg.pose
-        return (float(pose[r]), float(pose[r + 1]))
+        item = self.msg.pose.item  # (a plain float at once, no NumPy scalar: read at every touch of the ball)
+        return (float(item(r)), float(item(r + 1)))
 
     def ball_xy_now(self) -> tuple[float, float]:
         """The ball's position in the latest message (physics rate, without a refresh)."""
         if self._rows is None:
             self._locate(self.msg)
         r = 7 * self._rows[self.n]
-        pose = self.msg.pose
-        return (float(pose[r]), float(pose[r + 1]))
+        item = self.msg.pose.item
+        return (float(item(r)), float(item(r + 1)))
 
     # --- geometry ----------------------------------------------------------------------------------------
     def yaw(self, i: int) -> float:

@@ -20,6 +20,8 @@ from collections import deque
 from dataclasses import replace
 from types import SimpleNamespace
 
+import numpy as np
+
 from ... import msgs
 from ...bus import NodeContext, topics
 from ...config.loader import SceneError
@@ -42,6 +44,7 @@ from .touches import Touches
 # the phases as plain attributes: on Python 3.11 every attribute lookup on an Enum class takes the slow
 # path of its metaclass (which defines __getattr__), and the referee looks phases up at every step
 _Phase = SimpleNamespace(**Phase.__members__)
+_F32 = np.dtype(np.float32)  # the precision of ModelStates' numbers
 
 
 class Match:
@@ -117,6 +120,9 @@ class MslReferee(OperatorTakeover, Judge):
         # the whole ball past the outer edge of a line (the lines belong to the field)
         self._xlim = f.outer_half_length + m.obs.ball_radius
         self._ylim = f.outer_half_width + m.obs.ball_radius
+        # the same limits at the precision of the messages' float32 positions, which NumPy compares with a
+        # Python float in float32: comparing the positions read as plain floats with these is the same test
+        self._xlim32, self._ylim32 = msgs.f32s(self._xlim, self._ylim)
         self._states = None
         self._ball_row = -1
         self._out_latched = False
@@ -193,8 +199,14 @@ class MslReferee(OperatorTakeover, Judge):
             g.phase_steps += 1
             pose = msg.pose
             b = self._ball_row
-            bx, by = pose[b], pose[b + 1]
-            if bx > self._xlim or bx < -self._xlim or by > self._ylim or by < -self._ylim:
+            if pose.dtype is _F32:  # read as plain floats (NumPy scalars cost more to make and compare, every step)
+                item = pose.item
+                bx, by = item(b), item(b + 1)
+                xlim, ylim = self._xlim32, self._ylim32
+            else:  # positions of another precision (not the message's own): compared as they are
+                bx, by = pose[b], pose[b + 1]
+                xlim, ylim = self._xlim, self._ylim
+            if bx > xlim or bx < -xlim or by > ylim or by < -ylim:
                 if g.phase in LIVE and not self._out_latched:
                     self._boundary(now, float(bx), float(by), float(pose[b + 2]))
             elif self._out_latched:
