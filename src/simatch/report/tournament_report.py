@@ -54,7 +54,7 @@ def elo_figure(summary: dict) -> go.Figure:
         )
     )
     fig.add_vline(x=1500, line_dash="dot", line_color="#888")
-    fig.update_xaxes(title_text="Elo rating (mean 1500); bars: 95 % interval from resampling the seeds")
+    fig.update_xaxes(title_text="Elo rating (mean 1500); bars: 95 % interval (seeds resampled, at least the fit's own)")
     return _base(fig, 140 + 40 * len(rows), "Elo rating")
 
 
@@ -261,7 +261,8 @@ def build(summary: dict, rows: list[dict]) -> Page:
         page.figure(elo_figure(summary), "elo"),
         anchor="elo",
         note=f"Maximum-likelihood Elo over every match; the interval comes from resampling the "
-        f"{summary['elo_seeds']} seed(s).",
+        f"{summary['elo_seeds']} seed(s), widened to at least the fit's own (±1.96 standard errors), which "
+        "resampling cannot show when every seed gave the same results.",
     )
     page.section("head to head", page.figure(head_to_head_figure(summary), "h2h"), anchor="h2h")
     fig = scores_figure(summary)
