@@ -253,6 +253,8 @@ def positional(msgtype: Any, order: str) -> Callable[..., Any]:
     # every field: the ones a call gives (at least ``order``'s), then the defaults of those it may leave out
     first_default = next((k for k, f in enumerate(have) if defaulted[f].default is not dataclasses.MISSING), len(have))
     required = max(first_default, len(want))
+    if any(defaulted[f].default is dataclasses.MISSING for f in have[required:]):
+        return cls  # a default made per instance (a factory): only the class's __init__ makes it
     return _maker(cls, have, tuple(defaulted[f].default for f in have[required:]))
 
 
