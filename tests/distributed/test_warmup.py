@@ -35,7 +35,7 @@ PLUGIN = textwrap.dedent(
         @classmethod
         def warm_up(cls):
             Path(os.environ["WARM_MARK"]).write_text("warmed")
-            time.sleep(3.0)  # a set-up longer than the server's team timeout
+            time.sleep(6.0)  # a set-up longer than the server's team timeout
 
         def decide(self, world):
             command = super().decide(world)
@@ -57,8 +57,11 @@ OVERRIDES = [
 
 
 def _lockstep(procs) -> tuple[dict, str, str]:
-    server = procs.server("msl_5v5", "--duration", "2", "--seed", "3", "--team-timeout", "1", *OVERRIDES)
+    # the team process first: it waits for the server (its scene and credential), so that its liveliness token
+    # is up within the server's 2 s team timeout however slowly a process starts here; its set-up (the
+    # rehearsal and the 6 s warm_up) lasts well beyond the timeout and the server's note 5 s after it began
     team = procs.team("cyan")
+    server = procs.server("msl_5v5", "--duration", "2", "--seed", "3", "--team-timeout", "2", *OVERRIDES)
     result = procs.result(server)
     assert procs.wait(team) == 0, procs.stderr(team)
     return result, procs.stderr(server), procs.stderr(team)
@@ -77,7 +80,7 @@ def test_a_process_compiles_its_kernels_before_joining_and_is_waited_for(procs, 
     assert "compiling its strategy's kernels before joining" in team_err
     assert mark.read_text() == "warmed"  # the strategy's own warm_up ran
     assert list((plug / "__pycache__").glob("warmplug.heading*.nbi")), "the kernel was not compiled and cached"
-    assert "setting up" in server_err  # waited for beyond the 1 s team timeout...
+    assert "setting up" in server_err  # waited for beyond the 2 s team timeout...
     assert not [e for e in result["events"] if e["type"] == "team_absent"]  # ...and not played without
     assert "missed 0" in server_err and "answers 0" not in server_err
 
