@@ -86,6 +86,9 @@ class TeamProcess:
         self.skipped = 0  # ticks skipped because a newer one was already there
         self.ended: str | None = None
         self.joined = False
+        #: a join is asked and not yet answered: a tick that comes meanwhile is held (`_on_tick`), not dropped
+        self._joining = False
+        self._held_tick: tuple | None = None
         self._server_alive = False
         self._server_lost_at: float | None = None
         #: the connection to the server came back after it was lost: the server took this process for dead
@@ -220,6 +223,14 @@ class TeamProcess:
             "pid": os.getpid(),
         }
         deadline = time.monotonic() + self.wait
+        self._joining = True
+        try:
+            self._ask_to_join(req, deadline)
+        finally:
+            self._joining = False
+            self._held_tick = None
+
+    def _ask_to_join(self, req: dict, deadline: float) -> None:
         while True:
             why = "no answer"
             for ok, payload in self.bus.query(protocol.JOIN, protocol.dumps(req), timeout=5.0):
@@ -233,7 +244,14 @@ class TeamProcess:
                     # the server's subscriptions (and one it made for this join, e.g. a StrategyPub) were
                     # declared to this session before the answer: from now on, what matches is known
                     self.bus.refresh_matching()
-                    self.joined = True
+                    with self._delivering:
+                        # the server may open its first tick for this process at once: a tick that Zenoh's
+                        # thread handed over before this answer was read here is answered now, not lost (it
+                        # would cost the run a missed tick and the deadline's wait)
+                        self.joined = True
+                        held, self._held_tick = self._held_tick, None
+                        if held is not None and not self.ended:
+                            self._on_tick(*held)
                     where = "; its team's StrategyPub runs on the server" if reply.get("strategy_pub_on_server") else ""
                     at = f", step {self.phase} of each control period" if self.phase else ""
                     self.say(f"{self.what} joined run {self.run_name!r} at {self.connect} ({self.mode}{at}{where})")
@@ -250,6 +268,8 @@ class TeamProcess:
     # --- the lockstep protocol ---------------------------------------------------------------------------------
     def _on_tick(self, topic: str, payload: bytes, attachment, arrival: float) -> None:
         if not self.joined or self.ended:
+            if self._joining and not self.ended:  # the newest tick before the join's answer (see `_join`)
+                self._held_tick = (topic, payload, attachment, arrival)
             return
         try:
             msg = protocol.loads(payload, "step", "tick")
