@@ -133,6 +133,22 @@ static inline int put_aligned(const void *src, int size) {
 }
 
 /* a primitive value; FALLBACK (exception cleared) if it is not one struct would pack the same way */
+/* An integer of the given kind into b, as struct packs it; -1 (nothing written) if x is out of its range or
+ * the kind is not an integer one. */
+static int pack_int(long kind, long long x, unsigned char *b) {
+    switch (kind) {
+    case K_I8: if (x < -128 || x > 127) return -1; { signed char c = (signed char)x; memcpy(b, &c, 1); } return 0;
+    case K_U8: if (x < 0 || x > 255) return -1; b[0] = (unsigned char)x; return 0;
+    case K_I16: if (x < -32768 || x > 32767) return -1; { short h = (short)x; memcpy(b, &h, 2); } return 0;
+    case K_U16: if (x < 0 || x > 65535) return -1; { unsigned short h = (unsigned short)x; memcpy(b, &h, 2); } return 0;
+    case K_I32: if (x < INT32_MIN || x > INT32_MAX) return -1; { int i = (int)x; memcpy(b, &i, 4); } return 0;
+    case K_U32: if (x < 0 || x > UINT32_MAX) return -1; { unsigned int i = (unsigned int)x; memcpy(b, &i, 4); } return 0;
+    case K_I64: memcpy(b, &x, 8); return 0;
+    case K_U64: if (x < 0) return -1; { unsigned long long u = (unsigned long long)x; memcpy(b, &u, 8); } return 0;
+    default: return -1;
+    }
+}
+
 static int put_primitive(long kind, PyObject *v) {
     /* the common cases first (a message's numbers are Python floats, bools and small ints): each is written
      * straight into the buffer, with the bytes of the general path below. A float32 is the cast that
@@ -163,17 +179,8 @@ static int put_primitive(long kind, PyObject *v) {
         x = digits * (long long)((PyLongObject *)v)->ob_digit[0];
 #endif
         unsigned char b[8];
-        switch (kind) {                                /* in range: written as struct packs it; else below */
-        case K_I8: if (x < -128 || x > 127) goto general; { signed char c = (signed char)x; memcpy(b, &c, 1); } break;
-        case K_U8: if (x < 0 || x > 255) goto general; b[0] = (unsigned char)x; break;
-        case K_I16: if (x < -32768 || x > 32767) goto general; { short h = (short)x; memcpy(b, &h, 2); } break;
-        case K_U16: if (x < 0 || x > 65535) goto general; { unsigned short h = (unsigned short)x; memcpy(b, &h, 2); } break;
-        case K_I32: if (x < INT32_MIN || x > INT32_MAX) goto general; { int i = (int)x; memcpy(b, &i, 4); } break;
-        case K_U32: if (x < 0 || x > UINT32_MAX) goto general; { unsigned int i = (unsigned int)x; memcpy(b, &i, 4); } break;
-        case K_I64: memcpy(b, &x, 8); break;
-        case K_U64: if (x < 0) goto general; { unsigned long long u = (unsigned long long)x; memcpy(b, &u, 8); } break;
-        default: goto general;
-        }
+        if (pack_int(kind, x, b) < 0)                  /* in range: written as struct packs it; else below */
+            goto general;
         return put_aligned(b, size_of(kind));
     }
 general:;
@@ -216,16 +223,8 @@ general:;
     long long x = PyLong_AsLongLong(v);
     if (x == -1 && PyErr_Occurred())
         goto fallback;
-    switch (kind) {
-    case K_I8: if (x < -128 || x > 127) return FALLBACK; { signed char c = (signed char)x; memcpy(out, &c, 1); } break;
-    case K_U8: if (x < 0 || x > 255) return FALLBACK; out[0] = (unsigned char)x; break;
-    case K_I16: if (x < -32768 || x > 32767) return FALLBACK; { short s = (short)x; memcpy(out, &s, 2); } break;
-    case K_U16: if (x < 0 || x > 65535) return FALLBACK; { unsigned short s = (unsigned short)x; memcpy(out, &s, 2); } break;
-    case K_I32: if (x < INT32_MIN || x > INT32_MAX) return FALLBACK; { int i = (int)x; memcpy(out, &i, 4); } break;
-    case K_U32: if (x < 0 || x > UINT32_MAX) return FALLBACK; { unsigned int i = (unsigned int)x; memcpy(out, &i, 4); } break;
-    case K_I64: memcpy(out, &x, 8); break;
-    default: return FALLBACK;
-    }
+    if (pack_int(kind, x, out) < 0)       /* (K_U64 was written above) */
+        return FALLBACK;
     return put(out, size);
 fallback:
     PyErr_Clear();
