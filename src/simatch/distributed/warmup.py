@@ -67,7 +67,7 @@ def preload_compiled_kernels(prefixes: tuple[str, ...] = ("simatch",)) -> Preloa
 
 def rehearse(scene, team: str, seed: int, seconds: float = REHEARSAL_SECONDS) -> None:
     """Play ``seconds`` of ``scene`` (a scene in which only ``team`` has a strategy) embedded and throw it
-    away, then call the ``warm_up()`` of the team's strategy classes that define one.
+    away, then call the ``warm_up()`` of the team's strategy class.
 
     The rehearsal's nodes are its own (nothing of the process's real nodes is touched), so it leaves the
     run bit for bit as it would be without it; what it leaves behind is compiled code and imports."""
@@ -81,11 +81,4 @@ def rehearse(scene, team: str, seed: int, seconds: float = REHEARSAL_SECONDS) ->
         cls = strategy_class(spec)
     except Exception:  # "none", "external": nothing of its own to warm
         return
-    classes = [cls]
-    robot_class = getattr(cls, "robot_class", None)
-    if robot_class is not None:
-        classes.append(robot_class)
-    for c in classes:
-        hook = getattr(c, "warm_up", None)
-        if callable(hook):
-            hook()
+    cls.warm_up()  # (a TeamStrategy's calls its robot_class's by default)
