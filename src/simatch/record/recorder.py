@@ -5,7 +5,8 @@ run (a server's bus) the same way. Its message log (`simatch.record.messagelog`:
 built) is the bus callback of every recorded topic: it encodes each message to CDR on arrival (with the memo
 of `simatch.msgs.cdr.Codec`: what teammates share and what a team's TeamStrategy repeats is encoded once) and
 appends its record to the current chunk; every half simulated second the chunk goes to the writer process
-(`simatch.record.writer`), which compresses and writes it while the simulation goes on. The 3D scene's game
+(`simatch.record.writer`), which compresses and writes it while the simulation goes on; the log writes the
+chunk's records straight into memory shared with that process (`McapWriter.buffer`). The 3D scene's game
 updates are written by the log too (its pose template), from the model states it logs.
 
 The hot path is one Python-to-C call per message: measured, every Python frame and attribute access on it
@@ -118,6 +119,7 @@ class Recorder:
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
         self._log = new_log(self._fallback, accelerate=accelerate)
+        self._log.into(self._writer.buffer())  # the chunk's records straight into memory shared with the writer
         self._codec = Codec(msgs.typestore, accelerate=accelerate)  # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
         self._channel_info: dict[int, tuple[str, str, object]] = {}  # channel id -> (channel, type, store)
@@ -233,6 +235,7 @@ class Recorder:
                 first = last = self._chunk_end
             self._writer.end_chunk(data, first, last, counts)
             self._chunk_end = last
+        self._log.into(self._writer.buffer())
         self._log.forget()
 
     def _scene_update(self, msg) -> None:
@@ -287,6 +290,7 @@ class Recorder:
         self._subs.clear()
         try:
             self._end_chunk()
+            self._log.into(None)
             errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
             end = {
                 "status": status,
