@@ -465,3 +465,27 @@ def test_a_chunk_goes_into_the_memory_lent_to_the_log(kind):
     for refused in (b"read-only", memoryview(bytearray(8))[::2]):
         with pytest.raises(BufferError):
             lent.into(refused)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_logs_callable_for_a_topic_logs_as_the_log_does(kind):
+    """``for_topic(topic)(msg)`` is ``log(topic, msg)``: the fallback's before the topic is added, its channel
+    once added, the new one when it is added again (the C log finds the channel once per change)."""
+    refused = []
+    fallback = lambda topic, msg: refused.append((topic, msg.tick))  # noqa: E731
+    log, plain = _log(kind, fallback), _log(kind, lambda topic, msg: None)
+    vel = log.for_topic("cyan/1/VelCmd")
+    vel(msgs.new(msgs.VelCmd, tick=1))
+    assert refused == [("cyan/1/VelCmd", 1)] and log.size == 0
+    for channel in (3, 4):
+        for each in (log, plain):
+            each.add("cyan/1/VelCmd", channel, "simatch_msgs/msg/VelCmd")
+        for tick in range(2, 5):
+            msg = msgs.new(msgs.VelCmd, tick=tick, vx=0.25 * tick)
+            vel(msg)
+            plain("cyan/1/VelCmd", msg)
+    got, counts, *_ = log.take()
+    expected, *rest = plain.take()
+    assert bytes(got) == bytes(expected) and counts == {3: 3, 4: 3} == rest[0]
+    with pytest.raises(TypeError):
+        vel()

@@ -1106,6 +1106,7 @@ typedef struct {
     Buf buf;
     Py_buffer target;              /* `into`: memory lent for this chunk's records (target.obj NULL: none) */
     PyObject *channels;            /* topic -> Channel (in a capsule) */
+    unsigned long generation;      /* changes whenever `channels` does (a `for_topic` callable finds it again) */
     PyObject *programs, *fallback, *on_chunk;
     MemoTable memo[2];             /* the memo's tables: this period's is memo[current] */
     int current;
@@ -1368,6 +1369,28 @@ static PyObject *log_ros_clock(Log *log, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* ``log(topic, msg)`` where `entry` is the topic's channel (a capsule), or NULL for a topic not added */
+static PyObject *deliver(Log *log, PyObject *topic, PyObject *entry, PyObject *msg) {
+    PyObject *args[2] = {topic, msg};
+    if (entry == NULL)             /* a topic not added: the fallback's */
+        return PyObject_Vectorcall(log->fallback, args, 2, NULL);
+    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
+    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
+    int r = ch->clock ? clock_message(log, ch, msg) : 0;
+    if (r == 0)
+        r = log_message(log, ch, msg);
+    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
+        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
+    if (r == 0 && ch->poses)
+        r = poses_after(log, msg);
+    if (r == 0 && ch->ros_clock)
+        r = ros_clock_record(log);
+    Py_DECREF(entry);
+    if (r != 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
     Log *log = (Log *)self;
     if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
@@ -1375,23 +1398,93 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
         return NULL;
     }
     PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
-    if (entry == NULL)             /* a topic not added: the fallback's */
-        return PyErr_Occurred() ? NULL : PyObject_Vectorcall(log->fallback, args, 2, NULL);
-    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
-    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
-    int r = ch->clock ? clock_message(log, ch, args[1]) : 0;
-    if (r == 0)
-        r = log_message(log, ch, args[1]);
-    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
-        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
-    if (r == 0 && ch->poses)
-        r = poses_after(log, args[1]);
-    if (r == 0 && ch->ros_clock)
-        r = ros_clock_record(log);
-    Py_DECREF(entry);
-    if (r != 0)
+    if (entry == NULL && PyErr_Occurred())
         return NULL;
-    Py_RETURN_NONE;
+    return deliver(log, args[0], entry, args[1]);
+}
+
+/* `log.for_topic(topic)`: the log's callback for the messages of one topic, ``f(msg)`` = ``log(topic, msg)``. The
+ * in-process bus calls such a callable, when a wildcard subscriber offers one, instead of a partial of the
+ * subscriber (`simatch.bus.inproc`): no partial's call and no look-up of the topic per message, the channel is
+ * found once (and again after the log's channels change). */
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    Log *log;
+    PyObject *topic;
+    PyObject *entry;               /* the topic's channel as of `generation`, or NULL (none yet: looked up again) */
+    unsigned long generation;
+} LogTopic;
+
+static PyObject *log_topic_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
+    LogTopic *lt = (LogTopic *)self;
+    if (PyVectorcall_NARGS(nargsf) != 1 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
+        PyErr_SetString(PyExc_TypeError, "for_topic(topic)(msg)");
+        return NULL;
+    }
+    Log *log = lt->log;
+    if (log == NULL) {             /* (cleared by the garbage collector) */
+        PyErr_SetString(PyExc_ValueError, "the log of this callable is gone");
+        return NULL;
+    }
+    if (lt->entry == NULL || lt->generation != log->generation) {
+        PyObject *entry = PyDict_GetItemWithError(log->channels, lt->topic);
+        if (entry == NULL && PyErr_Occurred())
+            return NULL;
+        Py_XSETREF(lt->entry, Py_XNewRef(entry));
+        lt->generation = log->generation;
+    }
+    return deliver(log, lt->topic, lt->entry, args[0]);
+}
+
+static int log_topic_traverse(LogTopic *self, visitproc visit, void *arg) {
+    Py_VISIT(self->log);
+    Py_VISIT(self->topic);
+    Py_VISIT(self->entry);
+    return 0;
+}
+
+static int log_topic_clear(LogTopic *self) {
+    Py_CLEAR(self->log);
+    Py_CLEAR(self->topic);
+    Py_CLEAR(self->entry);
+    return 0;
+}
+
+static void log_topic_dealloc(LogTopic *self) {
+    PyObject_GC_UnTrack(self);
+    log_topic_clear(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyTypeObject LogTopicType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.LogTopic",
+    .tp_doc = "log.for_topic(topic): f(msg) logs msg as log(topic, msg) does",
+    .tp_basicsize = sizeof(LogTopic),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_dealloc = (destructor)log_topic_dealloc,
+    .tp_traverse = (traverseproc)log_topic_traverse,
+    .tp_clear = (inquiry)log_topic_clear,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(LogTopic, vectorcall),
+};
+
+static PyObject *log_for_topic(Log *log, PyObject *topic) {
+    if (!PyUnicode_Check(topic)) {
+        PyErr_SetString(PyExc_TypeError, "for_topic(topic): a str");
+        return NULL;
+    }
+    LogTopic *lt = PyObject_GC_New(LogTopic, &LogTopicType);
+    if (lt == NULL)
+        return NULL;
+    lt->vectorcall = log_topic_vectorcall;
+    lt->log = (Log *)Py_NewRef((PyObject *)log);
+    lt->topic = Py_NewRef(topic);
+    lt->entry = NULL;
+    lt->generation = 0;
+    PyObject_GC_Track(lt);
+    return (PyObject *)lt;
 }
 
 static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
@@ -1432,6 +1525,7 @@ static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
     Py_DECREF(entry);
     if (r < 0)
         return NULL;
+    log->generation++;
     Py_RETURN_NONE;
 }
 
@@ -1834,6 +1928,8 @@ static PyMethodDef log_methods[] = {
     {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
     {"take", (PyCFunction)log_take, METH_NOARGS,
      "take() -> (chunk, {channel_id: messages}, first time, last time) since the last take; chunk: a buffer"},
+    {"for_topic", (PyCFunction)log_for_topic, METH_O,
+     "for_topic(topic) -> f: f(msg) logs msg as log(topic, msg) does (the in-process bus calls it)"},
     {"into", (PyCFunction)log_into, METH_O,
      "into(buffer or None): write the next records into buffer (writable) while they fit; take hands a view of it"},
     {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
@@ -2101,6 +2197,7 @@ static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
     if (PyType_Ready(&LogType) < 0 || PyType_Ready(&ChunkType) < 0 || PyType_Ready(&TapType) < 0
+        || PyType_Ready(&LogTopicType) < 0
         || (busy_name = PyUnicode_InternFromString("busy")) == NULL || (zero = PyFloat_FromDouble(0.0)) == NULL
         || (one = PyFloat_FromDouble(1.0)) == NULL || (nan_value = PyFloat_FromDouble(Py_NAN)) == NULL
         || (step_name = PyUnicode_InternFromString("step")) == NULL

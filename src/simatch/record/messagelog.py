@@ -38,12 +38,16 @@ Interface of both:
   ``fallback(msg)``, which may set a new template and records what it makes itself.
 * ``log.ros_clock(topic, channel_id)``: after each message on ``topic`` (the clock), a record on ``channel_id``
   of ROS 2's clock at the log time (`simatch.record.layout.ros_clock`; none beyond int32 seconds).
+* ``log.for_topic(topic)``: a callable ``f(msg)`` that logs as ``log(topic, msg)`` does; the in-process bus
+  calls it for the topic's messages (`simatch.bus.inproc`): the C log's finds the topic's channel once, not
+  per message, and is called without a partial.
 * ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
   last take.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 import struct
@@ -232,6 +236,9 @@ class MessageLog:
 
     def append(self, data) -> None:
         self._buf += data
+
+    def for_topic(self, topic: str) -> Callable[[Any], None]:
+        return functools.partial(self, topic)
 
     def into(self, buffer) -> None:
         self._target = None if buffer is None else _writable(buffer)

@@ -31,7 +31,6 @@ import datetime as _dt
 import json
 import logging
 import sys
-from collections import defaultdict
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -125,7 +124,6 @@ class Recorder:
         self._channel_info: dict[int, tuple[str, str, object]] = {}  # channel id -> (channel, type, store)
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
-        self._totals: dict[int, int] = defaultdict(int)  # messages per channel id in chunks handed over
         self._log.now = first_step * self.dt_ns
         self._log.timing(self.dt_ns, layout.CHUNK_NS, self._end_chunk)
         self._chunk_end = self._log.now  # log time of the last message handed over
@@ -229,8 +227,6 @@ class Recorder:
         this when the time moves into a new chunk)."""
         data, counts, first, last = self._log.take()
         if data:
-            for cid, n in counts.items():
-                self._totals[cid] += n
             if first < 0:  # only schema and channel records
                 first = last = self._chunk_end
             self._writer.end_chunk(data, first, last, counts)
@@ -271,14 +267,16 @@ class Recorder:
 
     def channel_counts(self) -> list[tuple[str, str, str, int]]:
         """(channel, type, RIHS01 hash, messages) of every channel, in the chunks handed to the writer."""
+        totals = self._writer.counts()
         return [
-            (topic, typename, store.hash_rihs01(typename), self._totals.get(cid, 0))
+            (topic, typename, store.hash_rihs01(typename), totals.get(cid, 0))
             for cid, (topic, typename, store) in sorted(self._channel_info.items())
         ]
 
     def counts(self) -> dict[str, int]:
         """Messages recorded per bus topic, in the chunks handed to the writer (all of them once closed)."""
-        return {t: self._totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
+        totals = self._writer.counts()
+        return {t: totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
 
     def close(self, status: str = "complete", summary: dict | None = None) -> None:
         """Stop listening and finalise the file (summary, indexes, ``simatch_end`` metadata)."""
