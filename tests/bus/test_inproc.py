@@ -23,6 +23,32 @@ def test_delivery_order_wildcards_and_late_subscribers():
     assert seen[-1] == ("all", "magenta/2/VelCmd") and ("a", 2.0) not in seen
 
 
+def test_a_wildcard_listener_may_bind_itself_to_each_topic():
+    """A listener with ``for_topic(topic)`` is called through what that returns for each matching topic (before
+    and after the publisher is declared), and closing the subscription removes those callables."""
+    seen, bound = [], []
+
+    class Listener:
+        def __call__(self, topic, m):
+            seen.append(("call", topic))
+
+        def for_topic(self, topic):
+            bound.append(topic)
+            return lambda m: seen.append(("bound", topic, m.vx))
+
+    bus = InProcessBus()
+    early = bus.publisher("cyan/1/VelCmd", msgs.VelCmd)
+    sub = bus.subscribe_all("cyan/**", Listener())
+    late = bus.publisher("cyan/2/VelCmd", msgs.VelCmd)
+    bus.publisher("magenta/2/VelCmd", msgs.VelCmd).put(msgs.new(msgs.VelCmd, vx=9.0))
+    early.put(msgs.new(msgs.VelCmd, vx=1.0))
+    late.put(msgs.new(msgs.VelCmd, vx=2.0))
+    assert bound == ["cyan/1/VelCmd", "cyan/2/VelCmd"]
+    assert seen == [("bound", "cyan/1/VelCmd", 1.0), ("bound", "cyan/2/VelCmd", 2.0)]
+    sub.close()
+    assert not early.active and not late.active
+
+
 def test_publish_without_subscribers_is_inactive_and_subscriptions_close():
     bus = InProcessBus()
     pub = bus.publisher("model_states", msgs.ModelStates)

@@ -5,6 +5,7 @@ re-simulates a run."""
 from __future__ import annotations
 
 import json
+import mmap
 import os
 import subprocess
 import sys
@@ -419,3 +420,72 @@ def test_a_taken_chunk_is_the_logs_buffer_and_stays_whole(kind):
     log.append(b"third")
     third = log.take()[0]
     assert bytes(third) == b"third" and len(third) == 5 and bytes(memoryview(third)[1:3]) == b"hi"
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_chunk_goes_into_the_memory_lent_to_the_log(kind):
+    """``into``: a chunk's records go into the memory given (shared with the writer process); ``take`` hands a
+    view of it over, with the bytes the log writes without it; the log writes no more into it once taken; a
+    chunk that outgrows it is handed over as without it; read-only memory is refused."""
+    memory = mmap.mmap(-1, 3 * 4096)
+    slots = [memoryview(memory)[i * 4096 : (i + 1) * 4096] for i in range(3)]
+    lent, plain = _log(kind, lambda topic, msg: None), _log(kind, lambda topic, msg: None)
+    for log in (lent, plain):
+        log.add("cyan/1/VelCmd", 3, "simatch_msgs/msg/VelCmd")
+        log.now = 5_000_000
+        log.append(b"held")  # before `into`: moved into the lent memory
+    lent.into(slots[0])
+    for tick in range(20):
+        for log in (lent, plain):
+            log("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=tick, vx=0.5 * tick))
+    if kind == "c":  # written there as they come
+        assert bytes(slots[0][:4]) == b"held" and len(_records(bytes(slots[0][4 : 4 + plain.size - 4]))) == 20
+    data, counts, first, last = lent.take()
+    assert isinstance(data, memoryview) and data.obj is memory and bytes(data) == bytes(slots[0][: len(data)])
+    expected, *rest = plain.take()
+    assert bytes(data) == bytes(expected) and [counts, first, last] == rest
+    before = bytes(memory)
+    lent("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=99))
+    lent.append(b"x" * 5000)  # more than a slot
+    assert bytes(memory) == before  # taken: not written into again
+    lent.into(slots[1])  # what is held does not fit: it stays the log's own
+    lent.append(b"y")
+    big = lent.take()[0]
+    assert not isinstance(big, memoryview) and bytes(big)[-5001:] == b"x" * 5000 + b"y" and bytes(memory) == before
+    lent.into(slots[2])
+    lent.append(b"z" * 3000)
+    lent.append(b"z" * 3000)  # outgrows the slot while it is filled
+    grown = lent.take()[0]
+    assert not isinstance(grown, memoryview) and bytes(grown) == b"z" * 6000
+    lent.into(slots[1])
+    lent.append(b"own")
+    lent.into(None)  # given back before the take: the records move to the log's own memory
+    own = lent.take()[0]
+    assert not isinstance(own, memoryview) and bytes(own) == b"own"
+    for refused in (b"read-only", memoryview(bytearray(8))[::2]):
+        with pytest.raises(BufferError):
+            lent.into(refused)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_logs_callable_for_a_topic_logs_as_the_log_does(kind):
+    """``for_topic(topic)(msg)`` is ``log(topic, msg)``: the fallback's before the topic is added, its channel
+    once added, the new one when it is added again (the C log finds the channel once per change)."""
+    refused = []
+    fallback = lambda topic, msg: refused.append((topic, msg.tick))  # noqa: E731
+    log, plain = _log(kind, fallback), _log(kind, lambda topic, msg: None)
+    vel = log.for_topic("cyan/1/VelCmd")
+    vel(msgs.new(msgs.VelCmd, tick=1))
+    assert refused == [("cyan/1/VelCmd", 1)] and log.size == 0
+    for channel in (3, 4):
+        for each in (log, plain):
+            each.add("cyan/1/VelCmd", channel, "simatch_msgs/msg/VelCmd")
+        for tick in range(2, 5):
+            msg = msgs.new(msgs.VelCmd, tick=tick, vx=0.25 * tick)
+            vel(msg)
+            plain("cyan/1/VelCmd", msg)
+    got, counts, *_ = log.take()
+    expected, *rest = plain.take()
+    assert bytes(got) == bytes(expected) and counts == {3: 3, 4: 3} == rest[0]
+    with pytest.raises(TypeError):
+        vel()

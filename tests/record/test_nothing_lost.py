@@ -110,6 +110,7 @@ def test_a_killed_writer_process_does_not_stop_the_run(tmp_path):
         _until_no_writer(path)
         sim.run(seconds=1.6)
         assert sim.time >= 3.2
+        assert rec._writer.buffer() is None  # the log went on in memory of its own, not in the shared slots
         with pytest.raises(RecordError, match="writer process"):
             rec.close()
     got = Recording(path)

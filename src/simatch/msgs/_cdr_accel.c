@@ -38,9 +38,12 @@ enum {
 typedef struct {
     char *p;
     Py_ssize_t n, cap;
+    int lent;                      /* p is memory lent by another object (a message log's `into`): never
+                                    * reallocated or freed here; growing past cap moves the bytes to memory
+                                    * of the Buf's own */
 } Buf;
 
-static Buf scratch = {NULL, 0, 0}; /* `encode`'s output, reused between calls: the GIL is held throughout */
+static Buf scratch = {NULL, 0, 0, 0}; /* `encode`'s output, reused between calls: the GIL is held throughout */
 static Buf *out = &scratch;         /* where the encoder writes now: `scratch` or a message log's buffer */
 static Py_ssize_t body = 4;         /* offset in `out` of the CDR body being written (alignment counts from it) */
 
@@ -80,10 +83,14 @@ static int reserve(Py_ssize_t need) {
     Py_ssize_t cap = out->cap ? out->cap : 4096;
     while (cap < out->n + need)
         cap *= 2;
-    char *p = PyMem_Realloc(out->p, cap);
+    char *p = out->lent ? PyMem_Malloc(cap) : PyMem_Realloc(out->p, cap);
     if (p == NULL) {
         PyErr_NoMemory();
         return FAILED;
+    }
+    if (out->lent) {                                  /* the lent memory is full: go on in memory of our own */
+        memcpy(p, out->p, out->n);
+        out->lent = 0;
     }
     out->p = p;
     out->cap = cap;
@@ -1097,7 +1104,9 @@ typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
     Buf buf;
+    Py_buffer target;              /* `into`: memory lent for this chunk's records (target.obj NULL: none) */
     PyObject *channels;            /* topic -> Channel (in a capsule) */
+    unsigned long generation;      /* changes whenever `channels` does (a `for_topic` callable finds it again) */
     PyObject *programs, *fallback, *on_chunk;
     MemoTable memo[2];             /* the memo's tables: this period's is memo[current] */
     int current;
@@ -1360,6 +1369,28 @@ static PyObject *log_ros_clock(Log *log, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* ``log(topic, msg)`` where `entry` is the topic's channel (a capsule), or NULL for a topic not added */
+static PyObject *deliver(Log *log, PyObject *topic, PyObject *entry, PyObject *msg) {
+    PyObject *args[2] = {topic, msg};
+    if (entry == NULL)             /* a topic not added: the fallback's */
+        return PyObject_Vectorcall(log->fallback, args, 2, NULL);
+    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
+    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
+    int r = ch->clock ? clock_message(log, ch, msg) : 0;
+    if (r == 0)
+        r = log_message(log, ch, msg);
+    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
+        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
+    if (r == 0 && ch->poses)
+        r = poses_after(log, msg);
+    if (r == 0 && ch->ros_clock)
+        r = ros_clock_record(log);
+    Py_DECREF(entry);
+    if (r != 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
     Log *log = (Log *)self;
     if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
@@ -1367,23 +1398,93 @@ static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t na
         return NULL;
     }
     PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
-    if (entry == NULL)             /* a topic not added: the fallback's */
-        return PyErr_Occurred() ? NULL : PyObject_Vectorcall(log->fallback, args, 2, NULL);
-    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
-    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
-    int r = ch->clock ? clock_message(log, ch, args[1]) : 0;
-    if (r == 0)
-        r = log_message(log, ch, args[1]);
-    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
-        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
-    if (r == 0 && ch->poses)
-        r = poses_after(log, args[1]);
-    if (r == 0 && ch->ros_clock)
-        r = ros_clock_record(log);
-    Py_DECREF(entry);
-    if (r != 0)
+    if (entry == NULL && PyErr_Occurred())
         return NULL;
-    Py_RETURN_NONE;
+    return deliver(log, args[0], entry, args[1]);
+}
+
+/* `log.for_topic(topic)`: the log's callback for the messages of one topic, ``f(msg)`` = ``log(topic, msg)``. The
+ * in-process bus calls such a callable, when a wildcard subscriber offers one, instead of a partial of the
+ * subscriber (`simatch.bus.inproc`): no partial's call and no look-up of the topic per message, the channel is
+ * found once (and again after the log's channels change). */
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    Log *log;
+    PyObject *topic;
+    PyObject *entry;               /* the topic's channel as of `generation`, or NULL (none yet: looked up again) */
+    unsigned long generation;
+} LogTopic;
+
+static PyObject *log_topic_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
+    LogTopic *lt = (LogTopic *)self;
+    if (PyVectorcall_NARGS(nargsf) != 1 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
+        PyErr_SetString(PyExc_TypeError, "for_topic(topic)(msg)");
+        return NULL;
+    }
+    Log *log = lt->log;
+    if (log == NULL) {             /* (cleared by the garbage collector) */
+        PyErr_SetString(PyExc_ValueError, "the log of this callable is gone");
+        return NULL;
+    }
+    if (lt->entry == NULL || lt->generation != log->generation) {
+        PyObject *entry = PyDict_GetItemWithError(log->channels, lt->topic);
+        if (entry == NULL && PyErr_Occurred())
+            return NULL;
+        Py_XSETREF(lt->entry, Py_XNewRef(entry));
+        lt->generation = log->generation;
+    }
+    return deliver(log, lt->topic, lt->entry, args[0]);
+}
+
+static int log_topic_traverse(LogTopic *self, visitproc visit, void *arg) {
+    Py_VISIT(self->log);
+    Py_VISIT(self->topic);
+    Py_VISIT(self->entry);
+    return 0;
+}
+
+static int log_topic_clear(LogTopic *self) {
+    Py_CLEAR(self->log);
+    Py_CLEAR(self->topic);
+    Py_CLEAR(self->entry);
+    return 0;
+}
+
+static void log_topic_dealloc(LogTopic *self) {
+    PyObject_GC_UnTrack(self);
+    log_topic_clear(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyTypeObject LogTopicType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "simatch.msgs._cdr_accel.LogTopic",
+    .tp_doc = "log.for_topic(topic): f(msg) logs msg as log(topic, msg) does",
+    .tp_basicsize = sizeof(LogTopic),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_dealloc = (destructor)log_topic_dealloc,
+    .tp_traverse = (traverseproc)log_topic_traverse,
+    .tp_clear = (inquiry)log_topic_clear,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(LogTopic, vectorcall),
+};
+
+static PyObject *log_for_topic(Log *log, PyObject *topic) {
+    if (!PyUnicode_Check(topic)) {
+        PyErr_SetString(PyExc_TypeError, "for_topic(topic): a str");
+        return NULL;
+    }
+    LogTopic *lt = PyObject_GC_New(LogTopic, &LogTopicType);
+    if (lt == NULL)
+        return NULL;
+    lt->vectorcall = log_topic_vectorcall;
+    lt->log = (Log *)Py_NewRef((PyObject *)log);
+    lt->topic = Py_NewRef(topic);
+    lt->entry = NULL;
+    lt->generation = 0;
+    PyObject_GC_Track(lt);
+    return (PyObject *)lt;
 }
 
 static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
@@ -1424,6 +1525,7 @@ static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
     Py_DECREF(entry);
     if (r < 0)
         return NULL;
+    log->generation++;
     Py_RETURN_NONE;
 }
 
@@ -1572,7 +1674,7 @@ typedef struct {
     Py_ssize_t exports;
 } Chunk;
 
-static Buf spare = {NULL, 0, 0};     /* a dropped chunk's memory, for the log's next buffer (the GIL is held) */
+static Buf spare = {NULL, 0, 0, 0};     /* a dropped chunk's memory, for the log's next buffer (the GIL is held) */
 
 static int chunk_getbuffer(Chunk *self, Py_buffer *view, int flags) {
     int r = PyBuffer_FillInfo(view, (PyObject *)self, self->buf.p ? self->buf.p : "", self->buf.n, 1, flags);
@@ -1589,14 +1691,21 @@ static Py_ssize_t chunk_length(Chunk *self) {
     return self->buf.n;
 }
 
-static void chunk_dealloc(Chunk *self) {
-    if (spare.cap < self->buf.cap) {   /* keep the larger of the two */
+/* `buf`, which holds no more records, as the spare buffer (the larger one is kept) */
+static void keep_spare(Buf buf) {
+    if (buf.lent)
+        return;
+    if (spare.cap < buf.cap) {
         PyMem_Free(spare.p);
-        spare = self->buf;
+        spare = buf;
         spare.n = 0;
     } else {
-        PyMem_Free(self->buf.p);
+        PyMem_Free(buf.p);
     }
+}
+
+static void chunk_dealloc(Chunk *self) {
+    keep_spare(self->buf);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -1639,26 +1748,93 @@ static PyObject *log_take(Log *log, PyObject *unused) {
             return NULL;
         }
     }
-    Chunk *data = PyObject_New(Chunk, &ChunkType);
     PyObject *result = NULL;
-    if (data != NULL) {
-        data->buf = log->buf;          /* the buffer itself; the log goes on in the spare one */
-        data->exports = 0;
-        log->buf = spare;
-        spare.p = NULL;
-        spare.n = spare.cap = 0;
-        result = Py_BuildValue("(NNLL)", (PyObject *)data, counts, log->first, log->last);
-    }
-    if (result == NULL) {
-        Py_XDECREF(data);
-        Py_DECREF(counts);
-        return NULL;
+    if (log->buf.lent) {               /* the records are in the memory lent by `into`: a view of them */
+        PyObject *whole = PyMemoryView_FromObject(log->target.obj);
+        PyObject *data = whole ? PySequence_GetSlice(whole, 0, log->buf.n) : NULL;
+        Py_XDECREF(whole);
+        if (data != NULL)
+            result = Py_BuildValue("(NNLL)", data, counts, log->first, log->last);
+        if (result == NULL) {
+            Py_DECREF(counts);
+            return NULL;
+        }
+        PyBuffer_Release(&log->target);   /* the log writes no more into it: the memory is the taker's now */
+        log->buf = spare;                 /* until the next `into` */
+        spare = (Buf){NULL, 0, 0, 0};
+    } else {
+        Chunk *data = PyObject_New(Chunk, &ChunkType);
+        if (data != NULL) {
+            data->buf = log->buf;          /* the buffer itself; the log goes on in the spare one */
+            data->exports = 0;
+            log->buf = spare;
+            spare = (Buf){NULL, 0, 0, 0};
+            result = Py_BuildValue("(NNLL)", (PyObject *)data, counts, log->first, log->last);
+        }
+        if (result == NULL) {
+            Py_XDECREF(data);
+            Py_DECREF(counts);
+            return NULL;
+        }
     }
     log->buf.n = 0;
     log->first = log->last = -1;
     if (log->ncounts)
         memset(log->counts, 0, log->ncounts * sizeof(Py_ssize_t));
     return result;
+}
+
+/* stop writing into the memory lent by `into`: the records held there move to memory of the log's own */
+static int leave_target(Log *log) {
+    if (log->target.obj == NULL)
+        return 0;
+    if (log->buf.lent) {
+        Buf own = spare;
+        if (own.cap < log->buf.n) {
+            char *p = PyMem_Realloc(own.p, log->buf.n);
+            if (p == NULL) {
+                PyErr_NoMemory();
+                return FAILED;
+            }
+            own.p = p;
+            own.cap = log->buf.n;
+        }
+        spare = (Buf){NULL, 0, 0, 0};
+        if (log->buf.n)
+            memcpy(own.p, log->buf.p, log->buf.n);
+        own.n = log->buf.n;
+        log->buf = own;
+    }
+    PyBuffer_Release(&log->target);
+    return 0;
+}
+
+/* into(buffer or None): write the records from now on into `buffer` (a writable buffer: memory shared with the
+ * process that writes the file), as long as they fit; those held since the last take move there (if they
+ * fit). `take` then hands them over as a memoryview of `buffer`, and the log writes no more into it until it
+ * is given again. None: back to memory of the log's own. */
+static PyObject *log_into(Log *log, PyObject *arg) {
+    Py_buffer view = {0};
+    if (arg != Py_None && PyObject_GetBuffer(arg, &view, PyBUF_WRITABLE) < 0)
+        return NULL;
+    if (leave_target(log) < 0) {
+        if (view.obj != NULL)
+            PyBuffer_Release(&view);
+        return NULL;
+    }
+    if (view.obj == NULL)
+        Py_RETURN_NONE;
+    if (log->buf.n > view.len) {      /* what is held does not fit: it stays where it is */
+        PyBuffer_Release(&view);
+        Py_RETURN_NONE;
+    }
+    if (log->buf.n)
+        memcpy(view.buf, log->buf.p, log->buf.n);
+    Py_ssize_t n = log->buf.n;
+    keep_spare(log->buf);
+    log->buf = (Buf){view.buf, n, view.len, 1};
+    log->target = view;
+    Py_RETURN_NONE;
 }
 
 static PyObject *log_forget(Log *log, PyObject *unused) {
@@ -1679,6 +1855,7 @@ static int log_traverse(Log *self, visitproc visit, void *arg) {
 #define VISIT_POSES(field) Py_VISIT(self->poses.field);
     LOG_OBJECTS(VISIT_MEMBER)
     POSES_OBJECTS(VISIT_POSES)
+    Py_VISIT(self->target.obj);
 #undef VISIT_POSES
     for (int i = 0; i < 2; i++) {
         int r = table_traverse(&self->memo[i], visit, arg);
@@ -1691,6 +1868,11 @@ static int log_traverse(Log *self, visitproc visit, void *arg) {
 static int log_clear(Log *self) {
     LOG_OBJECTS(CLEAR_MEMBER)
     poses_clear(&self->poses);
+    if (self->target.obj != NULL) {   /* the records held in the lent memory are dropped with it */
+        if (self->buf.lent)
+            self->buf = (Buf){NULL, 0, 0, 0};
+        PyBuffer_Release(&self->target);
+    }
     table_clear(&self->memo[0]);
     table_clear(&self->memo[1]);
     return 0;
@@ -1701,7 +1883,8 @@ static void log_dealloc(Log *log) {
     log_clear(log);
     table_free(&log->memo[0]);
     table_free(&log->memo[1]);
-    PyMem_Free(log->buf.p);
+    if (!log->buf.lent)
+        PyMem_Free(log->buf.p);
     PyMem_Free(log->counts);
     Py_TYPE(log)->tp_free((PyObject *)log);
 }
@@ -1745,6 +1928,10 @@ static PyMethodDef log_methods[] = {
     {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
     {"take", (PyCFunction)log_take, METH_NOARGS,
      "take() -> (chunk, {channel_id: messages}, first time, last time) since the last take; chunk: a buffer"},
+    {"for_topic", (PyCFunction)log_for_topic, METH_O,
+     "for_topic(topic) -> f: f(msg) logs msg as log(topic, msg) does (the in-process bus calls it)"},
+    {"into", (PyCFunction)log_into, METH_O,
+     "into(buffer or None): write the next records into buffer (writable) while they fit; take hands a view of it"},
     {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
     {NULL, NULL, 0, NULL},
 };
@@ -2010,6 +2197,7 @@ static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
     if (PyType_Ready(&LogType) < 0 || PyType_Ready(&ChunkType) < 0 || PyType_Ready(&TapType) < 0
+        || PyType_Ready(&LogTopicType) < 0
         || (busy_name = PyUnicode_InternFromString("busy")) == NULL || (zero = PyFloat_FromDouble(0.0)) == NULL
         || (one = PyFloat_FromDouble(1.0)) == NULL || (nan_value = PyFloat_FromDouble(Py_NAN)) == NULL
         || (step_name = PyUnicode_InternFromString("step")) == NULL

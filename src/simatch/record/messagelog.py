@@ -23,7 +23,13 @@ Interface of both:
 * ``log.take() -> (data, {channel_id: messages}, first, last)``: everything since the last take (one chunk)
   and the log times of its first and last message (-1 if it holds none). ``data`` is the log's buffer itself,
   handed over without a copy (a bytes-like object: a bytearray here, a read-only buffer of the C log whose
-  memory the log takes again once it is dropped; ``bytes(data)`` copies it).
+  memory the log takes again once it is dropped; ``bytes(data)`` copies it), or, after ``into``, a memoryview
+  of the memory given there.
+* ``log.into(buffer)``: the chunk's records go into ``buffer`` (a writable buffer: memory shared with the
+  writer process, `simatch.record.writer`), if they fit; ``take`` then hands over ``memoryview(buffer)[:n]``
+  (its ``obj`` is the buffer's exporter), and the log writes no more into it until it is given again. A chunk
+  that outgrows it is handed over as without it. The C log writes the records there as they come (no copy);
+  this one copies them there at ``take``. ``into(None)``: no such memory.
 * ``log.poses(topic, channel_id, every, fallback)`` and ``log.pose_template(names, template, slots, grid,
   turn_grid)``: a pose template (the recorder's 3D scene). After a message on ``topic`` (model states:
   ``name``, ``pose`` as rows of x y z qw qx qy qz) of a physics step that is a multiple of ``every``, a
@@ -32,12 +38,16 @@ Interface of both:
   ``fallback(msg)``, which may set a new template and records what it makes itself.
 * ``log.ros_clock(topic, channel_id)``: after each message on ``topic`` (the clock), a record on ``channel_id``
   of ROS 2's clock at the log time (`simatch.record.layout.ros_clock`; none beyond int32 seconds).
+* ``log.for_topic(topic)``: a callable ``f(msg)`` that logs as ``log(topic, msg)`` does; the in-process bus
+  calls it for the topic's messages (`simatch.bus.inproc`): the C log's finds the topic's channel once, not
+  per message, and is called without a partial.
 * ``log.forget()``: a new memo period; ``log.now``: the log time [ns]; ``log.size``: bytes held since the
   last take.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 import struct
@@ -113,6 +123,7 @@ class MessageLog:
         self._poses: tuple[str, int, int, Callable[[Any], None]] | None = None
         self._ros: tuple[str, int] | None = None
         self._template: tuple[Any, bytes, list[PoseSlot], float, float] | None = None
+        self._target: memoryview | None = None
 
     @property
     def size(self) -> int:
@@ -226,8 +237,19 @@ class MessageLog:
     def append(self, data) -> None:
         self._buf += data
 
-    def take(self) -> tuple[bytearray, dict[int, int], int, int]:
-        out = (self._buf, self._counts, self._first, self._last)
+    def for_topic(self, topic: str) -> Callable[[Any], None]:
+        return functools.partial(self, topic)
+
+    def into(self, buffer) -> None:
+        self._target = None if buffer is None else _writable(buffer)
+
+    def take(self) -> tuple[bytearray | memoryview, dict[int, int], int, int]:
+        data, target = self._buf, self._target
+        if target is not None and len(data) <= len(target):
+            target[: len(data)] = data
+            data = target[: len(data)]
+        self._target = None
+        out = (data, self._counts, self._first, self._last)
         self._buf = bytearray()
         self._counts = {}
         self._first = self._last = -1
@@ -243,6 +265,16 @@ def _float_buffer(pose):
     if view.format not in ("f", "d", "<f", "<d", "=f", "=d", "@f", "@d"):
         raise ValueError(f"poses of format {view.format!r}")
     return np.frombuffer(view.cast("B"), dtype=np.float32 if view.format[-1] == "f" else np.float64)
+
+
+def _writable(buffer) -> memoryview:
+    """``buffer`` as the C log takes it: a writable contiguous buffer (else BufferError)."""
+    view = memoryview(buffer)
+    if view.readonly:
+        raise BufferError("into: a writable buffer")
+    if not view.c_contiguous:
+        raise BufferError("into: a contiguous buffer")
+    return view.cast("B")
 
 
 def _channel(channel_id: int) -> int:

@@ -5,7 +5,8 @@ run (a server's bus) the same way. Its message log (`simatch.record.messagelog`:
 built) is the bus callback of every recorded topic: it encodes each message to CDR on arrival (with the memo
 of `simatch.msgs.cdr.Codec`: what teammates share and what a team's TeamStrategy repeats is encoded once) and
 appends its record to the current chunk; every half simulated second the chunk goes to the writer process
-(`simatch.record.writer`), which compresses and writes it while the simulation goes on. The 3D scene's game
+(`simatch.record.writer`), which compresses and writes it while the simulation goes on; the log writes the
+chunk's records straight into memory shared with that process (`McapWriter.buffer`). The 3D scene's game
 updates are written by the log too (its pose template), from the model states it logs.
 
 The hot path is one Python-to-C call per message: measured, every Python frame and attribute access on it
@@ -30,7 +31,6 @@ import datetime as _dt
 import json
 import logging
 import sys
-from collections import defaultdict
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -118,12 +118,12 @@ class Recorder:
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
         self._log = new_log(self._fallback, accelerate=accelerate)
+        self._log.into(self._writer.buffer())  # the chunk's records straight into memory shared with the writer
         self._codec = Codec(msgs.typestore, accelerate=accelerate)  # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
         self._channel_info: dict[int, tuple[str, str, object]] = {}  # channel id -> (channel, type, store)
         self._channels: dict[str, _Channel | None] = {}
         self._skipped: dict[str, str] = {}
-        self._totals: dict[int, int] = defaultdict(int)  # messages per channel id in chunks handed over
         self._log.now = first_step * self.dt_ns
         self._log.timing(self.dt_ns, layout.CHUNK_NS, self._end_chunk)
         self._chunk_end = self._log.now  # log time of the last message handed over
@@ -227,12 +227,11 @@ class Recorder:
         this when the time moves into a new chunk)."""
         data, counts, first, last = self._log.take()
         if data:
-            for cid, n in counts.items():
-                self._totals[cid] += n
             if first < 0:  # only schema and channel records
                 first = last = self._chunk_end
             self._writer.end_chunk(data, first, last, counts)
             self._chunk_end = last
+        self._log.into(self._writer.buffer())
         self._log.forget()
 
     def _scene_update(self, msg) -> None:
@@ -268,14 +267,16 @@ class Recorder:
 
     def channel_counts(self) -> list[tuple[str, str, str, int]]:
         """(channel, type, RIHS01 hash, messages) of every channel, in the chunks handed to the writer."""
+        totals = self._writer.counts()
         return [
-            (topic, typename, store.hash_rihs01(typename), self._totals.get(cid, 0))
+            (topic, typename, store.hash_rihs01(typename), totals.get(cid, 0))
             for cid, (topic, typename, store) in sorted(self._channel_info.items())
         ]
 
     def counts(self) -> dict[str, int]:
         """Messages recorded per bus topic, in the chunks handed to the writer (all of them once closed)."""
-        return {t: self._totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
+        totals = self._writer.counts()
+        return {t: totals.get(ch.id, 0) for t, ch in self._channels.items() if ch is not None}
 
     def close(self, status: str = "complete", summary: dict | None = None) -> None:
         """Stop listening and finalise the file (summary, indexes, ``simatch_end`` metadata)."""
@@ -287,6 +288,7 @@ class Recorder:
         self._subs.clear()
         try:
             self._end_chunk()
+            self._log.into(None)
             errors = {t: ch.errors for t, ch in self._channels.items() if ch is not None and ch.errors}
             end = {
                 "status": status,

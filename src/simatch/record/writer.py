@@ -10,11 +10,23 @@ Chunk records.
 
 How the work is split: the recorder's message log (`simatch.record.messagelog`) appends each message's
 record (header and CDR bytes) to one buffer per chunk (no object per message); `end_chunk` hands a chunk's
-records over a pipe to a **writer process** (`simatch.record.writer_process`), which compresses them with
-zstd and writes the chunk. Why a process and not a thread: a writer thread needs the GIL a few times per chunk
+records to a **writer process** (`simatch.record.writer_process`), which compresses them with zstd and
+writes the chunk. Why a process and not a thread: a writer thread needs the GIL a few times per chunk
 (to take the job, after compressing, after each write), and every such hand-over stopped the simulation
 thread; measured on a 5v5 match, the thread's hand-overs and compression cost the simulation thread
-1.5 ms per simulated second (5 % of the match), the process costs it the copy into the pipe.
+1.5 ms per simulated second (5 % of the match).
+
+**Shared memory.** The chunk buffers are memory shared with the writer process: one anonymous memory file
+(``memfd_create``: no name in ``/dev/shm`` or anywhere, gone with the last process that maps it, however the
+processes end) of `SLOTS` slots, mapped by both. `buffer` lends the message log a free slot (``log.into``),
+the log writes the chunk's records straight into it, and the pipe carries only "chunk in slot i, n bytes"
+and the acknowledgement that frees the slot once the chunk is written. Through the pipe alone, each chunk
+(some 370 kB of the match) was copied into the kernel by the simulation thread and out again by the writer
+process, and the simulation thread waited whenever the writer process, busy compressing or not scheduled on
+a loaded machine, had not yet read the pipe empty (measured under load: 5 ms of CPU time but 210 ms of wall
+time in the pipe's writes per 20 simulated seconds). A chunk that outgrows its slot (the log then moves it
+to memory of its own), and every chunk where there is no ``memfd_create`` (not Linux) or it fails, goes
+through the pipe as before.
 
 Integrity: each chunk's zstd frame carries zstd's content checksum (XXH64 of the records, checked by every
 zstd decoder, so by every MCAP reader), and the chunk's own CRC32 field is 0 ("not computed", as the MCAP
@@ -22,9 +34,10 @@ specification allows). Measured on a 5v5 match: the CRC32 of a megabyte of recor
 cost 0.3 ms, the zstd checksum 0.1 ms; both catch any damaged byte (tests/record/test_nothing_lost.py).
 
 Nothing handed over is lost when the recording process is killed: the writer process writes every chunk it
-was handed, then finalises the file itself (the `epitaph` metadata, the summary and the footer: it is told
-every schema and channel and each chunk's message counts as they come), so a kill loses only the chunk
-being filled, half a simulated second, and every MCAP reader reads the rest whole. At most two chunks are
+was handed (its mapping of the shared memory outlives the recording process), then finalises the file
+itself (the `epitaph` metadata, the summary and the footer: it is told every schema and channel and each
+chunk's message counts as they come), so a kill loses only the chunk being filled, half a simulated second,
+and every MCAP reader reads the rest whole. At most two chunks are
 in the writer's hands (it acknowledges each chunk once written; a third waits for that), so even a kill of
 the writer process itself loses at most one simulated second more (that file is then not finalised:
 `simatch recover` finalises it). The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
@@ -42,10 +55,14 @@ chunk indexes: those would add 16 bytes per message outside the compression (abo
 from __future__ import annotations
 
 import logging
+import mmap
 import os
 import pickle
+import struct
 import subprocess
 import sys
+from collections import deque
+from itertools import chain
 from pathlib import Path
 
 from mcap.data_stream import RecordBuilder
@@ -63,6 +80,8 @@ from .writer_process import (
     MAGIC,
     METADATA,
     RAW,
+    SHARED,
+    SLOT,
     SPAN,
     SUMMARY,
     write_all,
@@ -73,7 +92,12 @@ log = logging.getLogger(__name__)
 #: chunks handed over and not yet written, at most: one being written and one in the pipe (the writer process
 #: starts in some 30 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
 MAX_HANDED = 2
-_PIPE_SIZE = 1 << 20  # a chunk (about half a megabyte) fits: handed over in one copy
+#: shared chunk buffers: one being filled, `MAX_HANDED` handed over
+SLOTS = MAX_HANDED + 1
+#: bytes of a slot: a chunk of the match is some 370 kB, with link states about 1 MB; only the pages written
+#: take memory, and a larger chunk goes through the pipe
+SLOT_SIZE = 8 << 20
+_PIPE_SIZE = 1 << 20  # a chunk that goes through the pipe (about half a megabyte) fits: handed over in one copy
 
 
 class WriterError(Exception):
@@ -83,7 +107,18 @@ class WriterError(Exception):
 class McapWriter:
     """Writes one MCAP file: rare records and summary itself, message records in the chunks it is given."""
 
-    def __init__(self, path: str | Path, *, profile: str, library: str, compression_level: int = 1):
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        profile: str,
+        library: str,
+        compression_level: int = 1,
+        shared: bool = True,
+        slot_size: int | None = None,
+    ):
+        """``shared``: hand the chunks over in shared memory where the system has it (`SLOTS` of
+        ``slot_size`` bytes, default `SLOT_SIZE`), else through the pipe."""
         try:
             fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # never overwrites a file
         except OSError as exc:
@@ -99,22 +134,26 @@ class McapWriter:
         self._times: tuple[int, int] | None = None
         self._records = RecordBuilder()
         self._closed = False
-        self._pending = 0  # acknowledgements still to come
+        self._handed: deque[int | None] = deque()  # per acknowledgement still to come: the slot it frees
+        slot_size = SLOT_SIZE if slot_size is None else slot_size
+        share = _shared_memory(SLOTS * slot_size) if shared else None
+        self._map = share[1] if share else None
+        self._slots = (
+            [memoryview(self._map)[i * slot_size : (i + 1) * slot_size] for i in range(SLOTS)] if share else []
+        )
+        self._free = list(range(len(self._slots)))[::-1]  # slots neither handed over nor lent to the log
+        self._lent: int | None = None  # the slot lent for the chunk being filled
         to_child, self._out = os.pipe()
         self._back, from_child = os.pipe()
         _widen(self._out)
+        fds = (to_child, from_child, fd) + ((share[0],) if share else ())
+        args = [str(to_child), str(from_child), str(fd), str(compression_level)]
+        if share:
+            args += [str(share[0]), str(slot_size), str(SLOTS)]
         try:  # the file itself (it needs only zstd and mcap), -P: nothing of its folder on the path
             self._proc = subprocess.Popen(
-                [
-                    sys.executable,
-                    "-P",
-                    writer_process.__file__,
-                    str(to_child),
-                    str(from_child),
-                    str(fd),
-                    str(compression_level),
-                ],
-                pass_fds=(to_child, from_child, fd),
+                [sys.executable, "-P", writer_process.__file__, *args],
+                pass_fds=fds,
                 stdin=subprocess.DEVNULL,
                 stdout=subprocess.DEVNULL,
                 start_new_session=True,
@@ -125,7 +164,7 @@ class McapWriter:
             os.unlink(path)  # the empty file made above: nothing recorded
             raise WriterError(f"cannot start the writer process: {exc}") from None
         finally:
-            for end in (to_child, from_child, fd):
+            for end in fds:
                 os.close(end)
         Header(profile=profile, library=library).write(self._records)
         self._send(RAW, MAGIC + self._records.end())
@@ -150,22 +189,49 @@ class McapWriter:
         record.write(self._records)
         return record.id, self._records.end()
 
-    def end_chunk(self, data: bytes, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
+    @property
+    def shared(self) -> bool:
+        """Chunks are handed over in shared memory (else through the pipe)."""
+        return bool(self._slots)
+
+    def buffer(self) -> memoryview | None:
+        """Shared memory for the next chunk's records, to lend the message log (``log.into``): the same slot
+        until a chunk in it is handed over. None where there is none (or the writer process is gone)."""
+        if not self._slots or self.error is not None:
+            return None
+        if self._lent is None:
+            self._lent = self._free.pop()  # at most MAX_HANDED slots are handed over: one is free
+        return self._slots[self._lent]
+
+    def end_chunk(self, data, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
         """Hand one chunk's records (messages from ``start_ns`` to ``end_ns``; ``counts`` per channel id) to the
-        writer process. Waits while `MAX_HANDED` chunks are still to be written."""
-        if not data:
+        writer process: ``data`` is a bytes-like object, or the records in the slot `buffer` lent (a memoryview
+        of its first bytes, as ``log.take`` gives it). Waits while `MAX_HANDED` chunks are still to be
+        written."""
+        if not len(data):
             return
-        n = 0
+        counted = self._counts
         for cid, k in counts.items():
-            self._counts[cid] = self._counts.get(cid, 0) + k
-            n += k
-        self._message_count += n
+            counted[cid] = counted.get(cid, 0) + k
+        self._message_count += sum(counts.values())
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
         self._acknowledged(MAX_HANDED - 1)
-        head = SPAN.pack(start_ns, end_ns, len(counts)) + b"".join(COUNT.pack(c, k) for c, k in counts.items())
-        if self._send(CHUNK, head, data):
-            self._pending += 1
+        head = SPAN.pack(start_ns, end_ns, len(counts)) + _count_records(counts)
+        in_slot = self._map is not None and isinstance(data, memoryview) and data.obj is self._map
+        slot = self._lent if in_slot else None
+        if slot is not None:  # in the lent slot: only where it is crosses the pipe
+            self._lent = None
+            if self._send(SHARED, SLOT.pack(slot, len(data)), head):
+                self._handed.append(slot)
+            else:
+                self._free.append(slot)
+        elif self._send(CHUNK, head, data):
+            self._handed.append(None)
+
+    def counts(self) -> dict[int, int]:
+        """Messages per channel id in the chunks handed over."""
+        return dict(self._counts)
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
         """A Metadata record, written after everything handed over before it."""
@@ -180,7 +246,7 @@ class McapWriter:
     def flush(self) -> None:
         """Wait until everything handed over is on disk (in the operating system's hands)."""
         if self._send(FLUSH, b""):
-            self._pending += 1
+            self._handed.append(None)
         self._acknowledged(0)
 
     def close(self) -> None:
@@ -211,7 +277,8 @@ class McapWriter:
         finally:
             os.close(self._back)
             self._proc.wait()
-        status = status[self._pending :].decode(errors="replace").strip()  # after the acknowledgements due
+        status = status[len(self._handed) :].decode(errors="replace").strip()  # after the acknowledgements due
+        self._slots.clear()  # the shared memory goes with the last view of it
         if self.error is None and status != "ok":
             self.error = status or f"the writer process ended with status {self._proc.returncode}"
         if self.error is not None:
@@ -230,18 +297,28 @@ class McapWriter:
         return True
 
     def _acknowledged(self, left: int) -> None:
-        """Wait until at most ``left`` chunks or flushes are unacknowledged."""
-        while self._pending > left and self.error is None:
-            got = os.read(self._back, self._pending - left)
+        """Wait until at most ``left`` chunks or flushes are unacknowledged (their slots are free then)."""
+        while len(self._handed) > left and self.error is None:
+            got = os.read(self._back, len(self._handed) - left)
             if not got:
                 self._failed("the writer process ended unexpectedly")
                 return
-            self._pending -= got.count(ACK)
+            for _ in range(got.count(ACK)):
+                slot = self._handed.popleft()
+                if slot is not None:
+                    self._free.append(slot)
 
     def _failed(self, why: str) -> None:
         self.error = why
-        self._pending = 0
+        self._handed.clear()
+        self._free = [i for i in range(len(self._slots)) if i != self._lent]
         log.error("recording: writing %s failed (%s); the rest of the run is not recorded", self.path, why)
+
+
+def _count_records(counts: dict[int, int]) -> bytes:
+    """The COUNT records of ``counts`` (channel id -> messages), packed in one call (a chunk of the match counts
+    some hundred channels, twice per simulated second)."""
+    return struct.pack("<" + COUNT.format.lstrip("<") * len(counts), *chain.from_iterable(counts.items()))
 
 
 def _lock(fd: int) -> None:
@@ -253,6 +330,21 @@ def _lock(fd: int) -> None:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except (ImportError, OSError):  # not POSIX, or a file system without locks: readers cannot tell
         pass
+
+
+def _shared_memory(size: int) -> tuple[int, mmap.mmap] | None:
+    """An anonymous memory file of ``size`` bytes and this process's mapping of it, or None where the system
+    has none (the chunks then go through the pipe)."""
+    try:
+        fd = os.memfd_create("simatch-recording")  # close-on-exec: only the writer process is handed it
+    except (AttributeError, OSError):
+        return None
+    try:
+        os.ftruncate(fd, size)
+        return fd, mmap.mmap(fd, size)
+    except (OSError, ValueError):
+        os.close(fd)
+        return None
 
 
 def _widen(fd: int) -> None:
