@@ -811,29 +811,7 @@ class Simulator:
         n, m = self.n, self.n - 1
         obs = np.empty((6 * n, m), dtype=np.float32)
         wheels = np.empty((n, self.drive.max_wheels), dtype=np.float32)
-        sense = self._sense
-        if sense is None:  # (the arguments' kinds are the same at every call: see `kernels.entry`)
-            sense = self._sense = entry(
-                sense_ground,
-                self._qpos,
-                self._qvel,
-                self._q0,
-                self._v0,
-                self._bq,
-                self._bv,
-                *self._flags_in,
-                self.step_index,
-                *self._flags_of,
-                p.sign,
-                p.others,
-                p.own32,
-                p.balls32,
-                p.valid,
-                p.stuck,
-                obs,
-                wheels,
-            )
-        sense(
+        args = (
             self._qpos,
             self._qvel,
             self._q0,
@@ -852,6 +830,10 @@ class Simulator:
             obs,
             wheels,
         )
+        sense = self._sense
+        if sense is None:  # (the arguments' kinds are the same at every call: see `kernels.entry`)
+            sense = self._sense = entry(sense_ground, *args)
+        sense(*args)
         self.stuck = p.stuck
         return p.observe_exact(obs, wheels, self.ball.holder, stamp, tick)
 
