@@ -187,3 +187,55 @@ def test_velocity_commands_are_stored_as_the_rounded_numbers_the_general_way_sto
         with pytest.raises(IndexError):
             sim.command_velocity(sim.n, 0.0, 0.0, 0.0)
         assert sim.command_velocity(0, "1", 0.0, 0.0) is False and sim.command_velocity(0, np.nan, 0, 0) is False
+
+
+# --- the per-step kernels called without numba's dispatcher ----------------------------------------------------
+
+
+def test_kernel_entries_are_the_compiled_versions_the_dispatcher_picks():
+    """`kernels.entry` gives the very compiled function numba's dispatcher calls for those argument types, and
+    runs nothing; called with arguments of those kinds it returns what the dispatcher's call returns."""
+    import numba
+
+    from simatch.sim.kernels import entry, model_poses32
+
+    rng = np.random.default_rng(5)
+    qpos, qvel = rng.normal(size=40), rng.normal(size=40)
+    pose, twist = np.zeros(7 * 4, np.float32), np.zeros(6 * 4, np.float32)
+    fn = entry(model_poses32, qpos, qvel, 0, 0, 3, 9, 9, pose, twist)
+    assert not pose.any() and not twist.any()  # nothing was run
+    sig = tuple(numba.typeof(a) for a in (qpos, qvel, 0, 0, 3, 9, 9, pose, twist))
+    assert fn is model_poses32.overloads[sig].entry_point
+    for _ in range(20):
+        qpos[:], qvel[:] = rng.normal(size=40), rng.normal(size=40)
+        a = (np.zeros(28, np.float32), np.zeros(24, np.float32))
+        b = (np.zeros(28, np.float32), np.zeros(24, np.float32))
+        model_poses32(qpos, qvel, 0, 0, 3, 9, 9, *a)
+        fn(qpos, qvel, 0, 0, 3, 9, 9, *b)
+        assert a[0].tobytes() == b[0].tobytes() and a[1].tobytes() == b[1].tobytes()
+        xpos, geoms, bound2 = rng.normal(size=(6, 3)), np.arange(1, 6, dtype=np.int64), rng.uniform(0, 3, 5)
+        apart = entry(ball_apart, xpos, geoms, bound2, 0)
+        assert apart(xpos, geoms, bound2, 0) == ball_apart(xpos, geoms, bound2, 0)
+    assert entry(len, [1, 2]) is len  # a plain function (no numba compiler) is itself
+
+
+def test_held_ball_kernels_through_their_entries_play_the_match_the_dispatcher_plays():
+    """The held ball's kernels (keep, roll, catch) bound by `kernels.entry` at the start give the same steps as
+    their dispatchers: a stretch with catches, holds and losses of the ball played both ways ends in the same
+    state, bit for bit."""
+    from simatch.sim import kernels
+
+    def play(dispatch: bool) -> str:
+        with simatch.Simulation("msl_5v5", seed=3) as run:
+            ball = run.simulator.ball
+            if dispatch:
+                ball._keep_kernel, ball._roll, ball._catch_kernel = (
+                    kernels.keep_ball,
+                    kernels.roll_held_ball,
+                    kernels.catch_candidate,
+                )
+            run.run(seconds=12.0, until_done=False)
+            assert run.simulator.mechanics["dribble_start"] > 0  # the ball was caught (and held) in the stretch
+            return run.state_digest()
+
+    assert play(True) == play(False)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .kernels import catch_candidate, equality_force, keep_ball, roll_held_ball
+from .kernels import catch_candidate, entry, equality_force, keep_ball, roll_held_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -88,6 +88,46 @@ class BallHandling:
         # as one contiguous array: what the per-step kernels are given
         self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
         self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
+        # the per-step kernels without numba's dispatcher (`kernels.entry`): the same kinds of arguments at
+        # every call (these views, the engine's constraint arrays, plain numbers, the candidates' int64 array)
+        self._dribble_eq = [int(e) for e in index.dribble_eq]
+        self._mouth_xs = self._mouth_x.tolist()
+        bq, bv = int(index.ball_qpos), int(index.ball_qvel)
+        self._ball_q, self._ball_v = bq, bv
+        r, q, v = float(self.ball_r), self._qpos, self._qvel
+        self._roll = entry(roll_held_ball, q, v, bq, bv, r, float(self.roller_spin), float(self.roller_dw))
+        self._keep_kernel = entry(
+            keep_ball,
+            self._eq_data,
+            0,
+            q,
+            self._robot_q0,
+            bq,
+            0,
+            0.0,
+            float(self.pull_step),
+            True,
+            data.efc_type,
+            data.efc_id,
+            data.efc_force,
+            0,
+            int(self._eq_rows_type),
+            float(self.grip),
+        )
+        self._catch_kernel = entry(
+            catch_candidate,
+            q,
+            v,
+            self._robot_q0,
+            self._robot_v0,
+            bq,
+            bv,
+            np.zeros(1, dtype=np.int64),
+            float(self.hold_dist),
+            float(self.hold_cos),
+            self._mouth_x,
+            float(self.catch_speed),
+        )
 
     # --- requests from commands -----------------------------------------------------------------------------
     def set_dribbler(self, i: int, on: bool) -> None:
@@ -137,9 +177,8 @@ class BallHandling:
         if self.holder >= 0:
             self._keep(step, enabled)
             if self.holder >= 0 and self.roller_dw > 0.0:
-                ix = self.ix
-                roll_held_ball(
-                    self._qpos, self._qvel, ix.ball_qpos, ix.ball_qvel, self.ball_r, self.roller_spin, self.roller_dw
+                self._roll(
+                    self._qpos, self._qvel, self._ball_q, self._ball_v, self.ball_r, self.roller_spin, self.roller_dw
                 )
         elif step >= self._catch_idle_until and self._dribblers:
             self._catch(step, enabled)
@@ -187,7 +226,7 @@ class BallHandling:
         q = self._qpos
         if q[self.ix.ball_qpos + 2] > self.ball_r + 0.05:
             return
-        cand = np.flatnonzero(self.dribble_on & enabled)
+        cand = np.flatnonzero(self.dribble_on & enabled)  # (int64: what `_catch_kernel` takes)
         if self.lost_by >= 0:
             if step < self.lost_until and self.in_mouth(self.lost_by):
                 cand = cand[cand != self.lost_by]
@@ -196,13 +235,13 @@ class BallHandling:
         if cand.size == 0:
             return
         ix = self.ix
-        i, fwd, lat, nearest = catch_candidate(
+        i, fwd, lat, nearest = self._catch_kernel(
             q,
             self._qvel,
             self._robot_q0,
             self._robot_v0,
-            ix.ball_qpos,
-            ix.ball_qvel,
+            self._ball_q,
+            self._ball_v,
             cand,
             self.hold_dist,
             self.hold_cos,
@@ -233,14 +272,14 @@ class BallHandling:
             self.release("dribbler_off")
             return
         d = self.d
-        status, force = keep_ball(
+        status, force = self._keep_kernel(
             self._eq_data,
-            self.ix.dribble_eq[i],
+            self._dribble_eq[i],
             self._qpos,
             self._robot_q0,
-            self.ix.ball_qpos,
+            self._ball_q,
             i,
-            self.mouth[i, 0],
+            self._mouth_xs[i],
             self.pull_step,
             step - self.hold_since >= self.settle_steps,
             d.efc_type,

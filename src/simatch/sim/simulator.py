@@ -31,12 +31,13 @@ from ..robots.drive import OmniDrive
 from .ballhandling import BallHandling
 from .flight import AerialFleet, aerial_poses, frame_contacts, planar, rotor_links
 from .inputs import InputLog, action_input, install, velocity_input, world_input
-from .kernels import ball_apart, model_poses, model_poses32, robot_flags, sense_ground
+from .kernels import ball_apart, entry, model_poses, model_poses32, robot_flags, sense_ground
 from .perception import Perception, Snapshot
 from .sight import Sight
 from .world import BALL_NAME, build_world
 
 _f32s = msgs.f32s
+_zeros, _f32 = np.zeros, np.float32
 _f32x3 = struct.Struct("<3f")  # three float32 numbers: a velocity command rounded as `msgs.f32s` rounds it
 _pack3, _unpack3 = _f32x3.pack, _f32x3.unpack
 
@@ -219,6 +220,24 @@ class Simulator:
             self._geom_robot[g] = i
         self._geom_robot_list = self._geom_robot.tolist()
         self._init_touch_bounds()
+        # the per-step kernels, called without numba's dispatcher (`kernels.entry`: their arguments are the
+        # engine's arrays taken once, plain numbers and float32 arrays made for the call)
+        self._models = self.n + 1
+        self._poses32 = entry(
+            model_poses32,
+            self._qpos,
+            self._qvel,
+            self._q0,
+            self._v0,
+            self.n,
+            self._bq,
+            self._bv,
+            np.zeros(0, _f32),
+            np.zeros(0, _f32),
+        )
+        self._ball_apart = entry(
+            ball_apart, self._geom_xpos, self._touch_geoms, self._touch_bound2, int(self.ix.ball_geom)
+        )
         self.perception = Perception(
             robots,
             self.signs,
@@ -237,6 +256,7 @@ class Simulator:
         #: `observations` by one compiled call (exact perception of ground robots alone)
         p = self.perception
         self._sense_fast = self.aerial is None and p.exact and p.sight is None and p.delay_steps == 0 and self.n > 0
+        self._sense = None  # `sense_ground` for these arguments (made at the first observation)
 
     # --- inputs -------------------------------------------------------------------------------------------
     @property
@@ -614,7 +634,10 @@ class Simulator:
         n = d.ncon
         if n == 0:
             return []
-        if ball_apart(self._geom_xpos, self._touch_geoms, self._touch_bound2, self.ix.ball_geom):
+        # (a held ball is in its holder's mouth: never apart, the test is left out)
+        if self.ball.holder < 0 and self._ball_apart(
+            self._geom_xpos, self._touch_geoms, self._touch_bound2, self.ix.ball_geom
+        ):
             return []
         flat = d.contact.geom[:n].ravel().tolist()
         bg = self.ix.ball_geom
@@ -698,9 +721,9 @@ class Simulator:
         if self.aerial is not None:
             _, pose, twist = self.model_state_arrays()
             return pose.astype(np.float32).ravel(), twist.astype(np.float32).ravel()
-        m = self.n + 1
-        pose, twist = np.zeros(7 * m, np.float32), np.zeros(6 * m, np.float32)
-        model_poses32(self._qpos, self._qvel, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
+        m = self._models
+        pose, twist = _zeros(7 * m, _f32), _zeros(6 * m, _f32)
+        self._poses32(self._qpos, self._qvel, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
         return pose, twist
 
     def model_states(self) -> dict[str, ModelStateView]:
@@ -788,7 +811,7 @@ class Simulator:
         n, m = self.n, self.n - 1
         obs = np.empty((6 * n, m), dtype=np.float32)
         wheels = np.empty((n, self.drive.max_wheels), dtype=np.float32)
-        sense_ground(
+        args = (
             self._qpos,
             self._qvel,
             self._q0,
@@ -807,6 +830,10 @@ class Simulator:
             obs,
             wheels,
         )
+        sense = self._sense
+        if sense is None:  # (the arguments' kinds are the same at every call: see `kernels.entry`)
+            sense = self._sense = entry(sense_ground, *args)
+        sense(*args)
         self.stuck = p.stuck
         return p.observe_exact(obs, wheels, self.ball.holder, stamp, tick)
 

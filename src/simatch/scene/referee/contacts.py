@@ -41,6 +41,7 @@ class RobotContacts:
             for j in range(i + 1, obs.n)
             if t[i] != t[j]
         ]
+        self._rows = [(k, i, j, reach) for k, (i, j, reach) in enumerate(self.pairs)]  # (the loop's order)
         self.touching = [False] * len(self.pairs)
         self.called: set[int] = set()  # pairs whose contact (still going on) a rule has called already
         self.prev_vx = [0.0] * obs.n
@@ -58,10 +59,11 @@ class RobotContacts:
         self._vx[:] = obs.VX
         self._vy[:] = obs.VY
         now = []
-        for k, (i, j, reach) in enumerate(self.pairs):
+        for k, i, j, reach in self._rows:
             dx = X[j] - X[i]
-            if dx > reach or -dx > reach:
-                touching[k] = False
+            if dx > reach or -dx > reach:  # (the usual case: apart along x)
+                if touching[k]:
+                    touching[k] = False
                 continue
             dy = Y[j] - Y[i]
             dist = math.hypot(dx, dy)

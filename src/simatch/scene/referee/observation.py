@@ -80,23 +80,31 @@ class Observation:
         msg = self.msg
         if self._rows is None:
             self._locate(msg)
-        P = msg.pose.tolist()
-        T = msg.twist.tolist()
+        pose, twist = msg.pose, msg.twist
         rows = self._rows
         n = self.n
         X, Y, VX, VY = self.X, self.Y, self.VX, self.VY
         if self._in_order:  # the same lists, filled in place (a rule may hold them)
-            X[:] = P[0 : 7 * n : 7]
-            Y[:] = P[1 : 7 * n : 7]
-            VX[:] = T[0 : 6 * n : 6]
-            VY[:] = T[1 : 6 * n : 6]
+            # only the numbers read (48 of 143): a Python float costs more to make than a strided view
+            X[:] = pose[0 : 7 * n : 7].tolist()
+            Y[:] = pose[1 : 7 * n : 7].tolist()
+            VX[:] = twist[0 : 6 * n : 6].tolist()
+            VY[:] = twist[1 : 6 * n : 6].tolist()
+            self.bx, self.by, self.bz = pose[7 * n : 7 * n + 3].tolist()
+            self.bvx, self.bvy, self.bvz, self.bwx, self.bwy = twist[6 * n : 6 * n + 5].tolist()
         else:
+            P = pose.tolist()
+            T = twist.tolist()
             for i in range(n):
                 r = rows[i]
                 X[i] = P[7 * r]
                 Y[i] = P[7 * r + 1]
                 VX[i] = T[6 * r]
                 VY[i] = T[6 * r + 1]
+            b = rows[n]
+            self.bx, self.by, self.bz = P[7 * b], P[7 * b + 1], P[7 * b + 2]
+            self.bvx, self.bvy, self.bvz = T[6 * b], T[6 * b + 1], T[6 * b + 2]
+            self.bwx, self.bwy = T[6 * b + 3], T[6 * b + 4]
         pen, goal = self.penalty_area, self.goal_area
         px, py, gx, gy, near = self._pen_x, self._pen_y, self._goal_x, self._goal_y, self._near
         for i in range(n):
@@ -109,10 +117,6 @@ class Observation:
             side = 1 if x > 0 else -1
             pen[i] = side if ax >= px and ay <= py else 0
             goal[i] = side if ax >= gx and ay <= gy else 0
-        b = rows[n]
-        self.bx, self.by, self.bz = P[7 * b], P[7 * b + 1], P[7 * b + 2]
-        self.bvx, self.bvy, self.bvz = T[6 * b], T[6 * b + 1], T[6 * b + 2]
-        self.bwx, self.bwy = T[6 * b + 3], T[6 * b + 4]
         self.stamp = msg.stamp
         self.step = msg.step
 
@@ -153,8 +157,8 @@ class Observation:
     # --- geometry ----------------------------------------------------------------------------------------
     def yaw(self, i: int) -> float:
         r = 7 * self._rows[i]
-        pose = self.msg.pose
-        return 2.0 * math.atan2(float(pose[r + 6]), float(pose[r + 3]))
+        item = self.msg.pose.item  # (plain floats, no NumPy scalars: the same numbers)
+        return 2.0 * math.atan2(float(item(r + 6)), float(item(r + 3)))
 
     def ball_distance(self, i: int) -> float:
         return math.hypot(self.X[i] - self.bx, self.Y[i] - self.by)

@@ -190,7 +190,7 @@ class MslReferee(OperatorTakeover, Judge):
         if g.phase is _Phase.ENDED:
             return
         if g.phase is not _Phase.PAUSED:
-            d = g.stage.duration
+            d = g.stages[g.stage_index].duration  # (`g.stage`, without the property's call: every step)
             if d is not None and g.stage_steps * self.dt >= d - 1e-9:
                 self._end_stage(now)
                 if g.phase is _Phase.ENDED:

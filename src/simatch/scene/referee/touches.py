@@ -94,8 +94,39 @@ class Touches:
 
     # --- input (physics rate) -------------------------------------------------------------------------------
     def on_contacts(self, msg) -> None:
-        index = self.obs.index
         step = int(msg.step)
+        holder = msg.holder
+        touching = msg.touching
+        if (
+            holder
+            and not msg.kicker
+            and not self.armed
+            and (not touching or (len(touching) == 1 and touching[0] == holder))
+        ):
+            # the steady hold (most messages: the held ball sits in the mouth, mostly without a contact): the
+            # robot that alone had the ball at the last step still holds it, as the team on the ball, in
+            # possession; what `_contact` would change is then only the step and where the robot and the ball are
+            i = self.obs.index.get(holder, -1)
+            if (
+                i >= 0
+                and self.contact_step == step - 1
+                and self.touch_step[i] == step - 1
+                and self.last == i
+                and self.possessor == i
+                and self.contact == (i,)
+                and self._seen[i]
+                and self.team_on_ball == self.obs.team_ix[i]
+            ):
+                self.holder = i
+                self.ball_at_contact = self.obs.ball_xy_now()
+                self.contact_step = self.last_step = self.touch_step[i] = step
+                self.touch_x[i], self.touch_y[i] = self.obs.xy_now(i)
+                return
+        self._contact(msg, step)
+
+    def _contact(self, msg, step: int) -> None:
+        """A ``ball_contacts`` message (of physics step ``step``), the general way."""
+        index = self.obs.index
         robots = [index[nm] for nm in msg.touching if nm in index]
         for extra in (msg.holder, msg.kicker):
             if extra and extra in index and index[extra] not in robots:

@@ -43,6 +43,9 @@ class BallHoldingRule(Rule):
         self.posts = (
             [(sx * f.half_length, sy * 0.5 * f.goal_width) for sx in (-1, 1) for sy in (-1, 1)] if f.goals else []
         )
+        # a ball nearer the half-way line than this is farther than POST_CLEARANCE from every post (by a
+        # micrometre: the distances' rounding cannot matter), so the posts need no test
+        self._posts_far = min((abs(x) for x, _ in self.posts), default=math.inf) - POST_CLEARANCE - 1e-6
         self.robot = -1  # the robot being followed
         self.deep_for = 0  # control periods the ball has been deeper than the limit in it
         self.deeper_for = 0  # ... and deeper than the brief limit
@@ -59,7 +62,10 @@ class BallHoldingRule(Rule):
             i < 0
             or obs.bz > r + ON_GROUND
             or not obs.active[i]
-            or any(math.hypot(obs.bx - x, obs.by - y) < POST_CLEARANCE for x, y in self.posts)
+            or (
+                not -self._posts_far < obs.bx < self._posts_far
+                and any(math.hypot(obs.bx - x, obs.by - y) < POST_CLEARANCE for x, y in self.posts)
+            )
         ):
             self.robot = -1
             return None

@@ -17,6 +17,8 @@ class GoalAreaRule(Rule):
     def check(self) -> Call | None:
         obs = self.m.obs
         area = obs.goal_area
+        if not any(area):  # (the usual case: nobody in a goal area)
+            return None
         for i in range(obs.n):
             side = area[i]
             if not side or not obs.active[i] or (obs.is_goalkeeper[i] and obs.own_side[i] == side):

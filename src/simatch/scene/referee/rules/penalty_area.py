@@ -35,6 +35,8 @@ class PenaltyAreaRule(Rule):
         groups: dict[tuple[int, int], list[int]] = {}
         for i in range(obs.n):
             side = area[i] if obs.active[i] else 0
+            if not side and not inside[i]:
+                continue  # outside, and counted outside already: nothing to follow (most robots)
             if side and obs.is_goalkeeper[i] and obs.own_side[i] == side:
                 side = 0  # the defending goalkeeper is not counted
             if side != inside[i]:
