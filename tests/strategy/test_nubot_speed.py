@@ -53,7 +53,7 @@ def _kernels():
         "team_intercepts": ballpath._team_intercepts,
         "score_spots": positions._score_spots,
         "assist_choice": picture._assist_choice,
-        "assign": picture._assign,
+        "assign": picture._assign_flat,
     }
 
 
@@ -79,10 +79,17 @@ def test_team_intercepts_in_one_kernel_equal_the_rows_then_the_intercepts():
         path = _random_path(rng)
         us = np.array(
             [
-                [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-4, 4)]
-                for _ in range(rng.randint(0, 5))
+                [
+                    rng.uniform(-12, 12),
+                    rng.uniform(-8, 8),
+                    rng.uniform(-3, 3),
+                    rng.uniform(-3, 3),
+                    k,
+                    rng.uniform(-4, 4),
+                ]
+                for k in range(rng.randint(0, 5))
             ]
-        ).reshape(-1, 5)
+        ).reshape(-1, 6)
         opps = np.array(
             [
                 [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3)]
@@ -261,3 +268,37 @@ def test_the_motion_row_holds_the_command_rounded_as_the_messages_round_it():
                     fence=fence,
                 )
                 assert motion.row.tolist() == list(msgs.f32s(vx, vy, w, tx, ty))
+
+
+def test_assign_in_one_array_equals_the_rows_then_the_kernel():
+    """`assign` hands the robots' and the slots' rows to the kernel in one array (`_assign_flat`): the same
+    assignment as `_assign` of the two arrays made apart, on random teams, slots and circles."""
+
+    class _Robot:
+        def __init__(self, rid, x, y, role, role_time):
+            self.id, self.x, self.y, self.role, self.role_time = rid, x, y, role, role_time
+
+    rng = random.Random(11)
+    for _ in range(3000):
+        n, m = rng.randint(1, 6), rng.randint(1, 7)
+        robots = [
+            _Robot(k + 1, rng.uniform(-11, 11), rng.uniform(-7, 7), rng.choice([-1, 2, 3, 4, 5]), rng.uniform(0, 1.2))
+            for k in range(n)
+        ]
+        slots = [(rng.choice([2, 3, 4, 5]), rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0) for _ in range(m)]
+        if rng.random() < 0.2:  # equal costs: the first best assignment wins in both
+            slots = [slots[0]] * m
+        hysteresis = rng.choice([0.5, 1.0, 50.0])
+        around = (rng.uniform(-5, 5), rng.uniform(-3, 3), rng.uniform(0.5, 3.0)) if rng.random() < 0.4 else None
+        kept = slots[:n]
+        rows = _array(
+            [
+                (r.x, r.y, r.role, hysteresis + (picture.NEW_ROLE_HOLD if r.role_time < picture.MIN_ROLE_TIME else 0.0))
+                for r in robots
+            ],
+            4,
+        )
+        cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
+        best = picture._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
+        want = {robots[i].id: int(best[i]) for i in range(min(n, len(kept)))}
+        assert picture.assign(robots, slots, hysteresis, around) == want

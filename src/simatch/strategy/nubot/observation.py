@@ -82,7 +82,8 @@ class TeamView:
         self.team_strategy = None
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
-        self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        # (K, 6): x, y, vx, vy, id, yaw of every team-mate, for kernels (they read the columns they need)
+        self.array = np.zeros((0, 6))
         self.holder: Mate | None = None  # the first team-mate holding the ball, if any
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
@@ -90,25 +91,32 @@ class TeamView:
         team = world.team_strategy
         if self.tick == world.tick and self.robots is robots and self.team_strategy is team:
             return self.mates, self.by_id, self.array
-        strategies = world.strategies
         gk = world.goalkeeper
+        told = world.strategies.get
+        # one pass over the team: the records, the kernels' numbers (x, y, vx, vy, id, yaw of each, flat),
+        # the look-up by id and the first holder
         mates = []
-        told = strategies.get
+        flat = []
+        by_id = {}
+        holder = None
         for r in robots:
-            s = told(r.id)
+            rid = r.id
+            s = told(rid)
             if s is None:
-                mates.append(Mate(r, r.id == gk))
-                continue
-            user = s.user.tolist()
-            attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
-            pass_cmd = s.pass_cmd
-            mates.append(
-                Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
-            )
+                m = Mate(r, rid == gk)
+            else:
+                user = s.user.tolist()
+                attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+                pass_cmd = s.pass_cmd
+                m = Mate(r, rid == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
+            mates.append(m)
+            by_id[rid] = m
+            flat += (m.x, m.y, m.vx, m.vy, rid, m.yaw)
+            if holder is None and m.holding:
+                holder = m
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
-        self.mates, self.by_id = mates, {m.id: m for m in mates}
-        self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
-        self.holder = next((m for m in mates if m.holding), None)
+        self.mates, self.by_id, self.holder = mates, by_id, holder
+        self.array = np.array(flat, dtype=float).reshape(-1, 6)
         return self.mates, self.by_id, self.array
 
 

@@ -127,14 +127,22 @@ def assign(
     slots = slots[:n] if len(slots) >= n else slots
     if not slots:
         return {}
-    # a robot that took its role only a moment ago holds on to it harder (roles last a while)
-    r = _rows(
-        [(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0)) for m in robots], 4
-    )
-    q = _rows([(sl[1], sl[2], sl[0]) for sl in slots], 3)
+    # a robot that took its role only a moment ago holds on to it harder (roles last a while); the robots'
+    # rows (x, y, announced role, hysteresis) and the slots' (x, y, role) in one array, for one kernel call
+    flat = []
+    for m in robots:
+        flat += (m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+    for sl in slots:
+        flat += (sl[1], sl[2], sl[0])
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-    best = _assign(r, q, cx, cy, cr)
-    return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
+    best = _assign_flat(np.array(flat, dtype=float), n, len(slots), cx, cy, cr).tolist()
+    return {robots[i].id: best[i] for i in range(min(n, len(slots)))}
+
+
+@numba.njit(cache=True, nogil=True)
+def _assign_flat(flat, n, m, cx, cy, cr):
+    """`_assign` of the robots' (n, 4) and the slots' (m, 3) rows, given one after the other in ``flat``."""
+    return _assign(flat[: 4 * n].reshape((n, 4)), flat[4 * n : 4 * n + 3 * m].reshape((m, 3)), cx, cy, cr)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -297,7 +305,11 @@ class Analyst:
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         if mates or opps:
-            us = _rows([(m.x, m.y, m.vx, m.vy, m.yaw) for m in mates], 5)
+            # (the team view's table when every team-mate plays, as nearly always)
+            if n_us == len(obs.mates):
+                us = obs.mate_array
+            else:
+                us = _rows([(m.x, m.y, m.vx, m.vy, m.id, m.yaw) for m in mates], 6)
             turn = 0.7 / p.max_turn
             res = team_intercepts(path, us, obs.opp_array, obs.bx, obs.by, turn, p.max_speed, p.acceleration).tolist()
             for k, m in enumerate(mates):
@@ -335,8 +347,14 @@ class Analyst:
     # --- open play --------------------------------------------------------------------------------------
     def _play(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
         p, areas = self.p, self.areas
-        field = [m for m in mates if not m.is_goalie]
-        goalie = next((m for m in mates if m.is_goalie), None)
+        # (plain loops: a generator or a comprehension makes a function object at every call)
+        field = []
+        goalie = None
+        for m in mates:
+            if not m.is_goalie:
+                field.append(m)
+            elif goalie is None:
+                goalie = m
         holder = obs.by_id.get(pic.holder) if pic.holder else None
         if goalie is not None:
             pic.roles[goalie.id] = ROLES.GOALIE
@@ -360,34 +378,51 @@ class Analyst:
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
-            fresh = next(
-                (m for m in field if m.role == ROLES.ACTIVE and m.role_time < MIN_ACTIVE_TIME and m.id != flow.taker),
-                None,
-            )
-            if fresh is not None:
-                best, active = -math.inf, fresh  # a robot that just took the ball on keeps it a moment
+            taker = flow.taker
+            active_role = ROLES.ACTIVE
             for m in field:
-                if m.id == flow.taker:
+                if m.role == active_role and m.role_time < MIN_ACTIVE_TIME and m.id != taker:
+                    best, active = -math.inf, m  # a robot that just took the ball on keeps it a moment
+                    break
+            catch = pic.catch
+            hysteresis = p.active_hysteresis
+            for m in field:
+                if m.id == taker:
                     continue
-                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == ROLES.ACTIVE else 0.0)
+                score = catch[m.id][0] - (hysteresis if m.role == active_role else 0.0)
                 if score < best:
                     best, active = score, m
         if active is not None:
             pic.active = active.id
             pic.roles[active.id] = ROLES.ACTIVE if pic.receiver != active.id else ROLES.CATCHOFPASS
-        our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
+        # (min of the catch times as min() takes it: the first, then any smaller one)
+        our_t = math.inf
+        n_said = n_yes = 0
+        for k, m in enumerate(mates):
+            t = pic.catch[m.id][0]
+            if k == 0 or t < our_t:
+                our_t = t
+            said = m.attacking
+            if said >= 0:
+                n_said += 1
+                n_yes += said
         # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
-        said = [m.attacking for m in mates if m.attacking >= 0]
-        before = 2 * sum(said) > len(said) if said else False
+        before = 2 * n_yes > n_said if n_said else False
         margin = -ATTACK_HYSTERESIS if before else ATTACK_HYSTERESIS
         pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
-        rest = [m for m in field if m is not active]
+        rest = []
+        for m in field:
+            if m is not active:
+                rest.append(m)
         if not rest:
             return
         bx, by = pic.path.at(0.4)
         receiver = None
         if pic.receiver and pic.receiver != pic.active and pic.pass_info is not None:
-            receiver = next((m for m in rest if m.id == pic.receiver), None)
+            for m in rest:
+                if m.id == pic.receiver:
+                    receiver = m
+                    break
         n_assist = 2 if len(rest) >= 4 else 1
         assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
         order = (

@@ -29,13 +29,13 @@ class _Robot:
 def load_kernels() -> None:
     """Call every nubot kernel once (the results are thrown away)."""
     opps = np.array([(1.0, 0.5, 0.0, 0.0), (3.0, -1.0, 0.1, 0.0)])
-    mates = np.array([(0.0, 0.0, 0.0, 0.0, 1.0), (-2.0, 1.0, 0.0, 0.0, 2.0)])
+    mates = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.0), (-2.0, 1.0, 0.0, 0.0, 2.0, 0.0)])
     sub_target(0.0, 0.0, 4.0, 0.0, opps, mates, 1, 2.0, 0.2, 0.45, 1.1, 0.3, 0)
     no_charging(0.0, 0.0, 0.5, 0.0, 1.0, 0.0, opps, 0.55, 0.5, 2.0)
     path = BallPath(0.5, 0.2, 0.11, 1.0, 0.3, 0.0, 0.4, 0.11, 12.0, 8.0)
     rows = np.array([(0.0, 0.0, 0.0, 0.0, 0.1), (1.0, 0.5, 0.0, 0.0, 0.0)]).T.copy()
     intercepts(path, rows[0], rows[1], rows[2], rows[3], 3.0, 2.5, rows[4])
-    us = np.array([(0.0, 0.0, 0.0, 0.0, 0.5), (-2.0, 1.0, 0.3, 0.0, 1.0)])
+    us = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.5), (-2.0, 1.0, 0.3, 0.0, 2.0, 1.0)])
     team_intercepts(path, us, opps, 0.5, 0.2, 0.2, 3.0, 2.5)
     cx, cy = np.linspace(-5.0, 5.0, 4), np.linspace(-3.0, 3.0, 4)
     for near in (None, (1.0, 1.0)):
