@@ -216,8 +216,8 @@ def team_intercepts(
     vmax: float,
     acc: float,
 ) -> np.ndarray:
-    """`intercepts` of our robots ``us`` ((K, 6): x, y, vx, vy, id, yaw: the team view's table), who first
-    turn to face the ball at (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4):
+    """`intercepts` of our robots ``us`` ((K, 6+): x, y, vx, vy, id, yaw first: the team view's table), who
+    first turn to face the ball at (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4):
     x, y, vx, vy): (K + M, 3). One kernel call (`_team_intercepts`): the rows and the reach times, no arrays
     handed back and forth."""
     out = np.empty((us.shape[0] + opps.shape[0], 3))
