@@ -120,7 +120,7 @@ class TeamView:
                 holder = m
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id, self.holder = mates, by_id, holder
-        self.array = np.array(flat, dtype=float).reshape(-1, 8)
+        self.array = np.fromiter(flat, float, len(flat)).reshape(-1, 8)
         return self.mates, self.by_id, self.array
 
 
