@@ -53,7 +53,8 @@ def _kernels():
         "team_intercepts": ballpath._team_intercepts,
         "score_spots": positions._score_spots,
         "assist_choice": picture._assist_choice,
-        "assign": picture._assign,
+        "assign": picture._assign_flat,
+        "open_slots": picture._open_slots,
     }
 
 
@@ -79,10 +80,17 @@ def test_team_intercepts_in_one_kernel_equal_the_rows_then_the_intercepts():
         path = _random_path(rng)
         us = np.array(
             [
-                [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-4, 4)]
-                for _ in range(rng.randint(0, 5))
+                [
+                    rng.uniform(-12, 12),
+                    rng.uniform(-8, 8),
+                    rng.uniform(-3, 3),
+                    rng.uniform(-3, 3),
+                    k,
+                    rng.uniform(-4, 4),
+                ]
+                for k in range(rng.randint(0, 5))
             ]
-        ).reshape(-1, 5)
+        ).reshape(-1, 6)
         opps = np.array(
             [
                 [rng.uniform(-12, 12), rng.uniform(-8, 8), rng.uniform(-3, 3), rng.uniform(-3, 3)]
@@ -261,3 +269,91 @@ def test_the_motion_row_holds_the_command_rounded_as_the_messages_round_it():
                     fence=fence,
                 )
                 assert motion.row.tolist() == list(msgs.f32s(vx, vy, w, tx, ty))
+
+
+def test_assign_in_one_array_equals_the_rows_then_the_kernel():
+    """`assign` hands the robots' and the slots' rows to the kernel in one array (`_assign_flat`): the same
+    assignment as `_assign` of the two arrays made apart, on random teams, slots and circles."""
+
+    class _Robot:
+        def __init__(self, rid, x, y, role, role_time):
+            self.id, self.x, self.y, self.role, self.role_time = rid, x, y, role, role_time
+
+    rng = random.Random(11)
+    for _ in range(3000):
+        n, m = rng.randint(1, 6), rng.randint(1, 7)
+        robots = [
+            _Robot(k + 1, rng.uniform(-11, 11), rng.uniform(-7, 7), rng.choice([-1, 2, 3, 4, 5]), rng.uniform(0, 1.2))
+            for k in range(n)
+        ]
+        slots = [(rng.choice([2, 3, 4, 5]), rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0) for _ in range(m)]
+        if rng.random() < 0.2:  # equal costs: the first best assignment wins in both
+            slots = [slots[0]] * m
+        hysteresis = rng.choice([0.5, 1.0, 50.0])
+        around = (rng.uniform(-5, 5), rng.uniform(-3, 3), rng.uniform(0.5, 3.0)) if rng.random() < 0.4 else None
+        kept = slots[:n]
+        rows = _array(
+            [
+                (r.x, r.y, r.role, hysteresis + (picture.NEW_ROLE_HOLD if r.role_time < picture.MIN_ROLE_TIME else 0.0))
+                for r in robots
+            ],
+            4,
+        )
+        cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
+        best = picture._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
+        want = {robots[i].id: int(best[i]) for i in range(min(n, len(kept)))}
+        assert picture.assign(robots, slots, hysteresis, around) == want
+
+
+def test_open_play_slots_compiled_equal_the_plain_way():
+    """`_open_slots` (the roles' points, kept inside the field, spread, assigned: one kernel over the team
+    view's table) gives the robots the roles and places `open_slots` gives them, bit for bit, on random
+    teams, balls, opponents and receiving spots (near the goal's middle, on top of each other, far apart)."""
+
+    class _Robot:
+        def __init__(self, rid, x, y, role, role_time, row):
+            self.id, self.x, self.y, self.role, self.role_time, self.row = rid, x, y, role, role_time, row
+
+    areas = Areas(FieldGeometry(), 0.4)
+    rng = random.Random(21)
+    for _ in range(6000):
+        team = [
+            _Robot(
+                k + 1,
+                rng.uniform(-12, 12),
+                rng.uniform(-8, 8),
+                rng.choice([-1, 1, 2, 3, 4]),
+                rng.choice([1e9, rng.uniform(0.0, 1.2)]),
+                k,
+            )
+            for k in range(rng.randint(1, 7))
+        ]
+        rest = [r for r in team if rng.random() < 0.8] or team[:1]
+        table = np.array([(r.x, r.y, 0.0, 0.0, r.id, 0.0, r.role, r.role_time) for r in team])
+        attacking = rng.random() < 0.5
+        bx, by = rng.uniform(-12.5, 12.5), rng.uniform(-8.5, 8.5)
+        if rng.random() < 0.1:
+            bx, by = -areas.L2 + rng.choice([0.0, 1e-7]), 0.0  # at our goal's middle
+        opps = np.array(
+            [(rng.uniform(-12, 12), rng.uniform(-8, 8), 0.0, 0.0) for _ in range(rng.randint(0, 6))]
+        ).reshape(-1, 4)
+        spots = [(rng.uniform(-10, 10), rng.uniform(-6, 6)) for _ in range(rng.randint(1, 2))]
+        if rng.random() < 0.3:
+            spots = [(bx + rng.uniform(-0.5, 0.5), by)] * len(spots)  # slots on top of each other: spread
+        hysteresis = rng.choice([0.5, 1.0])
+        plain = picture.open_slots(
+            areas,
+            rest,
+            attacking,
+            spots if attacking else [positions.outlet_point(areas, bx, by)],
+            opps.tolist(),
+            bx,
+            by,
+            hysteresis,
+        )
+        bits = sum(1 << r.row for r in rest)
+        out = np.empty((len(rest), 4))
+        assist = np.array(spots) if attacking else picture._NO_SPOTS
+        k = picture._open_slots(table, bits, len(rest), attacking, assist, opps, bx, by, areas.geo, hysteresis, out)
+        compiled = [(rest[i].id, int(role), x, y) for i, (_, role, x, y) in enumerate(out[:k].tolist())]
+        assert repr(compiled) == repr([(rid, int(role), x, y) for rid, role, x, y in plain])

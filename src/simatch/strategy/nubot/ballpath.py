@@ -199,7 +199,7 @@ def _team_rows(us, opps, bx, by, turn):
     extra = np.empty(n + m)
     for k in range(n):
         px[k], py[k], vx[k], vy[k] = us[k, 0], us[k, 1], us[k, 2], us[k, 3]
-        extra[k] = turn * abs(remainder(math.atan2(by - us[k, 1], bx - us[k, 0]) - us[k, 4], TWO_PI))
+        extra[k] = turn * abs(remainder(math.atan2(by - us[k, 1], bx - us[k, 0]) - us[k, 5], TWO_PI))
     for k in range(m):
         px[n + k], py[n + k], vx[n + k], vy[n + k] = opps[k, 0], opps[k, 1], opps[k, 2], opps[k, 3]
         extra[n + k] = 0.0
@@ -216,9 +216,10 @@ def team_intercepts(
     vmax: float,
     acc: float,
 ) -> np.ndarray:
-    """`intercepts` of our robots ``us`` ((K, 5): x, y, vx, vy, yaw), who first turn to face the ball at
-    (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4): x, y, vx, vy): (K + M, 3).
-    One kernel call (`_team_intercepts`): the rows and the reach times, no arrays handed back and forth."""
+    """`intercepts` of our robots ``us`` ((K, 6+): x, y, vx, vy, id, yaw first: the team view's table), who
+    first turn to face the ball at (bx, by) at ``turn`` seconds per radian, then of the opponents ``opps`` ((M, 4):
+    x, y, vx, vy): (K + M, 3). One kernel call (`_team_intercepts`): the rows and the reach times, no arrays
+    handed back and forth."""
     out = np.empty((us.shape[0] + opps.shape[0], 3))
     _team_intercepts(
         *path.kernel_args(),

@@ -40,6 +40,7 @@ class Mate:
         "is_goalie",
         "attacking",
         "role_time",
+        "row",
     )
 
     def __init__(
@@ -64,6 +65,7 @@ class Mate:
         self.is_goalie = is_goalie
         self.attacking = attacking  # whether its team picture said "we attack" last tick (1/0), -1 if unknown
         self.role_time = role_time  # how long it has had its announced role [s]
+        self.row = -1  # its row in its TeamView's table
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
@@ -82,7 +84,9 @@ class TeamView:
         self.team_strategy = None
         self.mates: list[Mate] = []
         self.by_id: dict[int, Mate] = {}
-        self.array = np.zeros((0, 5))  # (K, 5): x, y, vx, vy, id of every team-mate, for kernels
+        # (K, 8): x, y, vx, vy, id, yaw, announced role, role time of every team-mate, for kernels (they
+        # read the columns they need)
+        self.array = np.zeros((0, 8))
         self.holder: Mate | None = None  # the first team-mate holding the ball, if any
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
@@ -90,25 +94,33 @@ class TeamView:
         team = world.team_strategy
         if self.tick == world.tick and self.robots is robots and self.team_strategy is team:
             return self.mates, self.by_id, self.array
-        strategies = world.strategies
         gk = world.goalkeeper
+        told = world.strategies.get
+        # one pass over the team: the records, the kernels' numbers (the table's row of each, flat), the
+        # look-up by id and the first holder
         mates = []
-        told = strategies.get
+        flat = []
+        by_id = {}
+        holder = None
         for r in robots:
-            s = told(r.id)
+            rid = r.id
+            s = told(rid)
             if s is None:
-                mates.append(Mate(r, r.id == gk))
-                continue
-            user = s.user.tolist()
-            attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
-            pass_cmd = s.pass_cmd
-            mates.append(
-                Mate(r, r.id == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
-            )
+                m = Mate(r, rid == gk)
+            else:
+                user = s.user.tolist()
+                attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+                pass_cmd = s.pass_cmd
+                m = Mate(r, rid == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
+            m.row = len(mates)
+            mates.append(m)
+            by_id[rid] = m
+            flat += (m.x, m.y, m.vx, m.vy, rid, m.yaw, m.role, m.role_time)
+            if holder is None and m.holding:
+                holder = m
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
-        self.mates, self.by_id = mates, {m.id: m for m in mates}
-        self.array = _array([(m.x, m.y, m.vx, m.vy, m.id) for m in mates], 5)
-        self.holder = next((m for m in mates if m.holding), None)
+        self.mates, self.by_id, self.holder = mates, by_id, holder
+        self.array = np.fromiter(flat, float, len(flat)).reshape(-1, 8)
         return self.mates, self.by_id, self.array
 
 

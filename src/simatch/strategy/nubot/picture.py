@@ -26,8 +26,18 @@ from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
 from .params import NubotParams
-from .positions import Areas, _score_spots, midfield_point, outlet_point, passive_point, score_spots
-from .setpieces import formation, spread
+from .positions import (
+    Areas,
+    _clamp,
+    _midfield_point,
+    _passive_point,
+    _score_spots,
+    midfield_point,
+    outlet_point,
+    passive_point,
+    score_spots,
+)
+from .setpieces import SLOT_GAP, formation, spread
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -48,6 +58,12 @@ RESTART_HYSTERESIS = 50.0
 #: acos(PASS_KEPT) once the receiver took the catching role
 PASS_HEADING = 0.6
 PASS_KEPT = 0.3
+
+
+# the positional roles as numbers, for the compiled slots (and back: the Role members by value)
+_ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
+_ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
+_NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
 
 
 class Picture:
@@ -127,14 +143,22 @@ def assign(
     slots = slots[:n] if len(slots) >= n else slots
     if not slots:
         return {}
-    # a robot that took its role only a moment ago holds on to it harder (roles last a while)
-    r = _rows(
-        [(m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0)) for m in robots], 4
-    )
-    q = _rows([(sl[1], sl[2], sl[0]) for sl in slots], 3)
+    # a robot that took its role only a moment ago holds on to it harder (roles last a while); the robots'
+    # rows (x, y, announced role, hysteresis) and the slots' (x, y, role) in one array, for one kernel call
+    flat = []
+    for m in robots:
+        flat += (m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
+    for sl in slots:
+        flat += (sl[1], sl[2], sl[0])
     cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-    best = _assign(r, q, cx, cy, cr)
-    return {robots[i].id: int(best[i]) for i in range(min(n, len(slots)))}
+    best = _assign_flat(np.array(flat, dtype=float), n, len(slots), cx, cy, cr).tolist()
+    return {robots[i].id: best[i] for i in range(min(n, len(slots)))}
+
+
+@numba.njit(cache=True, nogil=True)
+def _assign_flat(flat, n, m, cx, cy, cr):
+    """`_assign` of the robots' (n, 4) and the slots' (m, 3) rows, given one after the other in ``flat``."""
+    return _assign(flat[: 4 * n].reshape((n, 4)), flat[4 * n : 4 * n + 3 * m].reshape((m, 3)), cx, cy, cr)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -263,6 +287,108 @@ def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
     return k
 
 
+def open_slots(
+    areas: Areas, rest: list, attacking: bool, assist: list, opps: list, bx: float, by: float, hysteresis: float
+) -> list[tuple[int, int, float, float]]:
+    """Open play's positional roles of the robots ``rest`` (neither the active one nor the goalkeeper), the
+    ball expected at (bx, by): the roles' points (the assistants' at ``assist``, the receiving spots, or
+    the outlet point when we defend), kept inside the field, spread apart, and given to the robots by
+    `assign`. Returns (robot id, role, x, y) of each robot that gets one. The plain version of
+    `_open_slots`, which `Analyst._play` calls."""
+    n_assist = 2 if len(rest) >= 4 else 1
+    order = (
+        [ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD]
+        if attacking
+        else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT]
+    )
+    if n_assist == 2:
+        order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
+    slots: list[tuple] = []
+    used = 0
+    for role in order[: len(rest)]:
+        if role == ROLES.ASSISTANT:
+            x, y = assist[min(used, len(assist) - 1)]
+            used += 1
+        elif role == ROLES.PASSIVE:
+            x, y = passive_point(areas, bx, by, attacking)
+        else:
+            x, y = midfield_point(areas, bx, by, attacking, opps)
+        x, y = areas.inside_field(x, y, SLOT_INSIDE)
+        slots.append((role, x, y, bx, by))
+    slots = spread(slots, bx, by)
+    return [(rid, slots[i][0], slots[i][1], slots[i][2]) for rid, i in assign(rest, slots, hysteresis).items()]
+
+
+@numba.njit(cache=True, nogil=True)
+def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis, out):
+    """`open_slots` compiled, over the team view's table ((K, 8): x, y, vx, vy, id, yaw, announced role,
+    role time): ``rest`` has bit j set for each of the ``n`` robots at row j; ``assist`` (k, 2) the
+    receiving spots when ``attacking``. Writes, for the i-th of those robots (in row order) that gets a
+    slot, the slot's index, role, x and y into ``out[i]``; returns how many got one."""
+    L2, W2 = geo[0], geo[1]
+    robots = np.empty((n, 4))
+    i = 0
+    for j in range(table.shape[0]):
+        if (rest >> j) & 1:
+            robots[i, 0], robots[i, 1], robots[i, 2] = table[j, 0], table[j, 1], table[j, 6]
+            robots[i, 3] = hysteresis + (NEW_ROLE_HOLD if table[j, 7] < MIN_ROLE_TIME else 0.0)
+            i += 1
+    order = np.empty(4, np.int64)
+    if n >= 4:  # two assistants
+        order[0], order[1], order[2], order[3] = _ASSISTANT, _ASSISTANT, _PASSIVE, _MIDFIELD
+    elif attacking:
+        order[0], order[1], order[2] = _ASSISTANT, _PASSIVE, _MIDFIELD
+    else:
+        order[0], order[1], order[2] = _PASSIVE, _MIDFIELD, _ASSISTANT
+    m = min(4 if n >= 4 else 3, n)
+    slots = np.empty((m, 3))  # x, y, role (the kernel's rows), spread as they come
+    used = 0
+    for s in range(m):
+        role = order[s]
+        if role == _ASSISTANT:
+            if attacking:
+                a = min(used, assist.shape[0] - 1)
+                x, y = assist[a, 0], assist[a, 1]
+            else:  # outlet_point
+                x, y = _clamp(bx + 5.0, -2.0, 3.0), (-3.5 if by > 0.5 else 3.5)
+            used += 1
+        elif role == _PASSIVE:
+            x, y = _passive_point(bx, by, attacking, geo)
+        else:
+            x, y = _midfield_point(bx, by, attacking, opps, geo)
+        # Areas.inside_field
+        lo, hi = -L2 + SLOT_INSIDE, L2 - SLOT_INSIDE
+        x = lo if x < lo else hi if x > hi else x
+        lo, hi = -W2 + SLOT_INSIDE, W2 - SLOT_INSIDE
+        y = lo if y < lo else hi if y > hi else y
+        # spread: a slot too close to an earlier one slides sideways, across the direction of the ball
+        for _ in range(3):
+            clash = -1
+            for e in range(s):
+                if hypot(x - slots[e, 0], y - slots[e, 1]) < SLOT_GAP:
+                    clash = e
+                    break
+            if clash < 0:
+                break
+            cx, cy = slots[clash, 0], slots[clash, 1]
+            dx, dy = x - bx, y - by
+            d = hypot(dx, dy)
+            ux, uy = (1.0, 0.0) if d < 1e-12 else (dx / d, dy / d)
+            nx, ny = -uy, ux
+            if (x - cx) * nx + (y - cy) * ny < 0.0:
+                nx, ny = -nx, -ny
+            if abs(y + ny * SLOT_GAP) > 6.0:
+                nx, ny = -nx, -ny
+            x, y = cx + nx * SLOT_GAP, cy + ny * SLOT_GAP
+        slots[s, 0], slots[s, 1], slots[s, 2] = x, y, role
+    best = _assign(robots, slots, 0.0, 0.0, -1.0)
+    k = min(n, m)
+    for i in range(k):
+        j = best[i]
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = j, slots[j, 2], slots[j, 0], slots[j, 1]
+    return k
+
+
 class Analyst:
     """Computes team pictures for one team (field, parameters and the receiving-spot grid are fixed)."""
 
@@ -272,6 +398,7 @@ class Analyst:
         self.spots = spots
         self.xlim = areas.L2 + 1.3
         self.ylim = areas.W2 + 1.3
+        self.geo = areas.geo
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -297,7 +424,11 @@ class Analyst:
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go
         n_us = len(mates)
         if mates or opps:
-            us = _rows([(m.x, m.y, m.vx, m.vy, m.yaw) for m in mates], 5)
+            # (the team view's table when every team-mate plays, as nearly always)
+            if n_us == len(obs.mates):
+                us = obs.mate_array
+            else:
+                us = _rows([(m.x, m.y, m.vx, m.vy, m.id, m.yaw) for m in mates], 6)
             turn = 0.7 / p.max_turn
             res = team_intercepts(path, us, obs.opp_array, obs.bx, obs.by, turn, p.max_speed, p.acceleration).tolist()
             for k, m in enumerate(mates):
@@ -335,8 +466,14 @@ class Analyst:
     # --- open play --------------------------------------------------------------------------------------
     def _play(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
         p, areas = self.p, self.areas
-        field = [m for m in mates if not m.is_goalie]
-        goalie = next((m for m in mates if m.is_goalie), None)
+        # (plain loops: a generator or a comprehension makes a function object at every call)
+        field = []
+        goalie = None
+        for m in mates:
+            if not m.is_goalie:
+                field.append(m)
+            elif goalie is None:
+                goalie = m
         holder = obs.by_id.get(pic.holder) if pic.holder else None
         if goalie is not None:
             pic.roles[goalie.id] = ROLES.GOALIE
@@ -360,74 +497,101 @@ class Analyst:
             active = obs.by_id[pic.receiver]
         elif holder is None:
             best = math.inf
-            fresh = next(
-                (m for m in field if m.role == ROLES.ACTIVE and m.role_time < MIN_ACTIVE_TIME and m.id != flow.taker),
-                None,
-            )
-            if fresh is not None:
-                best, active = -math.inf, fresh  # a robot that just took the ball on keeps it a moment
+            taker = flow.taker
+            active_role = ROLES.ACTIVE
             for m in field:
-                if m.id == flow.taker:
+                if m.role == active_role and m.role_time < MIN_ACTIVE_TIME and m.id != taker:
+                    best, active = -math.inf, m  # a robot that just took the ball on keeps it a moment
+                    break
+            catch = pic.catch
+            hysteresis = p.active_hysteresis
+            for m in field:
+                if m.id == taker:
                     continue
-                score = pic.catch[m.id][0] - (p.active_hysteresis if m.role == ROLES.ACTIVE else 0.0)
+                score = catch[m.id][0] - (hysteresis if m.role == active_role else 0.0)
                 if score < best:
                     best, active = score, m
         if active is not None:
             pic.active = active.id
             pic.roles[active.id] = ROLES.ACTIVE if pic.receiver != active.id else ROLES.CATCHOFPASS
-        our_t = min((pic.catch[m.id][0] for m in mates), default=math.inf)
+        # (min of the catch times as min() takes it: the first, then any smaller one)
+        our_t = math.inf
+        n_said = n_yes = 0
+        for k, m in enumerate(mates):
+            t = pic.catch[m.id][0]
+            if k == 0 or t < our_t:
+                our_t = t
+            said = m.attacking
+            if said >= 0:
+                n_said += 1
+                n_yes += said
         # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
-        said = [m.attacking for m in mates if m.attacking >= 0]
-        before = 2 * sum(said) > len(said) if said else False
+        before = 2 * n_yes > n_said if n_said else False
         margin = -ATTACK_HYSTERESIS if before else ATTACK_HYSTERESIS
         pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
-        rest = [m for m in field if m is not active]
+        rest = []
+        for m in field:
+            if m is not active:
+                rest.append(m)
         if not rest:
             return
         bx, by = pic.path.at(0.4)
         receiver = None
         if pic.receiver and pic.receiver != pic.active and pic.pass_info is not None:
-            receiver = next((m for m in rest if m.id == pic.receiver), None)
-        n_assist = 2 if len(rest) >= 4 else 1
-        assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-        order = (
-            [ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD]
-            if pic.attacking
-            else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT]
-        )
-        if n_assist == 2:
-            order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
-        slots: list[tuple] = []
-        used = 0
-        for role in order[: len(rest)]:
-            if role == ROLES.ASSISTANT:
-                x, y = assist[min(used, len(assist) - 1)]
-                used += 1
-            elif role == ROLES.PASSIVE:
-                x, y = passive_point(areas, bx, by, pic.attacking)
-            else:
-                x, y = midfield_point(areas, bx, by, pic.attacking, obs.opps)
-            x, y = areas.inside_field(x, y, SLOT_INSIDE)
-            slots.append((role, x, y, bx, by))
-        slots = spread(slots, bx, by)
-        for rid, i in assign(rest, slots, p.role_hysteresis).items():
-            role, x, y, fx, fy = slots[i]
-            pic.roles[rid] = role
-            pic.slots[rid] = (x, y, fx, fy)
+            for m in rest:
+                if m.id == pic.receiver:
+                    receiver = m
+                    break
+        rows = 0
+        for m in rest:
+            rows |= 1 << m.row
+        if rows >> 62 == 0:  # (the rows fit the kernel's bits: always but in teams of more than 62)
+            assist = self._assist_array(obs, pic, 2 if len(rest) >= 4 else 1) if pic.attacking else _NO_SPOTS
+            out = np.empty((len(rest), 4))
+            k = _open_slots(
+                obs.mate_array,
+                rows,
+                len(rest),
+                pic.attacking,
+                assist,
+                obs.opp_array,
+                bx,
+                by,
+                self.geo,
+                p.role_hysteresis,
+                out,
+            )
+            res = out.tolist()
+            for i in range(k):
+                _, role, x, y = res[i]
+                rid = rest[i].id
+                pic.roles[rid] = _ROLE_OF[int(role)]
+                pic.slots[rid] = (x, y, bx, by)
+        else:
+            n_assist = 2 if len(rest) >= 4 else 1
+            assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
+            for rid, role, x, y in open_slots(areas, rest, pic.attacking, assist, obs.opps, bx, by, p.role_hysteresis):
+                pic.roles[rid] = role
+                pic.slots[rid] = (x, y, bx, by)
         if receiver is not None and receiver.id in pic.slots:
             # the announced receiver keeps its role and waits at the catch point, facing the passer
             info = pic.pass_info
             pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
 
-    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
+    def _assist_array(self, obs: Observation, pic: Picture, n: int) -> np.ndarray:
+        """`_assist_spots` as a (k, 2) array (the kernel's rows themselves when it could choose)."""
         cx, cy = self.spots
         prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
         nx, ny = prev if prev is not None else (math.nan, math.nan)
         out = np.empty((n, 2))
         k = _assist_choice(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
         if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
-            return assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
-        return [(x, y) for x, y in out[:k].tolist()]
+            spots = assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
+            return np.array(spots, dtype=float).reshape(-1, 2)
+        return out[:k]
+
+    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
+        return [(x, y) for x, y in self._assist_array(obs, pic, n).tolist()]
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:

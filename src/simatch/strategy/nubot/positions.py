@@ -12,7 +12,7 @@ import math
 import numba
 import numpy as np
 
-from ...exactmath import hypot
+from ...exactmath import hypot, pymax, pymin
 from .geometry import box_exit, clamp, push_out_of_box, segment_hits_box
 
 
@@ -37,6 +37,8 @@ class Areas:
         self._arrays = {
             id(boxes): np.array(boxes, dtype=np.float64) for boxes in (self._with_opp_area, self._without_opp_area)
         }
+        # what the compiled points read (see _passive_point): L2, W2, our and their penalty areas' boxes
+        self.geo = np.array((L2, self.W2, *self.own_pa, *self.opp_pa))
 
     # exact lines (robot centre over the line counts as inside)
     def in_own_penalty_area(self, x: float, y: float) -> bool:
@@ -256,3 +258,93 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
         if nx == nx:  # not NaN: a place to stay near
             score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
         out[i] = score
+
+
+# --- the positional roles' points, compiled (open play's slots, see picture._open_slots) ------------------
+# `geo`: the fixed numbers they read, from `Areas.geo`: L2, W2, then our penalty area's and the opponents'
+# penalty area's boxes (x0, x1, half width)
+
+
+@numba.njit(cache=True, nogil=True)
+def _clamp(v, lo, hi):
+    return lo if v < lo else hi if v > hi else v
+
+
+@numba.njit(cache=True, nogil=True)
+def _keep_out(x, y, geo):
+    """`Areas.keep_out` (both penalty areas)."""
+    x0, x1, hw = geo[2], geo[3], geo[4]
+    if x0 < x < x1 and -hw < y < hw:
+        x, y = push_out_of_box(x, y, x0, x1, hw)
+    x0, x1, hw = geo[5], geo[6], geo[7]
+    if x0 < x < x1 and -hw < y < hw:
+        x, y = push_out_of_box(x, y, x0, x1, hw)
+    return x, y
+
+
+@numba.njit(cache=True, nogil=True)
+def _passive_point(bx, by, attacking, geo):
+    """`passive_point`, compiled (with `guard_point` and `box_exit` inline, Python's min and max)."""
+    L2 = geo[0]
+    if attacking and bx > -3.0:
+        return _clamp(bx - 6.5, -L2 + 4.0, -0.5), 0.35 * by
+    fraction, min_s, gap = 0.45, 3.2, 1.8
+    gx = -L2
+    dx, dy = bx - gx, by
+    D = hypot(dx, dy)
+    if D < 1e-6:
+        return gx + min_s, 0.0
+    ux, uy = dx / D, dy / D
+    s = pymax(min_s, fraction * D)
+    # box_exit(0, 0, ux, uy, -5, own x1 - gx, own half width)
+    x1, hw = geo[3] - gx, geo[4]
+    s_out = math.inf
+    if ux > 1e-12:
+        s_out = pymin(s_out, (x1 - 0.0) / ux)
+    elif ux < -1e-12:
+        s_out = pymin(s_out, (-5.0 - 0.0) / ux)
+    if uy > 1e-12:
+        s_out = pymin(s_out, (hw - 0.0) / uy)
+    elif uy < -1e-12:
+        s_out = pymin(s_out, (-hw - 0.0) / uy)
+    s_out = pymax(0.0, s_out)
+    s = pymax(s, s_out)
+    s = pymin(s, pymax(s_out, D - gap))
+    return gx + ux * s, uy * s
+
+
+@numba.njit(cache=True, nogil=True)
+def _midfield_point(bx, by, attacking, opps, geo):
+    """`midfield_point`, compiled, over the opponents' (M, 4) array."""
+    L2, W2 = geo[0], geo[1]
+    if attacking:
+        x = _clamp(bx - 3.5, -L2 + 4.0, L2 - 4.5)
+        y = by - 3.0 if by > 0.0 else by + 3.0
+        return _keep_out(x, _clamp(y, -W2 + 1.0, W2 - 1.0), geo)
+    found = False
+    ox = oy = 0.0
+    best_d = math.inf
+    for k in range(opps.shape[0]):
+        px, py = opps[k, 0], opps[k, 1]
+        if hypot(px - bx, py - by) < 2.0 or px > 3.0:
+            continue
+        d = hypot(px + L2, py)
+        if d < best_d:
+            found, ox, oy, best_d = True, px, py, d
+    if not found:
+        x, y = _clamp(bx - 4.0, -L2 + 4.0, 1.0), -0.4 * by
+        return _keep_out(x, y, geo)
+    gx = -L2
+    ux, uy = gx - ox, -oy
+    n = hypot(ux, uy)
+    if n == 0.0:  # (`or 1.0`)
+        n = 1.0
+    vx, vy = bx - ox, by - oy
+    m = hypot(vx, vy)
+    if m == 0.0:
+        m = 1.0
+    wx, wy = 0.6 * ux / n + 0.4 * vx / m, 0.6 * uy / n + 0.4 * vy / m
+    k = hypot(wx, wy)
+    if k == 0.0:
+        k = 1.0
+    return _keep_out(ox + 1.0 * wx / k, oy + 1.0 * wy / k, geo)

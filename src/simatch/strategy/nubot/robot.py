@@ -213,7 +213,7 @@ class NubotRobot(RobotStrategy):
             slot = (x, y, obs.bx, obs.by)
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
-        keep = self.keep_from_ball(obs)
+        keep = None if self.flow.phase == PHASES.PLAY else self.keep_from_ball(obs)  # (in play: none)
         fence = None
         if keep is not None:
             taker = role == ROLES.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MODES.DROPBALL

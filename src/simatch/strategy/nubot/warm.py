@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...field import FieldGeometry
 from .active import _DIRECTIONS, _dribble_choice
 from .avoidance import no_charging, sub_target
 from .ballpath import BallPath, intercepts, team_intercepts
 from .evaluate import lane_clear, position_value, shot_window
 from .geometry import push_out_of_box
-from .picture import _assist_choice, assign
-from .positions import score_spots
+from .picture import _NO_SPOTS, _assist_choice, _open_slots, assign
+from .positions import Areas, score_spots
 
 
 class _Robot:
@@ -29,13 +30,13 @@ class _Robot:
 def load_kernels() -> None:
     """Call every nubot kernel once (the results are thrown away)."""
     opps = np.array([(1.0, 0.5, 0.0, 0.0), (3.0, -1.0, 0.1, 0.0)])
-    mates = np.array([(0.0, 0.0, 0.0, 0.0, 1.0), (-2.0, 1.0, 0.0, 0.0, 2.0)])
+    mates = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.0), (-2.0, 1.0, 0.0, 0.0, 2.0, 0.0)])
     sub_target(0.0, 0.0, 4.0, 0.0, opps, mates, 1, 2.0, 0.2, 0.45, 1.1, 0.3, 0)
     no_charging(0.0, 0.0, 0.5, 0.0, 1.0, 0.0, opps, 0.55, 0.5, 2.0)
     path = BallPath(0.5, 0.2, 0.11, 1.0, 0.3, 0.0, 0.4, 0.11, 12.0, 8.0)
     rows = np.array([(0.0, 0.0, 0.0, 0.0, 0.1), (1.0, 0.5, 0.0, 0.0, 0.0)]).T.copy()
     intercepts(path, rows[0], rows[1], rows[2], rows[3], 3.0, 2.5, rows[4])
-    us = np.array([(0.0, 0.0, 0.0, 0.0, 0.5), (-2.0, 1.0, 0.3, 0.0, 1.0)])
+    us = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.5), (-2.0, 1.0, 0.3, 0.0, 2.0, 1.0)])
     team_intercepts(path, us, opps, 0.5, 0.2, 0.2, 3.0, 2.5)
     cx, cy = np.linspace(-5.0, 5.0, 4), np.linspace(-3.0, 3.0, 4)
     for near in (None, (1.0, 1.0)):
@@ -54,3 +55,8 @@ def load_kernels() -> None:
     slots = [(1, 2.0, 0.0, 0.0, 0.0), (2, -2.0, 1.0, 0.0, 0.0)]
     assign(robots, slots, 0.5)
     assign(robots, slots, 0.5, around=(0.0, 0.0, 1.0))
+    # open play's slots, attacking (the receiving spots) and defending
+    table = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 1e9), (-2.0, 1.0, 0.0, 0.0, 2.0, 0.0, -1.0, 0.1)])
+    geo = Areas(FieldGeometry(), 0.4).geo
+    for attacking, spots in ((True, np.array([(3.0, 2.0)])), (False, _NO_SPOTS)):
+        _open_slots(table, 3, 2, attacking, spots, opps, 0.5, 0.2, geo, 0.5, np.empty((2, 4)))
