@@ -14,8 +14,9 @@ time limit counts from a match's start, and an interrupted tournament has at mos
 * a match past its time limit is stopped in its worker (`match.MatchTimeout`); if its code never gives the
   worker back (a loop in compiled code), the pool ends that worker after `KILL_GRACE` more seconds and
   records the match as ``timeout``;
-* Ctrl-C (or SIGTERM) in the driver cancels the matches in flight: they are not recorded, and are played by
-  the next run of the command.
+* Ctrl-C (or SIGTERM) in the driver stops the matches in flight (a local instance is shut down with its
+  workers; on a joined cluster they are cancelled): they are not recorded, and are played by the next run
+  of the command.
 """
 
 from __future__ import annotations
@@ -165,11 +166,17 @@ class RayPool:
                             ),
                         )
         finally:
-            for ref in inflight:
-                try:
-                    ray.cancel(ref, force=True)
-                except Exception:  # the cluster may be gone already
-                    pass
+            # Interrupted (Ctrl-C, SIGTERM) or closed early. A local instance this pool started ends with
+            # its workers in `close`, so its matches in flight are not cancelled one by one: Ray 2.60's
+            # task manager can fail its own check (``CompletePendingTask``) and end this process with status
+            # 1 when a force-cancel crosses the reply of a task that has just finished (seen once in a CI
+            # run, after the results were stored). On a cluster it joined, the matches would run on.
+            if not self.started:
+                for ref in inflight:
+                    try:
+                        ray.cancel(ref, force=True)
+                    except Exception:  # the cluster may be gone already
+                        pass
 
     def _get(self, ref, job: dict) -> dict | None:
         ray = self.ray
