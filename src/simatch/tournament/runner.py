@@ -166,12 +166,14 @@ class RayPool:
                             ),
                         )
         finally:
-            # Interrupted (Ctrl-C, SIGTERM) or closed early. A local instance this pool started ends with
-            # its workers in `close`, so its matches in flight are not cancelled one by one: Ray 2.60's
-            # task manager can fail its own check (``CompletePendingTask``) and end this process with status
-            # 1 when a force-cancel crosses the reply of a task that has just finished (seen once in a CI
-            # run, after the results were stored). On a cluster it joined, the matches would run on.
-            if not self.started:
+            # Interrupted (Ctrl-C, SIGTERM) or left early: the matches in flight stop now. A local instance this
+            # pool started is shut down with its workers rather than each match force-cancelled: Ray 2.60's task
+            # manager can fail its own check (``CompletePendingTask``) and end this process with status 1 when a
+            # force-cancel crosses the reply of a task that has just finished (seen once in a CI run, after the
+            # results were stored). On a cluster it joined, the matches are cancelled.
+            if inflight and self.started:
+                self.close()
+            else:
                 for ref in inflight:
                     try:
                         ray.cancel(ref, force=True)
