@@ -24,6 +24,12 @@ def clamp(v: float, lo: float, hi: float) -> float:
     return lo if v < lo else hi if v > hi else v
 
 
+@numba.njit(cache=True, nogil=True)
+def _clamp(v: float, lo: float, hi: float) -> float:
+    """`clamp`, for compiled callers."""
+    return lo if v < lo else hi if v > hi else v
+
+
 def dist(ax: float, ay: float, bx: float, by: float) -> float:
     return math.hypot(bx - ax, by - ay)
 
@@ -46,19 +52,21 @@ def segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: 
     return math.hypot(px - ax - s * dx, py - ay - s * dy), s
 
 
+@numba.njit(cache=True, nogil=True)
 def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, half_w: float) -> float:
     """Along the ray O + s u from a point O inside the box [x0, x1] x [-half_w, half_w], the s at which
-    the ray leaves the box (inf if it never does)."""
+    the ray leaves the box (inf if it never does). (Compiled, for the compiled points as for Python's
+    callers; Python's min and max, as they take them.)"""
     s = math.inf
     if ux > 1e-12:
-        s = min(s, (x1 - ox) / ux)
+        s = pymin(s, (x1 - ox) / ux)
     elif ux < -1e-12:
-        s = min(s, (x0 - ox) / ux)
+        s = pymin(s, (x0 - ox) / ux)
     if uy > 1e-12:
-        s = min(s, (half_w - oy) / uy)
+        s = pymin(s, (half_w - oy) / uy)
     elif uy < -1e-12:
-        s = min(s, (-half_w - oy) / uy)
-    return max(0.0, s)
+        s = pymin(s, (-half_w - oy) / uy)
+    return pymax(0.0, s)
 
 
 @numba.njit(cache=True, nogil=True)

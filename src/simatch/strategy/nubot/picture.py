@@ -28,8 +28,8 @@ from .observation import _array as _rows
 from .params import NubotParams
 from .positions import (
     Areas,
-    _clamp,
     _midfield_point,
+    _outlet_point,
     _passive_point,
     _score_spots,
     midfield_point,
@@ -349,8 +349,8 @@ def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis
             if attacking:
                 a = min(used, assist.shape[0] - 1)
                 x, y = assist[a, 0], assist[a, 1]
-            else:  # outlet_point
-                x, y = _clamp(bx + 5.0, -2.0, 3.0), (-3.5 if by > 0.5 else 3.5)
+            else:
+                x, y = _outlet_point(bx, by)
             used += 1
         elif role == _PASSIVE:
             x, y = _passive_point(bx, by, attacking, geo)

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from ...exactmath import hypot, pymax, pymin
-from .geometry import box_exit, clamp, push_out_of_box, segment_hits_box
+from .geometry import _clamp, box_exit, clamp, push_out_of_box, segment_hits_box
 
 
 class Areas:
@@ -183,6 +183,12 @@ def outlet_point(areas: Areas, bx: float, by: float) -> tuple[float, float]:
     return x, y
 
 
+@numba.njit(cache=True, nogil=True)
+def _outlet_point(bx, by):
+    """`outlet_point`, for compiled callers."""
+    return _clamp(bx + 5.0, -2.0, 3.0), (-3.5 if by > 0.5 else 3.5)
+
+
 # --- receiving spots, scored for all candidates at once -----------------------------------------------
 
 
@@ -266,11 +272,6 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def _clamp(v, lo, hi):
-    return lo if v < lo else hi if v > hi else v
-
-
-@numba.njit(cache=True, nogil=True)
 def _keep_out(x, y, geo):
     """`Areas.keep_out` (both penalty areas)."""
     x0, x1, hw = geo[2], geo[3], geo[4]
@@ -284,7 +285,7 @@ def _keep_out(x, y, geo):
 
 @numba.njit(cache=True, nogil=True)
 def _passive_point(bx, by, attacking, geo):
-    """`passive_point`, compiled (with `guard_point` and `box_exit` inline, Python's min and max)."""
+    """`passive_point`, compiled (with `guard_point` inline, Python's min and max)."""
     L2 = geo[0]
     if attacking and bx > -3.0:
         return _clamp(bx - 6.5, -L2 + 4.0, -0.5), 0.35 * by
@@ -296,18 +297,7 @@ def _passive_point(bx, by, attacking, geo):
         return gx + min_s, 0.0
     ux, uy = dx / D, dy / D
     s = pymax(min_s, fraction * D)
-    # box_exit(0, 0, ux, uy, -5, own x1 - gx, own half width)
-    x1, hw = geo[3] - gx, geo[4]
-    s_out = math.inf
-    if ux > 1e-12:
-        s_out = pymin(s_out, (x1 - 0.0) / ux)
-    elif ux < -1e-12:
-        s_out = pymin(s_out, (-5.0 - 0.0) / ux)
-    if uy > 1e-12:
-        s_out = pymin(s_out, (hw - 0.0) / uy)
-    elif uy < -1e-12:
-        s_out = pymin(s_out, (-hw - 0.0) / uy)
-    s_out = pymax(0.0, s_out)
+    s_out = box_exit(0.0, 0.0, ux, uy, -5.0, geo[3] - gx, geo[4])
     s = pymax(s, s_out)
     s = pymin(s, pymax(s_out, D - gap))
     return gx + ux * s, uy * s

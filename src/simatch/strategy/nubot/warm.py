@@ -15,7 +15,7 @@ from .active import _DIRECTIONS, _dribble_choice
 from .avoidance import no_charging, sub_target
 from .ballpath import BallPath, intercepts, team_intercepts
 from .evaluate import lane_clear, position_value, shot_window
-from .geometry import push_out_of_box
+from .geometry import box_exit, push_out_of_box
 from .picture import _NO_SPOTS, _assist_choice, _open_slots, assign
 from .positions import Areas, score_spots
 
@@ -43,6 +43,7 @@ def load_kernels() -> None:
         score_spots(cx, cy, 0.0, 0.0, np.array([1.0]), np.array([0.5]), 11.0, 3.0, 8.5, near)
     _assist_choice(cx, cy, 0.0, 0.0, opps, 11.0, 3.0, 8.5, np.nan, np.nan, np.empty((2, 2)))
     push_out_of_box(0.5, 0.2, -1.0, 1.0, 1.0)  # (Areas.keep_out, from Python)
+    box_exit(0.0, 0.0, 1.0, 0.5, -5.0, 1.0, 1.0)  # (guard_point, from Python)
     # the ball player's judges, as it calls them (from Python, and inside the dribble's kernel)
     shot_window(8.0, 0.5, opps, 11.0, 1.2, 10.0, 0.22)
     lane_clear(0.0, 0.0, 4.0, 1.0, opps, 3.0, 0.0)
