@@ -158,7 +158,7 @@ class Observation:
     def yaw(self, i: int) -> float:
         r = 7 * self._rows[i]
         item = self.msg.pose.item  # (plain floats, no NumPy scalars: the same numbers)
-        return 2.0 * math.atan2(float(item(r + 6)), float(item(r + 3)))
+        return 2.0 * math.atan2(item(r + 6), item(r + 3))
 
     def ball_distance(self, i: int) -> float:
         return math.hypot(self.X[i] - self.bx, self.Y[i] - self.by)
