@@ -136,6 +136,25 @@ def test_a_writer_process_that_cannot_start_is_a_clear_error(tmp_path, monkeypat
     assert not path.exists()  # nothing left behind to refuse the next attempt
 
 
+def test_close_returns_with_the_file_whole_and_the_writer_process_ended(tmp_path):
+    """`close` hands the writer process the summary and returns once the file is finalised: by then the
+    process has ended with status 0 (it ends itself right after closing the file, without waiting for its
+    interpreter's teardown) and the plain mcap reader reads every message."""
+    from mcap.reader import make_reader
+
+    path = tmp_path / "closed.mcap"
+    with simatch.Simulation("omni_circle") as sim:
+        rec = Recorder.for_run(sim, path)
+        sim.run(seconds=0.5)
+        rec.close()
+        proc = rec._writer._proc
+    assert proc.returncode == 0
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        n = sum(1 for _ in reader.iter_messages())
+        assert n == sum(reader.get_summary().statistics.channel_message_counts.values()) > 0
+
+
 FOREIGN_READER = textwrap.dedent("""
     import json, sys
     from pathlib import Path

@@ -111,6 +111,7 @@ class FileWriter:
                 self.error = f"{type(exc).__name__}: {exc}"
         os.close(self._fd)
         self._answer(b"ok\n" if self.error is None else (self.error + "\n").encode())
+        os.close(self._acks)  # the recording process reads to the end of this pipe: it ends here, not at our exit
 
     def _answer(self, data: bytes) -> None:
         """An acknowledgement to the recording process, if it is still there to read it."""
@@ -294,7 +295,9 @@ def main(argv: list[str]) -> int:
         pass
     frames, acks, fd, level, *shared = map(int, argv)
     FileWriter(frames, acks, fd, level, tuple(shared) if shared else None).run()
-    return 0
+    # everything is written and closed: end without the interpreter's teardown (some milliseconds that the
+    # recording process would wait for in `McapWriter.close`)
+    os._exit(0)
 
 
 if __name__ == "__main__":
