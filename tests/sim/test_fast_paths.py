@@ -11,6 +11,7 @@ import simatch
 from simatch import msgs
 from simatch.config.loader import shipped_scenes
 from simatch.sim.kernels import ball_apart
+from simatch.sim.simulator import fingerprint
 
 
 def _touches_from_contacts(sim) -> list[int]:
@@ -37,6 +38,22 @@ def test_model_states_message_arrays_are_the_exact_states_in_float32(name):
             assert twist32.tobytes() == twist.astype(np.float32).ravel().tobytes()
             assert len(names) * 7 == pose32.size and len(names) * 6 == twist32.size
             run.run(seconds=0.5, until_done=False)
+
+
+@pytest.mark.parametrize("name", sorted(shipped_scenes()))
+def test_state_fingerprint_is_the_fingerprint_of_the_exact_states(name):
+    # the fingerprint a recording takes every control tick, from the block the simulator fills in place, equals
+    # the one of the arrays `model_state_arrays` makes (what `replay --verify` recomputes), through a run
+    with simatch.Simulation(name, seed=4) as run:
+        sim = run.simulator
+        seen = set()
+        for _ in range(6):
+            _, pose, twist = sim.model_state_arrays()
+            fp = sim.state_fingerprint()
+            assert fp == fingerprint(pose, twist)
+            seen.add(fp)
+            run.run(seconds=0.35, until_done=False)
+        assert len(seen) > 1  # the states moved, and the fingerprint with them
 
 
 def test_model_states_message_carries_the_float32_arrays():

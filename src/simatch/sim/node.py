@@ -11,14 +11,12 @@ the SimulatorNode those made between two steps, the PhysicsNode those made while
 
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
 from .inputs import InputLog
-from .simulator import Simulator
+from .simulator import Simulator, fingerprint  # noqa: F401 (fingerprint: for the reproduction)
 
 # built positionally (every physics step; see msgs.positional)
 _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
@@ -31,20 +29,6 @@ _F32 = np.float32  # the states' numbers, as the messages define them
 def model_states_message(now: float, step: int, names, pose: np.ndarray, twist: np.ndarray):
     """The ModelStates message of the simulator's exact states (float32 numbers, as recorded)."""
     return _ModelStates(now, step, names, pose.astype(_F32).ravel(), twist.astype(_F32).ravel())
-
-
-_sha256 = hashlib.sha256
-_from_bytes = int.from_bytes
-
-
-def fingerprint(pose: np.ndarray, twist: np.ndarray) -> int:
-    """The StateFingerprint of the exact poses and twists (C-ordered float64 arrays, as the simulator makes
-    them): the first 8 bytes of their SHA-256, little endian. Equal fingerprints mean the same states bit for
-    bit (a chance difference is 1 in 1.8e19). SHA-256, like the run's state digest: processors hash it in
-    hardware (about 2 us)."""
-    h = _sha256(pose)
-    h.update(twist)
-    return _from_bytes(h.digest()[:8], "little")
 
 
 class SimulatorNode(Node):
@@ -151,8 +135,7 @@ class SimulatorNode(Node):
         if self.pub_models.active:
             self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
         if into == 0 and self.pub_fingerprint.active:
-            _, pose, twist = sim.model_state_arrays()
-            self.pub_fingerprint.put(_StateFingerprint(now, k, fingerprint(pose, twist)))
+            self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()
             self.pub_links.put(
