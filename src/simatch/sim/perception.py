@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from itertools import islice
 
 import numpy as np
 
@@ -142,8 +143,10 @@ class Perception:
         own = self.own32.tolist()
         valid = self.valid.tolist()
         stuck = self.stuck.tolist()
-        ids, nw = self._ids, self._nw
-        wrows = list(wheels)
+        ids, nw, n = self._ids, self._nw, self.n
+        # (row views taken by an iterator stopped after the last row: iterating an array to its end raises an
+        # IndexError inside NumPy, a formatted message, a few thousand instructions each time)
+        wrows = list(islice(wheels, n))
         W = wheels.shape[1]
         team_infos = [
             [
@@ -162,7 +165,9 @@ class Perception:
             for idx in self._team_members
         ]
         rows = iter(obs)  # each robot's six rows, then the obstacles' radii and heights (constant)
-        obstacles = list(map(_ObstaclesInfo, rows, rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows))
+        obstacles = list(
+            map(_ObstaclesInfo, islice(rows, n), rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows)
+        )
         team = self._team_index
         return [
             _OmniVisionInfo(stamp, tick, ids[i], _BallInfo(1, *ball, True, True), obstacles[i], team_infos[team[i]])
