@@ -164,6 +164,21 @@ def test_perception_fast_path_equals_the_general_way_on_random_worlds():
         assert seen_stuck > 10 and seen_invalid > 10  # both flags exercised
 
 
+def test_perception_fast_path_with_robots_of_fewer_wheels_equals_the_general_way(field_sim):
+    """Three-wheel robots among four-wheel ones: each robot's wheel speeds are its own wheels' alone."""
+    run = field_sim(**{"teams.magenta.model": "omni3"})
+    sim = run.simulator
+    assert sim._sense_fast and sim.perception._short_wheels
+    run.run(seconds=0.3, until_done=False)
+    for _ in range(3):
+        sim._qvel3[:] = np.random.default_rng(sim.step_index).normal(0, 1.5, (sim.n, 3))
+        fast, general, stuck_fast, stuck_general = _both_ways(sim)
+        assert fast == general
+        run.run(seconds=0.2, until_done=False)
+    sizes = {len(r.wheel_speeds) for m in sim.observations(0.0, 0) for r in m.robots}
+    assert sizes == {3, 4}
+
+
 def test_perception_messages_of_a_tick_are_new_arrays_and_shared_ones_are_read_only():
     """A subscriber may keep a message: the next tick's never writes into it. The obstacles' radii and heights,
     the same at every tick, are shared and read-only (as a decoded message's arrays are)."""

@@ -133,7 +133,8 @@ class SimulatorNode(Node):
                     if pub.active:
                         pub.put(infos[i])
         if self.pub_models.active:
-            self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
+            pose, twist = sim.model_state_arrays32()
+            self.pub_models.put(_ModelStates(now, k, sim.model_names, pose, twist))
         if into == 0 and self.pub_fingerprint.active:
             self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
         if self.pub_links.active:
@@ -153,7 +154,7 @@ class SimulatorNode(Node):
                     _BallContacts(
                         now,
                         k,
-                        [names[i] for i in touching],
+                        list(map(names.__getitem__, touching)),  # (no comprehension's frame: every step)
                         names[holder] if holder >= 0 else "",
                         names[kicker] if kicker >= 0 else "",
                         ball.kicked_speed if kicker >= 0 else 0.0,

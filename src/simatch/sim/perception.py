@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from itertools import islice, repeat
 
 import numpy as np
 
@@ -107,6 +108,9 @@ class Perception:
         self.stuck = np.zeros(n, dtype=bool)
         self._team_members = list(self.members.values())
         self._team_index = [self.teams.index(t) for t in self.team_of]
+        self._nobody = [False] * n  # nobody holds the ball
+        self._seen_state, self._seen = [1] * n, [True] * n  # a BallInfo's state, pos_known, velocity_known
+        self._short_wheels = any(k != max(self._nw, default=0) for k in self._nw)
         self.exact = (
             spec.position_noise == 0
             and spec.velocity_noise == 0
@@ -139,35 +143,30 @@ class Perception:
         object's, read into Python values here) and ``obs`` (n * 6, n - 1), ``wheels`` (n, W), fresh float32
         arrays whose rows the messages keep. The same messages, field for field, as `observe` makes of the
         same world, with far fewer steps between (tests/sim/test_fast_paths.py holds them equal)."""
-        own = self.own32.tolist()
-        valid = self.valid.tolist()
-        stuck = self.stuck.tolist()
-        ids, nw = self._ids, self._nw
-        wrows = list(wheels)
-        W = wheels.shape[1]
-        team_infos = [
-            [
-                _RobotInfo(
-                    ids[i],
-                    *own[i],
-                    valid[i],
-                    stuck[i],
-                    holder == i,
-                    wrows[i] if nw[i] == W else wrows[i][: nw[i]],
-                    0.0,
-                    0.0,
-                )
-                for i in idx
-            ]
-            for idx in self._team_members
-        ]
+        n, ids = self.n, self._ids
+        # every message by `map` over per-field lists (numbers read in bulk by `tolist`): the makers are called
+        # from C, with no bytecode per message
+        x, y, yaw, vx, vy, w = self.own32.T.tolist()
+        holding = self._nobody.copy()
+        if holder >= 0:
+            holding[holder] = True
+        # (row views taken by an iterator stopped after the last row: iterating an array to its end raises an
+        # IndexError inside NumPy, a formatted message, a few thousand instructions each time)
+        wrows = list(islice(wheels, n))
+        if self._short_wheels:  # a robot with fewer wheels than the widest: its first ones
+            wrows = [r[:k] for r, k in zip(wrows, self._nw)]
+        z = self._ground_z
+        infos = list(
+            map(_RobotInfo, ids, x, y, yaw, vx, vy, w, self.valid.tolist(), self.stuck.tolist(), holding, wrows, z, z)
+        )
+        team_infos = [[infos[i] for i in idx] for idx in self._team_members]
         rows = iter(obs)  # each robot's six rows, then the obstacles' radii and heights (constant)
-        obstacles = list(map(_ObstaclesInfo, rows, rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows))
-        team = self._team_index
-        return [
-            _OmniVisionInfo(stamp, tick, ids[i], _BallInfo(1, *ball, True, True), obstacles[i], team_infos[team[i]])
-            for i, ball in enumerate(self.balls32.tolist())
-        ]
+        obstacles = map(_ObstaclesInfo, islice(rows, n), rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows)
+        bx, by, bz, bvx, bvy, bvz, angle, distance = self.balls32.T.tolist()
+        seen = self._seen
+        balls = map(_BallInfo, self._seen_state, bx, by, bz, bvx, bvy, bvz, angle, distance, seen, seen)
+        teams = map(team_infos.__getitem__, self._team_index)
+        return list(map(_OmniVisionInfo, repeat(stamp, n), repeat(tick, n), ids, balls, obstacles, teams))
 
     def observe(self, snap: Snapshot, stamp: float, tick: int, only: list[int] | None = None) -> list:
         """One OmniVisionInfo per robot (in robot order); with ``only``, messages for those robots alone (None
