@@ -259,7 +259,7 @@ class Simulator:
         # the exact states whose fingerprint a recording takes every control tick: poses then twists, float64,
         # in one block that `model_poses32`'s compiled body fills in place (the numbers `model_poses` returns,
         # the positions it leaves zero never written), hashed as the two arrays one after the other
-        m = self._models
+        m = self.n + 1  # the robots and the ball
         self._state64 = np.zeros(13 * m)
         self._pose64, self._twist64 = self._state64[: 7 * m], self._state64[7 * m :]
         self._poses64 = entry(
