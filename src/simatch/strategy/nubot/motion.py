@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import math
+import struct
 
 import numba
 import numpy as np
@@ -22,7 +23,7 @@ from ...exactmath import hypot, pymax, pymin, remainder
 from ..base import RoundedMove
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
-from .observation import Observation
+from .observation import Observation, kernel_entry
 from .params import NubotParams
 from .positions import route
 
@@ -78,6 +79,14 @@ class Motion:
                 ar.goal_half if ar is not None else 0.5 * field.goal_width,
             )
         )
+        # `go`'s numbers for the kernel (see _A_*), written through a memoryview at each call; never leaves
+        # this robot's Motion
+        self.args = np.zeros(_N_ARGS)
+        self._args_buf = memoryview(self.args)
+        # the compiled `_go_packed` for its argument types (float64 arrays: the boxes and the observation's
+        # opponents and team table, C-contiguous, as `Areas.box_array` and `Observation` make them), called
+        # without numba's dispatcher typing its six arguments at every call
+        self._go = kernel_entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.consts, self.row)
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -124,7 +133,11 @@ class Motion:
             fx = fy = fr = math.nan
         else:
             fx, fy, fr = fence
-        vx, vy, w, side, wx, wy = _go(
+        # the kernel's numbers in one float64 array (see _A_*): one argument instead of twenty-six, written in
+        # one call (a kernel call costs some 200 instructions per argument, an array one ~1 k)
+        _PACK_ARGS(
+            self._args_buf,
+            0,
             me.x,
             me.y,
             me.yaw,
@@ -144,19 +157,15 @@ class Motion:
             self.p.braking if brake is None else brake,
             gentle and bool(obs.opps),
             turn_first,
-            box_array,
             fx,
             fy,
             fr,
             math.nan if max_x is None else max_x,
-            obs.opp_array,
-            obs.mate_array,
             obs.bx,
             obs.by,
             self.side,
-            self.consts,
-            self.row,
         )
+        vx, vy, w, side, wx, wy = self._go(self.args, box_array, obs.opp_array, obs.mate_array, self.consts, self.row)
         self.side = side
         self.last = (wx, wy, w)
         return (vx, vy, w)
@@ -188,6 +197,10 @@ class Motion:
 
 
 _NO_BOXES = np.zeros((0, 3))
+# the indices of Motion.args, `_go`'s numbers in the order of its arguments (bools and the robot's id as 0.0/1.0
+# and float: exact; the avoidance side, -1, 0 or +1, likewise)
+_N_ARGS = 26
+_PACK_ARGS = struct.Struct(f"={_N_ARGS}d").pack_into
 # the indices of Motion.consts
 _C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC, _C_PERIOD, _C_L2, _C_GOAL_HALF = (
     range(10)
@@ -308,3 +321,43 @@ def _go(
     row[1] = bvy
     row[2] = w
     return bvx, bvy, w, side, vx, vy
+
+
+@numba.njit(cache=True, nogil=True)
+def _go_packed(args, boxes, opps, mates, consts, row):
+    """`_go` with its numbers in one float64 array ``args`` (Motion.args, in `_go`'s order of arguments; the
+    robot's id, the flags and the avoidance side as floats), for a call of six arguments instead of
+    thirty-one."""
+    return _go(
+        args[0],
+        args[1],
+        args[2],
+        args[3],
+        args[4],
+        args[5],
+        args[6],
+        args[7],
+        args[8],
+        args[9],
+        args[10],
+        args[11] != 0.0,
+        args[12],
+        args[13],
+        args[14],
+        args[15],
+        args[16],
+        args[17] != 0.0,
+        args[18] != 0.0,
+        boxes,
+        args[19],
+        args[20],
+        args[21],
+        args[22],
+        opps,
+        mates,
+        args[23],
+        args[24],
+        int(args[25]),
+        consts,
+        row,
+    )
