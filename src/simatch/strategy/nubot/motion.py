@@ -79,14 +79,14 @@ class Motion:
                 ar.goal_half if ar is not None else 0.5 * field.goal_width,
             )
         )
-        # `go`'s numbers for the kernel (see _A_*), written through a memoryview at each call; never leaves
-        # this robot's Motion
-        self.args = np.zeros(_N_ARGS)
+        # the fixed numbers, then `go`'s numbers of the call, for the kernel (`_go_packed`): those of each
+        # call written (in one struct call) after the fixed ones at each call; never leaves this robot's Motion
+        self.args = np.concatenate((self.consts, np.zeros(_N_ARGS)))
         self._args_buf = memoryview(self.args)
         # the compiled `_go_packed` for its argument types (float64 arrays: the boxes and the observation's
         # opponents and team table, C-contiguous, as `Areas.box_array` and `Observation` make them), called
-        # without numba's dispatcher typing its six arguments at every call
-        self._go = kernel_entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.consts, self.row)
+        # without numba's dispatcher typing its arguments at every call
+        self._go = kernel_entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.row)
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -120,10 +120,13 @@ class Motion:
         me = obs.me
         c = obs.coach
         if c is not None:  # the speed limits the coach allows (CoachInfo max_vel / max_w)
-            if c.max_vel > 0.0:
-                vmax = min(vmax, c.max_vel)
-            if c.max_w > 0.0:
-                wmax = min(wmax, c.max_w)
+            # (min(vmax, c.max_vel) and min(wmax, c.max_w), inline: the first unless the second is smaller)
+            lim = c.max_vel
+            if lim > 0.0 and lim < vmax:
+                vmax = lim
+            lim = c.max_w
+            if lim > 0.0 and lim < wmax:
+                wmax = lim
         box_array = self.areas.box_array(boxes) if boxes else _NO_BOXES
         if ball_obstacle is True:
             ball = self.ball_clearance
@@ -133,11 +136,11 @@ class Motion:
             fx = fy = fr = math.nan
         else:
             fx, fy, fr = fence
-        # the kernel's numbers in one float64 array (see _A_*): one argument instead of twenty-six, written in
-        # one call (a kernel call costs some 200 instructions per argument, an array one ~1 k)
+        # the kernel's numbers in one float64 array: one argument instead of twenty-seven, written in one call
+        # (a kernel call costs some 200 instructions per argument, an array ~1 k)
         _PACK_ARGS(
             self._args_buf,
-            0,
+            _ARGS_AT,
             me.x,
             me.y,
             me.yaw,
@@ -165,7 +168,7 @@ class Motion:
             obs.by,
             self.side,
         )
-        vx, vy, w, side, wx, wy = self._go(self.args, box_array, obs.opp_array, obs.mate_array, self.consts, self.row)
+        vx, vy, w, side, wx, wy = self._go(self.args, box_array, obs.opp_array, obs.mate_array, self.row)
         self.side = side
         self.last = (wx, wy, w)
         return (vx, vy, w)
@@ -174,7 +177,12 @@ class Motion:
         """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
         all rounded as the messages take them (from `row`)."""
         vx, vy, w, ix, iy = self.row.tolist()
-        return RoundedMove(vx, vy, w, role, action, (ix, iy))
+        # (RoundedMove(vx, vy, w, role, action, (ix, iy)), its attributes written here: a class call with a
+        # Python __init__ costs CPython 3.11 more than the writes)
+        move = _new(RoundedMove)
+        move.vx, move.vy, move.w = vx, vy, w
+        move.role, move.action, move.intent, move.user = role, action, (ix, iy), ()
+        return move
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)
@@ -197,10 +205,12 @@ class Motion:
 
 
 _NO_BOXES = np.zeros((0, 3))
-# the indices of Motion.args, `_go`'s numbers in the order of its arguments (bools and the robot's id as 0.0/1.0
-# and float: exact; the avoidance side, -1, 0 or +1, likewise)
+_new = object.__new__
+# Motion.args: Motion.consts (_C_*), then `_go`'s numbers of a call in the order of its arguments (the
+# flags as 0.0/1.0, the robot's id and the avoidance side, -1, 0 or +1, as floats: exact)
 _N_ARGS = 26
-_PACK_ARGS = struct.Struct(f"={_N_ARGS}d").pack_into
+_PACK_ARGS = struct.Struct(f"{_N_ARGS}d").pack_into
+_ARGS_AT = 10 * 8  # (bytes: after the ten fixed numbers)
 # the indices of Motion.consts
 _C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC, _C_PERIOD, _C_L2, _C_GOAL_HALF = (
     range(10)
@@ -324,40 +334,41 @@ def _go(
 
 
 @numba.njit(cache=True, nogil=True)
-def _go_packed(args, boxes, opps, mates, consts, row):
-    """`_go` with its numbers in one float64 array ``args`` (Motion.args, in `_go`'s order of arguments; the
-    robot's id, the flags and the avoidance side as floats), for a call of six arguments instead of
-    thirty-one."""
+def _go_packed(args, boxes, opps, mates, row):
+    """`_go` with its numbers in one float64 array ``args`` (Motion.args: the ten fixed numbers `_go` reads as
+    ``consts``, then the call's in `_go`'s order of arguments, the robot's id, the flags and the avoidance
+    side as floats), for a call of five arguments instead of thirty-one."""
+    a = 10
     return _go(
-        args[0],
-        args[1],
-        args[2],
-        args[3],
-        args[4],
-        args[5],
-        args[6],
-        args[7],
-        args[8],
-        args[9],
-        args[10],
-        args[11] != 0.0,
-        args[12],
-        args[13],
-        args[14],
-        args[15],
-        args[16],
-        args[17] != 0.0,
-        args[18] != 0.0,
+        args[a],
+        args[a + 1],
+        args[a + 2],
+        args[a + 3],
+        args[a + 4],
+        args[a + 5],
+        args[a + 6],
+        args[a + 7],
+        args[a + 8],
+        args[a + 9],
+        args[a + 10],
+        args[a + 11] != 0.0,
+        args[a + 12],
+        args[a + 13],
+        args[a + 14],
+        args[a + 15],
+        args[a + 16],
+        args[a + 17] != 0.0,
+        args[a + 18] != 0.0,
         boxes,
-        args[19],
-        args[20],
-        args[21],
-        args[22],
+        args[a + 19],
+        args[a + 20],
+        args[a + 21],
+        args[a + 22],
         opps,
         mates,
-        args[23],
-        args[24],
-        int(args[25]),
-        consts,
+        args[a + 23],
+        args[a + 24],
+        int(args[a + 25]),
+        args,
         row,
     )
