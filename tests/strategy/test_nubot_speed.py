@@ -5,11 +5,13 @@ before timing."""
 import math
 import random
 
+import numba
 import numpy as np
 
 import simatch
 from simatch.field import FieldGeometry
 from simatch.strategy.nubot import ballpath, observation, picture, positions
+from simatch.strategy.nubot.avoidance import GROUP_GAP, MAX_TURN, SIDE_HYSTERESIS, TWO_PI, _wrap
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
@@ -357,3 +359,289 @@ def test_open_play_slots_compiled_equal_the_plain_way():
         k = picture._open_slots(table, bits, len(rest), attacking, assist, opps, bx, by, areas.geo, hysteresis, out)
         compiled = [(rest[i].id, int(role), x, y) for i, (_, role, x, y) in enumerate(out[:k].tolist())]
         assert repr(compiled) == repr([(rid, int(role), x, y) for rid, role, x, y in plain])
+
+
+def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bit():
+    """`_same_opponents` says a team-mate's rows are this robot's opponents exactly when `_opponents` would
+    write those very rows (bit for bit, in order: -0.0 is not 0.0, a NaN never matches), with the same
+    nearest team-mate as `_opponents` (and, when shared, the same nearest opponent's distance)."""
+    rng = random.Random(21)
+    f32 = np.float32
+    shared = differ = 0
+    for case in range(4000):
+        mates = [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0, k + 1) for k in range(rng.randint(1, 5))]
+        opps = [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-3, 3), rng.uniform(-3, 3)) for _ in range(5)]
+        opps = opps[: rng.randint(0, 5)]
+        m = np.array(mates, dtype=float).reshape(-1, 5)
+        m[:, :2] = m[:, :2].astype(f32)
+        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+
+        def seen(observer, opps=opps, m=m, case=case):
+            # the other team-mates and the opponents, in the order perception lists them
+            rows = [(x, y, 0.0, 0.0) for j, (x, y) in enumerate(m[:, :2].tolist()) if j != observer] + list(opps)
+            if case % 3 == 0:
+                rng.shuffle(rows)  # (the opponents' order too: the rows then differ)
+            return [np.array([r[i] for r in rows], dtype=f32) for i in range(4)]
+
+        first = seen(0)
+        buf = np.empty((len(first[0]), 4))
+        k = observation._opponents(*first, m, buf, bx, by)[0]
+        prev = buf[:k]
+        other = seen(min(1, len(mates) - 1))
+        change = rng.random()
+        if change < 0.15 and len(other[0]):  # one number differs (a sign of zero, a NaN, a last bit)
+            j, i = rng.randrange(len(other[0])), rng.randrange(4)
+            a = other[i]
+            a[j] = rng.choice([-0.0 if a[j] == 0.0 else 0.0, np.nan, np.nextafter(a[j], f32(np.inf))])
+        elif change < 0.2:
+            prev = prev.copy()
+            if len(prev):
+                prev[rng.randrange(len(prev)), rng.randrange(4)] = rng.choice([-0.0, np.nan])
+        out = np.empty((len(other[0]), 4))
+        want = observation._opponents(*other, m, out, bx, by)
+        got = observation._same_opponents(*other, m, prev, bx, by)
+        same = want[0] == len(prev) and out[: want[0]].tobytes() == prev.tobytes() and not np.isnan(prev).any()
+        assert (got[0] == len(prev)) == same and got[0] in (len(prev), -1)
+        assert got[1:3] == want[1:3]  # (the nearest team-mate; the opponents' distance only when shared)
+        assert not same or got[3] == want[3]
+        shared += same
+        differ += not same
+    assert shared > 1000 and differ > 1000
+
+
+def _packed_go_case(rng, motion, mates, opps):
+    face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else math.nan
+    fence = (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else (math.nan,) * 3
+    me = mates[rng.randrange(len(mates))]
+    return (
+        me[0],
+        me[1],
+        rng.uniform(-4.0, 4.0),
+        rng.uniform(-3, 3),
+        rng.uniform(-3, 3),
+        int(me[4]),
+        rng.uniform(-13.0, 13.0),
+        rng.uniform(-9.0, 9.0),
+        face,
+        rng.uniform(0.5, 4.0),
+        rng.uniform(1.0, 6.0),
+        rng.random() < 0.8,
+        rng.choice([0.0, motion.ball_clearance, 0.9]),
+        rng.choice([0.0, 0.0, rng.uniform(0.0, 2.0)]),
+        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
+        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
+        rng.uniform(1.0, 4.0),
+        rng.random() < 0.7,
+        rng.random() < 0.3,
+        *fence,
+        rng.choice([math.nan, -0.15, rng.uniform(-3.0, 3.0)]),
+        rng.uniform(-11, 11),
+        rng.uniform(-7, 7),
+        rng.choice([-1, 0, 1]),
+    )
+
+
+def test_motion_go_in_one_array_equals_the_kernel_of_every_argument():
+    """`Motion.go` calls `_go_packed` (its numbers in one array, without the dispatcher): the same results,
+    avoidance side and float32 row as `_go` given each number as an argument, on random situations."""
+    import struct
+
+    from simatch.strategy.nubot import motion as motion_mod
+    from simatch.strategy.nubot.params import NubotParams, plain
+
+    field = FieldGeometry()
+    params = plain(NubotParams())
+    areas = Areas(field, params.robot_radius + 0.15)
+    mo = motion_mod.Motion(params, 0.025, field, areas)
+    rng = random.Random(17)
+    box_sets = [motion_mod._NO_BOXES, areas.box_array(areas.forbidden(False)), areas.box_array(areas.forbidden(True))]
+    for _ in range(4000):
+        mates = np.array(
+            [
+                (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1, 0.0, 2.0, 1.0)
+                for k in range(rng.randint(1, 5))
+            ]
+        )
+        opps = np.array(
+            [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(5)]
+        )[: rng.randint(0, 5)].copy()
+        boxes = rng.choice(box_sets)
+        a = _packed_go_case(rng, mo, mates.tolist(), opps)
+        row = np.zeros(5, dtype=np.float32)
+        want = motion_mod._go(*a[:19], boxes, *a[19:23], opps, mates, *a[23:], mo.consts, row)
+        struct.pack_into(f"{len(a)}d", mo._args_buf, motion_mod._ARGS_AT, *a)
+        got = mo._go(mo.args, boxes, opps, mates, mo.row)
+        assert struct.pack("6d", *got) == struct.pack("6d", *want) and got[3] == want[3], a
+        assert mo.row.tobytes() == row.tobytes()
+
+
+@numba.njit
+def _sub_target_before(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
+    """avoidance.sub_target as it was before its scratch arrays were one (main 5e2ffed), for the test below."""
+    dx, dy = tx - px, ty - py
+    length = math.sqrt(dx * dx + dy * dy)
+    n = opps.shape[0] + mates.shape[0] + 1
+    if length < 1e-6:
+        return tx, ty, 0
+    ux, uy = dx / length, dy / length
+    ox = np.empty(n)
+    oy = np.empty(n)
+    oc = np.empty(n)
+    cnt = 0
+    for k in range(opps.shape[0]):
+        ox[cnt] = opps[k, 0] + look * opps[k, 2]
+        oy[cnt] = opps[k, 1] + look * opps[k, 3]
+        oc[cnt] = clear
+        cnt += 1
+    for k in range(mates.shape[0]):
+        if mates[k, 4] == me_id:
+            continue
+        ox[cnt] = mates[k, 0] + look * mates[k, 2]
+        oy[cnt] = mates[k, 1] + look * mates[k, 3]
+        oc[cnt] = clear
+        cnt += 1
+    if ball_clear > 0.0:
+        ox[cnt], oy[cnt], oc[cnt] = ball_x, ball_y, ball_clear
+        cnt += 1
+    near = np.zeros(cnt, dtype=np.bool_)
+    A = np.zeros(cnt)
+    B = np.zeros(cnt)
+    D = np.zeros(cnt)
+    first, first_a = -1, 1e18
+    for k in range(cnt):
+        rx, ry = ox[k] - px, oy[k] - py
+        d = math.sqrt(rx * rx + ry * ry)
+        if d > length + oc[k] or math.sqrt((ox[k] - tx) ** 2 + (oy[k] - ty) ** 2) < oc[k]:
+            continue
+        a = rx * ux + ry * uy
+        b = ry * ux - rx * uy
+        near[k] = True
+        A[k], B[k], D[k] = a, b, d
+        if (0.0 < a < length and abs(b) < oc[k]) or (d < oc[k] and a > 0.0):
+            if a < first_a:
+                first, first_a = k, a
+    if first < 0:
+        return tx, ty, 0
+    group = np.zeros(cnt, dtype=np.bool_)
+    group[first] = True
+    grew = True
+    while grew:
+        grew = False
+        for k in range(cnt):
+            if near[k] and not group[k]:
+                for g in range(cnt):
+                    if group[g] and (ox[k] - ox[g]) ** 2 + (oy[k] - oy[g]) ** 2 < GROUP_GAP * GROUP_GAP:
+                        group[k] = True
+                        grew = True
+                        break
+    lo = np.empty(cnt)
+    hi = np.empty(cnt)
+    m = 0
+    reach = 0.0
+    nearest, nearest_d = first, 1e18
+    for k in range(cnt):
+        if not group[k]:
+            continue
+        phi = math.atan2(B[k], A[k])
+        delta = 0.5 * math.pi if D[k] <= oc[k] else math.asin(oc[k] / D[k])
+        lo[m], hi[m] = phi - delta, phi + delta
+        m += 1
+        if A[k] > 0.0 and D[k] > reach:
+            reach = D[k]
+        if D[k] < nearest_d:
+            nearest, nearest_d = k, D[k]
+    best, best_cost, found = 0.0, 1e18, False
+    for j in range(2 * m):
+        angle = _wrap(lo[j // 2] - 1e-3 if j % 2 == 0 else hi[j // 2] + 1e-3)
+        if abs(angle) > MAX_TURN:
+            continue
+        free = True
+        for i in range(m):
+            if lo[i] < angle < hi[i] or lo[i] < angle - TWO_PI < hi[i] or lo[i] < angle + TWO_PI < hi[i]:
+                free = False
+                break
+        if not free:
+            continue
+        cost = abs(angle)
+        if prefer_side != 0 and (angle > 0.0) == (prefer_side > 0):
+            cost -= SIDE_HYSTERESIS
+        if cost < best_cost:
+            best, best_cost, found = angle, cost, True
+    if not found:
+        best = -MAX_TURN if B[nearest] > 0.0 else MAX_TURN
+    if reach <= 0.0:
+        reach = length
+    reach = max(min(reach, length), 0.5)
+    c, s = math.cos(best), math.sin(best)
+    return px + reach * (c * ux - s * uy), py + reach * (s * ux + c * uy), 1 if best > 0.0 else -1
+
+
+def test_sub_target_with_its_scratch_in_one_array_equals_the_one_before():
+    """sub_target keeps its per-obstacle numbers in the rows of one array (one allocation instead of ten): the
+    same points and sides as before, bit for bit, on random crowds (clusters, the ball, the robot itself)."""
+    import struct
+
+    from simatch.strategy.nubot.avoidance import sub_target
+
+    rng = random.Random(23)
+    for _ in range(20_000):
+        px, py = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        tx, ty = px + rng.uniform(-6, 6), py + rng.uniform(-6, 6)
+
+        def near(px=px, py=py, tx=tx, ty=ty):
+            return px + (tx - px) * rng.random() + rng.uniform(-1, 1), py + (ty - py) * rng.random() + rng.uniform(
+                -1, 1
+            )
+
+        opps = np.array([(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(rng.randint(0, 6))]).reshape(
+            -1, 4
+        )
+        mates = np.array(
+            [(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1) for k in range(rng.randint(0, 5))]
+        ).reshape(-1, 5)
+        args = (
+            px,
+            py,
+            tx,
+            ty,
+            opps,
+            mates,
+            rng.randint(1, 5),
+            *near(),
+            rng.choice([0.0, 0.45]),
+            1.1,
+            0.3,
+            rng.choice([-1, 0, 1]),
+        )
+        got, want = sub_target(*args), _sub_target_before(*args)
+        assert struct.pack("2d", *got[:2]) == struct.pack("2d", *want[:2]) and got[2] == want[2], args
+
+
+def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
+    """`TeamView.get` writes its Mate records' slots and its table in one pass: the same fields as
+    `Mate(info, ...)` gives and the table np.array makes of them, for every robot of a running match."""
+    from simatch.strategy.nubot.observation import Mate, TeamView
+
+    with simatch.Simulation("msl_5v5", seed=1) as sim:
+        for _ in range(6):
+            sim.run(seconds=1.5, until_done=False)
+            for node in sim.robot_nodes.values():
+                world = node.world
+                mates, by_id, table = TeamView().get(world)
+                expect = []
+                for k, r in enumerate(world.vision.robots):
+                    s = world.strategies.get(r.id)
+                    if s is None:
+                        m = Mate(r, r.id == world.goalkeeper)
+                    else:
+                        user = s.user.tolist()
+                        att, rt = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+                        pi = s.pass_cmd if s.pass_cmd.is_valid else None
+                        m = Mate(r, r.id == world.goalkeeper, s.role, s.action, pi, att, rt)
+                    m.row = k
+                    expect.append(m)
+                    assert by_id[r.id] is mates[k]
+                for got, want in zip(mates, expect, strict=True):
+                    assert [getattr(got, f) for f in Mate.__slots__] == [getattr(want, f) for f in Mate.__slots__]
+                rows = [(m.x, m.y, m.vx, m.vy, m.id, m.yaw, m.role, m.role_time) for m in expect]
+                assert table.tobytes() == np.array(rows, dtype=np.float64).reshape(-1, 8).tobytes()

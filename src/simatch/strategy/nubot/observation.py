@@ -303,11 +303,11 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     Returns how many, with what the game flow and the team picture ask of the ball at (bx, by) every
     tick: the row of the team-mate nearest to it (the first of equals; -1 without team-mates) and its
     distance, and the distance of the nearest opponent (inf without opponents), all by CPython's hypot."""
-    keep = _not_mates(ox, oy, mates)
+    noisy = _noisy(ox, oy, mates)
     r = 0
     opp_d = math.inf
     for k in range(ox.shape[0]):
-        if keep[k]:
+        if _opponent(np.float64(ox[k]), np.float64(oy[k]), mates, noisy):
             out[r, 0] = ox[k]
             out[r, 1] = oy[k]
             out[r, 2] = ovx[k]
@@ -321,34 +321,38 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
 
 
 @numba.njit(cache=True, nogil=True)
-def _not_mates(ox, oy, mates):
-    """Which obstacles (float32 x, y) are not team-mates (``mates``: x, y in the first columns): the rule of
-    `_opponents`."""
+def _noisy(ox, oy, mates):
+    """Whether some team-mates are not exactly where the team list puts them among the obstacles (float32 x,
+    y; ``mates``: x, y in the first columns): fewer obstacles are exactly at a team-mate than there are
+    team-mates besides the robot itself (noisy perception). Then `_opponent` matches by distance."""
     n = ox.shape[0]
     k_mates = mates.shape[0]
-    keep = np.zeros(n, dtype=np.bool_)
-    kept = 0
+    at_mates = 0
     for k in range(n):
-        x, y = np.float64(ox[k]), np.float64(oy[k])
-        mate = False
-        for j in range(k_mates):
-            if mates[j, 0] == x and mates[j, 1] == y:
-                mate = True
-                break
-        if not mate:
-            keep[k] = True
-            kept += 1
-    if n - kept < k_mates - 1:
-        # some team-mates are not where the team list says (noisy perception): match by distance
-        for k in range(n):
-            if keep[k]:
-                x, y = np.float64(ox[k]), np.float64(oy[k])
-                for j in range(k_mates):
-                    if not (abs(mates[j, 0] - x) >= _SAME_ROBOT or abs(mates[j, 1] - y) >= _SAME_ROBOT):
-                        keep[k] = False
-                        kept -= 1
-                        break
-    return keep
+        if _at_mate(np.float64(ox[k]), np.float64(oy[k]), mates):
+            at_mates += 1
+    return at_mates < k_mates - 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _at_mate(x, y, mates):
+    for j in range(mates.shape[0]):
+        if mates[j, 0] == x and mates[j, 1] == y:
+            return True
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
+def _opponent(x, y, mates, noisy):
+    """Whether the obstacle at (x, y) is an opponent: not exactly at a team-mate, nor, when ``noisy``
+    (`_noisy`), within _SAME_ROBOT of one (in both coordinates)."""
+    if _at_mate(x, y, mates):
+        return False
+    if noisy:
+        for j in range(mates.shape[0]):
+            if not (abs(mates[j, 0] - x) >= _SAME_ROBOT or abs(mates[j, 1] - y) >= _SAME_ROBOT):
+                return False
+    return True
 
 
 @numba.njit(cache=True, nogil=True)
@@ -375,16 +379,16 @@ def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
     number of rows if the opponents among these obstacles are exactly ``prev``'s rows (bit for bit, in
     order; nothing written), else -1; then, as `_opponents`, the team-mate nearest to the ball at (bx, by),
     its distance and the nearest opponent's distance (inf without opponents)."""
-    keep = _not_mates(ox, oy, mates)
+    noisy = _noisy(ox, oy, mates)
     m = prev.shape[0]
     r = 0
     opp_d = math.inf
     for k in range(ox.shape[0]):
-        if keep[k]:
+        x, y = np.float64(ox[k]), np.float64(oy[k])
+        if _opponent(x, y, mates, noisy):
             if r >= m:
                 r = -1
                 break
-            x, y = np.float64(ox[k]), np.float64(oy[k])
             if not (
                 _same(prev[r, 0], x)
                 and _same(prev[r, 1], y)
