@@ -16,13 +16,13 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from ..base import Command, RoundedMove
+from ..base import Command
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .ballpath import GRAVITY
 from .gameflow import PHASES, GameFlow
 from .geometry import clamp
-from .motion import Motion
+from .motion import Motion, rounded_move
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
@@ -87,8 +87,8 @@ class Goalkeeper:
         motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None)
         # the command's numbers (and the target as its intent), rounded as the messages take them
         vx, vy, w, ix, iy = motion.row.tolist()
-        return RoundedMove(
-            vx, vy, w, ROLES.GOALIE, ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, (ix, iy)
+        return rounded_move(
+            vx, vy, w, ROLES.GOALIE, ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, (ix, iy), ()
         )
 
     # --- where to stand ------------------------------------------------------------------------------------

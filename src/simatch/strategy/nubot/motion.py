@@ -177,12 +177,7 @@ class Motion:
         """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
         all rounded as the messages take them (from `row`)."""
         vx, vy, w, ix, iy = self.row.tolist()
-        # (RoundedMove(vx, vy, w, role, action, (ix, iy)), its attributes written here: a class call with a
-        # Python __init__ costs CPython 3.11 more than the writes)
-        move = _new(RoundedMove)
-        move.vx, move.vy, move.w = vx, vy, w
-        move.role, move.action, move.intent, move.user = role, action, (ix, iy), ()
-        return move
+        return rounded_move(vx, vy, w, role, action, (ix, iy), ())
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)
@@ -206,6 +201,17 @@ class Motion:
 
 _NO_BOXES = np.zeros((0, 3))
 _new = object.__new__
+
+
+def rounded_move(vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple) -> RoundedMove:
+    """``RoundedMove(vx, vy, w, role, action, intent, user)``: the same object, its attributes written here (a
+    class call with a Python ``__init__`` costs CPython 3.11 several times what a function's call does)."""
+    move = _new(RoundedMove)
+    move.vx, move.vy, move.w = vx, vy, w
+    move.role, move.action, move.intent, move.user = role, action, intent, user
+    return move
+
+
 # Motion.args: Motion.consts (_C_*), then `_go`'s numbers of a call in the order of its arguments (the
 # flags as 0.0/1.0, the robot's id and the avoidance side, -1, 0 or +1, as floats: exact)
 _N_ARGS = 26

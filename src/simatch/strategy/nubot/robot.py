@@ -26,7 +26,7 @@ from .active import BallPlayer
 from .gameflow import MODES, PHASES, GameFlow
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
-from .motion import Motion
+from .motion import Motion, rounded_move
 from .observation import Observation, TeamView
 from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
@@ -200,7 +200,7 @@ class NubotRobot(RobotStrategy):
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         if type(cmd) is RoundedMove:  # (its intent is rounded already)
             bx, by, w_body = _f32s(bx, by, w_body)
-            return RoundedMove(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
+            return rounded_move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
