@@ -4,10 +4,8 @@ per team, written against the bus interface only, so the same nodes run embedded
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
-import struct
 import traceback
 
 import numpy as np
@@ -41,12 +39,6 @@ _NO_PASS = msgs.new(msgs.PassCommands)
 _f32s = msgs.f32s
 #: a Command's default limits at float32 precision (a RoundedMove keeps them)
 _MAX_VEL, _MAX_W = _f32s(Command.max_vel, Command.max_w)
-
-
-@functools.cache
-def _pack_floats(n: int):
-    """The ``pack_into`` of ``n`` float64 numbers (native: an array's memory)."""
-    return struct.Struct(f"{n}d").pack_into
 
 
 class RobotNode(Node):
@@ -222,14 +214,7 @@ class RobotNode(Node):
             return _EMPTY_F64
         if user is self._user[0]:
             return self._user[1]
-        # (an empty array filled by one struct call: about two thirds of what np.array costs for two numbers;
-        # anything but plain numbers takes np.array's way)
-        n = len(user)
-        arr = np.empty(n)
-        try:
-            _pack_floats(n)(arr, 0, *user)
-        except (struct.error, TypeError):
-            arr = np.array(user, dtype=np.float64)
+        arr = np.array(user, dtype=np.float64)
         if type(user) is tuple:  # (a list may change in place: never kept)
             self._user = (user, arr)
         return arr
