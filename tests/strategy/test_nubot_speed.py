@@ -5,7 +5,6 @@ before timing."""
 import math
 import random
 
-import numba
 import numpy as np
 
 import simatch
@@ -475,110 +474,78 @@ def test_motion_go_in_one_array_equals_the_kernel_of_every_argument():
         assert mo.row.tobytes() == row.tobytes()
 
 
-@numba.njit
-def _sub_target_before(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
-    """avoidance.sub_target as it was before its scratch arrays were one (main 5e2ffed), for the test below."""
-    dx, dy = tx - px, ty - py
-    length = math.sqrt(dx * dx + dy * dy)
-    n = opps.shape[0] + mates.shape[0] + 1
+def _plain_sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
+    """The rule of avoidance.sub_target in plain Python over lists (the same float operations; ``** 2`` as the
+    product numba makes of it): the reference its compiled storage is held to."""
+    length = math.sqrt((tx - px) * (tx - px) + (ty - py) * (ty - py))
     if length < 1e-6:
         return tx, ty, 0
-    ux, uy = dx / length, dy / length
-    ox = np.empty(n)
-    oy = np.empty(n)
-    oc = np.empty(n)
-    cnt = 0
-    for k in range(opps.shape[0]):
-        ox[cnt] = opps[k, 0] + look * opps[k, 2]
-        oy[cnt] = opps[k, 1] + look * opps[k, 3]
-        oc[cnt] = clear
-        cnt += 1
-    for k in range(mates.shape[0]):
-        if mates[k, 4] == me_id:
-            continue
-        ox[cnt] = mates[k, 0] + look * mates[k, 2]
-        oy[cnt] = mates[k, 1] + look * mates[k, 3]
-        oc[cnt] = clear
-        cnt += 1
+    ux, uy = (tx - px) / length, (ty - py) / length
+    obst = [(o[0] + look * o[2], o[1] + look * o[3], clear) for o in opps.tolist()]
+    obst += [(m[0] + look * m[2], m[1] + look * m[3], clear) for m in mates.tolist() if m[4] != me_id]
     if ball_clear > 0.0:
-        ox[cnt], oy[cnt], oc[cnt] = ball_x, ball_y, ball_clear
-        cnt += 1
-    near = np.zeros(cnt, dtype=np.bool_)
-    A = np.zeros(cnt)
-    B = np.zeros(cnt)
-    D = np.zeros(cnt)
+        obst.append((ball_x, ball_y, ball_clear))
+    seen = {}  # index -> (a, b, d) of the obstacles near the way
     first, first_a = -1, 1e18
-    for k in range(cnt):
-        rx, ry = ox[k] - px, oy[k] - py
+    for k, (x, y, c) in enumerate(obst):
+        rx, ry = x - px, y - py
         d = math.sqrt(rx * rx + ry * ry)
-        if d > length + oc[k] or math.sqrt((ox[k] - tx) ** 2 + (oy[k] - ty) ** 2) < oc[k]:
+        if d > length + c or math.sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty)) < c:
             continue
-        a = rx * ux + ry * uy
-        b = ry * ux - rx * uy
-        near[k] = True
-        A[k], B[k], D[k] = a, b, d
-        if (0.0 < a < length and abs(b) < oc[k]) or (d < oc[k] and a > 0.0):
-            if a < first_a:
-                first, first_a = k, a
+        a, b = rx * ux + ry * uy, ry * ux - rx * uy
+        seen[k] = (a, b, d)
+        if ((0.0 < a < length and abs(b) < c) or (d < c and a > 0.0)) and a < first_a:
+            first, first_a = k, a
     if first < 0:
         return tx, ty, 0
-    group = np.zeros(cnt, dtype=np.bool_)
-    group[first] = True
-    grew = True
-    while grew:
-        grew = False
-        for k in range(cnt):
-            if near[k] and not group[k]:
-                for g in range(cnt):
-                    if group[g] and (ox[k] - ox[g]) ** 2 + (oy[k] - oy[g]) ** 2 < GROUP_GAP * GROUP_GAP:
-                        group[k] = True
-                        grew = True
-                        break
-    lo = np.empty(cnt)
-    hi = np.empty(cnt)
-    m = 0
-    reach = 0.0
-    nearest, nearest_d = first, 1e18
-    for k in range(cnt):
-        if not group[k]:
-            continue
-        phi = math.atan2(B[k], A[k])
-        delta = 0.5 * math.pi if D[k] <= oc[k] else math.asin(oc[k] / D[k])
-        lo[m], hi[m] = phi - delta, phi + delta
-        m += 1
-        if A[k] > 0.0 and D[k] > reach:
-            reach = D[k]
-        if D[k] < nearest_d:
-            nearest, nearest_d = k, D[k]
-    best, best_cost, found = 0.0, 1e18, False
-    for j in range(2 * m):
-        angle = _wrap(lo[j // 2] - 1e-3 if j % 2 == 0 else hi[j // 2] + 1e-3)
-        if abs(angle) > MAX_TURN:
-            continue
-        free = True
-        for i in range(m):
-            if lo[i] < angle < hi[i] or lo[i] < angle - TWO_PI < hi[i] or lo[i] < angle + TWO_PI < hi[i]:
-                free = False
-                break
-        if not free:
-            continue
-        cost = abs(angle)
-        if prefer_side != 0 and (angle > 0.0) == (prefer_side > 0):
-            cost -= SIDE_HYSTERESIS
-        if cost < best_cost:
-            best, best_cost, found = angle, cost, True
-    if not found:
-        best = -MAX_TURN if B[nearest] > 0.0 else MAX_TURN
-    if reach <= 0.0:
-        reach = length
-    reach = max(min(reach, length), 0.5)
+    group = {first}
+    while True:
+        more = [
+            k
+            for k in sorted(seen)
+            if k not in group
+            and any(
+                (obst[k][0] - obst[g][0]) * (obst[k][0] - obst[g][0])
+                + (obst[k][1] - obst[g][1]) * (obst[k][1] - obst[g][1])
+                < GROUP_GAP * GROUP_GAP
+                for g in group
+            )
+        ]
+        if not more:
+            break
+        group.update(more)  # (a pass of the kernel may take several at once: the same group in the end)
+    bounds, reach, nearest, nearest_d = [], 0.0, first, 1e18
+    for k in sorted(group):
+        a, b, d = seen[k]
+        c = obst[k][2]
+        phi = math.atan2(b, a)
+        delta = 0.5 * math.pi if d <= c else math.asin(c / d)
+        bounds.append((phi - delta, phi + delta))
+        if a > 0.0 and d > reach:
+            reach = d
+        if d < nearest_d:
+            nearest, nearest_d = k, d
+    best, best_cost = None, 1e18
+    for lo, hi in bounds:
+        for angle in (_wrap(lo - 1e-3), _wrap(hi + 1e-3)):
+            if abs(angle) > MAX_TURN or any(
+                lo2 < angle < hi2 or lo2 < angle - TWO_PI < hi2 or lo2 < angle + TWO_PI < hi2 for lo2, hi2 in bounds
+            ):
+                continue
+            cost = abs(angle) - (SIDE_HYSTERESIS if prefer_side != 0 and (angle > 0.0) == (prefer_side > 0) else 0.0)
+            if cost < best_cost:
+                best, best_cost = angle, cost
+    if best is None:
+        best = -MAX_TURN if seen[nearest][1] > 0.0 else MAX_TURN
+    reach = max(min(reach if reach > 0.0 else length, length), 0.5)
     c, s = math.cos(best), math.sin(best)
     return px + reach * (c * ux - s * uy), py + reach * (s * ux + c * uy), 1 if best > 0.0 else -1
 
 
 def test_sub_target_with_its_scratch_in_one_array_equals_the_one_before():
     """sub_target keeps its per-obstacle numbers in the rows of one array (one allocation instead of ten): the
-    same points and sides as before, bit for bit, on random crowds (clusters, the ball, the robot itself)."""
+    same points and sides as its rule in plain Python, bit for bit, on random crowds (clusters, the ball, the
+    robot itself)."""
     import struct
 
     from simatch.strategy.nubot.avoidance import sub_target
@@ -613,7 +580,7 @@ def test_sub_target_with_its_scratch_in_one_array_equals_the_one_before():
             0.3,
             rng.choice([-1, 0, 1]),
         )
-        got, want = sub_target(*args), _sub_target_before(*args)
+        got, want = sub_target(*args), _plain_sub_target(*args)
         assert struct.pack("2d", *got[:2]) == struct.pack("2d", *want[:2]) and got[2] == want[2], args
 
 
