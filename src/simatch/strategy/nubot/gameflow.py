@@ -41,6 +41,9 @@ class Phase(enum.IntEnum):
 
 
 PHASES = members(Phase)
+# (what `update` compares at every tick as plain ints and the very members: an IntEnum compares slowly)
+_STOPROBOT, _PARKINGROBOT, _TEST = int(MODES.STOPROBOT), int(MODES.PARKINGROBOT), int(MODES.TEST)
+_PLAY, _OUR_RESTART, _OPP_RESTART = PHASES.PLAY, PHASES.OUR_RESTART, PHASES.OPP_RESTART
 
 
 class GameFlow:
@@ -68,13 +71,13 @@ class GameFlow:
         mode = obs.mode
         last = self._last_mode
         self._last_mode = mode
-        if mode == MODES.STOPROBOT:
+        if mode == _STOPROBOT:
             self.phase = PHASES.STOP
             return
-        if mode == MODES.PARKINGROBOT:
+        if mode == _PARKINGROBOT:
             self.phase = PHASES.PARK
             return
-        if mode == MODES.TEST:
+        if mode == _TEST:
             self.phase = PHASES.TEST
             return
         if 1 <= mode <= 13:
@@ -110,8 +113,8 @@ class GameFlow:
     def _follow(self, obs: Observation) -> None:
         holder = obs.holder
         touched = self._regain(obs, holder)
-        phase = self.phase
-        if phase == PHASES.OUR_RESTART:
+        phase = self.phase  # (always one of PHASES' members: compared by identity)
+        if phase is _OUR_RESTART:
             shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
             if shift >= TAKEN_DISTANCE and not self.taker:
                 # from its first touch on, the taker may not touch the ball again before another robot did;
@@ -122,11 +125,11 @@ class GameFlow:
                 self.first_holder = taker.id
             if shift >= IN_PLAY_DISTANCE or obs.t - self.t0 > self.restart_wait:
                 self.phase = PHASES.PLAY
-        elif phase == PHASES.OPP_RESTART:
+        elif phase is _OPP_RESTART:
             shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
             if shift >= IN_PLAY_DISTANCE or obs.t - self.t0 > self.restart_wait:
                 self.phase = PHASES.PLAY
-        if self.phase != PHASES.PLAY or not (self.taker or self.pass_pending):
+        if self.phase is not _PLAY or not (self.taker or self.pass_pending):
             return
         if touched is None:
             touched = _opponent_touching(obs)
