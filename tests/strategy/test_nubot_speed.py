@@ -10,6 +10,7 @@ import numpy as np
 import simatch
 from simatch.field import FieldGeometry
 from simatch.strategy.nubot import ballpath, observation, picture, positions
+from simatch.strategy.nubot.avoidance import GROUP_GAP, MAX_TURN, SIDE_HYSTERESIS, TWO_PI, _wrap
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
@@ -357,3 +358,257 @@ def test_open_play_slots_compiled_equal_the_plain_way():
         k = picture._open_slots(table, bits, len(rest), attacking, assist, opps, bx, by, areas.geo, hysteresis, out)
         compiled = [(rest[i].id, int(role), x, y) for i, (_, role, x, y) in enumerate(out[:k].tolist())]
         assert repr(compiled) == repr([(rid, int(role), x, y) for rid, role, x, y in plain])
+
+
+def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bit():
+    """`_same_opponents` says a team-mate's rows are this robot's opponents exactly when `_opponents` would
+    write those very rows (bit for bit, in order: -0.0 is not 0.0, a NaN never matches), with the same
+    nearest team-mate as `_opponents` (and, when shared, the same nearest opponent's distance)."""
+    rng = random.Random(21)
+    f32 = np.float32
+    shared = differ = 0
+    for case in range(4000):
+        mates = [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0, k + 1) for k in range(rng.randint(1, 5))]
+        opps = [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-3, 3), rng.uniform(-3, 3)) for _ in range(5)]
+        opps = opps[: rng.randint(0, 5)]
+        m = np.array(mates, dtype=float).reshape(-1, 5)
+        m[:, :2] = m[:, :2].astype(f32)
+        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+
+        def seen(observer, opps=opps, m=m, case=case):
+            # the other team-mates and the opponents, in the order perception lists them
+            rows = [(x, y, 0.0, 0.0) for j, (x, y) in enumerate(m[:, :2].tolist()) if j != observer] + list(opps)
+            if case % 3 == 0:
+                rng.shuffle(rows)  # (the opponents' order too: the rows then differ)
+            return [np.array([r[i] for r in rows], dtype=f32) for i in range(4)]
+
+        first = seen(0)
+        buf = np.empty((len(first[0]), 4))
+        k = observation._opponents(*first, m, buf, bx, by)[0]
+        prev = buf[:k]
+        other = seen(min(1, len(mates) - 1))
+        change = rng.random()
+        if change < 0.15 and len(other[0]):  # one number differs (a sign of zero, a NaN, a last bit)
+            j, i = rng.randrange(len(other[0])), rng.randrange(4)
+            a = other[i]
+            a[j] = rng.choice([-0.0 if a[j] == 0.0 else 0.0, np.nan, np.nextafter(a[j], f32(np.inf))])
+        elif change < 0.2:
+            prev = prev.copy()
+            if len(prev):
+                prev[rng.randrange(len(prev)), rng.randrange(4)] = rng.choice([-0.0, np.nan])
+        out = np.empty((len(other[0]), 4))
+        want = observation._opponents(*other, m, out, bx, by)
+        got = observation._same_opponents(*other, m, prev, bx, by)
+        same = want[0] == len(prev) and out[: want[0]].tobytes() == prev.tobytes() and not np.isnan(prev).any()
+        assert (got[0] == len(prev)) == same and got[0] in (len(prev), -1)
+        assert got[1:3] == want[1:3]  # (the nearest team-mate; the opponents' distance only when shared)
+        assert not same or got[3] == want[3]
+        shared += same
+        differ += not same
+    assert shared > 1000 and differ > 1000
+
+
+def _packed_go_case(rng, motion, mates, opps):
+    face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else math.nan
+    fence = (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else (math.nan,) * 3
+    me = mates[rng.randrange(len(mates))]
+    return (
+        me[0],
+        me[1],
+        rng.uniform(-4.0, 4.0),
+        rng.uniform(-3, 3),
+        rng.uniform(-3, 3),
+        int(me[4]),
+        rng.uniform(-13.0, 13.0),
+        rng.uniform(-9.0, 9.0),
+        face,
+        rng.uniform(0.5, 4.0),
+        rng.uniform(1.0, 6.0),
+        rng.random() < 0.8,
+        rng.choice([0.0, motion.ball_clearance, 0.9]),
+        rng.choice([0.0, 0.0, rng.uniform(0.0, 2.0)]),
+        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
+        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
+        rng.uniform(1.0, 4.0),
+        rng.random() < 0.7,
+        rng.random() < 0.3,
+        *fence,
+        rng.choice([math.nan, -0.15, rng.uniform(-3.0, 3.0)]),
+        rng.uniform(-11, 11),
+        rng.uniform(-7, 7),
+        rng.choice([-1, 0, 1]),
+    )
+
+
+def test_motion_go_in_one_array_equals_the_kernel_of_every_argument():
+    """`Motion.go` calls `_go_packed` (its numbers in one array, without the dispatcher): the same results,
+    avoidance side and float32 row as `_go` given each number as an argument, on random situations."""
+    import struct
+
+    from simatch.strategy.nubot import motion as motion_mod
+    from simatch.strategy.nubot.params import NubotParams, plain
+
+    field = FieldGeometry()
+    params = plain(NubotParams())
+    areas = Areas(field, params.robot_radius + 0.15)
+    mo = motion_mod.Motion(params, 0.025, field, areas)
+    rng = random.Random(17)
+    box_sets = [motion_mod._NO_BOXES, areas.box_array(areas.forbidden(False)), areas.box_array(areas.forbidden(True))]
+    for _ in range(4000):
+        mates = np.array(
+            [
+                (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1, 0.0, 2.0, 1.0)
+                for k in range(rng.randint(1, 5))
+            ]
+        )
+        opps = np.array(
+            [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(5)]
+        )[: rng.randint(0, 5)].copy()
+        boxes = rng.choice(box_sets)
+        a = _packed_go_case(rng, mo, mates.tolist(), opps)
+        row = np.zeros(5, dtype=np.float32)
+        want = motion_mod._go(*a[:19], boxes, *a[19:23], opps, mates, *a[23:], mo.consts, row)
+        struct.pack_into(f"{len(a)}d", mo._args_buf, motion_mod._ARGS_AT, *a)
+        got = mo._go(mo.args, boxes, opps, mates, mo.row)
+        assert struct.pack("6d", *got) == struct.pack("6d", *want) and got[3] == want[3], a
+        assert mo.row.tobytes() == row.tobytes()
+
+
+def _plain_sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
+    """The rule of avoidance.sub_target in plain Python over lists (the same float operations; ``** 2`` as the
+    product numba makes of it): the reference its compiled storage is held to."""
+    length = math.sqrt((tx - px) * (tx - px) + (ty - py) * (ty - py))
+    if length < 1e-6:
+        return tx, ty, 0
+    ux, uy = (tx - px) / length, (ty - py) / length
+    obst = [(o[0] + look * o[2], o[1] + look * o[3], clear) for o in opps.tolist()]
+    obst += [(m[0] + look * m[2], m[1] + look * m[3], clear) for m in mates.tolist() if m[4] != me_id]
+    if ball_clear > 0.0:
+        obst.append((ball_x, ball_y, ball_clear))
+    seen = {}  # index -> (a, b, d) of the obstacles near the way
+    first, first_a = -1, 1e18
+    for k, (x, y, c) in enumerate(obst):
+        rx, ry = x - px, y - py
+        d = math.sqrt(rx * rx + ry * ry)
+        if d > length + c or math.sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty)) < c:
+            continue
+        a, b = rx * ux + ry * uy, ry * ux - rx * uy
+        seen[k] = (a, b, d)
+        if ((0.0 < a < length and abs(b) < c) or (d < c and a > 0.0)) and a < first_a:
+            first, first_a = k, a
+    if first < 0:
+        return tx, ty, 0
+    group = {first}
+    while True:
+        more = [
+            k
+            for k in sorted(seen)
+            if k not in group
+            and any(
+                (obst[k][0] - obst[g][0]) * (obst[k][0] - obst[g][0])
+                + (obst[k][1] - obst[g][1]) * (obst[k][1] - obst[g][1])
+                < GROUP_GAP * GROUP_GAP
+                for g in group
+            )
+        ]
+        if not more:
+            break
+        group.update(more)  # (a pass of the kernel may take several at once: the same group in the end)
+    bounds, reach, nearest, nearest_d = [], 0.0, first, 1e18
+    for k in sorted(group):
+        a, b, d = seen[k]
+        c = obst[k][2]
+        phi = math.atan2(b, a)
+        delta = 0.5 * math.pi if d <= c else math.asin(c / d)
+        bounds.append((phi - delta, phi + delta))
+        if a > 0.0 and d > reach:
+            reach = d
+        if d < nearest_d:
+            nearest, nearest_d = k, d
+    best, best_cost = None, 1e18
+    for lo, hi in bounds:
+        for angle in (_wrap(lo - 1e-3), _wrap(hi + 1e-3)):
+            if abs(angle) > MAX_TURN or any(
+                lo2 < angle < hi2 or lo2 < angle - TWO_PI < hi2 or lo2 < angle + TWO_PI < hi2 for lo2, hi2 in bounds
+            ):
+                continue
+            cost = abs(angle) - (SIDE_HYSTERESIS if prefer_side != 0 and (angle > 0.0) == (prefer_side > 0) else 0.0)
+            if cost < best_cost:
+                best, best_cost = angle, cost
+    if best is None:
+        best = -MAX_TURN if seen[nearest][1] > 0.0 else MAX_TURN
+    reach = max(min(reach if reach > 0.0 else length, length), 0.5)
+    c, s = math.cos(best), math.sin(best)
+    return px + reach * (c * ux - s * uy), py + reach * (s * ux + c * uy), 1 if best > 0.0 else -1
+
+
+def test_sub_target_with_its_scratch_in_one_array_equals_the_one_before():
+    """sub_target keeps its per-obstacle numbers in the rows of one array (one allocation instead of ten): the
+    same points and sides as its rule in plain Python, bit for bit, on random crowds (clusters, the ball, the
+    robot itself)."""
+    import struct
+
+    from simatch.strategy.nubot.avoidance import sub_target
+
+    rng = random.Random(23)
+    for _ in range(20_000):
+        px, py = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        tx, ty = px + rng.uniform(-6, 6), py + rng.uniform(-6, 6)
+
+        def near(px=px, py=py, tx=tx, ty=ty):
+            return px + (tx - px) * rng.random() + rng.uniform(-1, 1), py + (ty - py) * rng.random() + rng.uniform(
+                -1, 1
+            )
+
+        opps = np.array([(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(rng.randint(0, 6))]).reshape(
+            -1, 4
+        )
+        mates = np.array(
+            [(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1) for k in range(rng.randint(0, 5))]
+        ).reshape(-1, 5)
+        args = (
+            px,
+            py,
+            tx,
+            ty,
+            opps,
+            mates,
+            rng.randint(1, 5),
+            *near(),
+            rng.choice([0.0, 0.45]),
+            1.1,
+            0.3,
+            rng.choice([-1, 0, 1]),
+        )
+        got, want = sub_target(*args), _plain_sub_target(*args)
+        assert struct.pack("2d", *got[:2]) == struct.pack("2d", *want[:2]) and got[2] == want[2], args
+
+
+def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
+    """`TeamView.get` writes its Mate records' slots and its table in one pass: the same fields as
+    `Mate(info, ...)` gives and the table np.array makes of them, for every robot of a running match."""
+    from simatch.strategy.nubot.observation import Mate, TeamView
+
+    with simatch.Simulation("msl_5v5", seed=1) as sim:
+        for _ in range(6):
+            sim.run(seconds=1.5, until_done=False)
+            for node in sim.robot_nodes.values():
+                world = node.world
+                mates, by_id, table = TeamView().get(world)
+                expect = []
+                for k, r in enumerate(world.vision.robots):
+                    s = world.strategies.get(r.id)
+                    if s is None:
+                        m = Mate(r, r.id == world.goalkeeper)
+                    else:
+                        user = s.user.tolist()
+                        att, rt = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+                        pi = s.pass_cmd if s.pass_cmd.is_valid else None
+                        m = Mate(r, r.id == world.goalkeeper, s.role, s.action, pi, att, rt)
+                    m.row = k
+                    expect.append(m)
+                    assert by_id[r.id] is mates[k]
+                for got, want in zip(mates, expect, strict=True):
+                    assert [getattr(got, f) for f in Mate.__slots__] == [getattr(want, f) for f in Mate.__slots__]
+                rows = [(m.x, m.y, m.vx, m.vy, m.id, m.yaw, m.role, m.role_time) for m in expect]
+                assert table.tobytes() == np.array(rows, dtype=np.float64).reshape(-1, 8).tobytes()

@@ -37,6 +37,10 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
+# (what `fetch` and `play` read at every tick, as globals: a namespace's attribute costs more)
+_PLAY = PHASES.PLAY
+_CATCH_BALL, _CATCH_POSITIONED = ACTIONS.CATCH_BALL, ACTIONS.CATCH_POSITIONED
+
 MOUTH = 0.29  # robot centre to a held ball's centre [m]
 PASS_KEEP = 1.5  # a pass being lined up keeps its receiver unless another is this much better
 TASTE = 0.3  # spread of a possession's taste for each receiver (position value units)
@@ -146,7 +150,7 @@ class BallPlayer:
         feed = (0.0, 0.0)
         end = 0.0
         vmax = p.max_speed
-        action = ACTIONS.CATCH_BALL
+        action = _CATCH_BALL
         t, tx, ty = pic.catch.get(me.id, (0.0, bx, by))
         if pic.opp_holds or speed < 0.4:
             tx, ty = bx, by
@@ -164,7 +168,7 @@ class BallPlayer:
                 err = abs(wrap(face - me.yaw))
                 give = max(0.0, speed - p.catch_speed + 0.6)
                 feed = (ux * give, uy * give)
-                action = ACTIONS.CATCH_POSITIONED
+                action = _CATCH_POSITIONED
             elif dball < 1.0:
                 tx, ty = bx + vbx * 0.15, by + vby * 0.15
                 end = 0.6
@@ -200,7 +204,7 @@ class BallPlayer:
         left = p.dribble_limit - used
         opps = obs.opp_array
         bx, by = obs.bx, obs.by
-        can_score = not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == PHASES.PLAY
+        can_score = not flow.pass_pending and not flow.need_pass and me.x > 0.3 and flow.phase == _PLAY
         threat = self.threat_time(obs)
         prev = self.plan
         plan = None

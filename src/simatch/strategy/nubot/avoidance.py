@@ -46,9 +46,12 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
     if length < 1e-6:
         return tx, ty, 0
     ux, uy = dx / length, dy / length
-    ox = np.empty(n)
-    oy = np.empty(n)
-    oc = np.empty(n)
+    # every per-obstacle number in the rows of one array (one allocation instead of ten): the obstacles'
+    # x, y and clearance, whether near (1.0) with its a, b, d, whether in the group (1.0), its angles' bounds
+    work = np.empty((10, n))
+    ox = work[0]
+    oy = work[1]
+    oc = work[2]
     cnt = 0
     for k in range(opps.shape[0]):
         ox[cnt] = opps[k, 0] + look * opps[k, 2]
@@ -65,10 +68,11 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
     if ball_clear > 0.0:
         ox[cnt], oy[cnt], oc[cnt] = ball_x, ball_y, ball_clear
         cnt += 1
-    near = np.zeros(cnt, dtype=np.bool_)
-    A = np.zeros(cnt)
-    B = np.zeros(cnt)
-    D = np.zeros(cnt)
+    work[3:8, :cnt] = 0.0
+    near = work[3]
+    A = work[4]
+    B = work[5]
+    D = work[6]
     first, first_a = -1, 1e18
     for k in range(cnt):
         rx, ry = ox[k] - px, oy[k] - py
@@ -77,32 +81,32 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
             continue  # beyond the target, or standing at it (the robot must go there)
         a = rx * ux + ry * uy
         b = ry * ux - rx * uy
-        near[k] = True
+        near[k] = 1.0
         A[k], B[k], D[k] = a, b, d
         if (0.0 < a < length and abs(b) < oc[k]) or (d < oc[k] and a > 0.0):
             if a < first_a:
                 first, first_a = k, a
     if first < 0:
         return tx, ty, 0
-    group = np.zeros(cnt, dtype=np.bool_)
-    group[first] = True
+    group = work[7]
+    group[first] = 1.0
     grew = True
     while grew:
         grew = False
         for k in range(cnt):
-            if near[k] and not group[k]:
+            if near[k] != 0.0 and group[k] == 0.0:
                 for g in range(cnt):
-                    if group[g] and (ox[k] - ox[g]) ** 2 + (oy[k] - oy[g]) ** 2 < GROUP_GAP * GROUP_GAP:
-                        group[k] = True
+                    if group[g] != 0.0 and (ox[k] - ox[g]) ** 2 + (oy[k] - oy[g]) ** 2 < GROUP_GAP * GROUP_GAP:
+                        group[k] = 1.0
                         grew = True
                         break
-    lo = np.empty(cnt)
-    hi = np.empty(cnt)
+    lo = work[8]
+    hi = work[9]
     m = 0
     reach = 0.0
     nearest, nearest_d = first, 1e18
     for k in range(cnt):
-        if not group[k]:
+        if group[k] == 0.0:
             continue
         phi = math.atan2(B[k], A[k])
         delta = 0.5 * math.pi if D[k] <= oc[k] else math.asin(oc[k] / D[k])

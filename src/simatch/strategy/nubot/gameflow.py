@@ -41,6 +41,9 @@ class Phase(enum.IntEnum):
 
 
 PHASES = members(Phase)
+# (what `update` compares at every tick as plain ints and the very members: an IntEnum compares slowly)
+_STOPROBOT, _PARKINGROBOT, _TEST = int(MODES.STOPROBOT), int(MODES.PARKINGROBOT), int(MODES.TEST)
+_PLAY, _OUR_RESTART, _OPP_RESTART = PHASES.PLAY, PHASES.OUR_RESTART, PHASES.OPP_RESTART
 
 
 class GameFlow:
@@ -68,13 +71,13 @@ class GameFlow:
         mode = obs.mode
         last = self._last_mode
         self._last_mode = mode
-        if mode == MODES.STOPROBOT:
+        if mode == _STOPROBOT:
             self.phase = PHASES.STOP
             return
-        if mode == MODES.PARKINGROBOT:
+        if mode == _PARKINGROBOT:
             self.phase = PHASES.PARK
             return
-        if mode == MODES.TEST:
+        if mode == _TEST:
             self.phase = PHASES.TEST
             return
         if 1 <= mode <= 13:
@@ -110,9 +113,9 @@ class GameFlow:
     def _follow(self, obs: Observation) -> None:
         holder = obs.holder
         touched = self._regain(obs, holder)
-        shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
-        moved = shift >= IN_PLAY_DISTANCE
-        if self.phase == PHASES.OUR_RESTART:
+        phase = self.phase  # (always one of PHASES' members: compared by identity)
+        if phase is _OUR_RESTART:
+            shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
             if shift >= TAKEN_DISTANCE and not self.taker:
                 # from its first touch on, the taker may not touch the ball again before another robot did;
                 # the others keep their distance until the ball is in play (or the restart times out)
@@ -120,12 +123,13 @@ class GameFlow:
                 taker = min(obs.field_mates() or obs.mates, key=lambda m: math.hypot(m.x - bx, m.y - by))
                 self.taker, self.taker_since = taker.id, obs.t
                 self.first_holder = taker.id
-            if moved or obs.t - self.t0 > self.restart_wait:
+            if shift >= IN_PLAY_DISTANCE or obs.t - self.t0 > self.restart_wait:
                 self.phase = PHASES.PLAY
-        elif self.phase == PHASES.OPP_RESTART:
-            if moved or obs.t - self.t0 > self.restart_wait:
+        elif phase is _OPP_RESTART:
+            shift = math.hypot(obs.bx - self.ball0[0], obs.by - self.ball0[1])
+            if shift >= IN_PLAY_DISTANCE or obs.t - self.t0 > self.restart_wait:
                 self.phase = PHASES.PLAY
-        if self.phase != PHASES.PLAY or not (self.taker or self.pass_pending):
+        if self.phase is not _PLAY or not (self.taker or self.pass_pending):
             return
         if touched is None:
             touched = _opponent_touching(obs)
@@ -154,7 +158,7 @@ class GameFlow:
             # the team-mate nearest to the ball (the first of equals), if it is on it
             on = obs.mates[obs.near_mate]
         if on is None:
-            touched = _opponent_touching(obs)
+            touched = obs.opp_ball_d < TOUCH_DISTANCE  # (_opponent_touching, inline)
             if touched:
                 self._ours = 0
             return touched

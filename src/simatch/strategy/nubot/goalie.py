@@ -16,17 +16,21 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from ..base import Command, RoundedMove
+from ..base import Command
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .ballpath import GRAVITY
 from .gameflow import PHASES, GameFlow
 from .geometry import clamp
-from .motion import Motion
+from .motion import Motion, rounded_move
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
+
+# (what `decide` reads at every tick, as globals: a namespace's attribute costs more)
+_PLAY = PHASES.PLAY
+_GOALIE, _CATCH_POSITIONED, _POSITIONED = ROLES.GOALIE, ACTIONS.CATCH_POSITIONED, ACTIONS.POSITIONED
 
 LOB_MIN, LOB_MAX = 3.0, 9.0  # a clearance lob goes to a team-mate this far away (10 m/s reaches 9.8 m) [m]
 
@@ -78,7 +82,7 @@ class Goalkeeper:
         me = obs.me
         if obs.ball_seen:
             self.tracker.add(obs.t, obs.bx, obs.by, obs.bz)
-        if flow.phase == PHASES.PLAY and pic.goalie_plays:
+        if flow.phase == _PLAY and pic.goalie_plays:
             return self.play_ball(obs, pic, flow)
         target, urgent = self.block_point(obs)
         face = math.atan2(obs.by - me.y, obs.bx - me.x)
@@ -87,9 +91,7 @@ class Goalkeeper:
         motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None)
         # the command's numbers (and the target as its intent), rounded as the messages take them
         vx, vy, w, ix, iy = motion.row.tolist()
-        return RoundedMove(
-            vx, vy, w, ROLES.GOALIE, ACTIONS.CATCH_POSITIONED if urgent else ACTIONS.POSITIONED, (ix, iy)
-        )
+        return rounded_move(vx, vy, w, _GOALIE, _CATCH_POSITIONED if urgent else _POSITIONED, (ix, iy), ())
 
     # --- where to stand ------------------------------------------------------------------------------------
     def block_point(self, obs: Observation) -> tuple[tuple[float, float], bool]:

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import math
+import struct
 
 import numba
 import numpy as np
@@ -22,7 +23,7 @@ from ...exactmath import hypot, pymax, pymin, remainder
 from ..base import RoundedMove
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
-from .observation import Observation
+from .observation import Observation, kernel_entry
 from .params import NubotParams
 from .positions import route
 
@@ -78,6 +79,14 @@ class Motion:
                 ar.goal_half if ar is not None else 0.5 * field.goal_width,
             )
         )
+        # the fixed numbers, then `go`'s numbers of the call, for the kernel (`_go_packed`): those of each
+        # call written (in one struct call) after the fixed ones at each call; never leaves this robot's Motion
+        self.args = np.concatenate((self.consts, np.zeros(_N_ARGS)))
+        self._args_buf = memoryview(self.args)
+        # the compiled `_go_packed` for its argument types (float64 arrays: the boxes and the observation's
+        # opponents and team table, C-contiguous, as `Areas.box_array` and `Observation` make them), called
+        # without numba's dispatcher typing its arguments at every call
+        self._go = kernel_entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.row)
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -111,10 +120,13 @@ class Motion:
         me = obs.me
         c = obs.coach
         if c is not None:  # the speed limits the coach allows (CoachInfo max_vel / max_w)
-            if c.max_vel > 0.0:
-                vmax = min(vmax, c.max_vel)
-            if c.max_w > 0.0:
-                wmax = min(wmax, c.max_w)
+            # (min(vmax, c.max_vel) and min(wmax, c.max_w), inline: the first unless the second is smaller)
+            lim = c.max_vel
+            if lim > 0.0 and lim < vmax:
+                vmax = lim
+            lim = c.max_w
+            if lim > 0.0 and lim < wmax:
+                wmax = lim
         box_array = self.areas.box_array(boxes) if boxes else _NO_BOXES
         if ball_obstacle is True:
             ball = self.ball_clearance
@@ -124,7 +136,11 @@ class Motion:
             fx = fy = fr = math.nan
         else:
             fx, fy, fr = fence
-        vx, vy, w, side, wx, wy = _go(
+        # the kernel's numbers in one float64 array: one argument instead of twenty-seven, written in one call
+        # (a kernel call costs some 200 instructions per argument, an array ~1 k)
+        _PACK_ARGS(
+            self._args_buf,
+            _ARGS_AT,
             me.x,
             me.y,
             me.yaw,
@@ -144,19 +160,15 @@ class Motion:
             self.p.braking if brake is None else brake,
             gentle and bool(obs.opps),
             turn_first,
-            box_array,
             fx,
             fy,
             fr,
             math.nan if max_x is None else max_x,
-            obs.opp_array,
-            obs.mate_array,
             obs.bx,
             obs.by,
             self.side,
-            self.consts,
-            self.row,
         )
+        vx, vy, w, side, wx, wy = self._go(self.args, box_array, obs.opp_array, obs.mate_array, self.row)
         self.side = side
         self.last = (wx, wy, w)
         return (vx, vy, w)
@@ -165,7 +177,7 @@ class Motion:
         """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
         all rounded as the messages take them (from `row`)."""
         vx, vy, w, ix, iy = self.row.tolist()
-        return RoundedMove(vx, vy, w, role, action, (ix, iy))
+        return rounded_move(vx, vy, w, role, action, (ix, iy), ())
 
     def turn_rate(self, err: float, wmax: float) -> float:
         a = abs(err)
@@ -188,6 +200,23 @@ class Motion:
 
 
 _NO_BOXES = np.zeros((0, 3))
+_new = object.__new__
+
+
+def rounded_move(vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple) -> RoundedMove:
+    """``RoundedMove(vx, vy, w, role, action, intent, user)``: the same object, its attributes written here (a
+    class call with a Python ``__init__`` costs CPython 3.11 several times what a function's call does)."""
+    move = _new(RoundedMove)
+    move.vx, move.vy, move.w = vx, vy, w
+    move.role, move.action, move.intent, move.user = role, action, intent, user
+    return move
+
+
+# Motion.args: Motion.consts (_C_*), then `_go`'s numbers of a call in the order of its arguments (the
+# flags as 0.0/1.0, the robot's id and the avoidance side, -1, 0 or +1, as floats: exact)
+_N_ARGS = 26
+_PACK_ARGS = struct.Struct(f"{_N_ARGS}d").pack_into
+_ARGS_AT = 10 * 8  # (bytes: after the ten fixed numbers)
 # the indices of Motion.consts
 _C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC, _C_PERIOD, _C_L2, _C_GOAL_HALF = (
     range(10)
@@ -308,3 +337,44 @@ def _go(
     row[1] = bvy
     row[2] = w
     return bvx, bvy, w, side, vx, vy
+
+
+@numba.njit(cache=True, nogil=True)
+def _go_packed(args, boxes, opps, mates, row):
+    """`_go` with its numbers in one float64 array ``args`` (Motion.args: the ten fixed numbers `_go` reads as
+    ``consts``, then the call's in `_go`'s order of arguments, the robot's id, the flags and the avoidance
+    side as floats), for a call of five arguments instead of thirty-one."""
+    a = 10
+    return _go(
+        args[a],
+        args[a + 1],
+        args[a + 2],
+        args[a + 3],
+        args[a + 4],
+        args[a + 5],
+        args[a + 6],
+        args[a + 7],
+        args[a + 8],
+        args[a + 9],
+        args[a + 10],
+        args[a + 11] != 0.0,
+        args[a + 12],
+        args[a + 13],
+        args[a + 14],
+        args[a + 15],
+        args[a + 16],
+        args[a + 17] != 0.0,
+        args[a + 18] != 0.0,
+        boxes,
+        args[a + 19],
+        args[a + 20],
+        args[a + 21],
+        args[a + 22],
+        opps,
+        mates,
+        args[a + 23],
+        args[a + 24],
+        int(args[a + 25]),
+        args,
+        row,
+    )

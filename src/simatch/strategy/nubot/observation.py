@@ -8,6 +8,7 @@ are not one of the team's robots.
 from __future__ import annotations
 
 import math
+import struct
 from itertools import chain
 
 import numba
@@ -18,6 +19,9 @@ from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
 _SAME_ROBOT = 0.1
+#: number of team-mates -> the `pack_into` of a struct of their table's numbers (float64, native)
+_TABLE_PACK: dict = {}
+_new = object.__new__
 
 
 class Mate:
@@ -76,7 +80,18 @@ class TeamView:
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
     the others when they hold the very same messages."""
 
-    __slots__ = ("tick", "robots", "team_strategy", "mates", "by_id", "array", "holder")
+    __slots__ = (
+        "tick",
+        "robots",
+        "team_strategy",
+        "mates",
+        "by_id",
+        "array",
+        "holder",
+        "opp_tick",
+        "opp_array",
+        "opps",
+    )
 
     def __init__(self):
         self.tick = -1
@@ -88,6 +103,11 @@ class TeamView:
         # read the columns they need)
         self.array = np.zeros((0, 8))
         self.holder: Mate | None = None  # the first team-mate holding the ball, if any
+        # the opponents' array and rows an observation of tick ``opp_tick`` found last: a team-mate seeing
+        # the very same opponents at that tick shares them (read only, as the team picture is shared)
+        self.opp_tick = -1
+        self.opp_array: np.ndarray | None = None
+        self.opps: list | None = None
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
@@ -102,25 +122,58 @@ class TeamView:
         flat = []
         by_id = {}
         holder = None
+        row = 0
         for r in robots:
             rid = r.id
             s = told(rid)
+            # (the record's slots written here, as Mate.__init__ writes them: a class call with a Python
+            # __init__ costs CPython 3.11 twice what the writes do)
+            m = _new(Mate)
+            m.id = rid
+            m.x = x = r.x
+            m.y = y = r.y
+            m.yaw = yaw = r.yaw
+            m.vx = vx = r.vx
+            m.vy = vy = r.vy
+            m.w = r.w
+            m.holding = holding = r.holding_ball
+            m.valid = r.valid
+            m.stuck = r.stuck
+            m.is_goalie = rid == gk
+            m.row = row
             if s is None:
-                m = Mate(r, rid == gk)
+                m.role = role = -1
+                m.action = -1
+                m.pass_info = None
+                m.attacking = -1
+                m.role_time = role_time = 1e9
             else:
                 user = s.user.tolist()
-                attacking, role_time = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
+                if len(user) >= 2:
+                    m.attacking = int(user[0])
+                    m.role_time = role_time = user[1]
+                else:
+                    m.attacking = -1
+                    m.role_time = role_time = 1e9
+                m.role = role = s.role
+                m.action = s.action
                 pass_cmd = s.pass_cmd
-                m = Mate(r, rid == gk, s.role, s.action, pass_cmd if pass_cmd.is_valid else None, attacking, role_time)
-            m.row = len(mates)
+                m.pass_info = pass_cmd if pass_cmd.is_valid else None
+            row += 1
             mates.append(m)
             by_id[rid] = m
-            flat += (m.x, m.y, m.vx, m.vy, rid, m.yaw, m.role, m.role_time)
-            if holder is None and m.holding:
+            flat += (x, y, vx, vy, rid, yaw, role, role_time)
+            if holder is None and holding:
                 holder = m
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id, self.holder = mates, by_id, holder
-        self.array = np.fromiter(flat, float, len(flat)).reshape(-1, 8)
+        # (written into an empty array by one struct call: half what np.fromiter costs for forty numbers)
+        k = len(mates)
+        self.array = arr = np.empty((k, 8))
+        pack = _TABLE_PACK.get(k)
+        if pack is None:
+            pack = _TABLE_PACK[k] = struct.Struct(f"{8 * k}d").pack_into
+        pack(arr, 0, *flat)
         return self.mates, self.by_id, self.array
 
 
@@ -179,6 +232,29 @@ class Observation:
             self.ball_age = 0.0 if self.ball_seen else b.age
         o = v.obstacles
         ox = o.x
+        tick = self.tick
+        if view.opp_tick == tick:
+            # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are
+            # shared (one kernel call that compares instead of filling, no array or rows made)
+            arr = view.opp_array
+            k, self.near_mate, self.near_mate_d, self.opp_ball_d = _same_opponents(
+                ox, o.y, o.vx, o.vy, self.mate_array, arr, self.bx, self.by
+            )
+            if k >= 0:
+                self.opp_array = arr
+                self.opps = view.opps
+            else:
+                self._own_opponents(o, view, tick)
+        else:
+            self._own_opponents(o, view, tick)
+        c = world.coach
+        self.coach = c
+        self.mode = c.match_mode if c is not None else 0
+        self.mtype = c.match_type if c is not None else 0
+
+    def _own_opponents(self, o, view: TeamView, tick: int) -> None:
+        """The opponents among the obstacles ``o``, found afresh, and kept in ``view`` for team-mates."""
+        ox = o.x
         # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs
         # numba more to hand back than this one does to make)
         buf = np.empty((len(ox), 4))
@@ -186,11 +262,8 @@ class Observation:
             ox, o.y, o.vx, o.vy, self.mate_array, buf, self.bx, self.by
         )
         self.opp_array = arr = buf[:k]
-        self.opps = arr.tolist()
-        c = world.coach
-        self.coach = c
-        self.mode = c.match_mode if c is not None else 0
-        self.mtype = c.match_type if c is not None else 0
+        self.opps = rows = arr.tolist()
+        view.opp_tick, view.opp_array, view.opps = tick, arr, rows
 
     @property
     def ball_speed(self) -> float:
@@ -199,6 +272,18 @@ class Observation:
     def field_mates(self) -> list[Mate]:
         """Valid team-mates that are not the goalkeeper, me included."""
         return [m for m in self.mates if m.valid and not m.is_goalie]
+
+
+def kernel_entry(kernel, *sample):
+    """The compiled version of ``kernel`` for the argument types of ``sample`` (what the dispatcher would pick
+    for them), to be called without numba's dispatcher, which types every argument at every call (some 200
+    instructions each). The version does not check its arguments: only for call sites whose arguments always
+    have the sample's types (float64 arrays made by this package, C-contiguous and writable, plain floats).
+    Nothing is run here; without the compiler (NUMBA_DISABLE_JIT) it is the kernel itself."""
+    compile_for = getattr(kernel, "compile", None)
+    if compile_for is None:
+        return kernel
+    return compile_for(tuple(map(numba.typeof, sample)))
 
 
 def _array(rows: list[tuple], width: int) -> np.ndarray:
@@ -218,34 +303,11 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     Returns how many, with what the game flow and the team picture ask of the ball at (bx, by) every
     tick: the row of the team-mate nearest to it (the first of equals; -1 without team-mates) and its
     distance, and the distance of the nearest opponent (inf without opponents), all by CPython's hypot."""
-    n = ox.shape[0]
-    k_mates = mates.shape[0]
-    keep = np.zeros(n, dtype=np.bool_)
-    kept = 0
-    for k in range(n):
-        x, y = np.float64(ox[k]), np.float64(oy[k])
-        mate = False
-        for j in range(k_mates):
-            if mates[j, 0] == x and mates[j, 1] == y:
-                mate = True
-                break
-        if not mate:
-            keep[k] = True
-            kept += 1
-    if n - kept < k_mates - 1:
-        # some team-mates are not where the team list says (noisy perception): match by distance
-        for k in range(n):
-            if keep[k]:
-                x, y = np.float64(ox[k]), np.float64(oy[k])
-                for j in range(k_mates):
-                    if not (abs(mates[j, 0] - x) >= _SAME_ROBOT or abs(mates[j, 1] - y) >= _SAME_ROBOT):
-                        keep[k] = False
-                        kept -= 1
-                        break
+    noisy = _noisy(ox, oy, mates)
     r = 0
     opp_d = math.inf
-    for k in range(n):
-        if keep[k]:
+    for k in range(ox.shape[0]):
+        if _opponent(np.float64(ox[k]), np.float64(oy[k]), mates, noisy):
             out[r, 0] = ox[k]
             out[r, 1] = oy[k]
             out[r, 2] = ovx[k]
@@ -254,9 +316,92 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
             if d < opp_d:
                 opp_d = d
             r += 1
+    near, near_d = _nearest_mate(mates, bx, by)
+    return r, near, near_d, opp_d
+
+
+@numba.njit(cache=True, nogil=True)
+def _noisy(ox, oy, mates):
+    """Whether some team-mates are not exactly where the team list puts them among the obstacles (float32 x,
+    y; ``mates``: x, y in the first columns): fewer obstacles are exactly at a team-mate than there are
+    team-mates besides the robot itself (noisy perception). Then `_opponent` matches by distance."""
+    n = ox.shape[0]
+    k_mates = mates.shape[0]
+    at_mates = 0
+    for k in range(n):
+        if _at_mate(np.float64(ox[k]), np.float64(oy[k]), mates):
+            at_mates += 1
+    return at_mates < k_mates - 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _at_mate(x, y, mates):
+    for j in range(mates.shape[0]):
+        if mates[j, 0] == x and mates[j, 1] == y:
+            return True
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
+def _opponent(x, y, mates, noisy):
+    """Whether the obstacle at (x, y) is an opponent: not exactly at a team-mate, nor, when ``noisy``
+    (`_noisy`), within _SAME_ROBOT of one (in both coordinates)."""
+    if _at_mate(x, y, mates):
+        return False
+    if noisy:
+        for j in range(mates.shape[0]):
+            if not (abs(mates[j, 0] - x) >= _SAME_ROBOT or abs(mates[j, 1] - y) >= _SAME_ROBOT):
+                return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_mate(mates, bx, by):
+    """The row of the team-mate nearest to (bx, by) (the first of equals; -1 without team-mates) and its
+    distance, by CPython's hypot."""
     near, near_d = -1, math.inf
-    for j in range(k_mates):
+    for j in range(mates.shape[0]):
         d = hypot(mates[j, 0] - bx, mates[j, 1] - by)
         if j == 0 or d < near_d:
             near, near_d = j, d
+    return near, near_d
+
+
+@numba.njit(cache=True, nogil=True)
+def _same(a, b):
+    """``a`` and ``b`` are the same float64 bit for bit (a NaN never is; -0.0 is not 0.0)."""
+    return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
+
+
+@numba.njit(cache=True, nogil=True)
+def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
+    """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
+    number of rows if the opponents among these obstacles are exactly ``prev``'s rows (bit for bit, in
+    order; nothing written), else -1; then, as `_opponents`, the team-mate nearest to the ball at (bx, by),
+    its distance and the nearest opponent's distance (inf without opponents)."""
+    noisy = _noisy(ox, oy, mates)
+    m = prev.shape[0]
+    r = 0
+    opp_d = math.inf
+    for k in range(ox.shape[0]):
+        x, y = np.float64(ox[k]), np.float64(oy[k])
+        if _opponent(x, y, mates, noisy):
+            if r >= m:
+                r = -1
+                break
+            if not (
+                _same(prev[r, 0], x)
+                and _same(prev[r, 1], y)
+                and _same(prev[r, 2], np.float64(ovx[k]))
+                and _same(prev[r, 3], np.float64(ovy[k]))
+            ):
+                r = -1
+                break
+            d = hypot(prev[r, 0] - bx, prev[r, 1] - by)
+            if d < opp_d:
+                opp_d = d
+            r += 1
+    if r != m:
+        r = -1
+    near, near_d = _nearest_mate(mates, bx, by)
     return r, near, near_d, opp_d

@@ -63,6 +63,8 @@ PASS_KEPT = 0.3
 # the positional roles as numbers, for the compiled slots (and back: the Role members by value)
 _ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
+#: the phases of a set piece (set up or not taken yet), as one tuple made once
+_SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
 _NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
 
 
@@ -418,7 +420,7 @@ class Analyst:
         if pic.holder == 0 and obs.opp_ball_d < OPP_CONTROL:  # (the nearest opponent's distance to the ball)
             pic.opp_holds = True
         self._passes(obs, pic)
-        if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
+        if flow.phase in _SET_PIECE_PHASES:
             self._set_piece(obs, flow, pic, mates)  # (nobody plays the ball: no interceptions needed)
             return pic
         # interception of every robot, ours (with the time to face the ball) and theirs, in one go

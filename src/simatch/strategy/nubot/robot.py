@@ -26,7 +26,7 @@ from .active import BallPlayer
 from .gameflow import MODES, PHASES, GameFlow
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
-from .motion import Motion
+from .motion import Motion, rounded_move
 from .observation import Observation, TeamView
 from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
@@ -36,6 +36,18 @@ from .testmodes import TestModes
 from .warm import load_kernels
 
 _f32s = msgs.f32s
+
+# what `decide` and `hold_slot` compare at every tick, as globals (a namespace's attribute costs more); the
+# game flow's phase is always one of PHASES' members, compared by identity
+_STOP, _PARK, _TEST, _PLAY, _SETUP, _OUR_RESTART = (
+    PHASES.STOP,
+    PHASES.PARK,
+    PHASES.TEST,
+    PHASES.PLAY,
+    PHASES.SETUP,
+    PHASES.OUR_RESTART,
+)
+_NOROLE, _ACTIVE, _CATCHOFPASS, _POSITIONED = ROLES.NOROLE, ROLES.ACTIVE, ROLES.CATCHOFPASS, ACTIONS.POSITIONED
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -136,27 +148,27 @@ class NubotRobot(RobotStrategy):
         me = obs.me
         phase = flow.phase
         self.steady = None
-        if phase == PHASES.STOP:
+        if phase is _STOP:
             return Command(role=self.role, action=ACTIONS.NO_ACTION)
-        if phase == PHASES.PARK:
+        if phase is _PARK:
             return self.park(obs)
         pic = self.picture
         if not (odd and pic is not None and pic.phase == phase and self.picture_tick == obs.tick - 1):
             pic = self.team_picture(obs)
             self.picture, self.picture_tick = pic, obs.tick
-        if phase == PHASES.TEST:
+        if phase is _TEST:
             cmd = self.tests.decide(obs, pic)
         else:
-            role = pic.roles.get(me.id, ROLES.NOROLE)
+            role = pic.roles.get(me.id, _NOROLE)
             if me.is_goalie:
                 cmd = self.keeper.decide(obs, pic, flow)
-            elif phase == PHASES.OUR_RESTART and role == ROLES.ACTIVE and flow.taker != me.id:
+            elif phase is _OUR_RESTART and role == _ACTIVE and flow.taker != me.id:
                 cmd = self.taker.take(obs, pic, flow)
-            elif phase != PHASES.PLAY:
+            elif phase is not _PLAY:
                 cmd = self.hold_slot(obs, pic, role)
             elif me.holding:
                 cmd = self.player.play(obs, pic, flow, role)
-            elif role in (ROLES.ACTIVE, ROLES.CATCHOFPASS):
+            elif role == _ACTIVE or role == _CATCHOFPASS:
                 cmd = self.player.fetch(obs, pic, role)
             else:
                 cmd = self.hold_slot(obs, pic, role)
@@ -169,8 +181,8 @@ class NubotRobot(RobotStrategy):
         cmd.user = (1.0 if pic.attacking else 0.0, obs.t - self.role_since)
         if (
             not odd
-            and phase in (PHASES.PLAY, PHASES.SETUP)
-            and cmd.action == ACTIONS.POSITIONED
+            and (phase is _PLAY or phase is _SETUP)
+            and cmd.action == _POSITIONED
             and cmd.pass_intent is None
             and pic.receiver != me.id
             and not me.holding
@@ -200,7 +212,7 @@ class NubotRobot(RobotStrategy):
         bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         if type(cmd) is RoundedMove:  # (its intent is rounded already)
             bx, by, w_body = _f32s(bx, by, w_body)
-            return RoundedMove(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
+            return rounded_move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
@@ -213,7 +225,7 @@ class NubotRobot(RobotStrategy):
             slot = (x, y, obs.bx, obs.by)
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
-        keep = None if self.flow.phase == PHASES.PLAY else self.keep_from_ball(obs)  # (in play: none)
+        keep = None if self.flow.phase is _PLAY else self.keep_from_ball(obs)  # (in play: none)
         fence = None
         if keep is not None:
             taker = role == ROLES.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MODES.DROPBALL
@@ -239,7 +251,7 @@ class NubotRobot(RobotStrategy):
             fence=fence,
             max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None,
         )
-        return motion.move(role, ACTIONS.POSITIONED)  # (its numbers rounded as the messages take them)
+        return motion.move(role, _POSITIONED)  # (its numbers rounded as the messages take them)
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a
