@@ -225,11 +225,12 @@ def test_velocity_commands_are_stored_as_the_rounded_numbers_the_general_way_sto
 
 
 def test_kernel_entries_are_the_compiled_versions_the_dispatcher_picks():
-    """`kernels.entry` gives the very compiled function numba's dispatcher calls for those argument types, and
+    """`simatch.compiled.entry` gives the very compiled function numba's dispatcher calls for those argument types, and
     runs nothing; called with arguments of those kinds it returns what the dispatcher's call returns."""
     import numba
 
-    from simatch.sim.kernels import entry, model_poses32
+    from simatch.compiled import entry
+    from simatch.sim.kernels import model_poses32
 
     rng = np.random.default_rng(5)
     qpos, qvel = rng.normal(size=40), rng.normal(size=40)
@@ -252,7 +253,7 @@ def test_kernel_entries_are_the_compiled_versions_the_dispatcher_picks():
 
 
 def test_held_ball_kernels_through_their_entries_play_the_match_the_dispatcher_plays():
-    """The held ball's kernels (keep, roll, catch) bound by `kernels.entry` at the start give the same steps as
+    """The held ball's kernels (keep, roll, catch) bound by `simatch.compiled.entry` at the start give the same steps as
     their dispatchers: a stretch with catches, holds and losses of the ball played both ways ends in the same
     state, bit for bit."""
     from simatch.sim import kernels

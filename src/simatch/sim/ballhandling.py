@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .kernels import catch_candidate, entry, equality_force, keep_ball, roll_held_ball
+from ..compiled import entry
+from .kernels import catch_candidate, equality_force, keep_ball, roll_held_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -88,7 +89,7 @@ class BallHandling:
         # as one contiguous array: what the per-step kernels are given
         self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
         self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
-        # the per-step kernels without numba's dispatcher (`kernels.entry`): the same kinds of arguments at
+        # the per-step kernels without numba's dispatcher (`simatch.compiled.entry`): the same kinds of arguments at
         # every call (these views, the engine's constraint arrays, plain numbers, the candidates' int64 array)
         self._dribble_eq = [int(e) for e in index.dribble_eq]
         self._mouth_xs = self._mouth_x.tolist()

@@ -12,23 +12,6 @@ import numba
 import numpy as np
 
 
-def entry(kernel, *sample):
-    """``kernel``'s compiled function for the types of ``sample`` (its arguments at the calls to come), to call
-    without numba's dispatcher.
-
-    The dispatcher types every argument at every call to pick the compiled version (some 150-250 machine
-    instructions per argument: a third of the cost of a per-step kernel's call here). A call site whose
-    arguments always have the same types (the engine's arrays, taken once as views, arrays made for the
-    call by ``np.zeros`` of a fixed dtype, plain ints, floats and bools) can skip that: the function returned
-    takes the arguments as they are. It does not check an array's dtype or layout, so it is only for such
-    call sites; anything else calls the kernel. Nothing is run here (the version is compiled, or loaded from
-    the cache); without numba's compiler (NUMBA_DISABLE_JIT) it is the kernel itself."""
-    compile = getattr(kernel, "compile", None)
-    if compile is None:
-        return kernel
-    return compile(tuple(numba.typeof(a) for a in sample))
-
-
 @numba.njit(cache=True, nogil=True)
 def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     """Horizontal magnitude of the force of equality constraint ``eq`` (its first two rows) [N]."""

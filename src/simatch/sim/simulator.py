@@ -26,12 +26,13 @@ import mujoco
 import numpy as np
 
 from .. import msgs
+from ..compiled import entry
 from ..config.schema import Scene
 from ..robots.drive import OmniDrive
 from .ballhandling import BallHandling
 from .flight import AerialFleet, aerial_poses, frame_contacts, planar, rotor_links
 from .inputs import InputLog, action_input, install, velocity_input, world_input
-from .kernels import ball_apart, entry, model_poses, model_poses32, robot_flags, sense_ground
+from .kernels import ball_apart, model_poses, model_poses32, robot_flags, sense_ground
 from .perception import Perception, Snapshot
 from .sight import Sight
 from .world import BALL_NAME, build_world
@@ -241,7 +242,7 @@ class Simulator:
             self._geom_robot[g] = i
         self._geom_robot_list = self._geom_robot.tolist()
         self._init_touch_bounds()
-        # the per-step kernels, called without numba's dispatcher (`kernels.entry`: their arguments are the
+        # the per-step kernels, called without numba's dispatcher (`simatch.compiled.entry`: their arguments are the
         # engine's arrays taken once, plain numbers and float32 arrays made for the call)
         self._pose32_size, self._twist32_size = 7 * (self.n + 1), 6 * (self.n + 1)  # the robots and the ball
         self._poses32 = entry(
@@ -883,7 +884,7 @@ class Simulator:
             wheels,
         )
         sense = self._sense
-        if sense is None:  # (the arguments' kinds are the same at every call: see `kernels.entry`)
+        if sense is None:  # (the arguments' kinds are the same at every call: see `simatch.compiled.entry`)
             sense = self._sense = entry(sense_ground, *args)
         sense(*args)
         self.stuck = p.stuck

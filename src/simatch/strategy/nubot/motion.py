@@ -19,11 +19,12 @@ import struct
 import numba
 import numpy as np
 
+from ...compiled import entry
 from ...exactmath import hypot, pymax, pymin, remainder
 from ..base import RoundedMove
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
-from .observation import Observation, kernel_entry
+from .observation import Observation
 from .params import NubotParams
 from .positions import route
 
@@ -86,7 +87,7 @@ class Motion:
         # the compiled `_go_packed` for its argument types (float64 arrays: the boxes and the observation's
         # opponents and team table, C-contiguous, as `Areas.box_array` and `Observation` make them), called
         # without numba's dispatcher typing its arguments at every call
-        self._go = kernel_entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.row)
+        self._go = entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.row)
 
     # -----------------------------------------------------------------------------------------------------
     def go(

@@ -274,18 +274,6 @@ class Observation:
         return [m for m in self.mates if m.valid and not m.is_goalie]
 
 
-def kernel_entry(kernel, *sample):
-    """The compiled version of ``kernel`` for the argument types of ``sample`` (what the dispatcher would pick
-    for them), to be called without numba's dispatcher, which types every argument at every call (some 200
-    instructions each). The version does not check its arguments: only for call sites whose arguments always
-    have the sample's types (float64 arrays made by this package, C-contiguous and writable, plain floats).
-    Nothing is run here; without the compiler (NUMBA_DISABLE_JIT) it is the kernel itself."""
-    compile_for = getattr(kernel, "compile", None)
-    if compile_for is None:
-        return kernel
-    return compile_for(tuple(map(numba.typeof, sample)))
-
-
 def _array(rows: list[tuple], width: int) -> np.ndarray:
     """(len(rows), width) float array of equal-length tuples of numbers: the values of
     ``np.array(rows, dtype=float)``, built faster for a handful of rows. (Shared between the robots of a
