@@ -38,7 +38,10 @@ def test_the_tournament_report_shows_the_standing_and_links_every_match(referenc
     shot(page, "tournament-report")
     # a match's report, reached by its link, works from the folder and links back
     page.click(f'a[href="{match_links[0]}"]')
-    page.wait_for_function("document.querySelectorAll('.js-plotly-plot').length >= 8")
+    # (the whole page: its figures are drawn while it is parsed, before the data it carries at its end)
+    page.wait_for_function(
+        "document.readyState === 'complete' && document.querySelectorAll('.js-plotly-plot').length >= 8"
+    )
     data = report_data(page)
     row = reference["rows"][data["tournament"]["match_id"]]
     assert data["state_digest"] == row["state_digest"]
