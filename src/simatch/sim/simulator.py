@@ -35,6 +35,7 @@ from .inputs import InputLog, action_input, install, velocity_input, world_input
 from .kernels import ball_apart, model_poses, model_poses32, robot_flags, sense_ground
 from .perception import Perception, Snapshot
 from .sight import Sight
+from .timers import keep_timers_off
 from .world import BALL_NAME, build_world
 
 _f32s = msgs.f32s
@@ -128,6 +129,7 @@ class Simulator:
         self.scene = scene
         self.seed = seed
         self.m, self.d, self.ix, self.field = build_world(scene)
+        keep_timers_off()  # MuJoCo's profiling clock, read some twenty times a step and never by us
         self._qpos, self._qvel = self.d.qpos, self.d.qvel  # views of the engine's arrays (fixed memory)
         # the same memory as memoryviews, whose items are plain floats (a physics step reads a few)
         self._qpos_flat, self._qvel_flat = memoryview(self._qpos), memoryview(self._qvel)
