@@ -133,12 +133,14 @@ class SimulatorNode(Node):
         due = self._due_at[into]
         if due is not None:
             pubs = self.pub_vision
-            if any(pubs[i].active for i in due):
-                infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
-                for i in due:
-                    pub = pubs[i]
-                    if pub.active:
-                        pub.put(infos[i])
+            for i in due:  # (no generator's frame: `any(pubs[i].active for i in due)`)
+                if pubs[i].active:
+                    infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
+                    for j in due:
+                        pub = pubs[j]
+                        if pub.active:
+                            pub.put(infos[j])
+                    break
         if self.pub_models.active:
             if sim.aerial is None:  # (`model_state_arrays32`, inline: every step)
                 pose, twist = _zeros(sim._pose32_size, _F32), _zeros(sim._twist32_size, _F32)
