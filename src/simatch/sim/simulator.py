@@ -527,8 +527,9 @@ class Simulator:
         """Stop every robot whose last command would be older than ``timeout`` before the next check,
         ``next_check`` steps from now (its node died or hangs): it is stopped within ``timeout``."""
         limit = round(timeout / self.dt)
-        # (the builtin `min` over the memoryview: the same int, without NumPy's reduction)
-        if min(self._last_command, default=self.step_index + next_check) > self.step_index + next_check - limit:
+        # (the builtin `min` over the memoryview, without keywords (slow to parse): the same int, without NumPy's
+        # reduction; no robots, nothing to check)
+        if not self.n or min(self._last_command) > self.step_index + next_check - limit:
             return  # every robot commanded recently (the usual case): nothing to check one by one
         stale = (
             (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
@@ -568,7 +569,7 @@ class Simulator:
             if timeout != self._watch_timeout:
                 self._watch_timeout, self._watch_limit = timeout, round(timeout / self.dt)
             # (`watchdog`'s own first test, inline: every robot commanded recently is the usual case)
-            if min(self._last_command, default=k + cs) <= k + cs - self._watch_limit:
+            if self.n and min(self._last_command) <= k + cs - self._watch_limit:
                 self.watchdog(timeout, cs)
         if drive.any_dirty or (into == 0 and any(self._drive_ramping)):
             self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), cs - into)
@@ -709,13 +710,14 @@ class Simulator:
         enough to the ball for a contact (a compiled test of the bounding spheres, about a microsecond), and
         the contact list, whose accessor costs some ten microseconds, is not read; otherwise a scan of plain
         ints (the contacts are few) costs a few microseconds where NumPy calls on such small arrays cost tens."""
+        bg = self._ball_geom
+        # (a held ball is in its holder's mouth: never apart, the test is left out; the test first, before the
+        # contacts' count, whose accessor costs more)
+        if self.ball.holder < 0 and self._ball_apart(self._geom_xpos, self._touch_geoms, self._touch_bound2, bg):
+            return []
         d = self.d
         n = d.ncon
         if n == 0:
-            return []
-        bg = self._ball_geom
-        # (a held ball is in its holder's mouth: never apart, the test is left out)
-        if self.ball.holder < 0 and self._ball_apart(self._geom_xpos, self._touch_geoms, self._touch_bound2, bg):
             return []
         flat = d.contact.geom.ravel().tolist()  # (the engine's ncon contacts: its rows are those alone)
         if bg not in flat:
