@@ -9,6 +9,7 @@ topic then, by its own ``f.for_topic(topic) -> g`` (``g(msg)``) where it has one
 from __future__ import annotations
 
 from functools import partial
+from itertools import islice
 from typing import Any
 
 from . import topics as _topics
@@ -18,23 +19,34 @@ from .base import AnyCallback, BusStats, Callback
 class _Publisher:
     """A topic's sending end: ``put(msg)`` delivers to every subscriber, in subscription order. ``active``
     (whether anybody listens) is a plain attribute, set again whenever a subscriber comes or goes: it is
-    read before building a message that nobody may want, hundreds of times per simulated second."""
+    read before building a message that nobody may want, hundreds of times per simulated second. ``_one``
+    is the subscriber when there is exactly one (most topics: a robot's commands, its perception, the
+    model states), called without the loop over the list."""
 
-    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "active")
+    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "_one", "active")
 
     def __init__(self, bus: InProcessBus, topic: str, msgtype: Any):
         self.topic = topic
         self.msgtype = msgtype
         self._bus = bus
         self._callbacks: list[Callback] = []
+        self._one: Callback | None = None
         self.active = False
 
     def _rebind(self) -> None:
         self.active = bool(self._callbacks)
+        self._one = self._callbacks[0] if len(self._callbacks) == 1 else None
 
     # (a method, looked up at each call: a sender may keep the bound ``put``, and must still reach
     # subscribers that come later)
     def put(self, msg: Any) -> None:
+        one = self._one
+        if one is not None:
+            one(msg)
+            if self._one is not one:  # subscribers came or went during the call: those the loop would reach
+                for cb in islice(self._callbacks, 1, None):
+                    cb(msg)
+            return
         for cb in self._callbacks:
             cb(msg)
 

@@ -21,6 +21,8 @@ import hashlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
+from operator import attrgetter
 
 import numpy as np
 
@@ -83,6 +85,9 @@ class Node:
         """Release what ``start`` took."""
 
 
+_step_index = attrgetter("step_index")
+
+
 class LockstepClock:
     """Ticks nodes in phase order, one physics step at a time, in a single thread (the embedded run)."""
 
@@ -98,7 +103,8 @@ class LockstepClock:
         self._schedule: list[tuple[Node, int]] = []  # (node, period in steps), sorted by phase
         self._table: list[list] = [[]]  # tick methods due at step k: _table[k % len(_table)]
         self._held: list | None = None  # the rest of a step held by `step_until`
-        self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=lambda: self.step_index)
+        # (``step`` called from C, without a Python frame: the referee reads it at every physics step)
+        self.context = NodeContext(bus=bus, dt=dt, seed=seed, now=self.now, step=partial(_step_index, self))
 
     def now(self) -> float:
         return self.step_index * self.dt

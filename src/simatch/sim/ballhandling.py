@@ -75,6 +75,10 @@ class BallHandling:
         self.kicked_lob = False
         self._eq_rows_type = mujoco.mjtConstraint.mjCNSTR_EQUALITY.value
         self._catch_idle_until = 0  # no catch is possible before this step (see _catch)
+        # the robots whose dribbler is on and that are usable, as `_catch_kernel` takes them (int64), kept while
+        # neither changes (`set_dribbler` forgets them; the usable flags are compared as bytes)
+        self._cand: np.ndarray | None = None
+        self._cand_usable = b""
         # a robot that lost the ball cannot take it again until the ball has left its mouth (or for
         # RECATCH_WAIT seconds): the lost ball is on its way out, not to be caught back at once
         self.lost_by = -1
@@ -88,6 +92,8 @@ class BallHandling:
         # the model's and the data's life; each accessor call makes a new view), and the mouths' offsets
         # as one contiguous array: what the per-step kernels are given
         self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
+        self._qpos_flat = memoryview(self._qpos)  # (plain floats: a NumPy scalar costs more to make, every step)
+        self._catch_top = self.ball_r + 0.05  # a ball whose centre is higher is in the air: no catch
         self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
         # the per-step kernels without numba's dispatcher (`simatch.compiled.entry`): the same kinds of arguments at
         # every call (these views, the engine's constraint arrays, plain numbers, the candidates' int64 array)
@@ -137,6 +143,7 @@ class BallHandling:
         self.dribbling[i] = on
         self.dribble_on[i] = on
         self._catch_idle_until = 0
+        self._cand = None
         if not on and self.holder == i:
             self.release("dribbler_off")
 
@@ -224,10 +231,13 @@ class BallHandling:
         self.on_event("kick", i, value=req.speed, detail="lob" if req.lob else "ground")
 
     def _catch(self, step: int, enabled: np.ndarray) -> None:
-        q = self._qpos
-        if q[self.ix.ball_qpos + 2] > self.ball_r + 0.05:
+        if self._qpos_flat[self._ball_q + 2] > self._catch_top:
             return
-        cand = np.flatnonzero(self.dribble_on & enabled)  # (int64: what `_catch_kernel` takes)
+        usable = enabled.tobytes()
+        cand = self._cand
+        if cand is None or usable != self._cand_usable:  # (only when a dribbler or a robot's state changed)
+            self._cand = cand = np.flatnonzero(self.dribble_on & enabled)  # (int64: what `_catch_kernel` takes)
+            self._cand_usable = usable
         if self.lost_by >= 0:
             if step < self.lost_until and self.in_mouth(self.lost_by):
                 cand = cand[cand != self.lost_by]
@@ -237,7 +247,7 @@ class BallHandling:
             return
         ix = self.ix
         i, fwd, lat, nearest = self._catch_kernel(
-            q,
+            self._qpos,
             self._qvel,
             self._robot_q0,
             self._robot_v0,
@@ -269,7 +279,7 @@ class BallHandling:
 
     def _keep(self, step: int, enabled: np.ndarray) -> None:
         i = self.holder
-        if not (self.dribble_on[i] and enabled[i]):
+        if not (self.dribbling[i] and enabled[i]):
             self.release("dribbler_off")
             return
         d = self.d

@@ -24,6 +24,7 @@ _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerpri
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
 _BallContacts = msgs.positional(msgs.BallContacts, "stamp step touching holder kicker kick_speed lob")
 _F32 = np.float32  # the states' numbers, as the messages define them
+_zeros = np.zeros
 
 
 def model_states_message(now: float, step: int, names, pose: np.ndarray, twist: np.ndarray):
@@ -43,6 +44,7 @@ class SimulatorNode(Node):
         #: (all 0, the control tick's first step, unless a real-time server spreads its processes out)
         self.vision_phase = [0] * len(sim.ix.robots)
         self._due: dict[int, list[int]] = {0: list(range(len(sim.ix.robots)))}
+        self._due_at: list[list[int] | None] = self._due_table()
 
     def set_vision_phase(self, robot: int, phase: int) -> None:
         """Take robot ``robot``'s (index) perception at step ``phase`` of each control period from now on."""
@@ -53,6 +55,11 @@ class SimulatorNode(Node):
         for i, p in enumerate(self.vision_phase):
             due.setdefault(p, []).append(i)
         self._due = due
+        self._due_at = self._due_table()
+
+    def _due_table(self) -> list[list[int] | None]:
+        """The robots whose perception is due at each step of the control period (None: nobody's)."""
+        return [self._due.get(into) for into in range(self.control_steps)]
 
     def start(self, ctx: NodeContext) -> None:
         super().start(ctx)
@@ -123,17 +130,23 @@ class SimulatorNode(Node):
         into = k % cs
         if into == 0 and self.pub_clock.active:
             self.pub_clock.put(_Clock(now, k, k // cs))
-        due = self._due.get(into)
+        due = self._due_at[into]
         if due is not None:
             pubs = self.pub_vision
-            if any(pubs[i].active for i in due):
-                infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
-                for i in due:
-                    pub = pubs[i]
-                    if pub.active:
-                        pub.put(infos[i])
+            for i in due:  # (no generator's frame: `any(pubs[i].active for i in due)`)
+                if pubs[i].active:
+                    infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
+                    for j in due:
+                        pub = pubs[j]
+                        if pub.active:
+                            pub.put(infos[j])
+                    break
         if self.pub_models.active:
-            pose, twist = sim.model_state_arrays32()
+            if sim.aerial is None:  # (`model_state_arrays32`, inline: every step)
+                pose, twist = _zeros(sim._pose32_size, _F32), _zeros(sim._twist32_size, _F32)
+                sim._poses32(sim._qpos, sim._qvel, sim._q0, sim._v0, sim.n, sim._bq, sim._bv, pose, twist)
+            else:
+                pose, twist = sim.model_state_arrays32()
             self.pub_models.put(_ModelStates(now, k, sim.model_names, pose, twist))
         if into == 0 and self.pub_fingerprint.active:
             self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
@@ -199,7 +212,7 @@ class PhysicsNode(Node):
                 self.pub_inputs.put(inputs.take(now, sim.step_index, False))
             else:
                 inputs.clear()
-        sim.advance()
+        sim._step(True)  # (`sim.advance()` without its frame: every step)
         if sim.events:
             self.sensor.flush_events()
         # the inputs are logged while somebody listens (from the start on: a recorder attached before the

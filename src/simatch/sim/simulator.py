@@ -28,7 +28,7 @@ import numpy as np
 from .. import msgs
 from ..compiled import entry
 from ..config.schema import Scene
-from ..robots.drive import OmniDrive
+from ..robots.drive import OmniDrive, plan_drive
 from .ballhandling import BallHandling
 from .flight import AerialFleet, aerial_poses, frame_contacts, planar, rotor_links
 from .inputs import InputLog, action_input, install, velocity_input, world_input
@@ -161,6 +161,9 @@ class Simulator:
         # `command_velocity`
         self._drive_cmd = memoryview(self.drive.cmd.view(np.uint8).reshape(-1))
         self._drive_dirty = memoryview(self.drive.dirty)
+        self._drive_ramping = memoryview(self.drive.ramping)
+        self._plan = None  # `plan_drive` for the simulator's arguments (made at the first plan)
+        self._watch_timeout = self._watch_limit = None  # the watchdog's timeout and its limit in steps
         self._on_event = on_event
         # the log of the world's inputs: on from the start, so that what a judge or a script does before the
         # first step is in it; the bus adapter turns it off while nobody listens
@@ -526,7 +529,9 @@ class Simulator:
         """Stop every robot whose last command would be older than ``timeout`` before the next check,
         ``next_check`` steps from now (its node died or hangs): it is stopped within ``timeout``."""
         limit = round(timeout / self.dt)
-        if self.last_command_step.min() > self.step_index + next_check - limit:
+        # (the builtin `min` over the memoryview, without keywords (slow to parse): the same int, without NumPy's
+        # reduction; no robots, nothing to check)
+        if not self.n or min(self._last_command) > self.step_index + next_check - limit:
             return  # every robot commanded recently (the usual case): nothing to check one by one
         stale = (
             (self.step_index - self.last_command_step + next_check > limit) & ~self.watchdog_tripped & self.commanded
@@ -547,27 +552,32 @@ class Simulator:
     def advance(self) -> None:
         """One physics step as a run makes it after its nodes: at a control tick, the watchdog first (robots
         whose commands stopped coming are stopped within ``control.command_timeout``)."""
-        if self.step_index % self.control_steps == 0:
-            self.watchdog(self.scene.control.command_timeout, self.control_steps)
-        self._step()
+        self._step(True)
 
     def step(self, n: int = 1) -> None:
         step = self._step
         for _ in range(n):
             step()
 
-    def _step(self) -> None:
+    def _step(self, watch: bool = False) -> None:
+        """One physics step; with ``watch``, at a control tick the watchdog first (`advance`)."""
         d = self.d
         drive = self.drive
         k = self.step_index
-        into = k % self.control_steps
-        if drive.any_dirty or (into == 0 and drive.ramping.any()):
-            self._plan_drive(
-                drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), self.control_steps - into
-            )
+        cs = self.control_steps
+        into = k % cs
+        if watch and into == 0:
+            timeout = self.scene.control.command_timeout
+            if timeout != self._watch_timeout:
+                self._watch_timeout, self._watch_limit = timeout, round(timeout / self.dt)
+            # (`watchdog`'s own first test, inline: every robot commanded recently is the usual case)
+            if self.n and min(self._last_command) <= k + cs - self._watch_limit:
+                self.watchdog(timeout, cs)
+        if drive.any_dirty or (into == 0 and any(self._drive_ramping)):
+            self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), cs - into)
         if self.track_wheels:
             self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self._act3) * self.dt
-        self.ball.before_step(self.step_index, self.usable)
+        self.ball.before_step(k, self.usable)
         if self._wrenches:
             self._apply_wrenches()
         if self.aerial is not None:
@@ -622,7 +632,31 @@ class Simulator:
         stops at the target (actrange), integrated by the engine. The bias corrects for the engine moving
         a body during a step along its heading at the start of the step (it turns the set point by half
         the step's rotation), so the base follows the commanded twist along the exact arc."""
-        self.drive.plan(due, self._act3, window, self._actrange3, self._ctrl3, self._bias3, self._kv)
+        drive = self.drive
+        args = (
+            drive.M,
+            drive.Mpinv,
+            drive.cmd,
+            drive.dirty,
+            due,
+            drive.U_target,
+            drive.up,
+            drive.down,
+            drive.max_speed,
+            self._act3,
+            window,
+            self._actrange3,
+            self._ctrl3,
+            self._bias3,
+            self._kv,
+            drive.ramping,
+            drive.dt,
+        )
+        plan = self._plan
+        if plan is None:  # (`OmniDrive.plan` without numba's dispatcher: the same kinds of arguments at every call)
+            plan = self._plan = entry(plan_drive, *args)
+        plan(*args)
+        drive.any_dirty = any(self._drive_dirty)  # (`bool(drive.dirty.any())` without NumPy's reduction)
 
     def _reset_drive(self, i: int, body_velocity: np.ndarray | None) -> None:
         """Robot i's wheels turn at once at the speeds of ``body_velocity`` (teleports, freezing)."""
@@ -678,13 +712,14 @@ class Simulator:
         enough to the ball for a contact (a compiled test of the bounding spheres, about a microsecond), and
         the contact list, whose accessor costs some ten microseconds, is not read; otherwise a scan of plain
         ints (the contacts are few) costs a few microseconds where NumPy calls on such small arrays cost tens."""
+        bg = self._ball_geom
+        # (a held ball is in its holder's mouth: never apart, the test is left out; the test first, before the
+        # contacts' count, whose accessor costs more)
+        if self.ball.holder < 0 and self._ball_apart(self._geom_xpos, self._touch_geoms, self._touch_bound2, bg):
+            return []
         d = self.d
         n = d.ncon
         if n == 0:
-            return []
-        bg = self._ball_geom
-        # (a held ball is in its holder's mouth: never apart, the test is left out)
-        if self.ball.holder < 0 and self._ball_apart(self._geom_xpos, self._touch_geoms, self._touch_bound2, bg):
             return []
         flat = d.contact.geom.ravel().tolist()  # (the engine's ncon contacts: its rows are those alone)
         if bg not in flat:

@@ -107,9 +107,10 @@ class Observation:
             self.bwx, self.bwy = T[6 * b + 3], T[6 * b + 4]
         pen, goal = self.penalty_area, self.goal_area
         px, py, gx, gy, near = self._pen_x, self._pen_y, self._goal_x, self._goal_y, self._near
+        far = -near  # (negated once, not for every robot)
         for i in range(n):
             x = X[i]
-            if -near < x < near:  # short of both areas (the usual case)
+            if far < x < near:  # short of both areas (the usual case)
                 pen[i] = goal[i] = 0
                 continue
             y = Y[i]

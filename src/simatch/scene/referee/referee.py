@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import replace
+from functools import partial
 from types import SimpleNamespace
 
 import numpy as np
@@ -44,6 +45,7 @@ from .touches import Touches
 # the phases as plain attributes: on Python 3.11 every attribute lookup on an Enum class takes the slow
 # path of its metaclass (which defines __getattr__), and the referee looks phases up at every step
 _Phase = SimpleNamespace(**Phase.__members__)
+_ENDED, _PAUSED = Phase.ENDED, Phase.PAUSED  # (read at every step: globals)
 _F32 = np.dtype(np.float32)  # the precision of ModelStates' numbers
 
 
@@ -100,10 +102,10 @@ class MslReferee(OperatorTakeover, Judge):
         disabled = set(params.disabled_rules)
         self.rules = [cls(m) for cls in CONTROL_RULES if cls.name not in disabled]
         self.position_rules = [r for r in self.rules if isinstance(r, PositionRule)]
-        # the rules that judge in each phase, in their order, during a shoot-out or not (a shoot-out judges
-        # the set-piece distance and charging alone)
+        # the rules that judge in each phase (by its value: an Enum member's hash is a Python call), in their
+        # order, during a shoot-out or not (a shoot-out judges the set-piece distance and charging alone)
         self._judging = {
-            (phase, shootout): [
+            (phase._value_, shootout): [
                 r
                 for r in self.rules
                 if phase in r.phases and not (shootout and r.name not in ("set_piece_distance", "charging"))
@@ -123,7 +125,9 @@ class MslReferee(OperatorTakeover, Judge):
         # the same limits at the precision of the messages' float32 positions, which NumPy compares with a
         # Python float in float32: comparing the positions read as plain floats with these is the same test
         self._xlim32, self._ylim32 = msgs.f32s(self._xlim, self._ylim)
-        self._states = None
+        # (each limit and its negative, made once: a negation makes a new float, at every step)
+        self._lims = (self._xlim, -self._xlim, self._ylim, -self._ylim)
+        self._lims32 = (self._xlim32, -self._xlim32, self._ylim32, -self._ylim32)
         self._ball_row = -1
         self._out_latched = False
         self._ops: deque = deque()
@@ -159,7 +163,8 @@ class MslReferee(OperatorTakeover, Judge):
         self.pub_operator = bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
         self.log = EventLog(pub_events.put)
         self.subs = [
-            bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_states),
+            # the latest states kept by the observation (a reference): set from C, no Python frame at every step
+            bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, partial(setattr, self.m.obs, "msg")),
             bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
             bus.subscribe(self.operator_topic, msgs.RefereeCommand, self._on_operator),
         ]
@@ -168,10 +173,6 @@ class MslReferee(OperatorTakeover, Judge):
         for sub in getattr(self, "subs", []):
             sub.close()
 
-    def _on_states(self, msg) -> None:
-        self._states = msg
-        self.m.obs.msg = msg
-
     def _on_contacts(self, msg) -> None:
         if self._begun:
             self.m.touches.on_contacts(msg)
@@ -179,21 +180,23 @@ class MslReferee(OperatorTakeover, Judge):
     # --- every physics step ----------------------------------------------------------------------------------
     def tick(self, now: float) -> None:
         self._ticked = self.ctx.step()
-        msg = self._states
+        m = self.m
+        msg = m.obs.msg
         if msg is None:
             return
-        g = self.m.game
+        g = m.game
         if not self._begun:
             self._begin(now)
         if self._ops:
             self._operator_queue(now)
-        if g.phase is _Phase.ENDED:
+        phase = g.phase
+        if phase is _ENDED:
             return
-        if g.phase is not _Phase.PAUSED:
+        if phase is not _PAUSED:
             d = g.stages[g.stage_index].duration  # (`g.stage`, without the property's call: every step)
             if d is not None and g.stage_steps * self.dt >= d - 1e-9:
                 self._end_stage(now)
-                if g.phase is _Phase.ENDED:
+                if g.phase is _ENDED:
                     return
             g.stage_steps += 1
             g.phase_steps += 1
@@ -202,11 +205,11 @@ class MslReferee(OperatorTakeover, Judge):
             if pose.dtype is _F32:  # read as plain floats (NumPy scalars cost more to make and compare, every step)
                 item = pose.item
                 bx, by = item(b), item(b + 1)
-                xlim, ylim = self._xlim32, self._ylim32
+                xlim, nxlim, ylim, nylim = self._lims32
             else:  # positions of another precision (not the message's own): compared as they are
                 bx, by = pose[b], pose[b + 1]
-                xlim, ylim = self._xlim, self._ylim
-            if bx > xlim or bx < -xlim or by > ylim or by < -ylim:
+                xlim, nxlim, ylim, nylim = self._lims
+            if bx > xlim or bx < nxlim or by > ylim or by < nylim:
                 if g.phase in LIVE and not self._out_latched:
                     self._boundary(now, float(bx), float(by), float(pose[b + 2]))
             elif self._out_latched:
@@ -268,11 +271,13 @@ class MslReferee(OperatorTakeover, Judge):
                     detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play",
                 )
                 g.go(_Phase.PLAY)
-        if g.phase in (_Phase.TAKING, _Phase.PLAY) and g.stage.kind == "shootout":
+        shootout = g.stages[g.stage_index].kind == "shootout"  # (`g.stage`, without the property's call)
+        if shootout and (g.phase is _Phase.TAKING or g.phase is _Phase.PLAY):
             self._shootout_check(now)
-        if g.phase not in (_Phase.PAUSED, _Phase.ENDED):
-            phase = g.phase
-            for rule in self._judging[phase, g.stage.kind == "shootout"]:
+            shootout = g.stages[g.stage_index].kind == "shootout"
+        phase = g.phase
+        if phase is not _Phase.PAUSED and phase is not _Phase.ENDED:
+            for rule in self._judging[phase._value_, shootout]:
                 calls = rule.check()
                 if calls is None:
                     continue

@@ -50,7 +50,8 @@ class BallRotationRule(Rule):
         fresh = touches.contact_step >= obs.step - 1
         i = touches.holder if fresh and touches.contact == (touches.holder,) else -1
         if i < 0 or not obs.active[i]:
-            self._forget(-1)  # released (or in a duel): it may begin anew
+            if self.robot >= 0:  # (forgotten already otherwise: nothing else changes while nobody is followed)
+                self._forget(-1)  # released (or in a duel): it may begin anew
             return None
         if i != self.robot:
             self._forget(i)

@@ -19,9 +19,10 @@ class GoalAreaRule(Rule):
         area = obs.goal_area
         if not any(area):  # (the usual case: nobody in a goal area)
             return None
+        active, keeper, own = obs.active, obs.is_goalkeeper, obs.own_side  # (read for every robot)
         for i in range(obs.n):
             side = area[i]
-            if not side or not obs.active[i] or (obs.is_goalkeeper[i] and obs.own_side[i] == side):
+            if not side or not active[i] or (keeper[i] and own[i] == side):
                 continue
             depth = side * obs.X[i] - obs.field.area_limits("goal")[0]
             owner = obs.defender_of(side)

@@ -17,6 +17,9 @@ from __future__ import annotations
 from ..state import LIVE, Phase
 from .base import Call, Rule
 
+_TAKING, _PLAY = Phase.TAKING, Phase.PLAY  # LIVE's members as globals (an Enum class's attribute is slow)
+assert LIVE == {_TAKING, _PLAY}
+
 
 class GoalkeeperContactRule(Rule):
     name = "goalkeeper_contact"
@@ -29,7 +32,8 @@ class GoalkeeperContactRule(Rule):
     def check(self) -> Call | None:
         m = self.m
         obs, contacts = m.obs, m.contacts
-        live = m.game.phase in LIVE
+        phase = m.game.phase
+        live = phase is _TAKING or phase is _PLAY  # (in LIVE, without the Enum's hash, a Python call: every tick)
         judged: set[int] = set()
         call = None
         for c in contacts.now:

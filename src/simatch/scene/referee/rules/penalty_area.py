@@ -15,6 +15,8 @@ from __future__ import annotations
 from ..state import Phase
 from .base import Call, Rule
 
+_PLAY = Phase.PLAY  # (a global: an Enum class's attribute takes its metaclass's slow path, at every tick)
+
 
 class PenaltyAreaRule(Rule):
     name = "penalty_area"
@@ -30,14 +32,15 @@ class PenaltyAreaRule(Rule):
 
     def check(self) -> Call | None:
         obs = self.m.obs
-        play = self.m.game.phase is Phase.PLAY
+        play = self.m.game.phase is _PLAY
         area, inside, time_in = obs.penalty_area, self.inside, self.time_in
+        active, keeper, own = obs.active, obs.is_goalkeeper, obs.own_side  # (read for every robot, every tick)
         groups: dict[tuple[int, int], list[int]] = {}
         for i in range(obs.n):
-            side = area[i] if obs.active[i] else 0
+            side = area[i] if active[i] else 0
             if not side and not inside[i]:
                 continue  # outside, and counted outside already: nothing to follow (most robots)
-            if side and obs.is_goalkeeper[i] and obs.own_side[i] == side:
+            if side and keeper[i] and own[i] == side:
                 side = 0  # the defending goalkeeper is not counted
             if side != inside[i]:
                 inside[i] = side

@@ -11,6 +11,8 @@ from ..restarts import NAMES
 from ..state import Phase
 from .base import Call, Rule
 
+_BEFORE_PLAY = (Phase.PREPARE, Phase.TAKING)  # (made once: an Enum class's attribute is slow, every tick)
+
 
 class PositionRule(Rule):
     phases = frozenset({Phase.TAKING})
@@ -22,7 +24,7 @@ class PositionRule(Rule):
 
     def applies(self) -> bool:
         r = self.m.game.restart
-        return r is not None and r.kind in self.kinds and self.m.game.phase in (Phase.PREPARE, Phase.TAKING)
+        return r is not None and r.kind in self.kinds and self.m.game.phase in _BEFORE_PLAY
 
     def spot_distances(self) -> list[float]:
         """Each robot's centre's distance from the restart spot."""
