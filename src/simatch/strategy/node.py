@@ -19,6 +19,7 @@ from .worldmodel import WorldModel
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
+_F64 = np.float64
 # built positionally (three messages per robot and control tick; see msgs.positional)
 _VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w vz")
 _ActionCmd = msgs.positional(
@@ -156,8 +157,34 @@ class RobotNode(Node):
             )
         )
         if self.pub_info.active:
+            if cmd.pass_intent is not None or cmd.target_num:
+                ix, iy = cmd.intent
+                self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
+                return
+            # `strategy_info` of a move without a pass or targets, written out (no calls but the message's)
+            world = self.world
+            me = world._me  # (`WorldModel.me`, without the property's call when found already)
+            try:
+                holding = bool((me if me is not None else world.me).holding_ball)
+            except LookupError:
+                holding = False
+            user = cmd.user  # (`_user_array`)
+            if not user:
+                arr = _EMPTY_F64
+            else:
+                last = self._user
+                if user is last[0]:
+                    arr = last[1]
+                else:
+                    arr = np.array(user, dtype=_F64)
+                    if type(user) is tuple:
+                        self._user = (user, arr)
             ix, iy = cmd.intent
-            self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
+            self.pub_info.put(
+                _StrategyInfo(
+                    now, tick, self.rid, cmd.role, cmd.action, holding, False, 0.0, ix, iy, _EMPTY_I32, 0, 0, _NO_PASS, arr
+                )
+            )
 
     def _climb(self, cmd: Command) -> float:
         try:
