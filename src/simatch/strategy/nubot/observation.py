@@ -243,85 +243,9 @@ class Observation:
     )
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
-        v = world.vision
-        self.t = world.time
-        self.tick = tick = world.tick
-        self.goalie_id = world.goalkeeper
-        if view is None:
-            view = TeamView()
-        robots = v.robots
-        # (`TeamView.get`'s test of a view still valid, here: a team-mate's observation makes no call for it)
-        if view.tick == tick and view.robots is robots and view.team_strategy is world.team_strategy:
-            by_id = view.by_id
-            self.mates = view.mates
-            self.mate_array = table = view.array
-        else:
-            mates, by_id, table = view.get(world)
-            self.mates, self.mate_array = mates, table
-        self.holder = view.holder  # the first team-mate holding the ball (None: none does)
-        me = by_id.get(world.id)
-        if me is None:
-            raise LookupError(f"robot {world.id} is missing from its own perception")
-        self.me = me
-        self.by_id = by_id
-        # (the WorldModel's own record, found here: `WorldModel.me` then needs no search, e.g. for what the
-        # robot tells its team)
-        world._me = robots[me.row]
-        b = v.ball
-        if b.pos_known:
-            self.bx = bx = b.x
-            self.by = by = b.y
-            self.bz, self.bvx, self.bvy, self.bvz = b.z, b.vx, b.vy, b.vz
-            self.ball_seen = True
-            self.ball_age = 0.0
-        else:
-            b = world.ball
-            if b is None:
-                self.bx = self.by = self.bvx = self.bvy = self.bvz = bx = by = 0.0
-                self.bz = 0.11
-                self.ball_seen = False
-                self.ball_age = math.inf
-            else:
-                self.bx = bx = b.x
-                self.by = by = b.y
-                self.bz, self.bvx, self.bvy, self.bvz = b.z, b.vx, b.vy, b.vz
-                self.ball_seen = False
-                self.ball_age = b.age
-        o = v.obstacles
-        if view.opp_tick == tick:
-            # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are
-            # shared (one kernel call that compares instead of filling, no array or rows made)
-            arr = view.opp_array
-            k, self.near_mate, self.near_mate_d, self.opp_ball_d = _same_opponents(
-                o.x, o.y, o.vx, o.vy, table, arr, bx, by
-            )
-            if k >= 0:
-                self.opp_array = arr
-                self.opps = view.opps
-            else:
-                self._own_opponents(o, view, tick)
-        else:
-            self._own_opponents(o, view, tick)
-        c = world.coach
-        self.coach = c
-        if c is None:
-            self.mode = self.mtype = 0
-        else:
-            self.mode = c.match_mode
-            self.mtype = c.match_type
-
-    def _own_opponents(self, o, view: TeamView, tick: int) -> None:
-        """The opponents among the obstacles ``o``, found afresh, and kept in ``view`` for team-mates."""
-        ox = o.x
-        # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs
-        # numba more to hand back than this one does to make)
-        buf = np.empty((len(ox), 4))
-        k, self.near_mate, self.near_mate_d, self.opp_ball_d = _opponents(
-            ox, o.y, o.vx, o.vy, self.mate_array, buf, self.bx, self.by
-        )
-        self.opp_array = arr = buf[:k]
-        self.opps = rows = arr.tolist()
-        view.opp_tick, view.opp_array, view.opps = tick, arr, rows
+        made = observe(world, view if view is not None else TeamView())
+        for name in Observation.__slots__:
+            setattr(self, name, getattr(made, name))
 
     @property
     def ball_speed(self) -> float:
@@ -330,6 +254,112 @@ class Observation:
     def field_mates(self) -> list[Mate]:
         """Valid team-mates that are not the goalkeeper, me included."""
         return [m for m in self.mates if m.valid and not m.is_goalie]
+
+
+def _make_observation_py(*values) -> Observation:
+    """An `Observation` of its slots' values (in slot order), without its class call: where the C helper is not
+    built."""
+    made = _new(Observation)
+    for name, value in zip(Observation.__slots__, values, strict=True):
+        setattr(made, name, value)
+    return made
+
+
+#: `Observation` of its slots' values, in slot order (the C helper's one call)
+_make_observation = msgs.slot_maker(Observation, Observation.__slots__) or _make_observation_py
+
+
+def observe(world: WorldModel, view: TeamView) -> Observation:
+    """``Observation(world, view)``: the same record, its numbers found in locals and its slots filled by one
+    call (no class call with a Python ``__init__``, no attribute writes one by one: a robot observes at
+    almost every tick)."""
+    v = world.vision
+    tick = world.tick
+    robots = v.robots
+    # (`TeamView.get`'s test of a view still valid, here: a team-mate's observation makes no call for it)
+    if view.tick == tick and view.robots is robots and view.team_strategy is world.team_strategy:
+        mates, by_id, table = view.mates, view.by_id, view.array
+    else:
+        mates, by_id, table = view.get(world)
+    me = by_id.get(world.id)
+    if me is None:
+        raise LookupError(f"robot {world.id} is missing from its own perception")
+    # (the WorldModel's own record, found here: `WorldModel.me` then needs no search, e.g. for what the robot
+    # tells its team)
+    world._me = robots[me.row]
+    b = v.ball
+    if b.pos_known:
+        bx, by, bz, bvx, bvy, bvz = b.x, b.y, b.z, b.vx, b.vy, b.vz
+        seen, age = True, 0.0
+    else:
+        b = world.ball
+        seen = False
+        if b is None:
+            bx = by = bvx = bvy = bvz = 0.0
+            bz = 0.11
+            age = math.inf
+        else:
+            bx, by, bz, bvx, bvy, bvz = b.x, b.y, b.z, b.vx, b.vy, b.vz
+            age = b.age
+    o = v.obstacles
+    if view.opp_tick == tick:
+        # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are shared
+        # (one kernel call that compares instead of filling, no array or rows made)
+        arr = view.opp_array
+        k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
+        if k >= 0:
+            rows = view.opps
+        else:
+            arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
+    else:
+        arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
+    c = world.coach
+    if c is None:
+        mode = mtype = 0
+    else:
+        mode, mtype = c.match_mode, c.match_type
+    # (in Observation.__slots__' order)
+    return _make_observation(
+        world.time,
+        tick,
+        me,
+        mates,
+        by_id,
+        table,
+        bx,
+        by,
+        bz,
+        bvx,
+        bvy,
+        bvz,
+        seen,
+        age,
+        rows,
+        arr,
+        mode,
+        mtype,
+        c,
+        world.goalkeeper,
+        view.holder,  # the first team-mate holding the ball (None: none does)
+        near,
+        near_d,
+        opp_d,
+    )
+
+
+def _own_opponents(o, table: np.ndarray, bx: float, by: float, view: TeamView, tick: int) -> tuple:
+    """The opponents among the obstacles ``o`` (of a robot whose team's table is ``table``, the ball at ``bx``,
+    ``by``), found afresh and kept in ``view`` for team-mates: their array and rows, the team-mate nearest to
+    the ball, its distance, the nearest opponent's distance (`_opponents`)."""
+    ox = o.x
+    # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs numba
+    # more to hand back than this one does to make)
+    buf = np.empty((len(ox), 4))
+    k, near, near_d, opp_d = _opponents(ox, o.y, o.vx, o.vy, table, buf, bx, by)
+    arr = buf[:k]
+    rows = arr.tolist()
+    view.opp_tick, view.opp_array, view.opps = tick, arr, rows
+    return arr, rows, near, near_d, opp_d
 
 
 def _array(rows: list[tuple], width: int) -> np.ndarray:
