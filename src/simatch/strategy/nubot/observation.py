@@ -127,6 +127,10 @@ class TeamView:
         "opp_tick",
         "opp_array",
         "opps",
+        "opp_table",
+        "opp_bx",
+        "opp_by",
+        "opp_near",
     )
 
     def __init__(self):
@@ -144,6 +148,12 @@ class TeamView:
         self.opp_tick = -1
         self.opp_array: np.ndarray | None = None
         self.opps: list | None = None
+        # and the table and ball position it found them with: the team-mate nearest to the ball, its distance
+        # and the nearest opponent's distance it found (`_opponents`), the same for a team-mate seeing the ball
+        # at the same place (and the same opponents)
+        self.opp_table: np.ndarray | None = None
+        self.opp_bx = self.opp_by = math.nan
+        self.opp_near: tuple = (-1, math.inf, math.inf)
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
@@ -306,7 +316,13 @@ def observe(world: WorldModel, view: TeamView) -> Observation:
         # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are shared
         # (one kernel call that compares instead of filling, no array or rows made)
         arr = view.opp_array
-        k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
+        if view.opp_table is table and bx == view.opp_bx and by == view.opp_by:
+            # the ball where that team-mate saw it (the same numbers; a NaN never is): the team-mate nearest to
+            # it and the nearest opponent (when the rows are the same) are the ones it found
+            k = _same_rows(o.x, o.y, o.vx, o.vy, table, arr)
+            near, near_d, opp_d = view.opp_near
+        else:
+            k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
         if k >= 0:
             rows = view.opps
         else:
@@ -359,6 +375,7 @@ def _own_opponents(o, table: np.ndarray, bx: float, by: float, view: TeamView, t
     arr = buf[:k]
     rows = arr.tolist()
     view.opp_tick, view.opp_array, view.opps = tick, arr, rows
+    view.opp_table, view.opp_bx, view.opp_by, view.opp_near = table, bx, by, (near, near_d, opp_d)
     return arr, rows, near, near_d, opp_d
 
 
@@ -450,34 +467,40 @@ def _same(a, b):
 
 
 @numba.njit(cache=True, nogil=True)
-def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
-    """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
-    number of rows if the opponents among these obstacles are exactly ``prev``'s rows (bit for bit, in
-    order; nothing written), else -1; then, as `_opponents`, the team-mate nearest to the ball at (bx, by),
-    its distance and the nearest opponent's distance (inf without opponents)."""
+def _same_rows(ox, oy, ovx, ovy, mates, prev):
+    """The number of rows of ``prev`` (a team-mate's opponents at the same tick) if the opponents among these
+    obstacles (`_opponents`' rule) are exactly ``prev``'s rows (bit for bit, in order; nothing written), else
+    -1."""
     noisy = _noisy(ox, oy, mates)
     m = prev.shape[0]
     r = 0
-    opp_d = math.inf
     for k in range(ox.shape[0]):
         x, y = np.float64(ox[k]), np.float64(oy[k])
         if _opponent(x, y, mates, noisy):
             if r >= m:
-                r = -1
-                break
+                return -1
             if not (
                 _same(prev[r, 0], x)
                 and _same(prev[r, 1], y)
                 and _same(prev[r, 2], np.float64(ovx[k]))
                 and _same(prev[r, 3], np.float64(ovy[k]))
             ):
-                r = -1
-                break
-            d = hypot(prev[r, 0] - bx, prev[r, 1] - by)
-            if d < opp_d:
-                opp_d = d
+                return -1
             r += 1
-    if r != m:
-        r = -1
+    return r if r == m else -1
+
+
+@numba.njit(cache=True, nogil=True)
+def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
+    """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
+    number of rows if the opponents among these obstacles are exactly ``prev``'s rows (`_same_rows`), else -1;
+    then, as `_opponents`, the team-mate nearest to the ball at (bx, by), its distance and (when the rows are
+    the same) the nearest opponent's distance (inf without opponents)."""
+    r = _same_rows(ox, oy, ovx, ovy, mates, prev)
+    opp_d = math.inf
+    for j in range(r):
+        d = hypot(prev[j, 0] - bx, prev[j, 1] - by)
+        if d < opp_d:
+            opp_d = d
     near, near_d = _nearest_mate(mates, bx, by)
     return r, near, near_d, opp_d
