@@ -192,7 +192,21 @@ class RobotNode(Node):
             ix, iy = cmd.intent
             self.pub_info.put(
                 _StrategyInfo(
-                    now, tick, self.rid, cmd.role, cmd.action, holding, False, 0.0, ix, iy, _EMPTY_I32, 0, 0, _NO_PASS, arr
+                    now,
+                    tick,
+                    self.rid,
+                    cmd.role,
+                    cmd.action,
+                    holding,
+                    False,
+                    0.0,
+                    ix,
+                    iy,
+                    _EMPTY_I32,
+                    0,
+                    0,
+                    _NO_PASS,
+                    arr,
                 )
             )
 
