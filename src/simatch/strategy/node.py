@@ -160,11 +160,11 @@ class RobotNode(Node):
             )
         )
         if self.pub_info.active:
-            if cmd.pass_intent is not None or cmd.target_num:
+            if cmd.pass_intent is not None:  # (a move's targets are none: RoundedMove keeps Command's default)
                 ix, iy = cmd.intent
                 self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
                 return
-            # `strategy_info` of a move without a pass or targets, written out (no calls but the message's)
+            # `strategy_info` of a move without a pass, written out (no calls but the message's)
             world = self.world
             me = world._me  # (`WorldModel.me`, without the property's call when found already)
             try:
@@ -236,8 +236,10 @@ class RobotNode(Node):
                 is_static_pass=bool(p.static),
                 is_valid=True,
             )
+        world = self.world
+        me = world._me  # (`WorldModel.me`, without the property's call when found already)
         try:
-            holding = bool(self.world.me.holding_ball)
+            holding = bool((me if me is not None else world.me).holding_ball)
         except LookupError:
             holding = False
         return _StrategyInfo(
