@@ -77,39 +77,17 @@ class Mate:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
 
 
-#: the order of `_make_mate`'s arguments
-_MATE_ORDER = (
-    "id",
-    "x",
-    "y",
-    "yaw",
-    "vx",
-    "vy",
-    "w",
-    "holding",
-    "valid",
-    "stuck",
-    "is_goalie",
-    "row",
-    "role",
-    "action",
-    "pass_info",
-    "attacking",
-    "role_time",
-)
-
-
-def _make_mate_py(rid, x, y, yaw, vx, vy, w, holding, valid, stuck, is_goalie, row, role, action, pass_info, att, rt):
-    """A `Mate` of its slots' values (in `_MATE_ORDER`), without its class call: where the C helper is not built."""
+def _make_mate_py(rid, x, y, yaw, vx, vy, w, holding, valid, stuck, role, action, pass_info, is_goalie, att, rt, row):
+    """A `Mate` of its slots' values (in slot order), without its class call: where the C helper is not built."""
     m = _new(Mate)
     m.id, m.x, m.y, m.yaw, m.vx, m.vy, m.w = rid, x, y, yaw, vx, vy, w
-    m.holding, m.valid, m.stuck, m.is_goalie, m.row = holding, valid, stuck, is_goalie, row
-    m.role, m.action, m.pass_info, m.attacking, m.role_time = role, action, pass_info, att, rt
+    m.holding, m.valid, m.stuck, m.role, m.action, m.pass_info = holding, valid, stuck, role, action, pass_info
+    m.is_goalie, m.attacking, m.role_time, m.row = is_goalie, att, rt, row
     return m
 
 
-#: `Mate` of its slots' values in `_MATE_ORDER` (the C helper's one call instead of a frame and 17 writes)
-_make_mate = msgs.slot_maker(Mate, _MATE_ORDER) or _make_mate_py
+#: `Mate` of its slots' values in slot order (the C helper's one call instead of a frame and 17 writes)
+_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or _make_mate_py
 
 
 class TeamView:
@@ -178,7 +156,7 @@ class TeamView:
             holding = r.holding_ball
             if s is None:
                 m = _make_mate(
-                    rid, x, y, yaw, vx, vy, r.w, holding, r.valid, r.stuck, rid == gk, row, -1, -1, None, -1, 1e9
+                    rid, x, y, yaw, vx, vy, r.w, holding, r.valid, r.stuck, -1, -1, None, rid == gk, -1, 1e9, row
                 )
                 role, role_time = -1, 1e9
             else:
@@ -200,13 +178,13 @@ class TeamView:
                     holding,
                     r.valid,
                     r.stuck,
-                    rid == gk,
-                    row,
                     role,
                     s.action,
                     pass_cmd if pass_cmd.is_valid else None,
+                    rid == gk,
                     attacking,
                     role_time,
+                    row,
                 )
             _pack_row(rows, 64 * row, x, y, vx, vy, rid, yaw, role, role_time)  # (the table's row, in place)
             row += 1
