@@ -149,10 +149,15 @@ class TeamView:
         by_id = {}
         holder = None
         row = 0
+        append = mates.append
         for r in robots:
             rid = r.id
             s = told(rid)
-            x, y, yaw, vx, vy = r.x, r.y, r.yaw, r.vx, r.vy
+            x = r.x  # (one by one: a tuple of five would be built and taken apart)
+            y = r.y
+            yaw = r.yaw
+            vx = r.vx
+            vy = r.vy
             holding = r.holding_ball
             if s is None:
                 m = _make_mate(
@@ -188,7 +193,7 @@ class TeamView:
                 )
             _pack_row(rows, 64 * row, x, y, vx, vy, rid, yaw, role, role_time)  # (the table's row, in place)
             row += 1
-            mates.append(m)
+            append(m)
             by_id[rid] = m
             if holder is None and holding:
                 holder = m
@@ -273,8 +278,14 @@ def observe(world: WorldModel, view: TeamView) -> Observation:
     world._me = robots[me.row]
     b = v.ball
     if b.pos_known:
-        bx, by, bz, bvx, bvy, bvz = b.x, b.y, b.z, b.vx, b.vy, b.vz
-        seen, age = True, 0.0
+        bx = b.x  # (one by one: a tuple of six would be built and taken apart)
+        by = b.y
+        bz = b.z
+        bvx = b.vx
+        bvy = b.vy
+        bvz = b.vz
+        seen = True
+        age = 0.0
     else:
         b = world.ball
         seen = False
