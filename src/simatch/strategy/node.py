@@ -330,7 +330,13 @@ class StrategyPub(Node):
         self.latest[msg.agent_id] = msg
 
     def tick(self, now: float) -> None:
-        fresh = [m for _, m in sorted(self.latest.items()) if now - m.stamp <= self.stale_after + 1e-9]
+        latest = self.latest
+        limit = self.stale_after + 1e-9
+        fresh = []  # (in id order: the ids are the dict's keys, each once; a loop, not a comprehension's frame)
+        for rid in sorted(latest):
+            m = latest[rid]
+            if now - m.stamp <= limit:
+                fresh.append(m)
         self.pub.put(_TeamStrategy(now, 0, fresh))
 
     def stop(self) -> None:
