@@ -371,7 +371,10 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
     return np.fromiter(chain.from_iterable(rows), float, width * len(rows)).reshape(-1, width)
 
 
-@numba.njit(cache=True, nogil=True)
+# _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``): they run for about a
+# microsecond, and a kernel that lets the GIL go costs its call some 0.7 k instructions to take it back (the runs
+# are single-threaded: nothing else would run meanwhile). The helpers they call are compiled into them either way.
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
     team-mates (``mates``, the TeamView's array: x, y in its first columns) into the first rows of ``out``
@@ -451,7 +454,7 @@ def _same(a, b):
     return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _same_rows(ox, oy, ovx, ovy, mates, prev):
     """The number of rows of ``prev`` (a team-mate's opponents at the same tick) if the opponents among these
     obstacles (`_opponents`' rule) are exactly ``prev``'s rows (bit for bit, in order; nothing written), else
@@ -475,7 +478,7 @@ def _same_rows(ox, oy, ovx, ovy, mates, prev):
     return r if r == m else -1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
     """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
     number of rows if the opponents among these obstacles are exactly ``prev``'s rows (`_same_rows`), else -1;
