@@ -4,6 +4,7 @@ before timing."""
 
 import math
 import random
+import struct
 
 import numpy as np
 
@@ -399,6 +400,7 @@ def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bi
         out = np.empty((len(other[0]), 4))
         want = observation._opponents(*other, m, out, bx, by)
         got = observation._same_opponents(*other, m, prev, bx, by)
+        assert observation._same_rows(*other, m, prev) == got[0]
         same = want[0] == len(prev) and out[: want[0]].tobytes() == prev.tobytes() and not np.isnan(prev).any()
         assert (got[0] == len(prev)) == same and got[0] in (len(prev), -1)
         assert got[1:3] == want[1:3]  # (the nearest team-mate; the opponents' distance only when shared)
@@ -612,3 +614,39 @@ def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
                     assert [getattr(got, f) for f in Mate.__slots__] == [getattr(want, f) for f in Mate.__slots__]
                 rows = [(m.x, m.y, m.vx, m.vy, m.id, m.yaw, m.role, m.role_time) for m in expect]
                 assert table.tobytes() == np.array(rows, dtype=np.float64).reshape(-1, 8).tobytes()
+
+
+def test_a_team_mates_observation_is_the_one_made_afresh():
+    """`observe` with the team's shared view (its records, table and opponents, and the ball's nearest team-mate
+    and opponent a team-mate found at the same tick) gives, slot for slot, the Observation a robot makes from a
+    fresh view, for every robot of a running match; `Observation(world, view)` is the same record."""
+    from simatch.strategy.nubot.observation import Mate, Observation, TeamView, observe
+
+    def slots(obs):
+        out = []
+        for name in Observation.__slots__:
+            value = getattr(obs, name)
+            if isinstance(value, Mate):
+                value = [getattr(value, f) for f in Mate.__slots__]
+            elif isinstance(value, list) and value and isinstance(value[0], Mate):
+                value = [[getattr(m, f) for f in Mate.__slots__] for m in value]
+            elif isinstance(value, dict):
+                value = {k: [getattr(m, f) for f in Mate.__slots__] for k, m in value.items()}
+            elif isinstance(value, np.ndarray):
+                value = (value.shape, value.tobytes())
+            elif isinstance(value, float):
+                value = struct.pack("d", value)
+            out.append((name, value))
+        return out
+
+    cached = 0
+    with simatch.Simulation("msl_5v5", seed=1) as sim:
+        for _ in range(8):
+            sim.run(seconds=1.3, until_done=False)
+            for node in sim.robot_nodes.values():
+                world, view = node.world, node.strategy.shared.view
+                cached += view.opp_tick == world.tick and view.opp_bx == world.vision.ball.x
+                got = observe(world, view)
+                assert slots(got) == slots(Observation(world, TeamView()))
+                assert slots(Observation(world, view)) == slots(got)
+    assert cached > 20

@@ -258,6 +258,18 @@ def positional(msgtype: Any, order: str) -> Callable[..., Any]:
     return _maker(cls, have, tuple(defaulted[f].default for f in have[required:]))
 
 
+def slot_maker(cls: type, names: tuple[str, ...]) -> Callable[..., Any] | None:
+    """A constructor of ``cls`` instances from positional arguments, one for each slot of ``names`` (in that
+    order), filled without running the class's ``__init__``: the C helper's ``Maker`` (see `positional`), for a
+    class of the strategies' own built per robot and tick (every slot of ``names`` an object slot of the class
+    itself, no instance dict, object's own ``__new__``; TypeError otherwise). Called with exactly
+    ``len(names)`` positional arguments. None where the C helper is not built (or `POSITIONAL_PURE_ENV` is set):
+    the caller then fills the slots itself."""
+    if _maker is None:
+        return None
+    return _maker(cls, tuple(names), ())
+
+
 #: set (to anything but "" or "0") to build messages by their classes even where the C helper is built
 POSITIONAL_PURE_ENV = "SIMATCH_POSITIONAL_PURE"
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+import struct
 import traceback
 
 import numpy as np
@@ -19,6 +20,9 @@ from .worldmodel import WorldModel
 log = logging.getLogger(__name__)
 _EMPTY_I32 = np.zeros(0, dtype=np.int32)
 _EMPTY_F64 = np.zeros(0)
+#: number of values -> the `pack` of that many float64 (native order): a StrategyInfo's ``user`` as bytes
+_USER_PACK: dict = {}
+_frombuffer = np.frombuffer
 # built positionally (three messages per robot and control tick; see msgs.positional)
 _VelCmd = msgs.positional(msgs.VelCmd, "stamp tick vx vy w vz")
 _ActionCmd = msgs.positional(
@@ -72,7 +76,7 @@ class RobotNode(Node):
 
     def tick(self, now: float) -> None:
         world = self.world
-        if self.detached or not world.ready:
+        if self.detached or world.vision is None:  # (not `world.ready`: the same test without the property's call)
             return
         try:
             cmd = self.strategy.decide(world)
@@ -156,8 +160,55 @@ class RobotNode(Node):
             )
         )
         if self.pub_info.active:
+            if cmd.pass_intent is not None:  # (a move's targets are none: RoundedMove keeps Command's default)
+                ix, iy = cmd.intent
+                self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
+                return
+            # `strategy_info` of a move without a pass, written out (no calls but the message's)
+            world = self.world
+            me = world._me  # (`WorldModel.me`, without the property's call when found already)
+            try:
+                holding = bool((me if me is not None else world.me).holding_ball)
+            except LookupError:
+                holding = False
+            user = cmd.user  # (`_user_array`: a move's user is a tuple of floats, as nubot's)
+            if not user:
+                arr = _EMPTY_F64
+            else:
+                last = self._user
+                if user is last[0]:
+                    arr = last[1]
+                else:
+                    n = len(user)
+                    pack = _USER_PACK.get(n)
+                    if pack is None or type(user) is not tuple:
+                        arr = self._user_array(user)
+                    else:
+                        try:
+                            arr = _frombuffer(pack(*user))
+                        except struct.error:
+                            arr = np.array(user, dtype=np.float64)
+                        self._user = (user, arr)
             ix, iy = cmd.intent
-            self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
+            self.pub_info.put(
+                _StrategyInfo(
+                    now,
+                    tick,
+                    self.rid,
+                    cmd.role,
+                    cmd.action,
+                    holding,
+                    False,
+                    0.0,
+                    ix,
+                    iy,
+                    _EMPTY_I32,
+                    0,
+                    0,
+                    _NO_PASS,
+                    arr,
+                )
+            )
 
     def _climb(self, cmd: Command) -> float:
         try:
@@ -185,8 +236,10 @@ class RobotNode(Node):
                 is_static_pass=bool(p.static),
                 is_valid=True,
             )
+        world = self.world
+        me = world._me  # (`WorldModel.me`, without the property's call when found already)
         try:
-            holding = bool(self.world.me.holding_ball)
+            holding = bool((me if me is not None else world.me).holding_ball)
         except LookupError:
             holding = False
         return _StrategyInfo(
@@ -214,7 +267,16 @@ class RobotNode(Node):
             return _EMPTY_F64
         if user is self._user[0]:
             return self._user[1]
-        arr = np.array(user, dtype=np.float64)
+        n = len(user)
+        pack = _USER_PACK.get(n)
+        if pack is None:
+            pack = _USER_PACK[n] = struct.Struct(f"{n}d").pack
+        try:
+            # (read-only, as messages are: the numbers np.array(user, dtype=np.float64) holds, in a quarter fewer
+            # instructions)
+            arr = _frombuffer(pack(*user))
+        except struct.error:  # (something else than numbers: NumPy's conversion, or its error)
+            arr = np.array(user, dtype=np.float64)
         if type(user) is tuple:  # (a list may change in place: never kept)
             self._user = (user, arr)
         return arr
@@ -268,7 +330,13 @@ class StrategyPub(Node):
         self.latest[msg.agent_id] = msg
 
     def tick(self, now: float) -> None:
-        fresh = [m for _, m in sorted(self.latest.items()) if now - m.stamp <= self.stale_after + 1e-9]
+        latest = self.latest
+        limit = self.stale_after + 1e-9
+        fresh = []  # (in id order: the ids are the dict's keys, each once; a loop, not a comprehension's frame)
+        for rid in sorted(latest):
+            m = latest[rid]
+            if now - m.stamp <= limit:
+                fresh.append(m)
         self.pub.put(_TeamStrategy(now, 0, fresh))
 
     def stop(self) -> None:

@@ -89,7 +89,9 @@ class WorldModel:
         """Teammate id -> latest StrategyInfo (from the team picture)."""
         found = self._strategies
         if found is None:
-            found = self._strategies = {s.agent_id: s for s in self.team_strategy.strategies}
+            found = self._strategies = {}
+            for s in self.team_strategy.strategies:  # (a loop: a comprehension costs a function and a frame)
+                found[s.agent_id] = s
         return found
 
     @strategies.setter

@@ -14,13 +14,15 @@ from itertools import chain
 import numba
 import numpy as np
 
+from ... import msgs
 from ...exactmath import hypot
 from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
 _SAME_ROBOT = 0.1
-#: number of team-mates -> the `pack_into` of a struct of their table's numbers (float64, native)
-_TABLE_PACK: dict = {}
+#: a team-mate's row of its team's table written in place (eight float64, native), through a memoryview of
+#: the table (taken once per table: its buffer is cheaper to take than a NumPy array's, at each row)
+_pack_row = struct.Struct("8d").pack_into
 _new = object.__new__
 
 
@@ -75,6 +77,19 @@ class Mate:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
 
 
+def _make_mate_py(rid, x, y, yaw, vx, vy, w, holding, valid, stuck, role, action, pass_info, is_goalie, att, rt, row):
+    """A `Mate` of its slots' values (in slot order), without its class call: where the C helper is not built."""
+    m = _new(Mate)
+    m.id, m.x, m.y, m.yaw, m.vx, m.vy, m.w = rid, x, y, yaw, vx, vy, w
+    m.holding, m.valid, m.stuck, m.role, m.action, m.pass_info = holding, valid, stuck, role, action, pass_info
+    m.is_goalie, m.attacking, m.role_time, m.row = is_goalie, att, rt, row
+    return m
+
+
+#: `Mate` of its slots' values in slot order (the C helper's one call instead of a frame and 17 writes)
+_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or _make_mate_py
+
+
 class TeamView:
     """The part of an observation that every robot of the team shares (its team's RobotInfo list and
     StrategyInfo messages): built once per tick by the first robot of the team in this process, reused by
@@ -91,6 +106,10 @@ class TeamView:
         "opp_tick",
         "opp_array",
         "opps",
+        "opp_table",
+        "opp_bx",
+        "opp_by",
+        "opp_near",
     )
 
     def __init__(self):
@@ -108,6 +127,12 @@ class TeamView:
         self.opp_tick = -1
         self.opp_array: np.ndarray | None = None
         self.opps: list | None = None
+        # and the table and ball position it found them with: the team-mate nearest to the ball, its distance
+        # and the nearest opponent's distance it found (`_opponents`), the same for a team-mate seeing the ball
+        # at the same place (and the same opponents)
+        self.opp_table: np.ndarray | None = None
+        self.opp_bx = self.opp_by = math.nan
+        self.opp_near: tuple = (-1, math.inf, math.inf)
 
     def get(self, world: WorldModel) -> tuple[list[Mate], dict[int, Mate], np.ndarray]:
         robots = world.vision.robots
@@ -116,64 +141,65 @@ class TeamView:
             return self.mates, self.by_id, self.array
         gk = world.goalkeeper
         told = world.strategies.get
-        # one pass over the team: the records, the kernels' numbers (the table's row of each, flat), the
+        # one pass over the team: the records, the kernels' numbers (each one's row of the table, in place), the
         # look-up by id and the first holder
         mates = []
-        flat = []
+        self.array = arr = np.empty((len(robots), 8))
+        rows = memoryview(arr)
         by_id = {}
         holder = None
         row = 0
+        append = mates.append
         for r in robots:
             rid = r.id
             s = told(rid)
-            # (the record's slots written here, as Mate.__init__ writes them: a class call with a Python
-            # __init__ costs CPython 3.11 twice what the writes do)
-            m = _new(Mate)
-            m.id = rid
-            m.x = x = r.x
-            m.y = y = r.y
-            m.yaw = yaw = r.yaw
-            m.vx = vx = r.vx
-            m.vy = vy = r.vy
-            m.w = r.w
-            m.holding = holding = r.holding_ball
-            m.valid = r.valid
-            m.stuck = r.stuck
-            m.is_goalie = rid == gk
-            m.row = row
+            x = r.x  # (one by one: a tuple of five would be built and taken apart)
+            y = r.y
+            yaw = r.yaw
+            vx = r.vx
+            vy = r.vy
+            holding = r.holding_ball
             if s is None:
-                m.role = role = -1
-                m.action = -1
-                m.pass_info = None
-                m.attacking = -1
-                m.role_time = role_time = 1e9
+                m = _make_mate(
+                    rid, x, y, yaw, vx, vy, r.w, holding, r.valid, r.stuck, -1, -1, None, rid == gk, -1, 1e9, row
+                )
+                role, role_time = -1, 1e9
             else:
                 user = s.user.tolist()
                 if len(user) >= 2:
-                    m.attacking = int(user[0])
-                    m.role_time = role_time = user[1]
+                    attacking, role_time = int(user[0]), user[1]
                 else:
-                    m.attacking = -1
-                    m.role_time = role_time = 1e9
-                m.role = role = s.role
-                m.action = s.action
+                    attacking, role_time = -1, 1e9
+                role = s.role
                 pass_cmd = s.pass_cmd
-                m.pass_info = pass_cmd if pass_cmd.is_valid else None
+                m = _make_mate(
+                    rid,
+                    x,
+                    y,
+                    yaw,
+                    vx,
+                    vy,
+                    r.w,
+                    holding,
+                    r.valid,
+                    r.stuck,
+                    role,
+                    s.action,
+                    pass_cmd if pass_cmd.is_valid else None,
+                    rid == gk,
+                    attacking,
+                    role_time,
+                    row,
+                )
+            _pack_row(rows, 64 * row, x, y, vx, vy, rid, yaw, role, role_time)  # (the table's row, in place)
             row += 1
-            mates.append(m)
+            append(m)
             by_id[rid] = m
-            flat += (x, y, vx, vy, rid, yaw, role, role_time)
             if holder is None and holding:
                 holder = m
         self.tick, self.robots, self.team_strategy = world.tick, robots, team
         self.mates, self.by_id, self.holder = mates, by_id, holder
-        # (written into an empty array by one struct call: half what np.fromiter costs for forty numbers)
-        k = len(mates)
-        self.array = arr = np.empty((k, 8))
-        pack = _TABLE_PACK.get(k)
-        if pack is None:
-            pack = _TABLE_PACK[k] = struct.Struct(f"{8 * k}d").pack_into
-        pack(arr, 0, *flat)
+        rows.release()
         return self.mates, self.by_id, self.array
 
 
@@ -206,64 +232,9 @@ class Observation:
     )
 
     def __init__(self, world: WorldModel, view: TeamView | None = None):
-        v = world.vision
-        self.t = world.time
-        self.tick = world.tick
-        self.goalie_id = world.goalkeeper
-        view = view or TeamView()
-        mates, by_id, self.mate_array = view.get(world)
-        self.holder = view.holder  # the first team-mate holding the ball (None: none does)
-        me = by_id.get(world.id)
-        if me is None:
-            raise LookupError(f"robot {world.id} is missing from its own perception")
-        self.me = me
-        self.mates = mates
-        self.by_id = by_id
-        b = v.ball if v.ball.pos_known else world.ball
-        if b is None:
-            self.bx = self.by = self.bvx = self.bvy = self.bvz = 0.0
-            self.bz = 0.11
-            self.ball_seen = False
-            self.ball_age = math.inf
-        else:
-            self.bx, self.by, self.bz = b.x, b.y, b.z
-            self.bvx, self.bvy, self.bvz = b.vx, b.vy, b.vz
-            self.ball_seen = b is v.ball
-            self.ball_age = 0.0 if self.ball_seen else b.age
-        o = v.obstacles
-        ox = o.x
-        tick = self.tick
-        if view.opp_tick == tick:
-            # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are
-            # shared (one kernel call that compares instead of filling, no array or rows made)
-            arr = view.opp_array
-            k, self.near_mate, self.near_mate_d, self.opp_ball_d = _same_opponents(
-                ox, o.y, o.vx, o.vy, self.mate_array, arr, self.bx, self.by
-            )
-            if k >= 0:
-                self.opp_array = arr
-                self.opps = view.opps
-            else:
-                self._own_opponents(o, view, tick)
-        else:
-            self._own_opponents(o, view, tick)
-        c = world.coach
-        self.coach = c
-        self.mode = c.match_mode if c is not None else 0
-        self.mtype = c.match_type if c is not None else 0
-
-    def _own_opponents(self, o, view: TeamView, tick: int) -> None:
-        """The opponents among the obstacles ``o``, found afresh, and kept in ``view`` for team-mates."""
-        ox = o.x
-        # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs
-        # numba more to hand back than this one does to make)
-        buf = np.empty((len(ox), 4))
-        k, self.near_mate, self.near_mate_d, self.opp_ball_d = _opponents(
-            ox, o.y, o.vx, o.vy, self.mate_array, buf, self.bx, self.by
-        )
-        self.opp_array = arr = buf[:k]
-        self.opps = rows = arr.tolist()
-        view.opp_tick, view.opp_array, view.opps = tick, arr, rows
+        made = observe(world, view if view is not None else TeamView())
+        for name in Observation.__slots__:
+            setattr(self, name, getattr(made, name))
 
     @property
     def ball_speed(self) -> float:
@@ -274,6 +245,125 @@ class Observation:
         return [m for m in self.mates if m.valid and not m.is_goalie]
 
 
+def _make_observation_py(*values) -> Observation:
+    """An `Observation` of its slots' values (in slot order), without its class call: where the C helper is not
+    built."""
+    made = _new(Observation)
+    for name, value in zip(Observation.__slots__, values, strict=True):
+        setattr(made, name, value)
+    return made
+
+
+#: `Observation` of its slots' values, in slot order (the C helper's one call)
+_make_observation = msgs.slot_maker(Observation, Observation.__slots__) or _make_observation_py
+
+
+def observe(world: WorldModel, view: TeamView) -> Observation:
+    """``Observation(world, view)``: the same record, its numbers found in locals and its slots filled by one
+    call (no class call with a Python ``__init__``, no attribute writes one by one: a robot observes at
+    almost every tick)."""
+    v = world.vision
+    tick = world.tick
+    robots = v.robots
+    # (`TeamView.get`'s test of a view still valid, here: a team-mate's observation makes no call for it)
+    if view.tick == tick and view.robots is robots and view.team_strategy is world.team_strategy:
+        mates, by_id, table = view.mates, view.by_id, view.array
+    else:
+        mates, by_id, table = view.get(world)
+    me = by_id.get(world.id)
+    if me is None:
+        raise LookupError(f"robot {world.id} is missing from its own perception")
+    # (the WorldModel's own record, found here: `WorldModel.me` then needs no search, e.g. for what the robot
+    # tells its team)
+    world._me = robots[me.row]
+    b = v.ball
+    if b.pos_known:
+        bx = b.x  # (one by one: a tuple of six would be built and taken apart)
+        by = b.y
+        bz = b.z
+        bvx = b.vx
+        bvy = b.vy
+        bvz = b.vz
+        seen = True
+        age = 0.0
+    else:
+        b = world.ball
+        seen = False
+        if b is None:
+            bx = by = bvx = bvy = bvz = 0.0
+            bz = 0.11
+            age = math.inf
+        else:
+            bx, by, bz, bvx, bvy, bvz = b.x, b.y, b.z, b.vx, b.vy, b.vz
+            age = b.age
+    o = v.obstacles
+    if view.opp_tick == tick:
+        # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are shared
+        # (one kernel call that compares instead of filling, no array or rows made)
+        arr = view.opp_array
+        if view.opp_table is table and bx == view.opp_bx and by == view.opp_by:
+            # the ball where that team-mate saw it (the same numbers; a NaN never is): the team-mate nearest to
+            # it and the nearest opponent (when the rows are the same) are the ones it found
+            k = _same_rows(o.x, o.y, o.vx, o.vy, table, arr)
+            near, near_d, opp_d = view.opp_near
+        else:
+            k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
+        if k >= 0:
+            rows = view.opps
+        else:
+            arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
+    else:
+        arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
+    c = world.coach
+    if c is None:
+        mode = mtype = 0
+    else:
+        mode, mtype = c.match_mode, c.match_type
+    # (in Observation.__slots__' order)
+    return _make_observation(
+        world.time,
+        tick,
+        me,
+        mates,
+        by_id,
+        table,
+        bx,
+        by,
+        bz,
+        bvx,
+        bvy,
+        bvz,
+        seen,
+        age,
+        rows,
+        arr,
+        mode,
+        mtype,
+        c,
+        world.goalkeeper,
+        view.holder,  # the first team-mate holding the ball (None: none does)
+        near,
+        near_d,
+        opp_d,
+    )
+
+
+def _own_opponents(o, table: np.ndarray, bx: float, by: float, view: TeamView, tick: int) -> tuple:
+    """The opponents among the obstacles ``o`` (of a robot whose team's table is ``table``, the ball at ``bx``,
+    ``by``), found afresh and kept in ``view`` for team-mates: their array and rows, the team-mate nearest to
+    the ball, its distance, the nearest opponent's distance (`_opponents`)."""
+    ox = o.x
+    # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs numba
+    # more to hand back than this one does to make)
+    buf = np.empty((len(ox), 4))
+    k, near, near_d, opp_d = _opponents(ox, o.y, o.vx, o.vy, table, buf, bx, by)
+    arr = buf[:k]
+    rows = arr.tolist()
+    view.opp_tick, view.opp_array, view.opps = tick, arr, rows
+    view.opp_table, view.opp_bx, view.opp_by, view.opp_near = table, bx, by, (near, near_d, opp_d)
+    return arr, rows, near, near_d, opp_d
+
+
 def _array(rows: list[tuple], width: int) -> np.ndarray:
     """(len(rows), width) float array of equal-length tuples of numbers: the values of
     ``np.array(rows, dtype=float)``, built faster for a handful of rows. (Shared between the robots of a
@@ -281,7 +371,10 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
     return np.fromiter(chain.from_iterable(rows), float, width * len(rows)).reshape(-1, width)
 
 
-@numba.njit(cache=True, nogil=True)
+# _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``): they run for about a
+# microsecond, and a kernel that lets the GIL go costs its call some 0.7 k instructions to take it back (the runs
+# are single-threaded: nothing else would run meanwhile). The helpers they call are compiled into them either way.
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
     team-mates (``mates``, the TeamView's array: x, y in its first columns) into the first rows of ``out``
@@ -361,35 +454,41 @@ def _same(a, b):
     return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
-@numba.njit(cache=True, nogil=True)
-def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
-    """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
-    number of rows if the opponents among these obstacles are exactly ``prev``'s rows (bit for bit, in
-    order; nothing written), else -1; then, as `_opponents`, the team-mate nearest to the ball at (bx, by),
-    its distance and the nearest opponent's distance (inf without opponents)."""
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
+def _same_rows(ox, oy, ovx, ovy, mates, prev):
+    """The number of rows of ``prev`` (a team-mate's opponents at the same tick) if the opponents among these
+    obstacles (`_opponents`' rule) are exactly ``prev``'s rows (bit for bit, in order; nothing written), else
+    -1."""
     noisy = _noisy(ox, oy, mates)
     m = prev.shape[0]
     r = 0
-    opp_d = math.inf
     for k in range(ox.shape[0]):
         x, y = np.float64(ox[k]), np.float64(oy[k])
         if _opponent(x, y, mates, noisy):
             if r >= m:
-                r = -1
-                break
+                return -1
             if not (
                 _same(prev[r, 0], x)
                 and _same(prev[r, 1], y)
                 and _same(prev[r, 2], np.float64(ovx[k]))
                 and _same(prev[r, 3], np.float64(ovy[k]))
             ):
-                r = -1
-                break
-            d = hypot(prev[r, 0] - bx, prev[r, 1] - by)
-            if d < opp_d:
-                opp_d = d
+                return -1
             r += 1
-    if r != m:
-        r = -1
+    return r if r == m else -1
+
+
+@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
+def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
+    """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
+    number of rows if the opponents among these obstacles are exactly ``prev``'s rows (`_same_rows`), else -1;
+    then, as `_opponents`, the team-mate nearest to the ball at (bx, by), its distance and (when the rows are
+    the same) the nearest opponent's distance (inf without opponents)."""
+    r = _same_rows(ox, oy, ovx, ovy, mates, prev)
+    opp_d = math.inf
+    for j in range(r):
+        d = hypot(prev[j, 0] - bx, prev[j, 1] - by)
+        if d < opp_d:
+            opp_d = d
     near, near_d = _nearest_mate(mates, bx, by)
     return r, near, near_d, opp_d

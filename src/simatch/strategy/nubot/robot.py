@@ -27,7 +27,7 @@ from .gameflow import MODES, PHASES, GameFlow
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
 from .motion import Motion, rounded_move
-from .observation import Observation, TeamView
+from .observation import Observation, TeamView, observe
 from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
 from .positions import Areas, spot_grid
@@ -141,7 +141,7 @@ class NubotRobot(RobotStrategy):
             again = self.repeat(world)
             if again is not None:
                 return again
-        obs = Observation(world, self.shared.view)
+        obs = observe(world, self.shared.view)
         flow = self.flow
         flow.update(obs)
         self.player.track(obs)
