@@ -612,3 +612,39 @@ def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
                     assert [getattr(got, f) for f in Mate.__slots__] == [getattr(want, f) for f in Mate.__slots__]
                 rows = [(m.x, m.y, m.vx, m.vy, m.id, m.yaw, m.role, m.role_time) for m in expect]
                 assert table.tobytes() == np.array(rows, dtype=np.float64).reshape(-1, 8).tobytes()
+
+
+def test_a_kept_formation_is_the_one_its_key_says():
+    """The team picture keeps the last set-piece formation with `_formation_key` of its inputs: for the set
+    pieces it keeps, any opponents and assistant's place of the same key give the same slots, bit for bit
+    (the signs of zeros too); the other set pieces have no key."""
+    from simatch.strategy.nubot.params import NubotParams, plain
+    from simatch.strategy.nubot.setpieces import formation
+
+    params = plain(NubotParams())
+    areas = Areas(FieldGeometry(), params.robot_radius + 0.15)
+    spots = positions.spot_grid(areas)
+    rng = random.Random(16)
+
+    def crowd():
+        return [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0) for _ in range(rng.randint(0, 5))]
+
+    def exact(slots):
+        return [tuple(v.hex() if isinstance(v, float) else v for v in s) for s in slots]
+
+    for kind in range(1, 16):
+        if kind not in (1, 2, 5, 6, 13):
+            assert picture._formation_key(kind, 1.0, 2.0, crowd()) is None
+    for _ in range(3000):
+        kind = rng.choice([1, 2, 5, 6, 13])
+        bx = rng.choice([0.0, -0.0, rng.uniform(-11, 11)])
+        by = rng.choice([0.0, -0.0, rng.uniform(-7, 7)])
+        a, b = crowd(), crowd()
+        key = picture._formation_key(kind, bx, by, a)
+        if picture._formation_key(kind, bx, by, b) != key:
+            continue
+        near = [None, (rng.uniform(-11, 11), rng.uniform(-7, 7))]
+        want = exact(formation(kind, areas, bx, by, a, params, spots, near[0]))
+        assert exact(formation(kind, areas, bx, by, b, params, spots, near[1])) == want
+        if by == 0.0:  # a zero of the other sign is another key
+            assert picture._formation_key(kind, bx, -by, a) != key

@@ -37,7 +37,7 @@ from .positions import (
     passive_point,
     score_spots,
 )
-from .setpieces import SLOT_GAP, formation, spread
+from .setpieces import SLOT_GAP, formation, kickoff_side, spread
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -66,6 +66,24 @@ _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
 _NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
+#: the set pieces whose formation depends on the ball's place alone (their kick-off, the penalties, the
+#: dropped ball); our kick-off's also on the side of the pass (`kickoff_side` of the opponents)
+_OUR_KICKOFF = 1
+_BALL_ONLY_FORMATIONS = frozenset((2, 5, 6, 13))
+_copysign = math.copysign
+
+
+def _formation_key(kind: int, bx: float, by: float, opps: list) -> tuple | None:
+    """What `formation` of set piece ``kind`` depends on besides the fixed field and parameters, when that is
+    few numbers (the ball's place, with the signs of its zeros, and our kick-off's side); None when the
+    formation reads the opponents or the assistant's place (the other restarts: computed at every picture)."""
+    if kind == _OUR_KICKOFF:
+        side = kickoff_side(opps)
+    elif kind in _BALL_ONLY_FORMATIONS:
+        side = 0.0
+    else:
+        return None
+    return (kind, bx, by, _copysign(1.0, bx), _copysign(1.0, by), side)
 
 
 class Picture:
@@ -401,6 +419,10 @@ class Analyst:
         self.xlim = areas.L2 + 1.3
         self.ylim = areas.W2 + 1.3
         self.geo = areas.geo
+        # the last set-piece formation computed, with `_formation_key` of its inputs: while a kick-off, a
+        # penalty or a dropped ball is set up and taken, the ball stays put and the formation is the same
+        self._formation_key: tuple | None = None
+        self._formation: list[tuple] = []
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -602,8 +624,14 @@ class Analyst:
             if m.is_goalie:
                 pic.roles[m.id] = ROLES.GOALIE
         bx, by = (obs.bx, obs.by) if flow.phase == PHASES.SETUP else flow.ball0
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
-        slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
+        key = _formation_key(flow.kind, bx, by, obs.opps)
+        if key is not None and key == self._formation_key:
+            slots = self._formation  # (never written: `assign` and the loop below only read it)
+        else:
+            prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
+            slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
+            if key is not None:
+                self._formation_key, self._formation = key, slots
         hyst = SETUP_HYSTERESIS if flow.phase == PHASES.SETUP else RESTART_HYSTERESIS
         keep = (
             self.p.dropball_distance
