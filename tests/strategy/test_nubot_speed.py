@@ -648,3 +648,36 @@ def test_a_kept_formation_is_the_one_its_key_says():
         assert exact(formation(kind, areas, bx, by, b, params, spots, near[1])) == want
         if by == 0.0:  # a zero of the other sign is another key
             assert picture._formation_key(kind, bx, -by, a) != key
+
+
+def test_the_ball_path_with_inline_min_and_max_is_the_one_before():
+    """`BallPath`'s stop point and `at` take Python's min and max inline: the same numbers, bit for bit, as
+    the calls they replace, on random paths (flying, rolling, at rest, against the boards) and times."""
+
+    def hexes(*vs):
+        return tuple(v.hex() for v in vs)
+
+    rng = random.Random(8)
+    for _ in range(20_000):
+        path = _random_path(rng)
+        if path.speed >= 0.05:
+            roll_t = path.speed / path.decel
+            s_stop = path.speed * path.land_t + path.speed * roll_t - 0.5 * path.decel * roll_t * roll_t
+            want = (
+                min(max(path.x + path.ux * s_stop, -path.xlim), path.xlim),
+                min(max(path.y + path.uy * s_stop, -path.ylim), path.ylim),
+            )
+            assert hexes(path.stop_x, path.stop_y) == hexes(*want)
+        t = rng.choice([0.0, 0.4, path.land_t, path.stop_t, rng.uniform(0.0, 5.0)])
+        if path.speed < 0.05 or t <= 0.0:
+            want = (path.x, path.y)
+        elif t >= path.stop_t:
+            want = (path.stop_x, path.stop_y)
+        else:
+            tr = max(0.0, t - path.land_t)
+            s = path.speed * (min(t, path.land_t) + tr) - 0.5 * path.decel * tr * tr
+            want = (
+                min(max(path.x + path.ux * s, -path.xlim), path.xlim),
+                min(max(path.y + path.uy * s, -path.ylim), path.ylim),
+            )
+        assert hexes(*path.at(t)) == hexes(*want)

@@ -80,8 +80,13 @@ class BallPath:
         roll_t = speed / decel if decel > 0 else 1e3
         self.stop_t = self.land_t + roll_t
         s_stop = speed * self.land_t + speed * roll_t - 0.5 * decel * roll_t * roll_t
-        self.stop_x = min(max(x + self.ux * s_stop, -xlim), xlim)
-        self.stop_y = min(max(y + self.uy * s_stop, -ylim), ylim)
+        # (min(max(v, -lim), lim), inline: Python's max keeps v unless -lim > v, min keeps it unless lim < v)
+        v = x + self.ux * s_stop
+        v = -xlim if -xlim > v else v
+        self.stop_x = xlim if xlim < v else v
+        v = y + self.uy * s_stop
+        v = -ylim if -ylim > v else v
+        self.stop_y = ylim if ylim < v else v
 
     def at(self, t: float) -> tuple[float, float]:
         """The ball's predicted position (x, y) in t seconds."""
@@ -89,12 +94,18 @@ class BallPath:
             return self.x, self.y
         if t >= self.stop_t:
             return self.stop_x, self.stop_y
-        tr = max(0.0, t - self.land_t)
-        s = self.speed * (min(t, self.land_t) + tr) - 0.5 * self.decel * tr * tr
-        return (
-            min(max(self.x + self.ux * s, -self.xlim), self.xlim),
-            min(max(self.y + self.uy * s, -self.ylim), self.ylim),
-        )
+        # (Python's min and max of two, inline: the first unless the second is smaller / larger)
+        land_t = self.land_t
+        tr = t - land_t
+        tr = tr if tr > 0.0 else 0.0
+        s = self.speed * ((land_t if land_t < t else t) + tr) - 0.5 * self.decel * tr * tr
+        lim = self.xlim
+        x = self.x + self.ux * s
+        x = -lim if -lim > x else x
+        lim2 = self.ylim
+        y = self.y + self.uy * s
+        y = -lim2 if -lim2 > y else y
+        return (lim if lim < x else x, lim2 if lim2 < y else y)
 
     def kernel_args(self) -> tuple:
         """The path as the intercept kernels take it (their first ten arguments, in their order)."""

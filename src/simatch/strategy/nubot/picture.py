@@ -62,6 +62,7 @@ PASS_KEPT = 0.3
 
 # the positional roles as numbers, for the compiled slots (and back: the Role members by value)
 _ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
+_ASSISTANT_ROLE = ROLES.ASSISTANT
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
@@ -434,7 +435,11 @@ class Analyst:
         # a robot off the field beyond the margin (it followed the ball) still plays; one not valid within
         # the margin has been taken off (sent off: parked and disabled beside the field)
         xl, yl = self.areas.L2 + 1.0, self.areas.W2 + 1.0
-        mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
+        mates = obs.mates  # (as nearly always: every team-mate plays; the list is only read)
+        for m in mates:
+            if not (m.valid or abs(m.x) > xl or abs(m.y) > yl):
+                mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
+                break
         for m in mates:
             if m.holding:
                 pic.holder = m.id
@@ -605,8 +610,12 @@ class Analyst:
     def _assist_array(self, obs: Observation, pic: Picture, n: int) -> np.ndarray:
         """`_assist_spots` as a (k, 2) array (the kernel's rows themselves when it could choose)."""
         cx, cy = self.spots
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
-        nx, ny = prev if prev is not None else (math.nan, math.nan)
+        prev = None  # (the first assistant's place; a plain loop: a generator is a function object per call)
+        nx = ny = math.nan
+        for m in obs.mates:
+            if m.role == _ASSISTANT_ROLE:
+                nx, ny = prev = (m.x, m.y)
+                break
         out = np.empty((n, 2))
         k = _assist_choice(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
         if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
