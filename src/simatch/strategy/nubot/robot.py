@@ -16,6 +16,7 @@ picture (roles and points, see picture.py) and acts on the game command:
 from __future__ import annotations
 
 import math
+import struct
 
 from ... import msgs
 from ..base import Command, RobotContext, RobotStrategy, RoundedMove, TeamContext, TeamStrategy
@@ -35,6 +36,8 @@ from .testmodes import TestModes
 from .warm import load_kernels
 
 _f32s = msgs.f32s
+_F32X3 = struct.Struct("<3f")  # (what msgs.f32s packs three numbers with)
+_cos, _sin = math.cos, math.sin
 
 # what `decide` and `hold_slot` compare at every tick, as globals (a namespace's attribute costs more); the
 # game flow's phase is always one of PHASES' members, compared by identity
@@ -211,9 +214,15 @@ class NubotRobot(RobotStrategy):
         dist = v.obstacles.distance
         if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
-        bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
+        # (Motion.body, inline: the course in the body frame half a period on)
+        h = me.yaw + 0.5 * w * self.motion.period
+        c, s = _cos(h), _sin(h)
+        bx, by, w_body = c * vx + s * vy, -s * vx + c * vy, w
         if type(cmd) is RoundedMove:  # (its intent is rounded already)
-            bx, by, w_body = _f32s(bx, by, w_body)
+            try:  # (msgs.f32s of three, inline; it takes the numbers out of float32's range)
+                bx, by, w_body = _F32X3.unpack(_F32X3.pack(bx, by, w_body))
+            except (OverflowError, struct.error):
+                bx, by, w_body = _f32s(bx, by, w_body)
             return rounded_move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
