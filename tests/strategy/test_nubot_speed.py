@@ -121,7 +121,7 @@ def test_assistant_spots_compiled_equal_the_plain_choice():
         else:
             bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
         prev = None if rng.random() < 0.3 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
-        n = rng.choice([1, 2])
+        n = rng.choice([1, 2, 12])  # (12: the order of all twelve best counts)
         plain = picture.assist_spots(cx, cy, bx, by, opps, areas.L2, prev, n)
         nx, ny = prev if prev is not None else (math.nan, math.nan)
         out = np.empty((n, 2))
@@ -681,3 +681,67 @@ def test_the_ball_path_with_inline_min_and_max_is_the_one_before():
                 min(max(path.y + path.uy * s, -path.ylim), path.ylim),
             )
         assert hexes(*path.at(t)) == hexes(*want)
+
+
+def _score_spots_before(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
+    """`positions._score_spots` as it was before it took square roots only where they count."""
+    for i in range(cx.shape[0]):
+        x, y = cx[i], cy[i]
+        score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)
+        if abs(y) < 3.0:
+            score += 0.4 * min(x, 2.0)
+        dball = math.sqrt((x - bx) ** 2 + (y - by) ** 2)
+        score -= 3.0 * max(0.0, dmin - dball) + 1.0 * max(0.0, dball - dmax)
+        sx, sy = x - bx, y - by
+        ll = sx * sx + sy * sy + 1e-9
+        lane = 1e9
+        for k in range(ox.shape[0]):
+            dopp = math.sqrt((x - ox[k]) ** 2 + (y - oy[k]) ** 2)
+            score -= 2.0 * max(0.0, 2.5 - dopp)
+            t = min(max(((ox[k] - bx) * sx + (oy[k] - by) * sy) / ll, 0.0), 1.0)
+            lane = min(lane, math.sqrt((bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2))
+        if ox.shape[0] > 0:
+            if lane < 0.85:
+                score -= 4.0
+            score -= 1.5 * max(0.0, 1.4 - lane)
+        if nx == nx:
+            score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
+        out[i] = score
+
+
+def test_spot_scores_with_fewer_square_roots_equal_the_ones_before():
+    """`_score_spots` takes an opponent's distance only within 2.5 m and one square root of the nearest
+    lane: the same scores, bit for bit, as before (compiled both), on random spots, balls and opponents
+    (opponents exactly 2.5 m from a spot, on a spot, on the ball, NaN, none)."""
+    import numba
+
+    before = numba.njit(_score_spots_before)
+    areas = Areas(FieldGeometry(), 0.55)
+    cx, cy = positions.spot_grid(areas)
+    rng = random.Random(25)
+    for _ in range(3000):
+        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        opps = []
+        for _ in range(rng.randint(0, 6)):
+            kind = rng.random()
+            if kind < 0.15:  # exactly 2.5 m from a spot (or as near as floats get)
+                k = rng.randrange(len(cx))
+                a = rng.choice([0.0, 0.5 * math.pi, rng.uniform(0, 2 * math.pi)])
+                opps.append((cx[k] + 2.5 * math.cos(a), cy[k] + 2.5 * math.sin(a)))
+            elif kind < 0.25:
+                k = rng.randrange(len(cx))
+                opps.append((cx[k], cy[k]))
+            elif kind < 0.3:
+                opps.append((bx, by))
+            elif kind < 0.33:
+                opps.append((math.nan, rng.uniform(-7, 7)))
+            else:
+                opps.append((rng.uniform(-11, 11), rng.uniform(-7, 7)))
+        ox = np.array([o[0] for o in opps], dtype=float)
+        oy = np.array([o[1] for o in opps], dtype=float)
+        nx, ny = (rng.uniform(-11, 11), rng.uniform(-7, 7)) if rng.random() < 0.7 else (math.nan, math.nan)
+        dmin, dmax = rng.choice([(3.0, 8.5), (2.5, 6.5)])
+        want, got = np.empty(len(cx)), np.empty(len(cx))
+        before(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, want)
+        positions._score_spots(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, got)
+        assert want.tobytes() == got.tobytes()

@@ -285,7 +285,18 @@ def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
     for i in range(m):
         if score[i] != score[i]:
             return -1
-    order = np.argsort(-score)
+    # the thirteen best in the order of np.argsort(-score) (the highest first), chosen one by one instead of
+    # sorting them all: the same order whenever it counts (two equal scores among them: -1 below either way)
+    sel = min(13, m)
+    order = np.empty(sel, np.int64)
+    taken = np.zeros(m, np.bool_)
+    for i in range(sel):
+        best = -1
+        for j in range(m):
+            if not taken[j] and (best < 0 or score[j] > score[best]):
+                best = j
+        taken[best] = True
+        order[i] = best
     top = min(12, m)
     for i in range(min(top, m - 1)):
         if score[order[i]] == score[order[i + 1]]:
