@@ -814,3 +814,32 @@ def test_intercepts_sampled_once_and_passing_over_samples_out_of_reach_equal_the
                 outcomes.append(ZeroDivisionError)
         assert outcomes[0] is outcomes[1]
         assert want.tobytes() == got.tobytes()
+
+
+def test_time_to_cover_and_pass_speed_with_inline_min_and_max_are_the_ones_before():
+    """`time_to_cover` and `pass_speed` take Python's min and max of two inline: the same numbers, bit for
+    bit (NaN and the limits themselves included)."""
+    from simatch.strategy.nubot.evaluate import pass_speed
+    from simatch.strategy.nubot.geometry import time_to_cover
+
+    def ttc_before(d, v0, vmax, acc):
+        v0 = min(max(v0, 0.0), vmax)
+        d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
+        if d <= d_acc:
+            return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
+        return (vmax - v0) / acc + (d - d_acc) / vmax
+
+    def same(a, b):
+        return (math.isnan(a) and math.isnan(b)) or a.hex() == b.hex()
+
+    rng = random.Random(31)
+    for _ in range(20_000):
+        vmax = rng.choice([3.0, rng.uniform(0.5, 4.0)])
+        v0 = rng.choice([0.0, -0.0, vmax, math.nan, rng.uniform(-5.0, 5.0)])
+        d, acc = rng.choice([0.0, rng.uniform(0.0, 20.0)]), rng.uniform(0.5, 3.0)
+        assert same(time_to_cover(d, v0, vmax, acc), ttc_before(d, v0, vmax, acc))
+        lo, hi = rng.choice([(1.6, 7.5), (1.8, 4.0)])
+        dist = rng.choice([0.0, rng.uniform(0.0, 30.0), math.nan])
+        arrival, decel = rng.choice([lo, rng.uniform(0.0, 3.0)]), rng.uniform(0.2, 0.8)
+        want = min(hi, max(lo, math.sqrt(arrival * arrival + 2.0 * decel * dist)))
+        assert same(pass_speed(dist, arrival, decel, lo, hi), want)

@@ -254,8 +254,11 @@ class BallPlayer:
             gap = d - 0.55
             if gap <= 0.0:
                 return 0.0
-            v0 = max(0.0, (vx * dx + vy * dy) / d)
-            best = min(best, time_to_cover(gap, v0, p.max_speed, p.acceleration))
+            # (Python's max and min of two, inline: the first unless the second is larger / smaller)
+            v0 = (vx * dx + vy * dy) / d
+            v0 = v0 if v0 > 0.0 else 0.0
+            t = time_to_cover(gap, v0, p.max_speed, p.acceleration)
+            best = t if t < best else best
         return best
 
     def turn_time(self, obs: Observation, tx: float, ty: float) -> float:
@@ -282,10 +285,15 @@ class BallPlayer:
             margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
             if margin < 0.15:
                 continue
-            near = min((math.hypot(o[0] - cx, o[1] - cy) for o in obs.opps), default=9.0)
-            if near < 1.1:
+            # (min(..., default=9.0) of the opponents' distances, as a plain loop: the first, then any smaller)
+            near = None
+            for o in obs.opps:
+                h = math.hypot(o[0] - cx, o[1] - cy)
+                if near is None or h < near:
+                    near = h
+            if near is not None and near < 1.1:
                 continue
-            value = position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * min(margin, 1.5)
+            value = position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * (1.5 if 1.5 < margin else margin)
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(
