@@ -19,9 +19,10 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import entry
 from ...exactmath import hypot
 from ..roles import ROLES
-from .ballpath import BallPath, team_intercepts
+from .ballpath import BallPath, _team_intercepts
 from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
@@ -435,6 +436,13 @@ class Analyst:
         # penalty or a dropped ball is set up and taken, the ball stays put and the formation is the same
         self._formation_key: tuple | None = None
         self._formation: list[tuple] = []
+        # the picture's kernels as compiled for the types of their arguments, called without numba's
+        # dispatcher typing them at every call (as Motion's `go`): every array they get is made by this
+        # package (float64, C-contiguous: the team view's table, the opponents' rows, the spots, fresh outputs)
+        table, rows, pairs = np.zeros((1, 8)), np.zeros((1, 4)), np.zeros((1, 2))
+        self._intercepts = entry(_team_intercepts, *(0.0,) * 10, table, rows, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros((1, 3)))
+        self._assist = entry(_assist_choice, *spots, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0, 0.0, pairs)
+        self._slots = entry(_open_slots, table, 0, 0, True, pairs, rows, 0.0, 0.0, self.geo, 0.0, rows)
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -469,8 +477,30 @@ class Analyst:
                 us = obs.mate_array
             else:
                 us = _rows([(m.x, m.y, m.vx, m.vy, m.id, m.yaw) for m in mates], 6)
+            # (ballpath.team_intercepts, by its kernel's compiled entry)
+            out = np.empty((us.shape[0] + obs.opp_array.shape[0], 3))
             turn = 0.7 / p.max_turn
-            res = team_intercepts(path, us, obs.opp_array, obs.bx, obs.by, turn, p.max_speed, p.acceleration).tolist()
+            self._intercepts(
+                path.x,
+                path.y,
+                path.speed,
+                path.ux,
+                path.uy,
+                path.land_t,
+                path.stop_t,
+                path.decel,
+                path.xlim,
+                path.ylim,
+                us,
+                obs.opp_array,
+                obs.bx,
+                obs.by,
+                turn,
+                p.max_speed,
+                p.acceleration,
+                out,
+            )
+            res = out.tolist()
             for k, m in enumerate(mates):
                 pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
             if opps:
@@ -588,7 +618,7 @@ class Analyst:
         if rows >> 62 == 0:  # (the rows fit the kernel's bits: always but in teams of more than 62)
             assist = self._assist_array(obs, pic, 2 if len(rest) >= 4 else 1) if pic.attacking else _NO_SPOTS
             out = np.empty((len(rest), 4))
-            k = _open_slots(
+            k = self._slots(
                 obs.mate_array,
                 rows,
                 len(rest),
@@ -628,7 +658,7 @@ class Analyst:
                 nx, ny = prev = (m.x, m.y)
                 break
         out = np.empty((n, 2))
-        k = _assist_choice(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
+        k = self._assist(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
         if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
             spots = assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
             return np.array(spots, dtype=float).reshape(-1, 2)
