@@ -63,7 +63,8 @@ PASS_KEPT = 0.3
 
 # the positional roles as numbers, for the compiled slots (and back: the Role members by value)
 _ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
-_ASSISTANT_ROLE = ROLES.ASSISTANT
+_ASSISTANT_ROLE, _ACTIVE_ROLE, _GOALIE = ROLES.ASSISTANT, ROLES.ACTIVE, ROLES.GOALIE
+_SETUP, _OUR_RESTART = PHASES.SETUP, PHASES.OUR_RESTART
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
@@ -149,7 +150,23 @@ class TeamMemo:
 
 
 def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
-    return (obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype, obs.opps, flow.key())
+    # (GameFlow.key()'s numbers inline, the phase as its member: the members are distinct, so equal members
+    # are equal phases, compared by identity first)
+    return (
+        obs.bx,
+        obs.by,
+        obs.bz,
+        obs.bvx,
+        obs.bvy,
+        obs.bvz,
+        obs.mode,
+        obs.mtype,
+        obs.opps,
+        flow.phase,
+        flow.kind,
+        flow.ball0,
+        flow.taker,
+    )
 
 
 def assign(
@@ -669,11 +686,15 @@ class Analyst:
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
-        field = [m for m in mates if not m.is_goalie]
+        # (one plain loop; the phases compared by identity: the flow's phase is always one of PHASES' members)
+        field = []
         for m in mates:
             if m.is_goalie:
-                pic.roles[m.id] = ROLES.GOALIE
-        bx, by = (obs.bx, obs.by) if flow.phase == PHASES.SETUP else flow.ball0
+                pic.roles[m.id] = _GOALIE
+            else:
+                field.append(m)
+        phase = flow.phase
+        bx, by = (obs.bx, obs.by) if phase is _SETUP else flow.ball0
         key = _formation_key(flow.kind, bx, by, obs.opps)
         if key is not None and key == self._formation_key:
             slots = self._formation  # (never written: `assign` and the loop below only read it)
@@ -682,7 +703,7 @@ class Analyst:
             slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
             if key is not None:
                 self._formation_key, self._formation = key, slots
-        hyst = SETUP_HYSTERESIS if flow.phase == PHASES.SETUP else RESTART_HYSTERESIS
+        hyst = SETUP_HYSTERESIS if phase is _SETUP else RESTART_HYSTERESIS
         keep = (
             self.p.dropball_distance
             if flow.kind == 13
@@ -693,14 +714,9 @@ class Analyst:
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
-            if role == ROLES.ACTIVE:
+            if role == _ACTIVE_ROLE:
                 pic.active = rid
-        if (
-            flow.phase == PHASES.OUR_RESTART
-            and pic.receiver in pic.slots
-            and pic.pass_info is not None
-            and flow.kind != 1
-        ):
+        if phase is _OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None and flow.kind != 1:
             # the taker aims at the receiver: it waits for the ball where it is announced, facing it
             info = pic.pass_info
             pic.slots[pic.receiver] = (info.catch_x, info.catch_y, bx, by)
