@@ -25,6 +25,7 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import entry
 from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
@@ -89,6 +90,12 @@ class BallPlayer:
         self.announce_until = -1.0
         self.pa_since: float | None = None  # when I entered the opponents' penalty area
         self.dribble_dir: tuple[float, float] | None = None
+        # the judges `passes` calls for every candidate, as compiled for the types it hands them (floats and
+        # the observation's opponents: float64, C-contiguous), without numba's dispatcher typing them each time
+        rows = np.zeros((1, 4))
+        self._lane_clear = entry(lane_clear, 0.0, 0.0, 0.0, 0.0, rows, 0.0, 0.0)
+        self._position_value = entry(position_value, 0.0, 0.0, rows, 0.0)
+        self._shot_window = entry(shot_window, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0)
         # what `_dribble_choice` reads of the field: half length and width, our penalty area's depth and
         # half width, the opponents' (widened) goal area's near edge and half width
         self.zones = np.array((areas.L2, areas.W2, areas.pa_depth, areas.pa_half, areas.opp_ga[0], areas.opp_ga[2]))
@@ -282,7 +289,7 @@ class BallPlayer:
             if d < 1.8 or d > p.max_pass:
                 continue
             v = pass_speed(d, p.pass_arrival_speed, p.ball_deceleration)
-            margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
+            margin = self._lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
             if margin < 0.15:
                 continue
             # (min(..., default=9.0) of the opponents' distances, as a plain loop: the first, then any smaller)
@@ -293,11 +300,13 @@ class BallPlayer:
                     near = h
             if near is not None and near < 1.1:
                 continue
-            value = position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * (1.5 if 1.5 < margin else margin)
+            value = self._position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * (1.5 if 1.5 < margin else margin)
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(
-                    shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[1],
+                    self._shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[
+                        1
+                    ],
                     0.15,
                 )
             out.append((value, m.id, cx, cy, v))
