@@ -122,7 +122,7 @@ def test_assistant_spots_compiled_equal_the_plain_choice():
         else:
             bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
         prev = None if rng.random() < 0.3 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
-        n = rng.choice([1, 2])
+        n = rng.choice([1, 2, 12])  # (12: the order of all twelve best counts)
         plain = picture.assist_spots(cx, cy, bx, by, opps, areas.L2, prev, n)
         nx, ny = prev if prev is not None else (math.nan, math.nan)
         out = np.empty((n, 2))
@@ -650,3 +650,234 @@ def test_a_team_mates_observation_is_the_one_made_afresh():
                 assert slots(got) == slots(Observation(world, TeamView()))
                 assert slots(Observation(world, view)) == slots(got)
     assert cached > 20
+
+
+def test_a_kept_formation_is_the_one_its_key_says():
+    """The team picture keeps the last set-piece formation with `_formation_key` of its inputs: for the set
+    pieces it keeps, any opponents and assistant's place of the same key give the same slots, bit for bit
+    (the signs of zeros too); the other set pieces have no key."""
+    from simatch.strategy.nubot.params import NubotParams, plain
+    from simatch.strategy.nubot.setpieces import formation
+
+    params = plain(NubotParams())
+    areas = Areas(FieldGeometry(), params.robot_radius + 0.15)
+    spots = positions.spot_grid(areas)
+    rng = random.Random(16)
+
+    def crowd():
+        return [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0) for _ in range(rng.randint(0, 5))]
+
+    def exact(slots):
+        return [tuple(v.hex() if isinstance(v, float) else v for v in s) for s in slots]
+
+    for kind in range(1, 16):
+        if kind not in (1, 2, 5, 6, 13):
+            assert picture._formation_key(kind, 1.0, 2.0, crowd()) is None
+    for _ in range(3000):
+        kind = rng.choice([1, 2, 5, 6, 13])
+        bx = rng.choice([0.0, -0.0, rng.uniform(-11, 11)])
+        by = rng.choice([0.0, -0.0, rng.uniform(-7, 7)])
+        a, b = crowd(), crowd()
+        key = picture._formation_key(kind, bx, by, a)
+        if picture._formation_key(kind, bx, by, b) != key:
+            continue
+        near = [None, (rng.uniform(-11, 11), rng.uniform(-7, 7))]
+        want = exact(formation(kind, areas, bx, by, a, params, spots, near[0]))
+        assert exact(formation(kind, areas, bx, by, b, params, spots, near[1])) == want
+        if by == 0.0:  # a zero of the other sign is another key
+            assert picture._formation_key(kind, bx, -by, a) != key
+
+
+def test_the_ball_path_with_inline_min_and_max_is_the_one_before():
+    """`BallPath`'s stop point and `at` take Python's min and max inline: the same numbers, bit for bit, as
+    the calls they replace, on random paths (flying, rolling, at rest, against the boards) and times."""
+
+    def hexes(*vs):
+        return tuple(v.hex() for v in vs)
+
+    rng = random.Random(8)
+    for _ in range(20_000):
+        path = _random_path(rng)
+        if path.speed >= 0.05:
+            roll_t = path.speed / path.decel
+            s_stop = path.speed * path.land_t + path.speed * roll_t - 0.5 * path.decel * roll_t * roll_t
+            want = (
+                min(max(path.x + path.ux * s_stop, -path.xlim), path.xlim),
+                min(max(path.y + path.uy * s_stop, -path.ylim), path.ylim),
+            )
+            assert hexes(path.stop_x, path.stop_y) == hexes(*want)
+        t = rng.choice([0.0, 0.4, path.land_t, path.stop_t, rng.uniform(0.0, 5.0)])
+        if path.speed < 0.05 or t <= 0.0:
+            want = (path.x, path.y)
+        elif t >= path.stop_t:
+            want = (path.stop_x, path.stop_y)
+        else:
+            tr = max(0.0, t - path.land_t)
+            s = path.speed * (min(t, path.land_t) + tr) - 0.5 * path.decel * tr * tr
+            want = (
+                min(max(path.x + path.ux * s, -path.xlim), path.xlim),
+                min(max(path.y + path.uy * s, -path.ylim), path.ylim),
+            )
+        assert hexes(*path.at(t)) == hexes(*want)
+
+
+def _score_spots_before(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
+    """`positions._score_spots` as it was before it took square roots only where they count."""
+    for i in range(cx.shape[0]):
+        x, y = cx[i], cy[i]
+        score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)
+        if abs(y) < 3.0:
+            score += 0.4 * min(x, 2.0)
+        dball = math.sqrt((x - bx) ** 2 + (y - by) ** 2)
+        score -= 3.0 * max(0.0, dmin - dball) + 1.0 * max(0.0, dball - dmax)
+        sx, sy = x - bx, y - by
+        ll = sx * sx + sy * sy + 1e-9
+        lane = 1e9
+        for k in range(ox.shape[0]):
+            dopp = math.sqrt((x - ox[k]) ** 2 + (y - oy[k]) ** 2)
+            score -= 2.0 * max(0.0, 2.5 - dopp)
+            t = min(max(((ox[k] - bx) * sx + (oy[k] - by) * sy) / ll, 0.0), 1.0)
+            lane = min(lane, math.sqrt((bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2))
+        if ox.shape[0] > 0:
+            if lane < 0.85:
+                score -= 4.0
+            score -= 1.5 * max(0.0, 1.4 - lane)
+        if nx == nx:
+            score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
+        out[i] = score
+
+
+def test_spot_scores_with_fewer_square_roots_equal_the_ones_before():
+    """`_score_spots` takes an opponent's distance only within 2.5 m and one square root of the nearest
+    lane: the same scores, bit for bit, as before (compiled both), on random spots, balls and opponents
+    (opponents exactly 2.5 m from a spot, on a spot, on the ball, NaN, none)."""
+    import numba
+
+    before = numba.njit(_score_spots_before)
+    areas = Areas(FieldGeometry(), 0.55)
+    cx, cy = positions.spot_grid(areas)
+    rng = random.Random(25)
+    for _ in range(3000):
+        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
+        opps = []
+        for _ in range(rng.randint(0, 6)):
+            kind = rng.random()
+            if kind < 0.15:  # exactly 2.5 m from a spot (or as near as floats get)
+                k = rng.randrange(len(cx))
+                a = rng.choice([0.0, 0.5 * math.pi, rng.uniform(0, 2 * math.pi)])
+                opps.append((cx[k] + 2.5 * math.cos(a), cy[k] + 2.5 * math.sin(a)))
+            elif kind < 0.25:
+                k = rng.randrange(len(cx))
+                opps.append((cx[k], cy[k]))
+            elif kind < 0.3:
+                opps.append((bx, by))
+            elif kind < 0.33:
+                opps.append((math.nan, rng.uniform(-7, 7)))
+            else:
+                opps.append((rng.uniform(-11, 11), rng.uniform(-7, 7)))
+        ox = np.array([o[0] for o in opps], dtype=float)
+        oy = np.array([o[1] for o in opps], dtype=float)
+        nx, ny = (rng.uniform(-11, 11), rng.uniform(-7, 7)) if rng.random() < 0.7 else (math.nan, math.nan)
+        dmin, dmax = rng.choice([(3.0, 8.5), (2.5, 6.5)])
+        want, got = np.empty(len(cx)), np.empty(len(cx))
+        before(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, want)
+        positions._score_spots(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, got)
+        assert want.tobytes() == got.tobytes()
+
+
+def _intercepts_before(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, vx, vy, extra, vmax, acc, out):
+    """`ballpath._intercepts` as it was before it sampled the path once and passed over samples out of reach."""
+    for r in range(px.shape[0]):
+        for k in range(ballpath.SAMPLES):
+            t = k * ballpath.STEP
+            if speed < 0.05:
+                bx, by = x, y
+            else:
+                tt = min(t, stop_t)
+                tr = max(0.0, tt - land_t)
+                s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
+                bx = min(max(x + ux * s, -xlim), xlim)
+                by = min(max(y + uy * s, -ylim), ylim)
+            dx, dy = bx - px[r], by - py[r]
+            d = math.sqrt(dx * dx + dy * dy) + 1e-9
+            vpar = (vx[r] * dx + vy[r] * dy) / d
+            vperp = math.sqrt(max(0.0, vx[r] * vx[r] + vy[r] * vy[r] - vpar * vpar))
+            v0 = min(max(vpar, -vmax), vmax)
+            t_stop = 0.0
+            if v0 < 0.0:
+                t_stop = -v0 / acc
+                d += v0 * v0 / (2.0 * acc)
+                v0 = 0.0
+            d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
+            if d <= d_acc:
+                reach = (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
+            else:
+                reach = (vmax - v0) / acc + (d - d_acc) / vmax
+            reach += t_stop + 0.5 * vperp / acc + ballpath.CATCH_MARGIN + extra[r]
+            if reach <= t or k == ballpath.SAMPLES - 1:
+                out[r, 0] = max(t, reach)
+                out[r, 1] = bx
+                out[r, 2] = by
+                break
+
+
+def test_intercepts_sampled_once_and_passing_over_samples_out_of_reach_equal_the_ones_before():
+    """`_intercepts` samples the ball's path once for all robots and passes over the samples a robot cannot
+    reach in time at top speed: the same interceptions, bit for bit, as before (compiled both), on random
+    paths and robots (near the ball, fast, extra delays below zero, a robot that reaches a sample just in
+    time, none that can, a NaN, odd speed limits)."""
+    import numba
+
+    before = numba.njit(_intercepts_before)
+    rng = random.Random(40)
+    for _ in range(6000):
+        path = _random_path(rng)
+        n = rng.randint(1, 10)
+        px = np.array([rng.choice([path.x + rng.uniform(-0.5, 0.5), rng.uniform(-12, 12)]) for _ in range(n)])
+        py = np.array([rng.choice([path.y + rng.uniform(-0.5, 0.5), rng.uniform(-8, 8)]) for _ in range(n)])
+        vx = np.array([rng.choice([0.0, rng.uniform(-4, 4)]) for _ in range(n)])
+        vy = np.array([rng.choice([0.0, rng.uniform(-4, 4)]) for _ in range(n)])
+        extra = np.array([rng.choice([0.0, rng.uniform(0.0, 2.0), rng.uniform(-1.0, 0.0)]) for _ in range(n)])
+        if rng.random() < 0.05:
+            px[0] = math.nan
+        vmax = rng.choice([rng.uniform(1.0, 4.0), rng.uniform(1.0, 4.0), 0.0, 1e-3, 50.0])
+        acc = rng.choice([rng.uniform(1.0, 3.0), rng.uniform(1.0, 3.0), 0.0, 1e-3, 50.0])
+        want, got = np.full((n, 3), 7.0), np.full((n, 3), 7.0)
+        outcomes = []
+        for kernel, out in ((before, want), (ballpath._intercepts, got)):
+            try:
+                kernel(*path.kernel_args(), px, py, vx, vy, extra, vmax, acc, out)
+                outcomes.append(None)
+            except ZeroDivisionError:  # (no speed or no acceleration: numba raises as Python would)
+                outcomes.append(ZeroDivisionError)
+        assert outcomes[0] is outcomes[1]
+        assert want.tobytes() == got.tobytes()
+
+
+def test_time_to_cover_and_pass_speed_with_inline_min_and_max_are_the_ones_before():
+    """`time_to_cover` and `pass_speed` take Python's min and max of two inline: the same numbers, bit for
+    bit (NaN and the limits themselves included)."""
+    from simatch.strategy.nubot.evaluate import pass_speed
+    from simatch.strategy.nubot.geometry import time_to_cover
+
+    def ttc_before(d, v0, vmax, acc):
+        v0 = min(max(v0, 0.0), vmax)
+        d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
+        if d <= d_acc:
+            return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
+        return (vmax - v0) / acc + (d - d_acc) / vmax
+
+    def same(a, b):
+        return (math.isnan(a) and math.isnan(b)) or a.hex() == b.hex()
+
+    rng = random.Random(31)
+    for _ in range(20_000):
+        vmax = rng.choice([3.0, rng.uniform(0.5, 4.0)])
+        v0 = rng.choice([0.0, -0.0, vmax, math.nan, rng.uniform(-5.0, 5.0)])
+        d, acc = rng.choice([0.0, rng.uniform(0.0, 20.0)]), rng.uniform(0.5, 3.0)
+        assert same(time_to_cover(d, v0, vmax, acc), ttc_before(d, v0, vmax, acc))
+        lo, hi = rng.choice([(1.6, 7.5), (1.8, 4.0)])
+        dist = rng.choice([0.0, rng.uniform(0.0, 30.0), math.nan])
+        arrival, decel = rng.choice([lo, rng.uniform(0.0, 3.0)]), rng.uniform(0.2, 0.8)
+        want = min(hi, max(lo, math.sqrt(arrival * arrival + 2.0 * decel * dist)))
+        assert same(pass_speed(dist, arrival, decel, lo, hi), want)

@@ -25,6 +25,7 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import entry
 from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
@@ -89,6 +90,12 @@ class BallPlayer:
         self.announce_until = -1.0
         self.pa_since: float | None = None  # when I entered the opponents' penalty area
         self.dribble_dir: tuple[float, float] | None = None
+        # the judges `passes` calls for every candidate, as compiled for the types it hands them (floats and
+        # the observation's opponents: float64, C-contiguous), without numba's dispatcher typing them each time
+        rows = np.zeros((1, 4))
+        self._lane_clear = entry(lane_clear, 0.0, 0.0, 0.0, 0.0, rows, 0.0, 0.0)
+        self._position_value = entry(position_value, 0.0, 0.0, rows, 0.0)
+        self._shot_window = entry(shot_window, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0)
         # what `_dribble_choice` reads of the field: half length and width, our penalty area's depth and
         # half width, the opponents' (widened) goal area's near edge and half width
         self.zones = np.array((areas.L2, areas.W2, areas.pa_depth, areas.pa_half, areas.opp_ga[0], areas.opp_ga[2]))
@@ -254,8 +261,11 @@ class BallPlayer:
             gap = d - 0.55
             if gap <= 0.0:
                 return 0.0
-            v0 = max(0.0, (vx * dx + vy * dy) / d)
-            best = min(best, time_to_cover(gap, v0, p.max_speed, p.acceleration))
+            # (Python's max and min of two, inline: the first unless the second is larger / smaller)
+            v0 = (vx * dx + vy * dy) / d
+            v0 = v0 if v0 > 0.0 else 0.0
+            t = time_to_cover(gap, v0, p.max_speed, p.acceleration)
+            best = t if t < best else best
         return best
 
     def turn_time(self, obs: Observation, tx: float, ty: float) -> float:
@@ -279,17 +289,24 @@ class BallPlayer:
             if d < 1.8 or d > p.max_pass:
                 continue
             v = pass_speed(d, p.pass_arrival_speed, p.ball_deceleration)
-            margin = lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
+            margin = self._lane_clear(bx, by, cx, cy, obs.opp_array, 0.5 * (v + p.pass_arrival_speed), 0.0)
             if margin < 0.15:
                 continue
-            near = min((math.hypot(o[0] - cx, o[1] - cy) for o in obs.opps), default=9.0)
-            if near < 1.1:
+            # (min(..., default=9.0) of the opponents' distances, as a plain loop: the first, then any smaller)
+            near = None
+            for o in obs.opps:
+                h = math.hypot(o[0] - cx, o[1] - cy)
+                if near is None or h < near:
+                    near = h
+            if near is not None and near < 1.1:
                 continue
-            value = position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * min(margin, 1.5)
+            value = self._position_value(cx, cy, obs.opp_array, self.areas.L2) + 0.3 * (1.5 if 1.5 < margin else margin)
             value += self.taste.get(m.id, 0.0)
             if cx > 0.0 and self.areas.L2 - cx < p.shoot_range:
                 value += OPEN_GOAL_VALUE * min(
-                    shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[1],
+                    self._shot_window(cx, cy, obs.opp_array, self.areas.L2, self.goal_half, p.shot_speed, POST_MARGIN)[
+                        1
+                    ],
                     0.15,
                 )
             out.append((value, m.id, cx, cy, v))

@@ -26,6 +26,8 @@ STEP = 0.1
 SAMPLES = 41  # 0 to 4 s
 #: a robot is given this much time to line up and take the ball when it arrives [s]
 CATCH_MARGIN = 0.15
+#: `_intercepts` passes over a sample whose lower bound of the reach time exceeds its time by this much [s]
+SKIP_MARGIN = 1e-3
 
 
 class BallPath:
@@ -80,8 +82,13 @@ class BallPath:
         roll_t = speed / decel if decel > 0 else 1e3
         self.stop_t = self.land_t + roll_t
         s_stop = speed * self.land_t + speed * roll_t - 0.5 * decel * roll_t * roll_t
-        self.stop_x = min(max(x + self.ux * s_stop, -xlim), xlim)
-        self.stop_y = min(max(y + self.uy * s_stop, -ylim), ylim)
+        # (min(max(v, -lim), lim), inline: Python's max keeps v unless -lim > v, min keeps it unless lim < v)
+        v = x + self.ux * s_stop
+        v = -xlim if -xlim > v else v
+        self.stop_x = xlim if xlim < v else v
+        v = y + self.uy * s_stop
+        v = -ylim if -ylim > v else v
+        self.stop_y = ylim if ylim < v else v
 
     def at(self, t: float) -> tuple[float, float]:
         """The ball's predicted position (x, y) in t seconds."""
@@ -89,12 +96,18 @@ class BallPath:
             return self.x, self.y
         if t >= self.stop_t:
             return self.stop_x, self.stop_y
-        tr = max(0.0, t - self.land_t)
-        s = self.speed * (min(t, self.land_t) + tr) - 0.5 * self.decel * tr * tr
-        return (
-            min(max(self.x + self.ux * s, -self.xlim), self.xlim),
-            min(max(self.y + self.uy * s, -self.ylim), self.ylim),
-        )
+        # (Python's min and max of two, inline: the first unless the second is smaller / larger)
+        land_t = self.land_t
+        tr = t - land_t
+        tr = tr if tr > 0.0 else 0.0
+        s = self.speed * ((land_t if land_t < t else t) + tr) - 0.5 * self.decel * tr * tr
+        lim = self.xlim
+        x = self.x + self.ux * s
+        x = -lim if -lim > x else x
+        lim2 = self.ylim
+        y = self.y + self.uy * s
+        y = -lim2 if -lim2 > y else y
+        return (lim if lim < x else x, lim2 if lim2 < y else y)
 
     def kernel_args(self) -> tuple:
         """The path as the intercept kernels take it (their first ten arguments, in their order)."""
@@ -122,20 +135,36 @@ def _intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, 
     """For each robot r: out[r] = (time, x, y) of the first sampled point of the ball's path it reaches no
     later than the ball, or of the last sample if it reaches none. Reach time: from velocity (vx, vy),
     the part towards the point kept (cancelled first if away), speeding up at ``acc`` to ``vmax``; the part
-    across the way costs half its cancelling time; plus ``extra`` and CATCH_MARGIN."""
+    across the way costs half its cancelling time; plus ``extra`` and CATCH_MARGIN.
+
+    A sample the robot cannot reach in time even straight at top speed (its reach time is at least
+    d / vmax + CATCH_MARGIN + extra, whatever its velocity) is passed over after its distance, by a margin
+    (SKIP_MARGIN) far beyond the rounding of either side: the same samples reached, the same numbers."""
+    bounded = vmax > 0.0 and acc > 0.0
+    last = SAMPLES - 1
+    # the ball's samples, once for all the robots
+    sx = np.empty(SAMPLES)
+    sy = np.empty(SAMPLES)
+    for k in range(SAMPLES):
+        t = k * STEP
+        if speed < 0.05:
+            bx, by = x, y
+        else:
+            tt = min(t, stop_t)
+            tr = max(0.0, tt - land_t)
+            s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
+            bx = min(max(x + ux * s, -xlim), xlim)
+            by = min(max(y + uy * s, -ylim), ylim)
+        sx[k] = bx
+        sy[k] = by
     for r in range(px.shape[0]):
         for k in range(SAMPLES):
             t = k * STEP
-            if speed < 0.05:
-                bx, by = x, y
-            else:
-                tt = min(t, stop_t)
-                tr = max(0.0, tt - land_t)
-                s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
-                bx = min(max(x + ux * s, -xlim), xlim)
-                by = min(max(y + uy * s, -ylim), ylim)
+            bx, by = sx[k], sy[k]
             dx, dy = bx - px[r], by - py[r]
             d = math.sqrt(dx * dx + dy * dy) + 1e-9
+            if bounded and k < last and d > (t + SKIP_MARGIN - CATCH_MARGIN - extra[r]) * vmax:
+                continue  # (out of reach at this sample: reach > t)
             vpar = (vx[r] * dx + vy[r] * dy) / d
             vperp = math.sqrt(max(0.0, vx[r] * vx[r] + vy[r] * vy[r] - vpar * vpar))
             v0 = min(max(vpar, -vmax), vmax)

@@ -148,4 +148,7 @@ def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float
 
 def pass_speed(distance: float, arrival: float, decel: float, lo: float = 1.6, hi: float = 7.5) -> float:
     """Kick speed for a ground pass that arrives at ``arrival`` after rolling ``distance``."""
-    return min(hi, max(lo, math.sqrt(arrival * arrival + 2.0 * decel * distance)))
+    # (min(hi, max(lo, v)), inline: Python's max keeps lo unless v > lo, min keeps hi unless that is smaller)
+    v = math.sqrt(arrival * arrival + 2.0 * decel * distance)
+    v = v if v > lo else lo
+    return v if v < hi else hi

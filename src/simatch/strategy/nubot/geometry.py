@@ -94,7 +94,9 @@ def push_out_of_box(x: float, y: float, x0: float, x1: float, half_w: float) -> 
 def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
     """Seconds to cover distance ``d`` starting at speed ``v0`` (towards it), speeding up at ``acc`` to
     ``vmax``."""
-    v0 = min(max(v0, 0.0), vmax)
+    # (min(max(v0, 0.0), vmax), inline: Python's max keeps v0 unless 0.0 > v0, min keeps it unless vmax < v0)
+    v0 = 0.0 if 0.0 > v0 else v0
+    v0 = vmax if vmax < v0 else v0
     d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
     if d <= d_acc:
         return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc

@@ -19,9 +19,10 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import entry
 from ...exactmath import hypot
 from ..roles import ROLES
-from .ballpath import BallPath, team_intercepts
+from .ballpath import BallPath, _team_intercepts
 from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
@@ -37,7 +38,7 @@ from .positions import (
     passive_point,
     score_spots,
 )
-from .setpieces import SLOT_GAP, formation, spread
+from .setpieces import SLOT_GAP, formation, kickoff_side, spread
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -62,10 +63,30 @@ PASS_KEPT = 0.3
 
 # the positional roles as numbers, for the compiled slots (and back: the Role members by value)
 _ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
+_ASSISTANT_ROLE, _ACTIVE_ROLE, _GOALIE = ROLES.ASSISTANT, ROLES.ACTIVE, ROLES.GOALIE
+_SETUP, _OUR_RESTART = PHASES.SETUP, PHASES.OUR_RESTART
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
 _NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
+#: the set pieces whose formation depends on the ball's place alone (their kick-off, the penalties, the
+#: dropped ball); our kick-off's also on the side of the pass (`kickoff_side` of the opponents)
+_OUR_KICKOFF = 1
+_BALL_ONLY_FORMATIONS = frozenset((2, 5, 6, 13))
+_copysign = math.copysign
+
+
+def _formation_key(kind: int, bx: float, by: float, opps: list) -> tuple | None:
+    """What `formation` of set piece ``kind`` depends on besides the fixed field and parameters, when that is
+    few numbers (the ball's place, with the signs of its zeros, and our kick-off's side); None when the
+    formation reads the opponents or the assistant's place (the other restarts: computed at every picture)."""
+    if kind == _OUR_KICKOFF:
+        side = kickoff_side(opps)
+    elif kind in _BALL_ONLY_FORMATIONS:
+        side = 0.0
+    else:
+        return None
+    return (kind, bx, by, _copysign(1.0, bx), _copysign(1.0, by), side)
 
 
 class Picture:
@@ -129,7 +150,23 @@ class TeamMemo:
 
 
 def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
-    return (obs.bx, obs.by, obs.bz, obs.bvx, obs.bvy, obs.bvz, obs.mode, obs.mtype, obs.opps, flow.key())
+    # (GameFlow.key()'s numbers inline, the phase as its member: the members are distinct, so equal members
+    # are equal phases, compared by identity first)
+    return (
+        obs.bx,
+        obs.by,
+        obs.bz,
+        obs.bvx,
+        obs.bvy,
+        obs.bvz,
+        obs.mode,
+        obs.mtype,
+        obs.opps,
+        flow.phase,
+        flow.kind,
+        flow.ball0,
+        flow.taker,
+    )
 
 
 def assign(
@@ -266,7 +303,18 @@ def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
     for i in range(m):
         if score[i] != score[i]:
             return -1
-    order = np.argsort(-score)
+    # the thirteen best in the order of np.argsort(-score) (the highest first), chosen one by one instead of
+    # sorting them all: the same order whenever it counts (two equal scores among them: -1 below either way)
+    sel = min(13, m)
+    order = np.empty(sel, np.int64)
+    taken = np.zeros(m, np.bool_)
+    for i in range(sel):
+        best = -1
+        for j in range(m):
+            if not taken[j] and (best < 0 or score[j] > score[best]):
+                best = j
+        taken[best] = True
+        order[i] = best
     top = min(12, m)
     for i in range(min(top, m - 1)):
         if score[order[i]] == score[order[i + 1]]:
@@ -401,6 +449,17 @@ class Analyst:
         self.xlim = areas.L2 + 1.3
         self.ylim = areas.W2 + 1.3
         self.geo = areas.geo
+        # the last set-piece formation computed, with `_formation_key` of its inputs: while a kick-off, a
+        # penalty or a dropped ball is set up and taken, the ball stays put and the formation is the same
+        self._formation_key: tuple | None = None
+        self._formation: list[tuple] = []
+        # the picture's kernels as compiled for the types of their arguments, called without numba's
+        # dispatcher typing them at every call (as Motion's `go`): every array they get is made by this
+        # package (float64, C-contiguous: the team view's table, the opponents' rows, the spots, fresh outputs)
+        table, rows, pairs = np.zeros((1, 8)), np.zeros((1, 4)), np.zeros((1, 2))
+        self._intercepts = entry(_team_intercepts, *(0.0,) * 10, table, rows, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros((1, 3)))
+        self._assist = entry(_assist_choice, *spots, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0, 0.0, pairs)
+        self._slots = entry(_open_slots, table, 0, 0, True, pairs, rows, 0.0, 0.0, self.geo, 0.0, rows)
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -412,7 +471,11 @@ class Analyst:
         # a robot off the field beyond the margin (it followed the ball) still plays; one not valid within
         # the margin has been taken off (sent off: parked and disabled beside the field)
         xl, yl = self.areas.L2 + 1.0, self.areas.W2 + 1.0
-        mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
+        mates = obs.mates  # (as nearly always: every team-mate plays; the list is only read)
+        for m in mates:
+            if not (m.valid or abs(m.x) > xl or abs(m.y) > yl):
+                mates = [m for m in obs.mates if m.valid or abs(m.x) > xl or abs(m.y) > yl]
+                break
         for m in mates:
             if m.holding:
                 pic.holder = m.id
@@ -431,8 +494,30 @@ class Analyst:
                 us = obs.mate_array
             else:
                 us = _rows([(m.x, m.y, m.vx, m.vy, m.id, m.yaw) for m in mates], 6)
+            # (ballpath.team_intercepts, by its kernel's compiled entry)
+            out = np.empty((us.shape[0] + obs.opp_array.shape[0], 3))
             turn = 0.7 / p.max_turn
-            res = team_intercepts(path, us, obs.opp_array, obs.bx, obs.by, turn, p.max_speed, p.acceleration).tolist()
+            self._intercepts(
+                path.x,
+                path.y,
+                path.speed,
+                path.ux,
+                path.uy,
+                path.land_t,
+                path.stop_t,
+                path.decel,
+                path.xlim,
+                path.ylim,
+                us,
+                obs.opp_array,
+                obs.bx,
+                obs.by,
+                turn,
+                p.max_speed,
+                p.acceleration,
+                out,
+            )
+            res = out.tolist()
             for k, m in enumerate(mates):
                 pic.catch[m.id] = (0.0, obs.bx, obs.by) if m.holding else tuple(res[k])
             if opps:
@@ -550,7 +635,7 @@ class Analyst:
         if rows >> 62 == 0:  # (the rows fit the kernel's bits: always but in teams of more than 62)
             assist = self._assist_array(obs, pic, 2 if len(rest) >= 4 else 1) if pic.attacking else _NO_SPOTS
             out = np.empty((len(rest), 4))
-            k = _open_slots(
+            k = self._slots(
                 obs.mate_array,
                 rows,
                 len(rest),
@@ -583,10 +668,14 @@ class Analyst:
     def _assist_array(self, obs: Observation, pic: Picture, n: int) -> np.ndarray:
         """`_assist_spots` as a (k, 2) array (the kernel's rows themselves when it could choose)."""
         cx, cy = self.spots
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
-        nx, ny = prev if prev is not None else (math.nan, math.nan)
+        prev = None  # (the first assistant's place; a plain loop: a generator is a function object per call)
+        nx = ny = math.nan
+        for m in obs.mates:
+            if m.role == _ASSISTANT_ROLE:
+                nx, ny = prev = (m.x, m.y)
+                break
         out = np.empty((n, 2))
-        k = _assist_choice(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
+        k = self._assist(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
         if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
             spots = assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
             return np.array(spots, dtype=float).reshape(-1, 2)
@@ -597,14 +686,24 @@ class Analyst:
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
-        field = [m for m in mates if not m.is_goalie]
+        # (one plain loop; the phases compared by identity: the flow's phase is always one of PHASES' members)
+        field = []
         for m in mates:
             if m.is_goalie:
-                pic.roles[m.id] = ROLES.GOALIE
-        bx, by = (obs.bx, obs.by) if flow.phase == PHASES.SETUP else flow.ball0
-        prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
-        slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
-        hyst = SETUP_HYSTERESIS if flow.phase == PHASES.SETUP else RESTART_HYSTERESIS
+                pic.roles[m.id] = _GOALIE
+            else:
+                field.append(m)
+        phase = flow.phase
+        bx, by = (obs.bx, obs.by) if phase is _SETUP else flow.ball0
+        key = _formation_key(flow.kind, bx, by, obs.opps)
+        if key is not None and key == self._formation_key:
+            slots = self._formation  # (never written: `assign` and the loop below only read it)
+        else:
+            prev = next(((m.x, m.y) for m in obs.mates if m.role == ROLES.ASSISTANT), None)
+            slots = formation(flow.kind, self.areas, bx, by, obs.opps, self.p, self.spots, prev)
+            if key is not None:
+                self._formation_key, self._formation = key, slots
+        hyst = SETUP_HYSTERESIS if phase is _SETUP else RESTART_HYSTERESIS
         keep = (
             self.p.dropball_distance
             if flow.kind == 13
@@ -615,14 +714,9 @@ class Analyst:
             role, x, y, fx, fy = slots[i]
             pic.roles[rid] = role
             pic.slots[rid] = (x, y, fx, fy)
-            if role == ROLES.ACTIVE:
+            if role == _ACTIVE_ROLE:
                 pic.active = rid
-        if (
-            flow.phase == PHASES.OUR_RESTART
-            and pic.receiver in pic.slots
-            and pic.pass_info is not None
-            and flow.kind != 1
-        ):
+        if phase is _OUR_RESTART and pic.receiver in pic.slots and pic.pass_info is not None and flow.kind != 1:
             # the taker aims at the receiver: it waits for the ball where it is announced, facing it
             info = pic.pass_info
             pic.slots[pic.receiver] = (info.catch_x, info.catch_y, bx, by)

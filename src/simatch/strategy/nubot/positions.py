@@ -251,13 +251,19 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
         score -= 3.0 * max(0.0, dmin - dball) + 1.0 * max(0.0, dball - dmax)
         sx, sy = x - bx, y - by
         ll = sx * sx + sy * sy + 1e-9
-        lane = 1e9
+        # (square roots only where they count, the same numbers: an opponent 2.5 m away or more takes nothing
+        # off (sqrt(d2) >= 2.5 exactly when d2 >= 6.25: score -= 0.0), and the nearest lane is the root of the
+        # least square (sqrt is correctly rounded, so monotonic; 1e18 = 1e9 squared exactly; NaN squares are
+        # passed over by min as their roots were, and a NaN distance still takes the long way)
+        lane2 = 1e18
         for k in range(ox.shape[0]):
-            dopp = math.sqrt((x - ox[k]) ** 2 + (y - oy[k]) ** 2)
-            score -= 2.0 * max(0.0, 2.5 - dopp)
+            d2 = (x - ox[k]) ** 2 + (y - oy[k]) ** 2
+            if not d2 >= 6.25:
+                score -= 2.0 * max(0.0, 2.5 - math.sqrt(d2))
             t = min(max(((ox[k] - bx) * sx + (oy[k] - by) * sy) / ll, 0.0), 1.0)
-            lane = min(lane, math.sqrt((bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2))
+            lane2 = min(lane2, (bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2)
         if ox.shape[0] > 0:
+            lane = math.sqrt(lane2)
             if lane < 0.85:
                 score -= 4.0
             score -= 1.5 * max(0.0, 1.4 - lane)

@@ -16,9 +16,9 @@ picture (roles and points, see picture.py) and acts on the game command:
 from __future__ import annotations
 
 import math
+import struct
 
 from ... import msgs
-from ...msgs.game_commands import is_ours
 from ..base import Command, RobotContext, RobotStrategy, RoundedMove, TeamContext, TeamStrategy
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
@@ -36,6 +36,8 @@ from .testmodes import TestModes
 from .warm import load_kernels
 
 _f32s = msgs.f32s
+_F32X3 = struct.Struct("<3f")  # (what msgs.f32s packs three numbers with)
+_cos, _sin = math.cos, math.sin
 
 # what `decide` and `hold_slot` compare at every tick, as globals (a namespace's attribute costs more); the
 # game flow's phase is always one of PHASES' members, compared by identity
@@ -48,6 +50,9 @@ _STOP, _PARK, _TEST, _PLAY, _SETUP, _OUR_RESTART = (
     PHASES.OUR_RESTART,
 )
 _NOROLE, _ACTIVE, _CATCHOFPASS, _POSITIONED = ROLES.NOROLE, ROLES.ACTIVE, ROLES.CATCHOFPASS, ACTIONS.POSITIONED
+_OPP_RESTART = PHASES.OPP_RESTART
+# the set pieces `hold_slot` tells apart, as plain ints (the game flow's kind is an int)
+_OUR_KICKOFF, _OPP_KICKOFF, _DROPBALL = int(MODES.OUR_KICKOFF), int(MODES.OPP_KICKOFF), int(MODES.DROPBALL)
 
 #: parking: robots line up beside the side line on their right, in their own half, facing the field
 PARK_OUTSIDE = 0.7
@@ -209,9 +214,15 @@ class NubotRobot(RobotStrategy):
         dist = v.obstacles.distance
         if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
-        bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
+        # (Motion.body, inline: the course in the body frame half a period on)
+        h = me.yaw + 0.5 * w * self.motion.period
+        c, s = _cos(h), _sin(h)
+        bx, by, w_body = c * vx + s * vy, -s * vx + c * vy, w
         if type(cmd) is RoundedMove:  # (its intent is rounded already)
-            bx, by, w_body = _f32s(bx, by, w_body)
+            try:  # (msgs.f32s of three, inline; it takes the numbers out of float32's range)
+                bx, by, w_body = _F32X3.unpack(_F32X3.pack(bx, by, w_body))
+            except (OverflowError, struct.error):
+                bx, by, w_body = _f32s(bx, by, w_body)
             return rounded_move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
         return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
 
@@ -225,19 +236,23 @@ class NubotRobot(RobotStrategy):
             slot = (x, y, obs.bx, obs.by)
         x, y, fx, fy = slot
         face = math.atan2(fy - me.y, fx - me.x)
-        keep = None if self.flow.phase is _PLAY else self.keep_from_ball(obs)  # (in play: none)
+        flow = self.flow
+        keep = None if flow.phase is _PLAY else self.keep_from_ball(obs)  # (in play: none)
         fence = None
+        kickoff = False
         if keep is not None:
-            taker = role == ROLES.ACTIVE and is_ours(self.flow.kind) and self.flow.kind != MODES.DROPBALL
+            kind = flow.kind
+            # (is_ours(kind), inline)
+            taker = role == _ACTIVE and 1 <= kind <= 12 and kind % 2 == 1 and kind != _DROPBALL
             x, y = self.round_the_ball(obs, x, y, keep, taker)
             if not taker:
                 fence = (obs.bx, obs.by, keep)
+            kickoff = kind == _OUR_KICKOFF or kind == _OPP_KICKOFF
         ball = True
-        if self.flow.taker == me.id:
+        if flow.taker == me.id:
             ball = TAKER_BALL_CLEARANCE  # the restart's taker must not touch the ball again yet
             fence = (obs.bx, obs.by, TAKER_BALL_CLEARANCE)
             x, y = self.out_of_the_way(obs, x, y)
-        kickoff = keep is not None and self.flow.kind in (MODES.OUR_KICKOFF, MODES.OPP_KICKOFF)
         motion = self.motion
         motion.go(
             obs,
@@ -272,13 +287,15 @@ class NubotRobot(RobotStrategy):
     def keep_from_ball(self, obs: Observation) -> float | None:
         """The distance the rules keep this robot from the ball while a restart is being set up or taken
         (None in play)."""
-        flow, p = self.flow, self.p
-        if flow.phase in (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART):
-            if flow.kind == MODES.DROPBALL:
-                return p.dropball_distance
-            if is_ours(flow.kind):
-                return p.mate_distance
-            return p.opponent_distance
+        flow = self.flow
+        phase = flow.phase  # (one of PHASES' members: compared by identity, the kind as an int)
+        if phase is _SETUP or phase is _OUR_RESTART or phase is _OPP_RESTART:
+            kind = flow.kind
+            if kind == _DROPBALL:
+                return self.p.dropball_distance
+            if 1 <= kind <= 12 and kind % 2 == 1:  # (is_ours, inline)
+                return self.p.mate_distance
+            return self.p.opponent_distance
         return None
 
     def round_the_ball(
@@ -298,8 +315,8 @@ class NubotRobot(RobotStrategy):
             e = math.hypot(ex, ey)
             ux, uy = (ex / e, ey / e) if e > 1e-6 else (-1.0, 0.0)
             x, y = bx + ux * (keep + 0.3), by + uy * (keep + 0.3)
-        a_me = math.atan2(me.y - by, me.x - bx) if d > 1e-6 else math.pi
         if d < keep - 0.25:
+            a_me = math.atan2(me.y - by, me.x - bx) if d > 1e-6 else math.pi
             # out of the circle by the nearest way that stays on the floor: straight away from a ball near
             # a line would run into the boards and stay inside the circle
             r = keep + 0.4
@@ -312,6 +329,7 @@ class NubotRobot(RobotStrategy):
         gap, _ = segment_distance(bx, by, me.x, me.y, x, y)
         if gap >= keep:
             return x, y
+        a_me = math.atan2(me.y - by, me.x - bx) if d > 1e-6 else math.pi
         turn = wrap(math.atan2(y - by, x - bx) - a_me)
         step = max(-ORBIT_STEP, min(ORBIT_STEP, turn))
         r = max(d, keep + 0.3)
