@@ -38,7 +38,7 @@ _MIN_NORMAL = 2.2250738585072014e-308
 SAME_AS_CPYTHON = sys.implementation.name == "cpython" and sys.version_info[:2] == (3, 11)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def hypot(x: float, y: float) -> float:
     """``math.hypot(x, y)`` of CPython 3.11, bit for bit."""
     a = abs(x)
@@ -107,7 +107,7 @@ def hypot(x: float, y: float) -> float:
     return h / scale
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def remainder(x: float, y: float) -> float:
     """``math.remainder(x, y)`` of CPython (IEEE 754 remainder: x - n y, n the nearest integer to x / y, ties
     to even), bit for bit; NaN where CPython raises ValueError (y == 0, or x infinite)."""
@@ -139,19 +139,19 @@ def remainder(x: float, y: float) -> float:
 TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def wrap(a: float) -> float:
     """An angle in [-pi, pi]: ``math.remainder(a, 2 pi)`` of CPython, bit for bit."""
     return remainder(a, TWO_PI)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def pymin(a: float, b: float) -> float:
     """Python's ``min(a, b)`` in a kernel: the first of equals (``min(0.0, -0.0)`` is 0.0)."""
     return b if b < a else a
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def pymax(a: float, b: float) -> float:
     """Python's ``max(a, b)`` in a kernel: the first of equals."""
     return b if b > a else a

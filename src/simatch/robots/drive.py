@@ -39,7 +39,7 @@ def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np
     return U + frac * dU
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def plan_drive(
     M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, bias, kv, ramping, dt
 ):

@@ -59,12 +59,12 @@ YAW_LEASH = 0.5
 INTEGRAL_LIMIT = 3.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def fly(qpos, qvel, ctrl, qadr, vadr, rotor, P, mix, cmd, armed, pref, vref, yref, vint, dt, g):
     """One physics step of every drone's controller: writes the four rotor thrust commands into ``ctrl``.
 
@@ -204,7 +204,7 @@ def fly(qpos, qvel, ctrl, qadr, vadr, rotor, P, mix, cmd, armed, pref, vref, yre
             ctrl[rotor[k, j]] = f[j]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _span(d, yaw, s):
     lo = np.inf
     hi = -np.inf
@@ -215,7 +215,7 @@ def _span(d, yaw, s):
     return hi - lo
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _mix(M, wrench, f, fmax):
     """Rotor thrusts f (4,) within [0, fmax] for wrench (thrust, tx, ty, tz) through the inverse mixer M:
     exact when it fits; else the roll/pitch torques kept whole (scaled down only if they alone do not
@@ -361,7 +361,7 @@ class AerialFleet:
         )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def aerial_poses(qpos, qvel, qadr, vadr):
     """Poses (A, 7: x y z qw qx qy qz) and world-frame twists (A, 6: v, w) of the free-flying bodies (their
     angular velocity turned from the body frame to the world frame)."""
@@ -405,7 +405,7 @@ def rotor_links(model, pose: np.ndarray, twist: np.ndarray) -> list[tuple[np.nda
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def frame_contacts(pairs, n, owner):
     """(drone, other geom) of every contact among the first ``n`` geom ``pairs`` that involves a drone's frame
     (``owner``: geom id -> drone index, -1 for any other geom); both ways for two drones."""

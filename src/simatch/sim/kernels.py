@@ -12,7 +12,7 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     """Horizontal magnitude of the force of equality constraint ``eq`` (its first two rows) [N]."""
     fx = 0.0
@@ -29,7 +29,7 @@ def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     return (fx * fx + fy * fy) ** 0.5
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def catch_candidate(
     qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, mouth_x, catch_speed
 ):
@@ -75,7 +75,7 @@ def catch_candidate(
     return best, best_f, best_l, nearest
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def keep_ball(
     eq_data,
     eq,
@@ -126,7 +126,7 @@ def keep_ball(
     return 0, force
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     """One physics step of the dribbler's rollers on a held ball: turn its horizontal spin towards ``spin``
     times rolling with its motion over the floor (w = z x v / r), by at most ``max_dw`` [rad/s] (the rollers'
@@ -165,18 +165,18 @@ def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     qvel[ball_v + 5] = wz + 2.0 * (qw * cz - qx * cy + qy * cx)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _polar(dx, dy, heading):
     """Bearing from ``heading`` (wrapped) and distance of the offset (dx, dy): how a robot sees a thing."""
     return _wrap(np.arctan2(dy, dx) - heading), np.hypot(dx, dy)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def perceive(R, ball, sign, others, own_noise, ball_noise, obs_noise):
     """The numbers of every robot's perception, in its team frame (see `perception.Perception.observe`).
 
@@ -220,7 +220,7 @@ def perceive(R, ball, sign, others, own_noise, ball_noise, obs_noise):
     return own, balls, obs
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _stuck(i, vx, vy, act, slow_since, step, stuck_steps):
     """Robot i moving at (vx, vy) is stuck: commanded (set point ``act``) > 0.2 m/s but moving at less than
     half of it for ``stuck_steps`` (counted in ``slow_since``, updated)."""
@@ -233,7 +233,7 @@ def _stuck(i, vx, vy, act, slow_since, step, stuck_steps):
     return slow and step - slow_since[i] >= stuck_steps
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def robot_flags(R, act, M, n_wheels, enabled, slow_since, step, stuck_steps, half_length, half_width):
     """Per robot, from its state R (n, 6) and servo set point act (n, 3): measured rim speeds (n, W) from its
     actual motion (what encoders measure), 'valid' (on the field within 1 m, enabled) and 'stuck'
@@ -256,7 +256,7 @@ def robot_flags(R, act, M, n_wheels, enabled, slow_since, step, stuck_steps, hal
     return wheels, valid, stuck
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def ball_apart(xpos, geoms, bound2, ball):
     """True when none of ``geoms`` (a robot's) can be in contact with geom ``ball``: every geom centre
     (``xpos``, the engine's geom_xpos of the last collision pass) is farther from the ball's than the
@@ -272,7 +272,7 @@ def ball_apart(xpos, geoms, bound2, ball):
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
     """Poses (n+1, 7: x y z qw qx qy qz) and twists (n+1, 6) of the robots (planar joints from robot_q/
     robot_v on) and the ball (free joint at ball_q/ball_v, its angular velocity turned to the world frame)."""
@@ -282,7 +282,7 @@ def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
     return pose, twist
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def model_poses32(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
     """`model_poses` written into float32 zeros ``pose`` (7 (n+1),) and ``twist`` (6 (n+1),), flat as the
     ModelStates message carries them: each number computed in float64 as there, then rounded to float32
@@ -293,7 +293,7 @@ def model_poses32(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
     """The body of `model_poses`, into zeroed arrays of any float type."""
     for i in range(n):
@@ -321,7 +321,7 @@ def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twi
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def rotate(qw, qx, qy, qz, w0, w1, w2):
     """The vector (w0, w1, w2) turned by the unit quaternion q: v' = v + 2 qw (q x v) + 2 q x (q x v)."""
     cx = qy * w2 - qz * w1
@@ -334,7 +334,7 @@ def rotate(qw, qx, qy, qz, w0, w1, w2):
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def sense_ground(
     qpos,
     qvel,

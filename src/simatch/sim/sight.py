@@ -77,7 +77,7 @@ class Sight:
         )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _clip(t0, t1, p, d, lo, hi):
     """Narrow [t0, t1] to where p + t d lies in [lo, hi]."""
     if abs(d) < 1e-12:
@@ -91,7 +91,7 @@ def _clip(t0, t1, p, d, lo, hi):
     return max(t0, a), min(t1, b)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     """Whether the segment from (x0, y0, z0) to (x1, y1, z1) passes through any obstacle (solid from the
     floor up to its height)."""
@@ -138,7 +138,7 @@ def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max_range):
     ex, ey, ez = R[i, 0], R[i, 1], Z[i] + eye[i]
     dx, dy, dz = tx - ex, ty - ey, tz - ez
@@ -153,7 +153,7 @@ def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def sight_lines(R, Z, ball, others, aerial, eye, top, cone, obstacles, los, footprint, max_range):
     n, m = others.shape
     vis = np.empty((n, m), dtype=np.bool_)

@@ -483,7 +483,7 @@ class BallPlayer:
         return cmd
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _dribble_choice(
     x,
     y,

@@ -29,12 +29,12 @@ MAX_TURN = 0.6 * math.pi
 TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _wrap(a):
     return (a + math.pi) % TWO_PI - math.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
     """(x, y, side) of the point to head for on the way from P to T: side +1 (turning left), -1 (right),
     0 when the way is free and the sub-target is T itself. ``opps`` (M, 4) and ``mates`` (K, 5: x, y, vx,
@@ -143,7 +143,7 @@ def sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, c
     return px + reach * (c * ux - s * uy), py + reach * (s * ux + c * uy), 1 if best > 0.0 else -1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def no_charging(x, y, vx_now, vy_now, vx, vy, opps, touch, contact_speed, braking):
     """The velocity (vx, vy) with its part towards every opponent capped so that the robot could still slow
     to ``contact_speed`` before touching it (an opponent coming towards it shortens the way). A robot

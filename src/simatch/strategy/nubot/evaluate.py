@@ -33,12 +33,12 @@ POST_MARGIN = 0.22
 PRESSURE_RADIUS = 2.2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def reach(t: float) -> float:
     return pymin(MAX_REACH, 0.5 * REACT_ACC * t * t)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def shot_window(
     bx: float, by: float, opps: np.ndarray, goal_x: float, goal_half: float, speed: float, post_margin: float
 ) -> tuple[float, float]:
@@ -98,7 +98,7 @@ def shot_window(
     return by + math.tan(aim) * dx, f1 - f0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def lane_clear(
     bx: float, by: float, cx: float, cy: float, opps: np.ndarray, speed: float, exclude_near_end: float
 ) -> float:
@@ -129,7 +129,7 @@ def lane_clear(
     return worst
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     """How crowded a point is: the sum of how far each opponent is inside ``radius`` of it."""
     total = 0.0
@@ -140,7 +140,7 @@ def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float:
     """How good a place is to have the ball: near the opponents' goal, in the middle, with room."""
     return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)

@@ -24,7 +24,7 @@ def clamp(v: float, lo: float, hi: float) -> float:
     return lo if v < lo else hi if v > hi else v
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _clamp(v: float, lo: float, hi: float) -> float:
     """`clamp`, for compiled callers."""
     return lo if v < lo else hi if v > hi else v
@@ -52,7 +52,7 @@ def segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: 
     return math.hypot(px - ax - s * dx, py - ay - s * dy), s
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, half_w: float) -> float:
     """Along the ray O + s u from a point O inside the box [x0, x1] x [-half_w, half_w], the s at which
     the ray leaves the box (inf if it never does). (Compiled, for the compiled points as for Python's
@@ -69,7 +69,7 @@ def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, h
     return pymax(0.0, s)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def push_out_of_box(x: float, y: float, x0: float, x1: float, half_w: float) -> tuple[float, float]:
     """The nearest point outside the box [x0, x1] x [-half_w, half_w] (the point itself if outside).
     (Compiled, for the compiled motion; on equal distances the faces are taken as ``min`` of the tuples
@@ -103,7 +103,7 @@ def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
     return (vmax - v0) / acc + (d - d_acc) / vmax
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def segment_hits_box(ax: float, ay: float, bx: float, by: float, x0: float, x1: float, half_w: float) -> bool:
     """Whether the segment AB passes through the open box [x0, x1] x [-half_w, half_w] (Liang-Barsky).
     (Compiled, for the compiled motion.)"""

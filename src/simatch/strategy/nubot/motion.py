@@ -224,7 +224,7 @@ _C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC
 )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     """`Motion.keep_out_of_circle`, compiled."""
     dx, dy = cx - x, cy - y
@@ -248,7 +248,7 @@ def _keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     return vx, vy
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _go(
     mx,
     my,
@@ -340,7 +340,7 @@ def _go(
     return bvx, bvy, w, side, vx, vy
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _go_packed(args, boxes, opps, mates, row):
     """`_go` with its numbers in one float64 array ``args`` (Motion.args: the ten fixed numbers `_go` reads as
     ``consts``, then the call's in `_go`'s order of arguments, the robot's id, the flags and the avoidance

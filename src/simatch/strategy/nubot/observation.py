@@ -371,9 +371,9 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
     return np.fromiter(chain.from_iterable(rows), float, width * len(rows)).reshape(-1, width)
 
 
-# _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``): they run for about a
-# microsecond, and a kernel that lets the GIL go costs its call some 0.7 k instructions to take it back (the runs
-# are single-threaded: nothing else would run meanwhile). The helpers they call are compiled into them either way.
+# _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``, as every kernel of
+# simatch: docs/performance.md's rules): they run for about a microsecond, and a kernel that lets the GIL go costs
+# its call some 0.7 k instructions to take it back (the runs are single-threaded: nothing else would run meanwhile).
 @numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
@@ -401,7 +401,7 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     return r, near, near_d, opp_d
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _noisy(ox, oy, mates):
     """Whether some team-mates are not exactly where the team list puts them among the obstacles (float32 x,
     y; ``mates``: x, y in the first columns): fewer obstacles are exactly at a team-mate than there are
@@ -415,7 +415,7 @@ def _noisy(ox, oy, mates):
     return at_mates < k_mates - 1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _at_mate(x, y, mates):
     for j in range(mates.shape[0]):
         if mates[j, 0] == x and mates[j, 1] == y:
@@ -423,7 +423,7 @@ def _at_mate(x, y, mates):
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _opponent(x, y, mates, noisy):
     """Whether the obstacle at (x, y) is an opponent: not exactly at a team-mate, nor, when ``noisy``
     (`_noisy`), within _SAME_ROBOT of one (in both coordinates)."""
@@ -436,7 +436,7 @@ def _opponent(x, y, mates, noisy):
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _nearest_mate(mates, bx, by):
     """The row of the team-mate nearest to (bx, by) (the first of equals; -1 without team-mates) and its
     distance, by CPython's hypot."""
@@ -448,7 +448,7 @@ def _nearest_mate(mates, bx, by):
     return near, near_d
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _same(a, b):
     """``a`` and ``b`` are the same float64 bit for bit (a NaN never is; -0.0 is not 0.0)."""
     return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))

@@ -194,13 +194,13 @@ def assign(
     return {robots[i].id: best[i] for i in range(min(n, len(slots)))}
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _assign_flat(flat, n, m, cx, cy, cr):
     """`_assign` of the robots' (n, 4) and the slots' (m, 3) rows, given one after the other in ``flat``."""
     return _assign(flat[: 4 * n].reshape((n, 4)), flat[4 * n : 4 * n + 3 * m].reshape((m, 3)), cx, cy, cr)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _assign(robots, slots, cx, cy, cr):
     """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
     slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""
@@ -278,7 +278,7 @@ def assist_spots(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
     """`assist_spots` compiled, over the opponents' (M, 4) array, ``prev`` as (nx, ny) (NaN: none): writes
     the spots into the first rows of ``out`` ((n, 2)) and returns how many, or -1 when two of the thirteen
@@ -369,7 +369,7 @@ def open_slots(
     return [(rid, slots[i][0], slots[i][1], slots[i][2]) for rid, i in assign(rest, slots, hysteresis).items()]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis, out):
     """`open_slots` compiled, over the team view's table ((K, 8): x, y, vx, vy, id, yaw, announced role,
     role time): ``rest`` has bit j set for each of the ``n`` robots at row j; ``assist`` (k, 2) the

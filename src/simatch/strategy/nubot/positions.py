@@ -92,7 +92,7 @@ class Areas:
         return x, (lo if y < lo else hi if y > hi else y)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def route(px, py, tx, ty, boxes, L2, goal_half):
     """`Areas.route`, compiled (the motion's kernel calls it): ``boxes`` (K, 3) of x0, x1, half width."""
     for k in range(boxes.shape[0]):
@@ -183,7 +183,7 @@ def outlet_point(areas: Areas, bx: float, by: float) -> tuple[float, float]:
     return x, y
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _outlet_point(bx, by):
     """`outlet_point`, for compiled callers."""
     return _clamp(bx + 5.0, -2.0, 3.0), (-3.5 if by > 0.5 else 3.5)
@@ -238,7 +238,7 @@ def score_spots(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
     """score_spots, compiled: a hundred candidates times five opponents are tiny loops, costly as NumPy
     calls (about a microsecond each) and cheap as machine code."""
@@ -277,7 +277,7 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
 # penalty area's boxes (x0, x1, half width)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _keep_out(x, y, geo):
     """`Areas.keep_out` (both penalty areas)."""
     x0, x1, hw = geo[2], geo[3], geo[4]
@@ -289,7 +289,7 @@ def _keep_out(x, y, geo):
     return x, y
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _passive_point(bx, by, attacking, geo):
     """`passive_point`, compiled (with `guard_point` inline, Python's min and max)."""
     L2 = geo[0]
@@ -309,7 +309,7 @@ def _passive_point(bx, by, attacking, geo):
     return gx + ux * s, uy * s
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _midfield_point(bx, by, attacking, opps, geo):
     """`midfield_point`, compiled, over the opponents' (M, 4) array."""
     L2, W2 = geo[0], geo[1]
