@@ -77,9 +77,7 @@ static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous ar
 #define FALLBACK 1                 /* not for the fast path: the caller uses the Python encoder */
 #define FAILED -1                  /* a Python exception is set (memory) */
 
-static int reserve(Py_ssize_t need) {
-    if (out->n + need <= out->cap)
-        return 0;
+static int grow(Py_ssize_t need) {
     Py_ssize_t cap = out->cap ? out->cap : 4096;
     while (cap < out->n + need)
         cap *= 2;
@@ -97,8 +95,13 @@ static int reserve(Py_ssize_t need) {
     return 0;
 }
 
+/* room for `need` more bytes in `out` (the test inline: it is made for every field and record) */
+static inline int reserve(Py_ssize_t need) {
+    return out->n + need <= out->cap ? 0 : grow(need);
+}
+
 /* pad with zeros to a multiple of `a`, counted from the start of the body (after the 4-byte header) */
-static int align(int a) {
+static inline int align(int a) {
     Py_ssize_t pad = (body - out->n) & (a - 1);       /* a is 1, 2, 4 or 8 */
     if (pad) {
         if (reserve(pad) < 0)
@@ -109,7 +112,7 @@ static int align(int a) {
     return 0;
 }
 
-static int put(const void *src, Py_ssize_t size) {
+static inline int put(const void *src, Py_ssize_t size) {
     if (reserve(size) < 0)
         return FAILED;
     memcpy(out->p + out->n, src, size);
@@ -142,7 +145,7 @@ static inline int put_aligned(const void *src, int size) {
 /* a primitive value; FALLBACK (exception cleared) if it is not one struct would pack the same way */
 /* An integer of the given kind into b, as struct packs it; -1 (nothing written) if x is out of its range or
  * the kind is not an integer one. */
-static int pack_int(long kind, long long x, unsigned char *b) {
+static inline int pack_int(long kind, long long x, unsigned char *b) {
     switch (kind) {
     case K_I8: if (x < -128 || x > 127) return -1; { signed char c = (signed char)x; memcpy(b, &c, 1); } return 0;
     case K_U8: if (x < 0 || x > 255) return -1; b[0] = (unsigned char)x; return 0;
@@ -248,13 +251,11 @@ fallback:
     return FALLBACK;
 }
 
-static int put_u32(Py_ssize_t n) {
+static inline int put_u32(Py_ssize_t n) {
     if (n > (Py_ssize_t)UINT32_MAX)
         return FALLBACK;
-    if (align(4) < 0)
-        return FAILED;
     unsigned int u = (unsigned int)n;
-    return put(&u, 4);
+    return put_aligned(&u, 4);                         /* (align and put in one: every sequence's length) */
 }
 
 static int put_string(PyObject *v) {
