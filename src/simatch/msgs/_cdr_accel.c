@@ -1998,7 +1998,30 @@ typedef struct {
     vectorcallfunc vectorcall;
     int form;                      /* TAP_VEL or TAP_ACTION */
     PyObject *original, *general, *log, *kind, *robot, *values, *code; /* code: the kind's int */
+    PyTypeObject *log_type;        /* the log's class when it holds `busy` in a slot (at `busy_at`), else NULL */
+    unsigned int log_version;      /* ... and its version tag then (the slot is read while it is the same) */
+    Py_ssize_t busy_at;
 } Tap;
+
+static PyObject *busy_name;       /* (below, with the taps' other constants) */
+
+/* the log's `busy` mark: read in its slot (as `encode_program` reads a message's fields), else by name */
+static int tap_busy(Tap *tap) {
+    PyTypeObject *tp = Py_TYPE(tap->log);
+    if (tp == tap->log_type && tp->tp_version_tag == tap->log_version) {
+        PyObject *busy = *(PyObject **)((char *)tap->log + tap->busy_at);
+        if (busy == Py_False)
+            return 0;
+        if (busy == Py_True)
+            return 1;
+    }
+    PyObject *busy = PyObject_GetAttr(tap->log, busy_name);
+    if (busy == NULL)
+        return -1;
+    int b = PyObject_IsTrue(busy);
+    Py_DECREF(busy);
+    return b;
+}
 
 static PyObject *busy_name = NULL, *zero = NULL, *one = NULL, *nan_value = NULL;
 
@@ -2022,11 +2045,7 @@ static PyObject *tap_vectorcall(PyObject *self, PyObject *const *args, size_t na
         compact = !overflow && i >= 0 && i < 32768;
     }
     if (compact) {
-        PyObject *busy = PyObject_GetAttr(tap->log, busy_name);
-        if (busy == NULL)
-            return NULL;
-        int b = PyObject_IsTrue(busy);
-        Py_DECREF(busy);
+        int b = tap_busy(tap);
         if (b < 0)
             return NULL;
         compact = !b;
@@ -2095,6 +2114,19 @@ static PyObject *tap_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     tap->robot = Py_NewRef(robot);
     tap->values = Py_NewRef(values);
     tap->code = Py_NewRef(code);
+    PyTypeObject *lt = Py_TYPE(log);                /* does the log hold `busy` in a slot? (InputLog does) */
+    if (lt->tp_getattro == PyObject_GenericGetAttr) {
+        PyObject *d = _PyType_Lookup(lt, busy_name);            /* borrowed */
+        if (d != NULL && Py_IS_TYPE(d, &PyMemberDescr_Type)) {
+            PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
+            if (member->type == T_OBJECT_EX && !(member->flags & READ_RESTRICTED) && member->offset > 0
+                && PyType_HasFeature(lt, Py_TPFLAGS_VALID_VERSION_TAG)) {
+                tap->log_type = lt;
+                tap->log_version = lt->tp_version_tag;
+                tap->busy_at = member->offset;
+            }
+        }
+    }
     return (PyObject *)tap;
 }
 
