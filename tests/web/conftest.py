@@ -77,12 +77,15 @@ def run_until(sim, condition, timeout: float = 10.0, chunk: float = 0.05) -> Non
 
 
 def wait_frame(page, sim_time: float, timeout: float = 10_000) -> None:
-    """Wait until the page shows the world at ``sim_time`` (or later)."""
+    """Wait until the page shows the world at ``sim_time`` (or later): the frame has come and the canvas has
+    been drawn since (the field view draws at the next animation frame; a resize in between clears the
+    canvas until then: a fresh-clone CI run once read a pixel of the cleared canvas)."""
     page.wait_for_function(
         "t => window.simatch && window.simatch.frame && window.simatch.frame.t >= t",
         arg=round(sim_time - 0.02, 3),
         timeout=timeout,
     )
+    page.evaluate("() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))")
 
 
 def drag_ball(page, sim, x: float, y: float) -> None:
