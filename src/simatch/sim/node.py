@@ -24,7 +24,6 @@ _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerpri
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
 _BallContacts = msgs.positional(msgs.BallContacts, "stamp step touching holder kicker kick_speed lob")
 _F32 = np.float32  # the states' numbers, as the messages define them
-_zeros = np.zeros
 
 
 def model_states_message(now: float, step: int, names, pose: np.ndarray, twist: np.ndarray):
@@ -142,12 +141,7 @@ class SimulatorNode(Node):
                             pub.put(infos[j])
                     break
         if self.pub_models.active:
-            if sim.aerial is None:  # (`model_state_arrays32`, inline: every step)
-                pose, twist = _zeros(sim._pose32_size, _F32), _zeros(sim._twist32_size, _F32)
-                sim._poses32(sim._qpos, sim._qvel, sim._q0, sim._v0, sim.n, sim._bq, sim._bv, pose, twist)
-            else:
-                pose, twist = sim.model_state_arrays32()
-            self.pub_models.put(_ModelStates(now, k, sim.model_names, pose, twist))
+            self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
         if into == 0 and self.pub_fingerprint.active:
             self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
         if self.pub_links.active:
@@ -212,7 +206,7 @@ class PhysicsNode(Node):
                 self.pub_inputs.put(inputs.take(now, sim.step_index, False))
             else:
                 inputs.clear()
-        sim._step(True)  # (`sim.advance()` without its frame: every step)
+        sim.advance()
         if sim.events:
             self.sensor.flush_events()
         # the inputs are logged while somebody listens (from the start on: a recorder attached before the

@@ -163,7 +163,6 @@ class Simulator:
         self._drive_dirty = memoryview(self.drive.dirty)
         self._drive_ramping = memoryview(self.drive.ramping)
         self._plan = None  # `plan_drive` for the simulator's arguments (made at the first plan)
-        self._watch_timeout = self._watch_limit = None  # the watchdog's timeout and its limit in steps
         self._on_event = on_event
         # the log of the world's inputs: on from the start, so that what a judge or a script does before the
         # first step is in it; the bus adapter turns it off while nobody listens
@@ -250,36 +249,20 @@ class Simulator:
         # the per-step kernels, called without numba's dispatcher (`simatch.compiled.entry`: their arguments are the
         # engine's arrays taken once, plain numbers and float32 arrays made for the call)
         self._pose32_size, self._twist32_size = 7 * (self.n + 1), 6 * (self.n + 1)  # the robots and the ball
-        self._poses32 = entry(
-            model_poses32,
-            self._qpos,
-            self._qvel,
-            self._q0,
-            self._v0,
-            self.n,
-            self._bq,
-            self._bv,
-            np.zeros(0, _f32),
-            np.zeros(0, _f32),
-        )
+
+        def poses_into(pose: np.ndarray, twist: np.ndarray):
+            # `model_poses32`'s compiled version for outputs of pose's and twist's kinds
+            q, v = self._qpos, self._qvel
+            return entry(model_poses32, q, v, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
+
+        self._poses32 = poses_into(np.zeros(0, _f32), np.zeros(0, _f32))
         # the exact states whose fingerprint a recording takes every control tick: poses then twists, float64,
         # in one block that `model_poses32`'s compiled body fills in place (the numbers `model_poses` returns,
         # the positions it leaves zero never written), hashed as the two arrays one after the other
         m = self.n + 1  # the robots and the ball
         self._state64 = np.zeros(13 * m)
         self._pose64, self._twist64 = self._state64[: 7 * m], self._state64[7 * m :]
-        self._poses64 = entry(
-            model_poses32,
-            self._qpos,
-            self._qvel,
-            self._q0,
-            self._v0,
-            self.n,
-            self._bq,
-            self._bv,
-            self._pose64,
-            self._twist64,
-        )
+        self._poses64 = poses_into(self._pose64, self._twist64)
         self._ball_apart = entry(
             ball_apart, self._geom_xpos, self._touch_geoms, self._touch_bound2, int(self.ix.ball_geom)
         )
@@ -567,12 +550,7 @@ class Simulator:
         cs = self.control_steps
         into = k % cs
         if watch and into == 0:
-            timeout = self.scene.control.command_timeout
-            if timeout != self._watch_timeout:
-                self._watch_timeout, self._watch_limit = timeout, round(timeout / self.dt)
-            # (`watchdog`'s own first test, inline: every robot commanded recently is the usual case)
-            if self.n and min(self._last_command) <= k + cs - self._watch_limit:
-                self.watchdog(timeout, cs)
+            self.watchdog(self.scene.control.command_timeout, cs)
         if drive.any_dirty or (into == 0 and any(self._drive_ramping)):
             self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), cs - into)
         if self.track_wheels:

@@ -160,55 +160,8 @@ class RobotNode(Node):
             )
         )
         if self.pub_info.active:
-            if cmd.pass_intent is not None:  # (a move's targets are none: RoundedMove keeps Command's default)
-                ix, iy = cmd.intent
-                self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
-                return
-            # `strategy_info` of a move without a pass, written out (no calls but the message's)
-            world = self.world
-            me = world._me  # (`WorldModel.me`, without the property's call when found already)
-            try:
-                holding = bool((me if me is not None else world.me).holding_ball)
-            except LookupError:
-                holding = False
-            user = cmd.user  # (`_user_array`: a move's user is a tuple of floats, as nubot's)
-            if not user:
-                arr = _EMPTY_F64
-            else:
-                last = self._user
-                if user is last[0]:
-                    arr = last[1]
-                else:
-                    n = len(user)
-                    pack = _USER_PACK.get(n)
-                    if pack is None or type(user) is not tuple:
-                        arr = self._user_array(user)
-                    else:
-                        try:
-                            arr = _frombuffer(pack(*user))
-                        except struct.error:
-                            arr = np.array(user, dtype=np.float64)
-                        self._user = (user, arr)
             ix, iy = cmd.intent
-            self.pub_info.put(
-                _StrategyInfo(
-                    now,
-                    tick,
-                    self.rid,
-                    cmd.role,
-                    cmd.action,
-                    holding,
-                    False,
-                    0.0,
-                    ix,
-                    iy,
-                    _EMPTY_I32,
-                    0,
-                    0,
-                    _NO_PASS,
-                    arr,
-                )
-            )
+            self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
 
     def _climb(self, cmd: Command) -> float:
         try:

@@ -19,6 +19,7 @@ import math
 import struct
 
 from ... import msgs
+from ...msgs.game_commands import is_ours
 from ..base import Command, RobotContext, RobotStrategy, RoundedMove, TeamContext, TeamStrategy
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
@@ -242,8 +243,7 @@ class NubotRobot(RobotStrategy):
         kickoff = False
         if keep is not None:
             kind = flow.kind
-            # (is_ours(kind), inline)
-            taker = role == _ACTIVE and 1 <= kind <= 12 and kind % 2 == 1 and kind != _DROPBALL
+            taker = role == _ACTIVE and is_ours(kind) and kind != _DROPBALL
             x, y = self.round_the_ball(obs, x, y, keep, taker)
             if not taker:
                 fence = (obs.bx, obs.by, keep)
@@ -293,7 +293,7 @@ class NubotRobot(RobotStrategy):
             kind = flow.kind
             if kind == _DROPBALL:
                 return self.p.dropball_distance
-            if 1 <= kind <= 12 and kind % 2 == 1:  # (is_ours, inline)
+            if is_ours(kind):
                 return self.p.mate_distance
             return self.p.opponent_distance
         return None
