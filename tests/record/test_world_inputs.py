@@ -348,3 +348,36 @@ def test_the_inputs_numbers_are_converted_as_numpy_converts_them(accelerated, mo
         assert cdr.pack([1, 2.5, True], "d") == bytearray(np.array([1.0, 2.5, 1.0]).tobytes())
         with pytest.raises(ValueError):
             cdr.pack([1], "q")
+
+
+def test_a_recording_with_sha256_fingerprints_is_verified_with_them(tmp_path, monkeypatch):
+    """Recordings of format 1 took the fingerprints as SHA-256's (and did not say so: read as SHA-256); a
+    re-simulation takes them the same way."""
+    import types
+
+    import simatch.record.recorder as recorder
+    from simatch.record.reproduce import _fingerprint_kind
+
+    path = tmp_path / "sha.mcap"
+    monkeypatch.setattr(recorder, "_fingerprint_kind", lambda: "sha256")
+    with simatch.Simulation("msl_5v5", seed=3) as sim:
+        sim.simulator.fingerprint_kind = "sha256"
+        with Recorder.for_run(sim, path):
+            sim.run(seconds=0.6)
+    assert Recording(path).metadata["fingerprint"] == "sha256"
+    for mode in ("inputs", "strategies"):
+        verdict = verify(path, mode=mode)
+        assert verdict.identical and verdict.compared == 120, (mode, verdict.first_difference)
+    assert _fingerprint_kind(types.SimpleNamespace(metadata={}, path=path)) == "sha256"
+
+
+def test_fingerprints_of_an_unknown_kind_are_refused(tmp_path, monkeypatch):
+    import simatch.record.recorder as recorder
+
+    path = tmp_path / "future.mcap"
+    monkeypatch.setattr(recorder, "_fingerprint_kind", lambda: "blake3")
+    with simatch.Simulation("omni_circle", seed=2) as sim:
+        with Recorder.for_run(sim, path):
+            sim.run(seconds=0.2)
+    with pytest.raises(VerifyError, match="taken as 'blake3', which this simatch"):
+        verify(path)

@@ -10,8 +10,8 @@ import pytest
 import simatch
 from simatch import msgs
 from simatch.config.loader import shipped_scenes
-from simatch.sim.kernels import ball_apart
-from simatch.sim.simulator import fingerprint
+from simatch.sim.kernels import ball_apart, mix64
+from simatch.sim.simulator import FINGERPRINTS, fingerprint
 
 
 def _touches_from_contacts(sim) -> list[int]:
@@ -54,6 +54,64 @@ def test_state_fingerprint_is_the_fingerprint_of_the_exact_states(name):
             seen.add(fp)
             run.run(seconds=0.35, until_done=False)
         assert len(seen) > 1  # the states moved, and the fingerprint with them
+
+
+def _mix64_by_hand(words: list[int]) -> int:
+    """The fingerprint's definition (xxHash64's round and final mix over the words) in plain integers."""
+    p1, p2, p3, mask = 0x9E3779B185EBCA87, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, (1 << 64) - 1
+    h = (len(words) * p3) & mask
+    for w in words:
+        h ^= (w * p2) & mask
+        h = ((((h << 31) | (h >> 33)) & mask) * p1) & mask
+    h ^= h >> 33
+    h = (h * p2) & mask
+    h ^= h >> 29
+    h = (h * p3) & mask
+    return h ^ (h >> 32)
+
+
+def test_the_fingerprint_is_its_definition_on_every_input():
+    # the compiled kernel against the definition in plain integers: lengths 0 to 200, random words and the corners
+    rng = np.random.default_rng(7)
+    for n in list(range(20)) + [143, 200] * 20:
+        words = rng.integers(0, 2**64, size=n, dtype=np.uint64, endpoint=False)
+        assert int(mix64(words)) == _mix64_by_hand(words.tolist())
+    for corner in ([0], [2**64 - 1], [0] * 143, [2**64 - 1] * 143, [1 << k for k in range(64)]):
+        assert int(mix64(np.array(corner, dtype=np.uint64))) == _mix64_by_hand(corner)
+
+
+def test_the_fingerprint_tells_every_single_bit_apart():
+    # a difference anywhere in the states, however small (each bit of each number flipped), changes it
+    rng = np.random.default_rng(3)
+    pose, twist = rng.normal(size=(11, 7)), rng.normal(size=(11, 6))
+    base = fingerprint(pose, twist)
+    seen = {base}
+    for arr in (pose, twist):
+        words = arr.view(np.uint64).reshape(-1)
+        for i in range(0, words.size, 5):
+            for bit in range(64):
+                words[i] ^= np.uint64(1 << bit)
+                seen.add(fingerprint(pose, twist))
+                words[i] ^= np.uint64(1 << bit)
+    assert fingerprint(pose, twist) == base and len(seen) == 1 + 64 * (len(range(0, 77, 5)) + len(range(0, 66, 5)))
+
+
+@pytest.mark.parametrize("name", ["msl_5v5", "aerial_encirclement"])
+def test_a_simulator_takes_the_fingerprint_of_an_older_recording_when_told(name):
+    # `replay --verify` of a recording made before format 2 re-simulates with its SHA-256 fingerprints
+    with simatch.Simulation(name, seed=4) as run:
+        sim = run.simulator
+        run.run(seconds=0.3, until_done=False)
+        _, pose, twist = sim.model_state_arrays()
+        assert sim.state_fingerprint() == fingerprint(pose, twist)
+        sim.fingerprint_kind = "sha256"
+        import hashlib
+
+        digest = hashlib.sha256(pose.tobytes() + twist.tobytes()).digest()
+        assert sim.state_fingerprint() == fingerprint(pose, twist, "sha256") == int.from_bytes(digest[:8], "little")
+        assert set(FINGERPRINTS) == {"mix64", "sha256"}
+        with pytest.raises(ValueError, match="unknown fingerprint"):
+            fingerprint(pose, twist, "md5")
 
 
 def test_model_states_message_carries_the_float32_arrays():

@@ -23,7 +23,8 @@
 from __future__ import annotations
 
 FORMAT = "simatch-recording"
-FORMAT_VERSION = "1"
+#: 2: the exact states' fingerprints by `simatch.sim.kernels.mix64` (metadata ``fingerprint``), 1: by SHA-256
+FORMAT_VERSION = "2"
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
 MESSAGE_ENCODING = "cdr"

@@ -145,6 +145,7 @@ class Recorder:
                 "first_step": str(first_step),
                 "links": json.dumps(bool(links)),
                 "world_inputs": "1" if world_inputs and first_step == 0 else "0",
+                "fingerprint": _fingerprint_kind(),
                 "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
                 "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             },
@@ -354,6 +355,14 @@ class RunRecorder(Recorder):
         }
         out.update(summary or {})
         super().close(status, out)
+
+
+def _fingerprint_kind() -> str:
+    """How the simulator of this simatch takes the StateFingerprint messages recorded (`simatch replay --verify`
+    takes them the same way; a recording without this entry took SHA-256's)."""
+    from ..sim.simulator import FINGERPRINT  # (the simulator's module: loaded by every run that records)
+
+    return FINGERPRINT
 
 
 def _check_path(path: Path) -> None:

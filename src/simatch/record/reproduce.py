@@ -186,6 +186,7 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
             f"a different version may simulate differently"
         )
     scene = rec.scene()
+    kind = _fingerprint_kind(rec)
     has_inputs = rec.metadata.get("world_inputs") == "1"
     if mode == "inputs" and not has_inputs:
         raise VerifyError(
@@ -193,15 +194,28 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
             f"recorded, or not from a run's start): try --verify strategies"
         )
     if mode != "strategies" and has_inputs:
-        verdict = _verify_inputs(rec, scene, progress)
+        verdict = _verify_inputs(rec, scene, kind, progress)
         verdict.problems = problems + verdict.problems
         return verdict
     if mode == "auto":
         problems.append("the recording holds no world inputs: re-simulated from its strategies")
-    return _verify_strategies(rec, scene, problems, progress)
+    return _verify_strategies(rec, scene, kind, problems, progress)
 
 
-def _verify_strategies(rec: Recording, scene, problems: list[str], progress) -> Verdict:
+def _fingerprint_kind(rec: Recording) -> str:
+    """How the recording's StateFingerprint messages were taken (its metadata; SHA-256 before it said)."""
+    from ..sim.simulator import FINGERPRINTS
+
+    kind = rec.metadata.get("fingerprint", "sha256")
+    if kind not in FINGERPRINTS:
+        raise VerifyError(
+            f"{rec.path}: its state fingerprints were taken as {kind!r}, which this simatch ({version()}) does not "
+            f"know (it knows {', '.join(FINGERPRINTS)}): re-simulate it with the simatch that recorded it"
+        )
+    return kind
+
+
+def _verify_strategies(rec: Recording, scene, kind: str, problems: list[str], progress) -> Verdict:
     from ..simulation import Simulation  # the embedded run: composes every subsystem
 
     meta = rec.metadata
@@ -212,12 +226,13 @@ def _verify_strategies(rec: Recording, scene, problems: list[str], progress) -> 
             f"(strategy 'external'): their decisions cannot be re-simulated"
         )
     with Simulation(scene, seed=int(meta.get("seed", "0"))) as sim:
+        sim.simulator.fingerprint_kind = kind  # its fingerprints as the recording's were taken
         verdict = _compare(rec, sim, problems, progress)
     verdict.mode = "strategies"
     return verdict
 
 
-def _verify_inputs(rec: Recording, scene, progress) -> Verdict:
+def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
     """Re-simulate the world alone from the recorded inputs and compare (see the module's docstring)."""
     from ..config.loader import check_models
     from ..sim.inputs import InputError, WorldReplay
@@ -248,7 +263,7 @@ def _verify_inputs(rec: Recording, scene, progress) -> Verdict:
                     continue
                 replay.advance_to(int(fp.step))
                 _, pose, twist = sim.model_state_arrays()
-                if fingerprint(pose, twist) != int(fp.fingerprint):
+                if fingerprint(pose, twist, kind) != int(fp.fingerprint):
                     verdict.identical = False
                     verdict.first_difference = Difference(
                         fp.step * dt,
@@ -256,7 +271,7 @@ def _verify_inputs(rec: Recording, scene, progress) -> Verdict:
                         "(every model)",
                         "fingerprint of the exact states",
                         int(fp.fingerprint),
-                        fingerprint(pose, twist),
+                        fingerprint(pose, twist, kind),
                         1,
                     )
                     break

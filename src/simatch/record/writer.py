@@ -37,9 +37,9 @@ Nothing handed over is lost when the recording process is killed: the writer pro
 was handed (its mapping of the shared memory outlives the recording process), then finalises the file
 itself (the `epitaph` metadata, the summary and the footer: it is told every schema and channel and each
 chunk's message counts as they come), so a kill loses only the chunk being filled, half a simulated second,
-and every MCAP reader reads the rest whole. At most two chunks are
-in the writer's hands (it acknowledges each chunk once written; a third waits for that), so even a kill of
-the writer process itself loses at most one simulated second more (that file is then not finalised:
+and every MCAP reader reads the rest whole. At most `MAX_HANDED` chunks are
+in the writer's hands (it acknowledges each chunk once written; one more waits for that), so even a kill of
+the writer process itself loses at most three simulated seconds more (that file is then not finalised:
 `simatch recover` finalises it). The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
 a Ctrl-C or a kill of the run's process group does not reach it) and ends when the recording process
 closes the pipe or dies.
@@ -54,6 +54,7 @@ chunk indexes: those would add 16 bytes per message outside the compression (abo
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import mmap
 import os
@@ -89,9 +90,12 @@ from .writer_process import (
 
 log = logging.getLogger(__name__)
 
-#: chunks handed over and not yet written, at most: one being written and one in the pipe (the writer process
-#: starts in some 30 ms, while a 5v5 match fills a chunk in 15: one would stop the run until it is up)
-MAX_HANDED = 2
+#: chunks handed over and not yet written, at most. Once it runs, the writer process writes a chunk of the match in
+#: some 2 ms, while the match fills one in 6 to 15 (two would do); but it starts in 15 to 40 ms, more on a loaded
+#: machine, and meanwhile the chunks wait for it: with two, the run stopped for 15 to 18 ms at its third chunk (2 %
+#: of a simulated minute's run time). Six cover the start at the pace of the fastest scenes; the price: a kill of the
+#: writer process itself loses at most three simulated seconds instead of one
+MAX_HANDED = 6
 #: shared chunk buffers: one being filled, `MAX_HANDED` handed over
 SLOTS = MAX_HANDED + 1
 #: bytes of a slot: a chunk of the match is some 370 kB, with link states about 1 MB; only the pages written
@@ -150,13 +154,14 @@ class McapWriter:
         args = [str(to_child), str(from_child), str(fd), str(compression_level)]
         if share:
             args += [str(share[0]), str(slot_size), str(SLOTS)]
-        try:  # the file itself (it needs only zstd and mcap), -P: nothing of its folder on the path
+        try:
             self._proc = subprocess.Popen(
-                [sys.executable, "-P", writer_process.__file__, *args],
+                _writer_command(args),
                 pass_fds=fds,
                 stdin=subprocess.DEVNULL,
                 stdout=subprocess.DEVNULL,
                 start_new_session=True,
+                env=_writer_environment(),
             )
         except OSError as exc:
             for end in (self._out, self._back):
@@ -319,6 +324,31 @@ def _count_records(counts: dict[int, int]) -> bytes:
     """The COUNT records of ``counts`` (channel id -> messages), packed in one call (a chunk of the match counts
     some hundred channels, twice per simulated second)."""
     return struct.pack("<" + COUNT.format.lstrip("<") * len(counts), *chain.from_iterable(counts.items()))
+
+
+def _writer_command(args: list[str]) -> list[str]:
+    """The writer process's command line: the file itself, not simatch's package. ``-S``: without the ``site``
+    module, which in a typical environment imports what its ``.pth`` files name (an editable install's hook,
+    coverage's start-up, ROS wheels' bootstrap: measured 20 of the 40 ms a start took, while the run's first
+    chunks wait for the process); ``-P``: nothing of the file's folder on the path (`_writer_environment` puts
+    there the two packages it needs)."""
+    return [sys.executable, "-S", "-P", writer_process.__file__, *args]
+
+
+def _writer_environment() -> dict[str, str]:
+    """This process's environment, with ``PYTHONPATH`` the folders of the packages the writer process imports
+    (zstd's binding and mcap, wherever this environment installed them): without ``site`` it knows only the
+    standard library."""
+    folders: list[str] = []
+    for name in writer_process.IMPORTS:
+        spec = importlib.util.find_spec(name)
+        where = spec.submodule_search_locations if spec is not None else None
+        if not where:  # (not met: both are packages) the interpreter's own search, with site
+            return dict(os.environ)
+        folder = os.path.dirname(next(iter(where)))
+        if folder not in folders:
+            folders.append(folder)
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(folders)}
 
 
 def _lock(fd: int) -> None:

@@ -32,7 +32,7 @@ from ..robots.drive import OmniDrive, plan_drive
 from .ballhandling import BallHandling
 from .flight import AerialFleet, aerial_poses, frame_contacts, planar, rotor_links
 from .inputs import InputLog, action_input, install, velocity_input, world_input
-from .kernels import ball_apart, model_poses, model_poses32, robot_flags, sense_ground
+from .kernels import ball_apart, mix64, model_fingerprint, model_poses, model_poses32, robot_flags, sense_ground
 from .perception import Perception, Snapshot
 from .sight import Sight
 from .timers import keep_timers_off
@@ -66,18 +66,27 @@ def _label(geom_name: str) -> str:
     return geom_name or "something"
 
 
-_sha256 = hashlib.sha256
-_from_bytes = int.from_bytes
+#: how the StateFingerprint of the exact states is taken (a recording says which in its metadata, `FINGERPRINTS`):
+#: ``mix64`` (`simatch.sim.kernels.mix64` of the states' 64-bit words) since recording format 2, ``sha256`` (the
+#: first 8 bytes of their SHA-256, little endian) before
+FINGERPRINT = "mix64"
 
 
-def fingerprint(pose: np.ndarray, twist: np.ndarray) -> int:
-    """The StateFingerprint of the exact poses and twists (C-ordered float64 arrays, as the simulator makes
-    them): the first 8 bytes of their SHA-256, little endian. Equal fingerprints mean the same states bit for
-    bit (a chance difference is 1 in 1.8e19). SHA-256, like the run's state digest: processors hash it in
-    hardware (about 2 us)."""
-    h = _sha256(pose)
-    h.update(twist)
-    return _from_bytes(h.digest()[:8], "little")
+def fingerprint(pose: np.ndarray, twist: np.ndarray, kind: str = FINGERPRINT) -> int:
+    """The StateFingerprint of the exact poses and twists (float64 arrays, as the simulator makes them): their
+    numbers, poses then twists, in C order, taken as ``kind`` (`FINGERPRINT`, or ``sha256`` for a recording of
+    format 1). Equal fingerprints mean the same states bit for bit (a chance difference is 1 in 1.8e19)."""
+    pose, twist = np.ascontiguousarray(pose, np.float64), np.ascontiguousarray(twist, np.float64)
+    if kind == "sha256":
+        h = hashlib.sha256(pose)
+        h.update(twist)
+        return int.from_bytes(h.digest()[:8], "little")
+    if kind != FINGERPRINT:
+        raise ValueError(f"unknown fingerprint {kind!r} (known: {', '.join(FINGERPRINTS)})")
+    return int(mix64(np.concatenate((pose.ravel(), twist.ravel())).view(np.uint64)))
+
+
+FINGERPRINTS = (FINGERPRINT, "sha256")
 
 
 class CommandError(ValueError):
@@ -249,20 +258,21 @@ class Simulator:
         # the per-step kernels, called without numba's dispatcher (`simatch.compiled.entry`: their arguments are the
         # engine's arrays taken once, plain numbers and float32 arrays made for the call)
         self._pose32_size, self._twist32_size = 7 * (self.n + 1), 6 * (self.n + 1)  # the robots and the ball
-
-        def poses_into(pose: np.ndarray, twist: np.ndarray):
-            # `model_poses32`'s compiled version for outputs of pose's and twist's kinds
-            q, v = self._qpos, self._qvel
-            return entry(model_poses32, q, v, self._q0, self._v0, self.n, self._bq, self._bv, pose, twist)
-
-        self._poses32 = poses_into(np.zeros(0, _f32), np.zeros(0, _f32))
+        q, v = self._qpos, self._qvel
+        self._poses32 = entry(
+            model_poses32, q, v, self._q0, self._v0, self.n, self._bq, self._bv, np.zeros(0, _f32), np.zeros(0, _f32)
+        )
         # the exact states whose fingerprint a recording takes every control tick: poses then twists, float64,
-        # in one block that `model_poses32`'s compiled body fills in place (the numbers `model_poses` returns,
-        # the positions it leaves zero never written), hashed as the two arrays one after the other
+        # in one block that `model_fingerprint` fills in place (the numbers `model_poses` returns, the positions it
+        # leaves zero never written) and hashes as the two arrays one after the other, by its 64-bit words
         m = self.n + 1  # the robots and the ball
         self._state64 = np.zeros(13 * m)
-        self._pose64, self._twist64 = self._state64[: 7 * m], self._state64[7 * m :]
-        self._poses64 = poses_into(self._pose64, self._twist64)
+        self._words64 = self._state64.view(np.uint64)
+        self._state_fingerprint = entry(
+            model_fingerprint, q, v, self._q0, self._v0, self.n, self._bq, self._bv, self._state64, self._words64
+        )
+        #: how `state_fingerprint` takes it (`FINGERPRINTS`: a re-simulation of an older recording sets its kind)
+        self.fingerprint_kind = FINGERPRINT
         self._ball_apart = entry(
             ball_apart, self._geom_xpos, self._touch_geoms, self._touch_bound2, int(self.ix.ball_geom)
         )
@@ -787,12 +797,12 @@ class Simulator:
     def state_fingerprint(self) -> int:
         """`fingerprint` of `model_state_arrays`' poses and twists, without making them (a recording takes it at
         every control tick)."""
-        if self.aerial is not None:
+        if self.aerial is not None or self.fingerprint_kind != FINGERPRINT:
             _, pose, twist = self.model_state_arrays()
-            return fingerprint(pose, twist)
-        q, v = self._qpos, self._qvel
-        self._poses64(q, v, self._q0, self._v0, self.n, self._bq, self._bv, self._pose64, self._twist64)
-        return _from_bytes(_sha256(self._state64).digest()[:8], "little")
+            return fingerprint(pose, twist, self.fingerprint_kind)
+        return self._state_fingerprint(
+            self._qpos, self._qvel, self._q0, self._v0, self.n, self._bq, self._bv, self._state64, self._words64
+        )
 
     def model_states(self) -> dict[str, ModelStateView]:
         names, pose, twist = self.model_state_arrays()
