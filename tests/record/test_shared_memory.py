@@ -122,3 +122,31 @@ def test_chunks_that_fit_their_slot_and_chunks_that_do_not_mix(tmp_path, monkeyp
     with open(path, "rb") as f:
         got = [(ch.topic, msg.data) for _, ch, msg in make_reader(f).iter_messages()]
     assert got == [("/blob", p) for p in sent]
+
+
+def test_a_chunk_larger_than_the_pipe_is_written_whole(tmp_path):
+    """Chunks that fit neither their slot nor the pipe (1 MB at most): the frame's write waits for the writer
+    process to read, every byte arrives in order, and the counts add up over the chunks."""
+    path = tmp_path / "huge.mcap"
+    w = writer.McapWriter(path, profile="ros2", library="pytest", slot_size=4096)
+    log = new_log(lambda topic, msg: None)
+    log.into(w.buffer())
+    sid, schema = w.schema("pytest/Blob", "ros2msg", b"uint8[] data")
+    cid, channel = w.channel("/blob", sid, "cdr")
+    log.append(schema + channel)
+    sent = []
+    for i, size in enumerate([3_000_001, 10, 2_200_000]):
+        log.now = i * 1000
+        payload = bytes(range(256)) * (size // 256) + bytes([i])
+        log.record(cid, payload)
+        sent.append(payload)
+        data, counts, first, last = log.take()
+        w.end_chunk(data, first, last, counts)
+        del data
+        log.into(w.buffer())
+        assert w.counts() == {cid: i + 1}
+    log.into(None)
+    w.close()
+    with open(path, "rb") as f:
+        got = [msg.data for _, _, msg in make_reader(f).iter_messages()]
+    assert got == sent

@@ -57,7 +57,7 @@ def test_state_fingerprint_is_the_fingerprint_of_the_exact_states(name):
 
 
 def _mix64_by_hand(words: list[int]) -> int:
-    """The fingerprint's definition (xxHash64's round and final mix over the words) in plain integers."""
+    """The fingerprint's definition (a round like xxHash64's per word, its final mix) in plain integers."""
     p1, p2, p3, mask = 0x9E3779B185EBCA87, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, (1 << 64) - 1
     h = (len(words) * p3) & mask
     for w in words:

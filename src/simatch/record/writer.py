@@ -132,7 +132,8 @@ class McapWriter:
         self.error: str | None = None
         self._schemas: list[Schema] = []
         self._channels: list[Channel] = []
-        self._counts: dict[int, int] = {}
+        self._counts: dict[int, int] = {}  # messages per channel id in the chunks handed over before ...
+        self._chunk_counts: list[dict[int, int]] = []  # ... and those of each chunk handed over since
         self._message_count = 0
         self._chunk_count = 0
         self._times: tuple[int, int] | None = None
@@ -215,9 +216,7 @@ class McapWriter:
         written."""
         if not len(data):
             return
-        counted = self._counts
-        for cid, k in counts.items():
-            counted[cid] = counted.get(cid, 0) + k
+        self._chunk_counts.append(counts)  # (added up when asked: a chunk of the match counts some hundred channels)
         self._message_count += sum(counts.values())
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
@@ -236,7 +235,12 @@ class McapWriter:
 
     def counts(self) -> dict[int, int]:
         """Messages per channel id in the chunks handed over."""
-        return dict(self._counts)
+        counted = self._counts
+        for counts in self._chunk_counts:
+            for cid, k in counts.items():
+                counted[cid] = counted.get(cid, 0) + k
+        self._chunk_counts.clear()
+        return dict(counted)
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
         """A Metadata record, written after everything handed over before it."""
@@ -266,7 +270,7 @@ class McapWriter:
                 {
                     "schemas": self._schemas,
                     "channels": self._channels,
-                    "counts": dict(self._counts),
+                    "counts": self.counts(),
                     "messages": self._message_count,
                     "chunks": self._chunk_count,
                     "first": first,
@@ -293,9 +297,14 @@ class McapWriter:
         """One frame to the writer process (False, and the error noted, if it is gone)."""
         if self.error is not None:
             return False
-        head = FRAME.pack(kind, sum(len(p) for p in parts))
+        size = sum(map(len, parts))
+        head = FRAME.pack(kind, size)
         try:
-            write_all(self._out, [head, *parts])
+            # one write: a blocking pipe takes the whole frame, waiting for the writer process to read where it
+            # does not fit; what a signal may leave unwritten, `write_all` writes
+            done = os.writev(self._out, (head, *parts))
+            if done < FRAME.size + size:
+                write_all(self._out, [b"".join((head, *parts))[done:]])
         except OSError as exc:  # the writer process died: keep the run going, say so at the end
             self._failed(f"the writer process is gone ({exc.strerror or exc})")
             return False
