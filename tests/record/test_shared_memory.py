@@ -88,19 +88,34 @@ def test_chunks_larger_than_a_slot_go_through_the_pipe(tmp_path, monkeypatch, re
     assert list(Recording(path).raw()) == list(Recording(recording[0]).raw())
 
 
+def _blob_writer(path, accelerate: bool = True):
+    """A writer of ``path`` with slots of 4 kB, a message log lent its first slot, and one channel of blobs:
+    (writer, log, channel id, the schema and channel records the log holds first)."""
+    w = writer.McapWriter(path, profile="ros2", library="pytest", slot_size=4096)
+    log = new_log(lambda topic, msg: None, accelerate=accelerate)
+    log.into(w.buffer())
+    sid, schema = w.schema("pytest/Blob", "ros2msg", b"uint8[] data")
+    cid, channel = w.channel("/blob", sid, "cdr")
+    log.append(schema + channel)
+    return w, log, cid, schema + channel
+
+
+def _hand_over(w, log) -> None:
+    """The log's chunk to the writer, as the recorder hands it over, and the next slot lent to the log."""
+    data, counts, first, last = log.take()
+    w.end_chunk(data, first, last, counts)
+    del data
+    log.into(w.buffer())
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_chunks_that_fit_their_slot_and_chunks_that_do_not_mix(tmp_path, monkeypatch, kind):
     """Chunks of every size, in slots of 4 kB: each one that fits goes through the shared memory, each one that
     does not through the pipe, and every message is in the file in order, as the plain mcap reader reads it."""
     kinds = _frames(monkeypatch)
     path = tmp_path / "mixed.mcap"
-    w = writer.McapWriter(path, profile="ros2", library="pytest", slot_size=4096)
+    w, log, cid, records = _blob_writer(path, accelerate=(kind == "c"))
     assert w.shared
-    log = new_log(lambda topic, msg: None, accelerate=(kind == "c"))
-    log.into(w.buffer())
-    sid, schema = w.schema("pytest/Blob", "ros2msg", b"uint8[] data")
-    cid, channel = w.channel("/blob", sid, "cdr")
-    log.append(schema + channel)
     sizes = [100, 5000, 200, 3000, 9000, 4000, 50, 70000, 10]
     sent = []
     for i, size in enumerate(sizes):
@@ -109,14 +124,11 @@ def test_chunks_that_fit_their_slot_and_chunks_that_do_not_mix(tmp_path, monkeyp
             payload = bytes([i, j]) * (size // 2)
             log.record(cid, payload)
             sent.append(payload)
-        data, counts, first, last = log.take()
-        w.end_chunk(data, first, last, counts)
-        del data
-        log.into(w.buffer())
+        _hand_over(w, log)
     log.into(None)
     w.close()
     # a chunk's records: its three messages (31 bytes of header each) and, in the first, the schema and channel
-    fits = [3 * (31 + s) + (len(schema + channel) if i == 0 else 0) <= 4096 for i, s in enumerate(sizes)]
+    fits = [3 * (31 + s) + (len(records) if i == 0 else 0) <= 4096 for i, s in enumerate(sizes)]
     assert kinds == [SHARED if fit else CHUNK for fit in fits]
     assert CHUNK in kinds and SHARED in kinds
     with open(path, "rb") as f:
@@ -128,22 +140,14 @@ def test_a_chunk_larger_than_the_pipe_is_written_whole(tmp_path):
     """Chunks that fit neither their slot nor the pipe (1 MB at most): the frame's write waits for the writer
     process to read, every byte arrives in order, and the counts add up over the chunks."""
     path = tmp_path / "huge.mcap"
-    w = writer.McapWriter(path, profile="ros2", library="pytest", slot_size=4096)
-    log = new_log(lambda topic, msg: None)
-    log.into(w.buffer())
-    sid, schema = w.schema("pytest/Blob", "ros2msg", b"uint8[] data")
-    cid, channel = w.channel("/blob", sid, "cdr")
-    log.append(schema + channel)
+    w, log, cid, _ = _blob_writer(path)
     sent = []
     for i, size in enumerate([3_000_001, 10, 2_200_000]):
         log.now = i * 1000
         payload = bytes(range(256)) * (size // 256) + bytes([i])
         log.record(cid, payload)
         sent.append(payload)
-        data, counts, first, last = log.take()
-        w.end_chunk(data, first, last, counts)
-        del data
-        log.into(w.buffer())
+        _hand_over(w, log)
         assert w.counts() == {cid: i + 1}
     log.into(None)
     w.close()
