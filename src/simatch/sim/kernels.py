@@ -434,7 +434,7 @@ def sense_ground(
 _P1 = np.uint64(0x9E3779B185EBCA87)
 _P2 = np.uint64(0xC2B2AE3D27D4EB4F)
 _P3 = np.uint64(0x165667B19E3779F9)
-_R31, _L31 = np.uint64(33), np.uint64(31)
+_L31, _R33 = np.uint64(31), np.uint64(33)  # a rotation left by 31 bits
 _S33, _S29, _S32 = np.uint64(33), np.uint64(29), np.uint64(32)
 
 
@@ -445,7 +445,7 @@ def mix64(words):
     h = np.uint64(words.size) * _P3
     for w in words:
         h ^= w * _P2
-        h = ((h << _L31) | (h >> _R31)) * _P1
+        h = ((h << _L31) | (h >> _R33)) * _P1
     h ^= h >> _S33
     h *= _P2
     h ^= h >> _S29
