@@ -2246,6 +2246,12 @@ static PyMethodDef methods[] = {
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
+/* what this build was made from (setup.py: the first 16 hex digits of this file's SHA-256), so that a test can
+ * tell an extension left from an older source (an optional extension that fails to compile leaves the last one) */
+#ifndef SIMATCH_SOURCE_DIGEST
+#define SIMATCH_SOURCE_DIGEST ""
+#endif
+
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
     if (PyType_Ready(&LogType) < 0 || PyType_Ready(&ChunkType) < 0 || PyType_Ready(&TapType) < 0
         || PyType_Ready(&LogTopicType) < 0
@@ -2259,7 +2265,8 @@ PyMODINIT_FUNC PyInit__cdr_accel(void) {
     if (m == NULL)
         return NULL;
     if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0
-        || PyModule_AddObjectRef(m, "Tap", (PyObject *)&TapType) < 0) {
+        || PyModule_AddObjectRef(m, "Tap", (PyObject *)&TapType) < 0
+        || PyModule_AddStringConstant(m, "SOURCE_DIGEST", SIMATCH_SOURCE_DIGEST) < 0) {
         Py_DECREF(m);
         return NULL;
     }

@@ -175,6 +175,11 @@ static PyMethodDef methods[] = {
     {NULL},
 };
 
+/* what this build was made from (setup.py; see _cdr_accel.c) */
+#ifndef SIMATCH_SOURCE_DIGEST
+#define SIMATCH_SOURCE_DIGEST ""
+#endif
+
 static struct PyModuleDef module_def = {
     PyModuleDef_HEAD_INIT, "simatch.msgs._positional",
     "Positional construction of slotted message classes in C (see simatch.msgs.positional).", -1, methods,
@@ -186,5 +191,10 @@ PyInit__positional(void)
     if (PyType_Ready(&MakerType) < 0) {
         return NULL;
     }
-    return PyModule_Create(&module_def);
+    PyObject *m = PyModule_Create(&module_def);
+    if (m != NULL && PyModule_AddStringConstant(m, "SOURCE_DIGEST", SIMATCH_SOURCE_DIGEST) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
 }
