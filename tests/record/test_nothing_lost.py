@@ -42,10 +42,11 @@ def _stop(proc: subprocess.Popen) -> None:
 
 
 def _writers_of(path) -> list[int]:
-    """The processes that hold ``path`` open (a recording's writer process)."""
+    """The processes other than this one that hold ``path`` open (a recording's writer process; this process may
+    hold it for a moment, reading it)."""
     found = []
     for entry in os.scandir("/proc"):
-        if entry.name.isdigit():
+        if entry.name.isdigit() and int(entry.name) != os.getpid():
             try:
                 if any(os.readlink(fd.path) == str(path) for fd in os.scandir(f"/proc/{entry.name}/fd")):
                     found.append(int(entry.name))
