@@ -7,11 +7,12 @@ which records through the shared memory too.)"""
 from __future__ import annotations
 
 import os
+import sys
 
 import pytest
 from mcap.reader import make_reader
 
-from simatch.record import Recording, verify, writer
+from simatch.record import Recording, verify, writer, writer_process
 from simatch.record.messagelog import new_log
 from simatch.record.writer_process import CHUNK, SHARED
 
@@ -154,3 +155,33 @@ def test_a_chunk_larger_than_the_pipe_is_written_whole(tmp_path):
     with open(path, "rb") as f:
         got = [msg.data for _, _, msg in make_reader(f).iter_messages()]
     assert got == sent
+
+
+def test_the_run_does_not_wait_for_the_writer_process_to_start(tmp_path, monkeypatch):
+    """While the writer process starts (held back here for 1.5 s), up to `MAX_HANDED_STARTING` chunks are handed
+    over without waiting for it; once it has written and caught up, at most `MAX_HANDED` are in its hands."""
+    script = writer_process.__file__
+    late = f"import runpy, time; time.sleep(1.5); runpy.run_path({script!r}, run_name='__main__')"
+    monkeypatch.setattr(writer, "_writer_command", lambda args: [sys.executable, "-S", "-P", "-c", late, *args])
+    path = tmp_path / "late.mcap"
+    w, log, cid, _ = _blob_writer(path)
+    sent = []
+
+    def chunk() -> None:
+        log.now = len(sent) * 1000
+        sent.append(bytes([len(sent)]) * 3000)
+        log.record(cid, sent[-1])
+        _hand_over(w, log)
+
+    for _ in range(writer.MAX_HANDED_STARTING):
+        chunk()
+    assert len(w._handed) == writer.MAX_HANDED_STARTING  # none waited for the sleeping process
+    chunk()  # one more waits until it writes
+    w.flush()
+    for _ in range(8):
+        chunk()
+        assert len(w._handed) <= writer.MAX_HANDED and not w._starting  # it runs: two at most again
+    log.into(None)
+    w.close()
+    with open(path, "rb") as f:
+        assert [msg.data for _, _, msg in make_reader(f).iter_messages()] == sent

@@ -37,9 +37,10 @@ Nothing handed over is lost when the recording process is killed: the writer pro
 was handed (its mapping of the shared memory outlives the recording process), then finalises the file
 itself (the `epitaph` metadata, the summary and the footer: it is told every schema and channel and each
 chunk's message counts as they come), so a kill loses only the chunk being filled, half a simulated second,
-and every MCAP reader reads the rest whole. At most `MAX_HANDED` chunks are
-in the writer's hands (it acknowledges each chunk once written; one more waits for that), so even a kill of
-the writer process itself loses at most three simulated seconds more (that file is then not finalised:
+and every MCAP reader reads the rest whole. At most `MAX_HANDED` (two) chunks are
+in the writer's hands (it acknowledges each chunk once written; a third waits for that), so even a kill of
+the writer process itself loses at most one simulated second more (three in the run's first seconds, while it
+starts: `MAX_HANDED_STARTING`) (that file is then not finalised:
 `simatch recover` finalises it). The writer process ignores Ctrl-C and SIGTERM (it runs in a session of its own:
 a Ctrl-C or a kill of the run's process group does not reach it) and ends when the recording process
 closes the pipe or dies.
@@ -59,6 +60,7 @@ import logging
 import mmap
 import os
 import pickle
+import select
 import struct
 import subprocess
 import sys
@@ -90,14 +92,15 @@ from .writer_process import (
 
 log = logging.getLogger(__name__)
 
-#: chunks handed over and not yet written, at most. Once it runs, the writer process writes a chunk of the match in
-#: some 2 ms, while the match fills one in 6 to 15 (two would do); but it starts in 15 to 40 ms, more on a loaded
-#: machine, and meanwhile the chunks wait for it: with two, the run stopped for 15 to 18 ms at its third chunk (2 %
-#: of a simulated minute's run time). Six cover the start at the pace of the fastest scenes; the price: a kill of the
-#: writer process itself loses at most three simulated seconds instead of one
-MAX_HANDED = 6
-#: shared chunk buffers: one being filled, `MAX_HANDED` handed over
-SLOTS = MAX_HANDED + 1
+#: chunks handed over and not yet written, at most, once the writer process runs: one being written and one in the
+#: pipe (it writes a chunk of the match in some 2 ms, while the match fills one in 6 to 15)
+MAX_HANDED = 2
+#: ... and while it starts, until it has written a chunk and caught up: it starts in 15 to 40 ms, more on a loaded
+#: machine, and the run does not wait for it (with two, the run stopped for 15 to 18 ms at its third chunk, 2 % of
+#: a simulated minute's run time)
+MAX_HANDED_STARTING = 6
+#: shared chunk buffers: one being filled, the others handed over
+SLOTS = MAX_HANDED_STARTING + 1
 #: bytes of a slot: a chunk of the match is some 370 kB, with link states about 1 MB; only the pages written
 #: take memory, and a larger chunk goes through the pipe
 SLOT_SIZE = 8 << 20
@@ -140,6 +143,8 @@ class McapWriter:
         self._records = RecordBuilder()
         self._closed = False
         self._handed: deque[int | None] = deque()  # per acknowledgement still to come: the slot it frees
+        self._written = 0  # chunks and flushes acknowledged
+        self._starting = True  # until the writer process has written a chunk and caught up (`MAX_HANDED_STARTING`)
         slot_size = SLOT_SIZE if slot_size is None else slot_size
         share = _shared_memory(SLOTS * slot_size) if shared else None
         self._map = share[1] if share else None
@@ -206,21 +211,25 @@ class McapWriter:
         if not self._slots or self.error is not None:
             return None
         if self._lent is None:
-            self._lent = self._free.pop()  # at most MAX_HANDED slots are handed over: one is free
+            self._lent = self._free.pop()  # at most MAX_HANDED_STARTING slots are handed over: one is free
         return self._slots[self._lent]
 
     def end_chunk(self, data, start_ns: int, end_ns: int, counts: dict[int, int]) -> None:
         """Hand one chunk's records (messages from ``start_ns`` to ``end_ns``; ``counts`` per channel id) to the
         writer process: ``data`` is a bytes-like object, or the records in the slot `buffer` lent (a memoryview
         of its first bytes, as ``log.take`` gives it). Waits while `MAX_HANDED` chunks are still to be
-        written."""
+        written (`MAX_HANDED_STARTING` while the writer process starts)."""
         if not len(data):
             return
         self._chunk_counts.append(counts)  # (added up when asked: a chunk of the match counts some hundred channels)
         self._message_count += sum(counts.values())
         self._chunk_count += 1
         self._times = (start_ns, end_ns) if self._times is None else (self._times[0], end_ns)
-        self._acknowledged(MAX_HANDED - 1)
+        if self._starting:
+            self._acknowledged(MAX_HANDED_STARTING - 1, poll=True)
+            self._starting = not (self._written and len(self._handed) < MAX_HANDED)
+        else:
+            self._acknowledged(MAX_HANDED - 1)
         head = SPAN.pack(start_ns, end_ns, len(counts)) + _count_records(counts)
         in_slot = self._map is not None and isinstance(data, memoryview) and data.obj is self._map
         slot = self._lent if in_slot else None
@@ -310,15 +319,19 @@ class McapWriter:
             return False
         return True
 
-    def _acknowledged(self, left: int) -> None:
-        """Wait until at most ``left`` chunks or flushes are unacknowledged (their slots are free then)."""
-        while len(self._handed) > left and self.error is None:
-            got = os.read(self._back, len(self._handed) - left)
+    def _acknowledged(self, left: int, poll: bool = False) -> None:
+        """Wait until at most ``left`` chunks or flushes are unacknowledged (their slots are free then); ``poll``:
+        take the acknowledgements that came meanwhile too, without waiting for more."""
+        while self._handed and self.error is None:
+            if len(self._handed) <= left and not (poll and _readable(self._back)):
+                return
+            got = os.read(self._back, len(self._handed))  # (one byte per acknowledgement; blocks only for the first)
             if not got:
                 self._failed("the writer process ended unexpectedly")
                 return
             for _ in range(got.count(ACK)):
                 slot = self._handed.popleft()
+                self._written += 1
                 if slot is not None:
                     self._free.append(slot)
 
@@ -333,6 +346,14 @@ def _count_records(counts: dict[int, int]) -> bytes:
     """The COUNT records of ``counts`` (channel id -> messages), packed in one call (a chunk of the match counts
     some hundred channels, twice per simulated second)."""
     return struct.pack("<" + COUNT.format.lstrip("<") * len(counts), *chain.from_iterable(counts.items()))
+
+
+def _readable(fd: int) -> bool:
+    """Whether a read of ``fd`` would return at once."""
+    try:
+        return bool(select.select([fd], [], [], 0)[0])
+    except (OSError, ValueError):
+        return False
 
 
 def _writer_command(args: list[str]) -> list[str]:
