@@ -349,10 +349,13 @@ def _count_records(counts: dict[int, int]) -> bytes:
 
 
 def _readable(fd: int) -> bool:
-    """Whether a read of ``fd`` would return at once."""
+    """Whether a read of ``fd`` would return at once (``poll``: any descriptor number, where ``select`` takes
+    those below 1024 only)."""
     try:
-        return bool(select.select([fd], [], [], 0)[0])
-    except (OSError, ValueError):
+        waiting = select.poll()
+        waiting.register(fd, select.POLLIN)
+        return bool(waiting.poll(0))
+    except (AttributeError, OSError, ValueError):  # no poll (not POSIX): waits as once it runs
         return False
 
 
