@@ -162,7 +162,10 @@ def test_the_run_does_not_wait_for_the_writer_process_to_start(tmp_path, monkeyp
     over without waiting for it; once it has written and caught up, at most `MAX_HANDED` are in its hands."""
     script = writer_process.__file__
     late = f"import runpy, time; time.sleep(1.5); runpy.run_path({script!r}, run_name='__main__')"
-    monkeypatch.setattr(writer, "_writer_command", lambda args: [sys.executable, "-S", "-P", "-c", late, *args])
+    start = writer._writer_start
+    monkeypatch.setattr(
+        writer, "_writer_start", lambda args: ([sys.executable, "-S", "-P", "-c", late, *args], start(args)[1])
+    )
     path = tmp_path / "late.mcap"
     w, log, cid, _ = _blob_writer(path)
     sent = []
@@ -185,3 +188,21 @@ def test_the_run_does_not_wait_for_the_writer_process_to_start(tmp_path, monkeyp
     w.close()
     with open(path, "rb") as f:
         assert [msg.data for _, _, msg in make_reader(f).iter_messages()] == sent
+
+
+def test_a_writer_process_whose_packages_are_not_found_starts_with_site(tmp_path, monkeypatch):
+    """Without the folders of its packages to put on its path, the writer process starts as any Python program
+    does (with ``site``), and writes the recording all the same."""
+    command, env = writer._writer_start(["1"])
+    assert command[1:3] == ["-S", "-P"] and env["PYTHONPATH"]
+    monkeypatch.setattr(writer_process, "IMPORTS", ("zstandard", "mcap", "no_such_package_here"))
+    command, env = writer._writer_start(["1"])
+    assert "-S" not in command and env == dict(os.environ)
+    path = tmp_path / "site.mcap"
+    w, log, cid, _ = _blob_writer(path)
+    log.record(cid, b"written")
+    _hand_over(w, log)
+    log.into(None)
+    w.close()
+    with open(path, "rb") as f:
+        assert [msg.data for _, _, msg in make_reader(f).iter_messages()] == [b"written"]

@@ -4,6 +4,8 @@ float32 arrays (one compiled call instead of the float64 states rounded) and the
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import pytest
 
@@ -105,8 +107,6 @@ def test_a_simulator_takes_the_fingerprint_of_an_older_recording_when_told(name)
         _, pose, twist = sim.model_state_arrays()
         assert sim.state_fingerprint() == fingerprint(pose, twist)
         sim.fingerprint_kind = "sha256"
-        import hashlib
-
         digest = hashlib.sha256(pose.tobytes() + twist.tobytes()).digest()
         assert sim.state_fingerprint() == fingerprint(pose, twist, "sha256") == int.from_bytes(digest[:8], "little")
         assert set(FINGERPRINTS) == {"mix64", "sha256"}

@@ -21,11 +21,9 @@ class _Publisher:
     (whether anybody listens) is a plain attribute, set again whenever a subscriber comes or goes: it is
     read before building a message that nobody may want, hundreds of times per simulated second. ``_one``
     is the subscriber when there is exactly one (most topics: a robot's commands, its perception, the
-    model states), called without the loop over the list; ``_two`` the pair when there are two (the same
-    topics while a recorder listens: some two thousand messages per simulated second, where the loop's
-    iterator cost more than the recorder's call to its log)."""
+    model states), called without the loop over the list."""
 
-    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "_one", "_two", "active")
+    __slots__ = ("topic", "msgtype", "_bus", "_callbacks", "_one", "active")
 
     def __init__(self, bus: InProcessBus, topic: str, msgtype: Any):
         self.topic = topic
@@ -33,14 +31,12 @@ class _Publisher:
         self._bus = bus
         self._callbacks: list[Callback] = []
         self._one: Callback | None = None
-        self._two: tuple[Callback, Callback] | None = None
         self.active = False
 
     def _rebind(self) -> None:
         callbacks = self._callbacks
         self.active = bool(callbacks)
         self._one = callbacks[0] if len(callbacks) == 1 else None
-        self._two = (callbacks[0], callbacks[1]) if len(callbacks) == 2 else None
 
     # (a method, looked up at each call: a sender may keep the bound ``put``, and must still reach
     # subscribers that come later)
@@ -50,19 +46,6 @@ class _Publisher:
             one(msg)
             if self._one is not one:  # subscribers came or went during the call: those the loop would reach
                 for cb in islice(self._callbacks, 1, None):
-                    cb(msg)
-            return
-        two = self._two
-        if two is not None:  # (the loop below, unrolled: the same calls when subscribers come or go meanwhile)
-            first, second = two
-            first(msg)
-            if self._two is not two:
-                for cb in islice(self._callbacks, 1, None):
-                    cb(msg)
-                return
-            second(msg)
-            if self._two is not two:
-                for cb in islice(self._callbacks, 2, None):
                     cb(msg)
             return
         for cb in self._callbacks:

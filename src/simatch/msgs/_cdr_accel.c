@@ -596,22 +596,29 @@ static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_
     return r;
 }
 
-/* how instances of `tp` hold the program's fields: slotted if the generic attribute lookup finds every field
- * as a slot (a member descriptor of an object that raises AttributeError when unset) */
+/* where instances of `tp` hold the attribute `name` (an offset > 0), or 0 if not in a slot that can be read there:
+ * the generic attribute lookup finds it as a member descriptor of an object that raises AttributeError when
+ * unset. The offset holds while `tp`'s version tag is the same. */
+static Py_ssize_t slot_offset(PyTypeObject *tp, PyObject *name) {
+    if (tp->tp_getattro != PyObject_GenericGetAttr)
+        return 0;
+    PyObject *d = _PyType_Lookup(tp, name);                    /* borrowed */
+    if (d == NULL || !Py_IS_TYPE(d, &PyMemberDescr_Type))
+        return 0;
+    PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
+    if (member->type != T_OBJECT_EX || (member->flags & READ_RESTRICTED) || member->offset <= 0)
+        return 0;
+    return member->offset;
+}
+
+/* how instances of `tp` hold the program's fields: slotted if every field is in a slot (`slot_offset`) */
 static void learn(Program *program, PyTypeObject *tp) {
     Py_XSETREF(program->type, (PyTypeObject *)Py_NewRef(tp));
     program->slotted = 0;
-    if (tp->tp_getattro != PyObject_GenericGetAttr)
-        goto done;
     for (Py_ssize_t i = 0; i < program->count; i++) {
         Op *op = &program->ops[i];
-        PyObject *d = _PyType_Lookup(tp, op->name);            /* borrowed */
-        if (d == NULL || !Py_IS_TYPE(d, &PyMemberDescr_Type))
+        if ((op->offset = slot_offset(tp, op->name)) == 0)
             goto done;
-        PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
-        if (member->type != T_OBJECT_EX || (member->flags & READ_RESTRICTED) || member->offset <= 0)
-            goto done;
-        op->offset = member->offset;
     }
     program->slotted = PyType_HasFeature(tp, Py_TPFLAGS_VALID_VERSION_TAG);
 done:
@@ -2115,17 +2122,11 @@ static PyObject *tap_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     tap->values = Py_NewRef(values);
     tap->code = Py_NewRef(code);
     PyTypeObject *lt = Py_TYPE(log);                /* does the log hold `busy` in a slot? (InputLog does) */
-    if (lt->tp_getattro == PyObject_GenericGetAttr) {
-        PyObject *d = _PyType_Lookup(lt, busy_name);            /* borrowed */
-        if (d != NULL && Py_IS_TYPE(d, &PyMemberDescr_Type)) {
-            PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
-            if (member->type == T_OBJECT_EX && !(member->flags & READ_RESTRICTED) && member->offset > 0
-                && PyType_HasFeature(lt, Py_TPFLAGS_VALID_VERSION_TAG)) {
-                tap->log_type = lt;
-                tap->log_version = lt->tp_version_tag;
-                tap->busy_at = member->offset;
-            }
-        }
+    Py_ssize_t busy_at = slot_offset(lt, busy_name);
+    if (busy_at > 0 && PyType_HasFeature(lt, Py_TPFLAGS_VALID_VERSION_TAG)) {
+        tap->log_type = lt;
+        tap->log_version = lt->tp_version_tag;
+        tap->busy_at = busy_at;
     }
     return (PyObject *)tap;
 }

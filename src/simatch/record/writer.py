@@ -160,14 +160,15 @@ class McapWriter:
         args = [str(to_child), str(from_child), str(fd), str(compression_level)]
         if share:
             args += [str(share[0]), str(slot_size), str(SLOTS)]
+        command, env = _writer_start(args)
         try:
             self._proc = subprocess.Popen(
-                _writer_command(args),
+                command,
                 pass_fds=fds,
                 stdin=subprocess.DEVNULL,
                 stdout=subprocess.DEVNULL,
                 start_new_session=True,
-                env=_writer_environment(),
+                env=env,
             )
         except OSError as exc:
             for end in (self._out, self._back):
@@ -359,29 +360,23 @@ def _readable(fd: int) -> bool:
         return False
 
 
-def _writer_command(args: list[str]) -> list[str]:
-    """The writer process's command line: the file itself, not simatch's package. ``-S``: without the ``site``
-    module, which in a typical environment imports what its ``.pth`` files name (an editable install's hook,
-    coverage's start-up, ROS wheels' bootstrap: measured 20 of the 40 ms a start took, while the run's first
-    chunks wait for the process); ``-P``: nothing of the file's folder on the path (`_writer_environment` puts
-    there the two packages it needs)."""
-    return [sys.executable, "-S", "-P", writer_process.__file__, *args]
-
-
-def _writer_environment() -> dict[str, str]:
-    """This process's environment, with ``PYTHONPATH`` the folders of the packages the writer process imports
-    (zstd's binding and mcap, wherever this environment installed them): without ``site`` it knows only the
-    standard library."""
+def _writer_start(args: list[str]) -> tuple[list[str], dict[str, str]]:
+    """The writer process's command line and environment. It runs the file itself, not simatch's package, with
+    ``-P`` (nothing of the file's folder on the path) and, where the packages it imports (`writer_process.IMPORTS`:
+    zstd's binding and mcap) are found, with ``-S`` and their folders as its ``PYTHONPATH``: without ``site``,
+    which in a typical environment imports what its ``.pth`` files name (an editable install's hook, coverage's
+    start-up, ROS wheels' bootstrap: measured 20 of the 40 ms a start took, while the run's first chunks wait)."""
     folders: list[str] = []
     for name in writer_process.IMPORTS:
         spec = importlib.util.find_spec(name)
         where = spec.submodule_search_locations if spec is not None else None
         if not where:  # (not met: both are packages) the interpreter's own search, with site
-            return dict(os.environ)
+            return [sys.executable, "-P", writer_process.__file__, *args], dict(os.environ)
         folder = os.path.dirname(next(iter(where)))
         if folder not in folders:
             folders.append(folder)
-    return {**os.environ, "PYTHONPATH": os.pathsep.join(folders)}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(folders)}
+    return [sys.executable, "-S", "-P", writer_process.__file__, *args], env
 
 
 def _lock(fd: int) -> None:

@@ -40,7 +40,6 @@ VEL, ACTION, CALL = msgs.WorldInputs.VEL, msgs.WorldInputs.ACTION, msgs.WorldInp
 METHODS: set[str] = set()
 
 _WorldInputs = msgs.positional(msgs.WorldInputs, "stamp step before_sense kind robot values calls")
-_frombuffer, _U8, _I16, _F64 = np.frombuffer, np.dtype(np.uint8), np.dtype(np.int16), np.dtype(np.float64)
 
 
 class InputError(ValueError):
@@ -117,24 +116,8 @@ class InputLog:
 
     def take(self, stamp: float, step: int, before_sense: bool):
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
-        kind = self.kind
-        if not kind:
+        if not self.kind:
             return None
-        pack = cdr.pack
-        if pack is not None:  # (the common case, without `_machine_array`'s frames: a match's every control tick)
-            v, k, r = pack(self.values, "d"), pack(kind, "B"), pack(self.robot, "h")
-            if v is not None and k is not None and r is not None:
-                msg = _WorldInputs(
-                    stamp,
-                    step,
-                    before_sense,
-                    _frombuffer(k, _U8),
-                    _frombuffer(r, _I16),
-                    _frombuffer(v, _F64),
-                    self.calls,
-                )
-                self.clear()
-                return msg
         # numbers as float64, exactly, converted in C as numpy would; anything else (text, which must not be read as
         # a number, huge ints, objects) one by one as the simulator took them
         values = _machine_array(self.values, "d", np.float64)
