@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import signal
 from pathlib import Path
 
 import pytest
 
-import simatch
+# Bound kernels check every argument against its declared type in the tests (simatch.compiled): a wrong
+# dtype or a strided view is a TypeError here, where a production run would read wrong memory. Set before
+# simatch is imported, and inherited by the processes the tests start.
+os.environ.setdefault("SIMATCH_CHECK_KERNELS", "1")
+
+import simatch  # noqa: E402
 
 # A suite started in the background by a non-interactive shell (as CI may start it) inherits SIGINT ignored;
 # Python then installs no KeyboardInterrupt handler, here or in the processes the tests start, and the tests
