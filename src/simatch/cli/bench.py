@@ -54,8 +54,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "bench",
         help="measure simulation speeds (real-time factors)",
-        description="Runs the benchmarks one after another, each in a fresh process, and prints "
-        "their figures, each beside its target where it has one; with --json, one JSON object. Benchmarks: " + ", ".join(BENCHMARKS),
+        description="Runs the benchmarks one after another, each in a fresh process, and prints their figures, "
+        "each beside its target where it has one; with --json, one JSON object. Benchmarks: " + ", ".join(BENCHMARKS),
     )
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
     p.add_argument("--only", action="append", default=[], metavar="NAME", help="run only this benchmark (repeatable)")
