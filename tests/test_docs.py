@@ -66,7 +66,7 @@ def _resolve(path: str) -> bool:
     """Whether a path the architecture names exists: from the repository's root, from src/, or from
     src/simatch/ (the tree's own names)."""
     path = path.rstrip("/")
-    return any((base / path).exists() for base in (ROOT, ROOT / "src", ROOT / "src" / "simatch"))
+    return any(list(base.glob(path)) for base in (ROOT, ROOT / "src", ROOT / "src" / "simatch"))
 
 
 def _resolve_dotted(name: str) -> bool:
@@ -93,10 +93,16 @@ PATHLIKE = re.compile(r"^[\w./-]*/[\w./-]*$|^[\w/-]+\.(?:py|md|toml|c|msg|sh)$")
 
 def architecture_paths(text: str) -> list[str]:
     """Every path the text names: in backticks (``src/simatch/sim/simulator.py``, ``sim/inputs.py``,
-    ``tests/aerial/plugin_drone.py``) and the entries of its tree of ``src/simatch/``."""
+    ``tests/aerial/plugin_drone.py``), the entries of its tree of ``src/simatch/``, and the files and folders
+    each entry's description names (``sight.py`` under ``sim/``: ``sim/sight.py``)."""
     named = [t for t in re.findall(r"`([^`\s]+)`", text) if PATHLIKE.match(t) and not t.startswith("simatch/<")]
     tree = text.split("```\nsrc/simatch/\n", 1)[1].split("```", 1)[0]
-    named += [m.group(1) for m in re.finditer(r"^  (\S+)", tree, re.M)]
+    for entry in re.split(r"\n(?=  \S)", tree.strip("\n")):
+        name, _, description = entry.strip().partition(" ")
+        named.append(name)
+        for token in re.split(r"[\s(),;:`]+", description):
+            if re.fullmatch(r"[\w*./-]+(?:/|\.(?:py|c|toml|md))", token) and not token.startswith("."):
+                named.append(token if token.startswith(("tests/", "docs/")) or name.endswith(".py") else name + token)
     return named
 
 
@@ -107,21 +113,31 @@ def test_every_path_the_architecture_names_exists():
     assert not missing, f"docs/architecture.md names paths that do not exist: {missing}"
 
 
+def _top_level_parts() -> set[str]:
+    """The packages and modules of src/simatch/ (``sim``, ``cli``, ``field``, ...)."""
+    return {
+        p.stem
+        for p in (ROOT / "src" / "simatch").iterdir()
+        if not p.name.startswith(("_", ".")) and (p.suffix == ".py" or (p / "__init__.py").exists())
+    }
+
+
 def test_every_module_the_architecture_names_exists():
-    names = sorted(set(re.findall(r"`(simatch(?:\.\w+)+)", ARCHITECTURE)))
-    assert len(names) > 5
+    """``simatch.robots.quadrotor``, and names relative to the package: ``cli.run.EXTENSIONS``, ``msgs.f32``."""
+    parts = _top_level_parts()
+    dotted = re.findall(r"`((?:simatch\.)?[a-z_0-9]+(?:\.\w+)+)", ARCHITECTURE)
+    names = sorted(
+        {n if n.startswith("simatch.") else f"simatch.{n}" for n in dotted if n.split(".")[0] in parts | {"simatch"}}
+    )
+    assert len(names) > 10 and "simatch.cli.run.EXTENSIONS" in names
     missing = [n for n in names if not _resolve_dotted(n)]
     assert not missing, f"docs/architecture.md names modules that do not exist: {missing}"
 
 
 def test_the_architecture_tree_lists_every_top_level_part():
     tree = ARCHITECTURE.split("```\nsrc/simatch/\n", 1)[1].split("```", 1)[0]
-    listed = {m.group(1).rstrip("/") for m in re.finditer(r"^  (\S+)", tree, re.M)}
-    parts = {
-        p.name
-        for p in (ROOT / "src" / "simatch").iterdir()
-        if not p.name.startswith(("_", ".")) and (p.suffix == ".py" or (p / "__init__.py").exists())
-    }
+    listed = {m.group(1).rstrip("/").removesuffix(".py") for m in re.finditer(r"^  (\S+)", tree, re.M)}
+    parts = _top_level_parts()
     assert parts == listed, f"not in the tree: {sorted(parts - listed)}; gone: {sorted(listed - parts)}"
 
 
