@@ -176,3 +176,15 @@ def test_a_target_says_whether_a_figure_meets_it():
     assert TARGETS["match_rtf"].met(80.0) and not TARGETS["match_rtf"].met(79.9)
     assert TARGETS["distributed_realtime_latency_p99_ms"].met(4.9)
     assert not TARGETS["distributed_realtime_latency_p99_ms"].met(5.0)
+
+
+def test_simatch_bench_prints_each_figure_beside_its_target(monkeypatch, capsys):
+    from types import SimpleNamespace
+
+    from simatch.cli import bench
+
+    monkeypatch.setattr(bench, "run_here", lambda name, seconds: {"match_rtf": 79.0, "match_sim_seconds": 120.0})
+    assert bench.main(SimpleNamespace(only=["match"], json=False, seconds=None)) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert any(line.startswith("match_rtf") and line.endswith("(target >= 80: NOT met)") for line in lines), lines
+    assert any(line.split() == ["match_sim_seconds", "120.0"] for line in lines), lines
