@@ -188,3 +188,14 @@ def test_simatch_bench_prints_each_figure_beside_its_target(monkeypatch, capsys)
     lines = capsys.readouterr().out.splitlines()
     assert any(line.startswith("match_rtf") and line.endswith("(target >= 80: NOT met)") for line in lines), lines
     assert any(line.split() == ["match_sim_seconds", "120.0"] for line in lines), lines
+
+
+def test_every_message_type_of_the_architecture_topics_is_defined():
+    section = ARCHITECTURE.split("## Topics", 1)[1].split("\n## ", 1)[0]
+    msg = ROOT / "src" / "simatch" / "msgs" / "simatch_msgs" / "msg"
+    types = [
+        t.strip() for line in section.splitlines() if line.startswith("| `") for t in line.split("|")[2].split(",")
+    ]
+    assert len(types) > 15
+    missing = [t for t in types if not (msg / f"{t}.msg").exists()]
+    assert not missing, f"docs/architecture.md's topics name message types that are not defined: {missing}"
