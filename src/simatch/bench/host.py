@@ -2,9 +2,8 @@
 guests (*steal*, Linux's ``/proc/stat``).
 
 On a virtual machine a noisy neighbour takes cores away for milliseconds at a time: the latency benchmarks'
-tails (p99, max) then measure the host, not simatch (on this machine runs with 0-4 % steal and 15-40 %
-steal gave a real-time p99 of 3-4 ms and 16-36 ms for the same code). Each benchmark reports the steal of
-its run beside its figures, so that a figure can be judged.
+tails (p99, max) then measure the host, not simatch. Each benchmark reports the steal of its run beside its
+figures, so that a figure can be judged.
 """
 
 from __future__ import annotations

@@ -98,6 +98,7 @@ def observer(seconds: float, pairs: int = 2) -> dict:
 
 
 def latency(seconds: float) -> dict:
+    """The ``ros2_latency_*`` figures: ``seconds`` of probing a real-time server through both teams' bridges."""
     from ..distributed.server import Server
 
     overrides = {"teams.cyan.strategy": "external", "teams.magenta.strategy": "external", "judge.kind": "none"}
@@ -115,28 +116,11 @@ def latency(seconds: float) -> dict:
     )
     sim = server.sim
     names = sim.simulator.robot_names
-    applied: list[tuple[float, int, float]] = []
-    # delivered to the simulator here, in the gate's order, just before the physics step that applies them
-    for i, name in enumerate(names):
-        team, rid = topics.split_robot_name(name)
-        server.bus.subscribe(
-            topics.robot_topic(team, rid, topics.VEL_CMD),
-            msgs.VelCmd,
-            lambda m, i=i: applied.append((time.monotonic(), i, float(m.vx))),
-        )
-    procs = []
+    applied = _note_applied(server, names)
+    procs: list[subprocess.Popen] = []
     probe_out = os.path.join(folder.name, "sent.json")
     try:
-        for k, team in enumerate(("cyan", "magenta")):
-            procs.append(
-                subprocess.Popen(
-                    [sys.executable, "-m", "simatch", "ros2", "--team", team, "--connect", endpoint, "--run", run_name]
-                    + ["--key", os.path.join(folder.name, f"{team}.key"), "--wait", "120"]
-                    + (["--no-clock"] if k else []),
-                    stdout=subprocess.DEVNULL,
-                    stderr=subprocess.DEVNULL,
-                )
-            )
+        _start_bridges(procs, endpoint, run_name, folder.name)
         probe = subprocess.Popen(
             [sys.executable, "-m", "simatch.ros2.probe", probe_out, str(seconds), *names],
             stdout=subprocess.DEVNULL,
@@ -154,30 +138,67 @@ def latency(seconds: float) -> dict:
         stats = server.stats()
     finally:
         server.finish()
-        for p in procs:
-            if p.poll() is None:
-                p.terminate()
-        for p in procs:
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        _stop(procs)
         server.close()
     with open(probe_out) as f:
         sent = json.load(f)
     folder.cleanup()
-    first = {}
-    for t, i, vx in applied:
-        first.setdefault((names[i], round((vx - 0.5) / 1e-4)), t)
-    lat = [first[(name, seq)] - t for name, seq, t in sent if (name, seq) in first and first[(name, seq)] >= t]
-    ms = np.array(lat) * 1e3
+    ms = np.array(_latencies(sent, applied, names)) * 1e3
     return {
         "ros2_latency_robots": len(names),
         "ros2_latency_published": len(sent),
-        "ros2_latency_applied": len(lat),
+        "ros2_latency_applied": int(ms.size),
         "ros2_latency_p50_ms": round(float(np.percentile(ms, 50)), 2) if ms.size else None,
         "ros2_latency_p99_ms": round(float(np.percentile(ms, 99)), 2) if ms.size else None,
         "ros2_latency_max_ms": round(float(ms.max()), 2) if ms.size else None,
         "ros2_realtime_missed": stats.get("missed"),
         "ros2_server_latency_p50_ms": stats.get("latency_p50_ms"),
     }
+
+
+def _note_applied(server, names: list[str]) -> list[tuple[float, int, float]]:
+    """(when, robot, vx) of every velocity command as the simulator gets it: noted by a subscription of the
+    server's bus, delivered in the gate's order just before the physics step that applies it."""
+    applied: list[tuple[float, int, float]] = []
+    for i, name in enumerate(names):
+        team, rid = topics.split_robot_name(name)
+        server.bus.subscribe(
+            topics.robot_topic(team, rid, topics.VEL_CMD),
+            msgs.VelCmd,
+            lambda m, i=i: applied.append((time.monotonic(), i, float(m.vx))),
+        )
+    return applied
+
+
+def _start_bridges(procs: list, endpoint: str, run_name: str, keys: str) -> None:
+    """A ROS 2 bridge process per team (the second without a clock of its own), added to ``procs``."""
+    for k, team in enumerate(("cyan", "magenta")):
+        procs.append(
+            subprocess.Popen(
+                [sys.executable, "-m", "simatch", "ros2", "--team", team, "--connect", endpoint, "--run", run_name]
+                + ["--key", os.path.join(keys, f"{team}.key"), "--wait", "120"]
+                + (["--no-clock"] if k else []),
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+
+
+def _stop(procs: list) -> None:
+    for p in procs:
+        if p.poll() is None:
+            p.terminate()
+    for p in procs:
+        try:
+            p.wait(15)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
+def _latencies(sent: list, applied: list[tuple[float, int, float]], names: list[str]) -> list[float]:
+    """Seconds from each published command to its first delivery to the simulator (the probe's sequence
+    number is in the speed it sent: 0.5 m/s + sequence x 1e-4); commands never applied are left out."""
+    first = {}
+    for t, i, vx in applied:
+        first.setdefault((names[i], round((vx - 0.5) / 1e-4)), t)
+    return [first[(name, seq)] - t for name, seq, t in sent if (name, seq) in first and first[(name, seq)] >= t]

@@ -246,8 +246,8 @@ class TeamProcess:
                     self.bus.refresh_matching()
                     with self._delivering:
                         # the server may open its first tick for this process at once: a tick that Zenoh's
-                        # thread handed over before this answer was read here is answered now, not lost (it
-                        # would cost the run a missed tick and the deadline's wait)
+                        # thread handed over before this answer was read here is answered now, not lost (the
+                        # run would miss that tick and wait for its deadline)
                         self.joined = True
                         held, self._held_tick = self._held_tick, None
                         if held is not None and not self.ended:

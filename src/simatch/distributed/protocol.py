@@ -32,8 +32,8 @@ perception is taken, and its tick opened, at its own step, as the robots of the 
 their own. On two cores ten robot processes woken at once queue for them (the last answers after all the
 others' work); spread out, two at a time, each answers in its own time.
 
-Bundles and feeds are how simatch's own processes talk (one sample per process and tick each way, instead
-of one per message: every sample costs a put, a wake-up and a GIL hand-off); the scene offer says the server
+Bundles and feeds are how simatch's own processes talk (one sample per process and tick each way, not one
+per message, since each sample means a put, a wake-up and a GIL hand-off); the scene offer says the server
 speaks them (``"bundles": 1``). A client that does not use them sends and subscribes topic by topic, and the
 server serves it that way: both kinds may play in one run.
 """
@@ -140,7 +140,8 @@ def dumps(obj: Mapping[str, Any]) -> bytes:
 
 
 def ack(proc: str, tick: int, sent: float, got: float | None = None) -> bytes:
-    """The ``ack`` of a tick (what `dumps` would write, without its cost on every tick of every process)."""
+    """The ``ack`` of a tick: the bytes `dumps` would write, formatted directly (made on every tick of every
+    process)."""
     more = "" if got is None else f',"got":{float(got)!r}'
     return f'{{"proc":{json.dumps(proc)},"tick":{int(tick)},"sent":{float(sent)!r}{more}}}'.encode()
 

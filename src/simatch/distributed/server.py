@@ -67,8 +67,6 @@ class Server:
         credentials_dir: str | Path | None = None,
         say: Callable[[str], None] = _stderr,
     ):
-        from ..simulation import Simulation
-
         spec = scene.spec
         self.scene = scene
         self.run_name = run
@@ -83,12 +81,30 @@ class Server:
         #: answer is normal (it applies at the next tick) and only a silent process should stop being waited for
         self.late_after = 4 if realtime else 1
         teams = {t: spec.teams[t].robot_ids() for t in spec.teams}
-        offered = len(protocol.dumps(protocol.scene_offer(scene, seed, run, self.mode)))
+        self._check_offer_fits(seed)
+        self.bus = self._open_bus(listen, teams, credentials_dir)
+        self.registry = Registry(spec)
+        self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}  # rate limit of refusal/malformed events
+        self.ended = False
+        try:
+            self._start_simulation(seed, deadline, list(teams))
+        except BaseException:
+            self.bus.close()
+            raise
+
+    def _check_offer_fits(self, seed: int) -> None:
+        """The scene offer (the scene with its overrides) must fit in one sample to reach the team processes."""
+        offered = len(protocol.dumps(protocol.scene_offer(self.scene, seed, self.run_name, self.mode)))
         if LOW_LATENCY and offered > MAX_SAMPLE:
             raise ValueError(
                 f"the scene is too large to offer to the team processes ({offered} bytes with its "
                 f"overrides; at most {MAX_SAMPLE})"
             )
+
+    def _open_bus(self, listen: Sequence[str], teams: dict, credentials_dir: str | Path | None) -> ZenohBus:
+        """The run's Zenoh router, with every team's credentials and the access control that keeps each team to
+        its own topics, and the bus on it that checks every sample."""
+        run = self.run_name
         self.credentials_dir = Path(credentials_dir) if credentials_dir else credentials.default_dir(run)
         self.creds = credentials.ensure(self.credentials_dir, [*teams, credentials.ADMIN])
         self.fair = FairPlay(run, self.creds, teams)
@@ -102,7 +118,7 @@ class Server:
             access_control=self.fair.access_control(),
         )
         session = open_session(conf, what=f"listening on {', '.join(listen)}")
-        self.bus = ZenohBus(
+        return ZenohBus(
             session,
             run,
             verifier=self.fair.check,
@@ -111,46 +127,46 @@ class Server:
             on_malformed=self._malformed,
             wake_on_data=False,
             drop_when_congested=True,
-            prepare_on_arrival=not realtime,
+            prepare_on_arrival=not self.realtime,
             max_sample=MAX_SAMPLE if LOW_LATENCY else None,
         )
-        self.registry = Registry(spec)
-        self._reports: dict[tuple[str, str, str], tuple[float, int]] = {}  # rate limit of refusal/malformed events
-        self.ended = False
-        try:
-            self.sim = Simulation(scene, seed=seed, bus=self.bus, run_name=run, teams="external")
-            self.pub_events = self.bus.publisher(topics.EVENTS, msgs.GameEvent)
-            self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
-            self._topic_order: dict[str, tuple] = {}  # a robot's topic -> its place (see `_order`)
-            clock = self.sim.clock
-            self.gate = clock.add(
-                LockstepGate(
-                    spec.control.period,
-                    deadline,
-                    realtime,
-                    self.registry.active,
-                    self._on_ack,
-                    self._on_missed,
-                    self._order,
-                    teams=list(teams),
-                    phases=protocol.phases(spec, self.mode),
-                )
+
+    def _start_simulation(self, seed: int, deadline: float, teams: list[str]) -> None:
+        """The embedded simulation on the bus, with the gate, the world service and (in real time) the pacer on
+        its clock; then the server answers the teams: scene offers, joins, bundles, goodbyes, liveliness."""
+        from ..simulation import Simulation
+
+        spec = self.scene.spec
+        self.sim = Simulation(self.scene, seed=seed, bus=self.bus, run_name=self.run_name, teams="external")
+        self.pub_events = self.bus.publisher(topics.EVENTS, msgs.GameEvent)
+        self._robot_order = {name: i for i, name in enumerate(spec.robot_names())}
+        self._topic_order: dict[str, tuple] = {}  # a robot's topic -> its place (see `_order`)
+        clock = self.sim.clock
+        self.gate = clock.add(
+            LockstepGate(
+                spec.control.period,
+                deadline,
+                self.realtime,
+                self.registry.active,
+                self._on_ack,
+                self._on_missed,
+                self._order,
+                teams=teams,
+                phases=protocol.phases(spec, self.mode),
             )
-            self.world_service = clock.add(WorldService(self.sim, self.emit))
-            self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if realtime else None
-            self.strategy_pubs: dict[str, StrategyPub] = {}
-            # one sample per process and tick each way (see protocol): each team's bundles here, its feeds
-            # declared and sent by the gate
-            for team in teams:
-                self.bus.accept_bundles(protocol.bundle_topic(team))
-            self.bus.serve(protocol.SCENE, self._on_scene)
-            self.bus.serve(protocol.JOIN, self._on_join)
-            self._byes = self.bus.subscribe_raw(protocol.BYES, self._on_bye)
-            self.bus.watch_liveliness(protocol.ALIVE, self._on_alive)
-            self.bus.declare_token(protocol.SERVER_ALIVE)
-        except BaseException:
-            self.bus.close()
-            raise
+        )
+        self.world_service = clock.add(WorldService(self.sim, self.emit))
+        self.pacer = clock.add(Pacer(spec.physics.timestep, slack=0.5)) if self.realtime else None
+        self.strategy_pubs: dict[str, StrategyPub] = {}
+        # one sample per process and tick each way (see protocol): each team's bundles here, its feeds
+        # declared and sent by the gate
+        for team in teams:
+            self.bus.accept_bundles(protocol.bundle_topic(team))
+        self.bus.serve(protocol.SCENE, self._on_scene)
+        self.bus.serve(protocol.JOIN, self._on_join)
+        self._byes = self.bus.subscribe_raw(protocol.BYES, self._on_bye)
+        self.bus.watch_liveliness(protocol.ALIVE, self._on_alive)
+        self.bus.declare_token(protocol.SERVER_ALIVE)
 
     # --- events -------------------------------------------------------------------------------------------
     def emit(self, kind: str, team: str = "", robot: int = 0, value: float = 0.0, detail: str = "") -> None:

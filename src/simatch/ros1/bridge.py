@@ -7,8 +7,8 @@ simulates nothing: perception, game commands and the world come from the simulat
 what ROS sends goes to the simulator as any team's commands (checked and counted there).
 
 At every control tick, for every robot it serves, it publishes on ROS (in this order) ``/clock`` (so
-simulated time on ROS advances a control period at a time: every node subscribes to it, and at the
-physics rate its 200 messages a second to each node cost more than all the rest), each
+simulated time on ROS advances a control period at a time: every node subscribes to it, and a clock at
+the physics rate would be most of what the bridge sends), each
 team's ``receive_from_coach`` (CoachInfo, every tick, stamped with the tick's simulated time), the relayed
 ``nubotcontrol/strategy`` (simulation_strategy), ``redcard/chatter`` when a robot is sent off or back,
 then per robot ``ballisholding/BallIsHolding`` and ``omnivision/OmniVisionInfo`` (stamped likewise).

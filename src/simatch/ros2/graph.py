@@ -356,7 +356,7 @@ class RosGraph:
 
     def heard(self, pub) -> bool:
         """Somebody subscribes to ``pub`` (looked up at most twice a second of wall time per publisher): what
-        nobody listens to is not built (an rclpy message costs tens of microseconds to make and send)."""
+        nobody listens to is not built (making and sending rclpy messages is most of the bridge's work)."""
         if pub is None:
             return False
         now = time.monotonic()

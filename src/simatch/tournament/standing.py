@@ -14,25 +14,7 @@ WIN, DRAW = 3, 1
 def standing(labels: list[str], rows: list[dict]) -> dict:
     """Everything the table and the tournament report show, from the rows of the played matches."""
     index = {label: i for i, label in enumerate(labels)}
-    n = len(labels)
-    table = {
-        label: dict(
-            team=label,
-            played=0,
-            won=0,
-            drawn=0,
-            lost=0,
-            goals_for=0,
-            goals_against=0,
-            points=0,
-            failed=0,
-            shots=0,
-            on_target=0,
-            possession_sum=0.0,
-            possession_n=0,
-        )
-        for label in labels
-    }
+    table = {label: _table_row(label) for label in labels}
     h2h: dict[str, dict[str, dict]] = {a: {} for a in labels}
     scores: dict[str, Counter] = {}
     games = []
@@ -48,36 +30,75 @@ def standing(labels: list[str], rows: list[dict]) -> dict:
             continue
         hg, ag = int(r["home_goals"]), int(r["away_goals"])
         for me, them, gf, ga, side in ((home, away, hg, ag, "home"), (away, home, ag, hg, "away")):
-            t = table[me]
-            t["played"] += 1
-            t["goals_for"] += gf
-            t["goals_against"] += ga
-            t["shots"] += int(r.get(f"{side}_shots") or 0)
-            t["on_target"] += int(r.get(f"{side}_on_target") or 0)
-            if r.get(f"{side}_possession") is not None:
-                t["possession_sum"] += float(r[f"{side}_possession"])
-                t["possession_n"] += 1
-            if gf > ga:
-                t["won"] += 1
-                t["points"] += WIN
-            elif gf == ga:
-                t["drawn"] += 1
-                t["points"] += DRAW
-            else:
-                t["lost"] += 1
+            _count_match(table[me], r, side, gf, ga)
             h = h2h[me].setdefault(them, dict(played=0, won=0, drawn=0, lost=0, goals_for=0, goals_against=0, points=0))
-            h["played"] += 1
-            h["goals_for"] += gf
-            h["goals_against"] += ga
-            h["won"] += gf > ga
-            h["drawn"] += gf == ga
-            h["lost"] += gf < ga
-            h["points"] += WIN if gf > ga else DRAW if gf == ga else 0
+            _count_head_to_head(h, gf, ga)
         a, b = sorted((home, away), key=index.get)
         ga_, gb_ = (hg, ag) if a == home else (ag, hg)
         scores.setdefault(f"{a} vs {b}", Counter())[f"{ga_}-{gb_}"] += 1
         games.append((index[home], index[away], 1.0 if hg > ag else 0.5 if hg == ag else 0.0, int(r["seed"])))
-    rated = elo.ratings(n, games)
+    rated = elo.ratings(len(labels), games)
+    return {
+        "standing": _ranked(table, index, rated),
+        "head_to_head": h2h,
+        "scores": {k: dict(sorted(v.items(), key=lambda kv: (-kv[1], kv[0]))) for k, v in scores.items()},
+        "failed": failed,
+        "elo_seeds": rated["seeds"],
+    }
+
+
+def _table_row(label: str) -> dict:
+    """A team's line of the table before any match (possession summed until `_ranked` averages it)."""
+    return dict(
+        team=label,
+        played=0,
+        won=0,
+        drawn=0,
+        lost=0,
+        goals_for=0,
+        goals_against=0,
+        points=0,
+        failed=0,
+        shots=0,
+        on_target=0,
+        possession_sum=0.0,
+        possession_n=0,
+    )
+
+
+def _count_match(t: dict, r: dict, side: str, gf: int, ga: int) -> None:
+    """Count a played match in the table line ``t`` of the team that played it as ``side`` ("home", "away")."""
+    t["played"] += 1
+    t["goals_for"] += gf
+    t["goals_against"] += ga
+    t["shots"] += int(r.get(f"{side}_shots") or 0)
+    t["on_target"] += int(r.get(f"{side}_on_target") or 0)
+    if r.get(f"{side}_possession") is not None:
+        t["possession_sum"] += float(r[f"{side}_possession"])
+        t["possession_n"] += 1
+    if gf > ga:
+        t["won"] += 1
+        t["points"] += WIN
+    elif gf == ga:
+        t["drawn"] += 1
+        t["points"] += DRAW
+    else:
+        t["lost"] += 1
+
+
+def _count_head_to_head(h: dict, gf: int, ga: int) -> None:
+    h["played"] += 1
+    h["goals_for"] += gf
+    h["goals_against"] += ga
+    h["won"] += gf > ga
+    h["drawn"] += gf == ga
+    h["lost"] += gf < ga
+    h["points"] += WIN if gf > ga else DRAW if gf == ga else 0
+
+
+def _ranked(table: dict[str, dict], index: dict[str, int], rated: dict) -> list[dict]:
+    """The table's lines completed (goal difference, mean possession, Elo) and ranked: points, goal
+    difference, goals, Elo, then the teams' order."""
     out = []
     for label, t in table.items():
         i = index[label]
@@ -91,13 +112,7 @@ def standing(labels: list[str], rows: list[dict]) -> dict:
     out.sort(key=lambda t: (-t["points"], -t["goal_difference"], -t["goals_for"], -t["elo"], index[t["team"]]))
     for rank, t in enumerate(out, 1):
         t["rank"] = rank
-    return {
-        "standing": out,
-        "head_to_head": h2h,
-        "scores": {k: dict(sorted(v.items(), key=lambda kv: (-kv[1], kv[0]))) for k, v in scores.items()},
-        "failed": failed,
-        "elo_seeds": rated["seeds"],
-    }
+    return out
 
 
 def progression(labels: list[str], rows: list[dict], stage_order: list[str]) -> dict[str, list[int]]:

@@ -128,6 +128,8 @@ class Picture:
         return self.signs[team] if side is None else (-1 if side == "-x" else 1)
 
     def team(self, team: str, t: float) -> dict:
+        """What ``team`` knows at ``t``: each robot as it perceives itself and what it intends, the obstacles
+        each one sees, the ball as seen by the robot nearest to it, the pass lines, the team's command."""
         robots, obstacles, passes = [], {}, []
         best_ball, best_dist = None, math.inf
         game = self.obs.game_at(t)
@@ -137,76 +139,20 @@ class Picture:
             intent = self.obs.intent_at(team, rid, t)
             sign = self.frame_sign(team, float(vision.stamp) if vision is not None else t)
             entry: dict = {"id": rid, "name": f"{team}/{rid}", "sent_off": f"{team}/{rid}" in off, "seen": False}
-            me = None
-            if vision is not None:
-                for r in vision.robots:
-                    if r.id == rid:
-                        me = r
-                        break
+            me = _myself(vision, rid)
             if me is not None:
-                x, y = frames.point(sign, me.x, me.y)
-                vx, vy = frames.point(sign, me.vx, me.vy)
-                entry.update(
-                    seen=True,
-                    x=_r(x),
-                    y=_r(y),
-                    yaw=_r(frames.yaw(sign, me.yaw)),
-                    vx=_r(vx, 2),
-                    vy=_r(vy, 2),
-                    w=_r(me.w, 2),
-                    speed=_r(math.hypot(me.vx, me.vy), 2),
-                    wheels=[_r(u, 2) for u in me.wheel_speeds],
-                    valid=bool(me.valid),
-                    stuck=bool(me.stuck),
-                    holding=bool(me.holding_ball),
-                )
-                if entry["name"] in self.aerial:
-                    entry.update(z=_r(me.z), vz=_r(me.vz, 2))
+                entry.update(self._as_seen(me, sign, entry["name"]))
                 obstacles[rid] = self._obstacles(vision, sign, team)
                 b = vision.ball
                 if b.pos_known and b.distance < best_dist:
                     best_dist = b.distance
-                    bx, by = frames.point(sign, b.x, b.y)
-                    bvx, bvy = frames.point(sign, b.vx, b.vy)
-                    best_ball = {
-                        "x": _r(bx),
-                        "y": _r(by),
-                        "z": _r(b.z),
-                        "vx": _r(bvx, 2),
-                        "vy": _r(bvy, 2),
-                        "seen_by": rid,
-                    }
+                    best_ball = _ball_seen(b, sign, rid)
             if intent is not None:
-                entry.update(
-                    role=role_words(intent.role), action=action_words(intent.action), dribble=bool(intent.is_dribble)
-                )
-                tx, ty = float(intent.target_x), float(intent.target_y)
-                if math.isfinite(tx) and math.isfinite(ty):
-                    wx, wy = frames.point(sign, tx, ty)
-                    entry["target"] = [_r(wx), _r(wy)]
+                entry.update(_intention(intent, sign))
                 p = intent.pass_cmd
                 if p.is_valid and me is not None:
-                    cx, cy = frames.point(sign, p.catch_x, p.catch_y)
-                    passes.append(
-                        {
-                            "passer": rid,
-                            "catcher": int(p.catch_id),
-                            "from": [entry["x"], entry["y"]],
-                            "to": [_r(cx), _r(cy)],
-                            "kicked": bool(p.is_passout),
-                        }
-                    )
+                    passes.append(_pass_line(p, sign, rid, entry))
             robots.append(entry)
-        info = self.obs.coach.get(team)
-        command = None
-        if info is not None:
-            command = {
-                "mode": command_name(info.match_mode),
-                "type": command_name(info.match_type),
-                "test_mode": int(info.test_mode),
-                "max_vel": _r(info.max_vel, 2),
-                "max_w": _r(info.max_w, 2),
-            }
         return {
             "type": "frame",
             "t": _r(t),
@@ -215,8 +161,43 @@ class Picture:
             "ball": best_ball,
             "obstacles": obstacles,
             "passes": passes,
-            "command": command,
+            "command": self._team_command(team),
             "game": game,
+        }
+
+    def _as_seen(self, me, sign: int, name: str) -> dict:
+        """A robot as it perceives itself, in the world frame."""
+        x, y = frames.point(sign, me.x, me.y)
+        vx, vy = frames.point(sign, me.vx, me.vy)
+        seen = dict(
+            seen=True,
+            x=_r(x),
+            y=_r(y),
+            yaw=_r(frames.yaw(sign, me.yaw)),
+            vx=_r(vx, 2),
+            vy=_r(vy, 2),
+            w=_r(me.w, 2),
+            speed=_r(math.hypot(me.vx, me.vy), 2),
+            wheels=[_r(u, 2) for u in me.wheel_speeds],
+            valid=bool(me.valid),
+            stuck=bool(me.stuck),
+            holding=bool(me.holding_ball),
+        )
+        if name in self.aerial:
+            seen.update(z=_r(me.z), vz=_r(me.vz, 2))
+        return seen
+
+    def _team_command(self, team: str) -> dict | None:
+        """The command ``team`` is playing (its latest CoachInfo), None before the first."""
+        info = self.obs.coach.get(team)
+        if info is None:
+            return None
+        return {
+            "mode": command_name(info.match_mode),
+            "type": command_name(info.match_type),
+            "test_mode": int(info.test_mode),
+            "max_vel": _r(info.max_vel, 2),
+            "max_w": _r(info.max_w, 2),
         }
 
     @staticmethod
@@ -234,3 +215,42 @@ class Picture:
                 seen.append(_r(float(o.z[k]), 2))  # a drone: its height
             out.append(seen)
         return out
+
+
+def _myself(vision, rid: int):
+    """Robot ``rid``'s perception of itself in its vision message (None: no message, or not in it)."""
+    if vision is None:
+        return None
+    for r in vision.robots:
+        if r.id == rid:
+            return r
+    return None
+
+
+def _ball_seen(b, sign: int, rid: int) -> dict:
+    """The ball as robot ``rid`` sees it, in the world frame."""
+    bx, by = frames.point(sign, b.x, b.y)
+    bvx, bvy = frames.point(sign, b.vx, b.vy)
+    return {"x": _r(bx), "y": _r(by), "z": _r(b.z), "vx": _r(bvx, 2), "vy": _r(bvy, 2), "seen_by": rid}
+
+
+def _intention(intent, sign: int) -> dict:
+    """What a robot intends: its role, action, whether it dribbles, and its target (world frame) if it has one."""
+    out = dict(role=role_words(intent.role), action=action_words(intent.action), dribble=bool(intent.is_dribble))
+    tx, ty = float(intent.target_x), float(intent.target_y)
+    if math.isfinite(tx) and math.isfinite(ty):
+        wx, wy = frames.point(sign, tx, ty)
+        out["target"] = [_r(wx), _r(wy)]
+    return out
+
+
+def _pass_line(p, sign: int, rid: int, passer: dict) -> dict:
+    """A pass robot ``rid`` plays or prepares: from where it stands to the catch point."""
+    cx, cy = frames.point(sign, p.catch_x, p.catch_y)
+    return {
+        "passer": rid,
+        "catcher": int(p.catch_id),
+        "from": [passer["x"], passer["y"]],
+        "to": [_r(cx), _r(cy)],
+        "kicked": bool(p.is_passout),
+    }

@@ -83,8 +83,8 @@ class Encirclement(PlayJudge):
                     f"{scene.source}: judge.scatter: {list(params.scatter)} is not inside the arena "
                     f"(|x| <= {reach_x:g}, |y| <= {reach_y:g})"
                 )
-        # the judge looks at the world as often as the robots decide (reading the model states at every
-        # physics step would cost as much as a third of the physics)
+        # the judge looks at the world as often as the robots decide: captures change no faster than their
+        # decisions, and reading every model's state at every physics step would rival the physics itself
         self.period = spec.control.period
         tspec = spec.teams[params.targets]
         self.target_names = [f"{params.targets}/{rid}" for rid in tspec.robot_ids()]

@@ -3,8 +3,8 @@
 The referee is fed only by topics (``model_states`` every physics step, ``ball_contacts`` when something
 touches the ball), so it judges a live run and a replayed recording alike. `Observation` keeps the latest
 ModelStates message (a reference, no copy, every physics step) and, once per control period, `refresh`
-turns it into plain Python lists: with ten robots, a loop over floats costs less than the many small NumPy
-calls the rules would otherwise make. It also knows what never changes during a match: who is in which
+turns it into plain Python lists: the rules' arithmetic over ten robots is on plain floats, not on many
+small NumPy arrays. It also knows what never changes during a match: who is in which
 team, which robot keeps goal. Which way each team attacks is known too, and changes when the teams change
 ends (`set_sign`): every rule reads it here, at the time it judges.
 """
@@ -85,7 +85,7 @@ class Observation:
         n = self.n
         X, Y, VX, VY = self.X, self.Y, self.VX, self.VY
         if self._in_order:  # the same lists, filled in place (a rule may hold them)
-            # only the numbers read (48 of 143): a Python float costs more to make than a strided view
+            # only the numbers the rules read become Python floats, taken through strided views
             X[:] = pose[0 : 7 * n : 7].tolist()
             Y[:] = pose[1 : 7 * n : 7].tolist()
             VX[:] = twist[0 : 6 * n : 6].tolist()

@@ -6,11 +6,15 @@ touches the ball) and ``referee_command`` (an operator). Outputs: each team's ga
 ``<team>/receive_from_coach``, mirrored per team, re-sent every control period), ``game_state`` and the
 event log on ``events``. It acts on the world only to place the ball and to park or bring back robots.
 
-Cost: what must be exact in time — the ball wholly over a line, every touch of the ball — is judged at the
-physics rate with a few float comparisons; everything else (positions, areas, dribbling, contacts between
+When it judges: what must be exact in time — the ball wholly over a line, every touch of the ball — at every
+physics step, with a few float comparisons; everything else (positions, areas, dribbling, contacts between
 robots, timers) at the control period, on plain lists read from the latest model states.
 
-The operator's side (pause, commands, cards, ...) is in `takeover.py`, what it reports in `report.py`.
+This file is the state machine: each phase's handling (`state.py` draws the phases), the transitions
+between them, and the decisions: every rule's `Call` logged, then enforced. The rest of the referee, one
+concern per file: `stages.py` (halves, change of ends, end of the match), `shootout.py` (the penalty
+shoot-out), `takeover.py` (the operator's requests), `report.py` (what it reports), `match.py` (what the
+rules read), `rules/` (one rule per file).
 """
 
 from __future__ import annotations
@@ -30,49 +34,27 @@ from ...msgs.game_commands import SET_PIECES, MatchMode, for_team
 from ...msgs.game_commands import name as command_name
 from ..judges.base import Judge
 from . import report
-from .contacts import RobotContacts
 from .discipline import Discipline
 from .log import EventLog
-from .observation import Observation
+from .match import Match
 from .params import RefereeParams
-from .restarts import NAMES, Restart, Spots
+from .restarts import NAMES, Restart
 from .rules import CONTROL_RULES, BallOutRule, Call, GoalRule, PositionRule
-from .shootout import ShootOut
-from .state import LIVE, Game, Phase, schedule
+from .shootout import ShootOut, ShootOutKicks
+from .stages import StageChanges
+from .state import LIVE, Phase
 from .takeover import OperatorTakeover
-from .touches import Touches
 
-# the phases as plain attributes: on Python 3.11 every attribute lookup on an Enum class takes the slow
-# path of its metaclass (which defines __getattr__), and the referee looks phases up at every step
+# the phases as plain attributes, read at every step without the Enum metaclass's attribute lookup
 _Phase = SimpleNamespace(**Phase.__members__)
 _ENDED, _PAUSED = Phase.ENDED, Phase.PAUSED  # (read at every step: globals)
 _F32 = np.dtype(np.float32)  # the precision of ModelStates' numbers
 
 
-class Match:
-    """What the rules read: the observation, the game state, the ball touches, the spots and settings."""
+class MslReferee(OperatorTakeover, StageChanges, ShootOutKicks, Judge):
+    """The referee node: the state machine and its decisions here; the operator's requests, the stage
+    changes and the shoot-out's kicks mixed in from `takeover.py`, `stages.py` and `shootout.py`."""
 
-    def __init__(self, scene, params: RefereeParams):
-        spec = scene.spec
-        self.params = params
-        self.dt = spec.physics.timestep
-        self.control_steps = max(1, round(spec.control.period / self.dt))
-        self.control_dt = self.control_steps * self.dt
-        self.obs = Observation(scene, params.robot_radius)
-        self.game = Game(teams=list(spec.teams), stages=schedule(spec.match), dt=self.dt)
-        self.touches = Touches(
-            self.obs, params.dribble_release_distance, round(params.double_touch_gap / self.dt), params.regain_pass_roll
-        )
-        self.contacts = RobotContacts(self.obs, params.contact_margin)
-        self.gravity = spec.physics.gravity
-        self.spots = Spots(self.obs.field, params, spec.ball.radius)
-
-    def restart_name(self) -> str:
-        r = self.game.restart
-        return NAMES[r.kind] if r is not None else "restart"
-
-
-class MslReferee(OperatorTakeover, Judge):
     Params = RefereeParams
     name = "msl_referee"
     gives_commands = True
@@ -102,8 +84,8 @@ class MslReferee(OperatorTakeover, Judge):
         disabled = set(params.disabled_rules)
         self.rules = [cls(m) for cls in CONTROL_RULES if cls.name not in disabled]
         self.position_rules = [r for r in self.rules if isinstance(r, PositionRule)]
-        # the rules that judge in each phase (by its value: an Enum member's hash is a Python call), in their
-        # order, during a shoot-out or not (a shoot-out judges the set-piece distance and charging alone)
+        # the rules that judge in each phase, in their order, during a shoot-out or not (a shoot-out judges
+        # the set-piece distance and charging alone); keyed by the phase's value, a plain str to hash
         self._judging = {
             (phase._value_, shootout): [
                 r
@@ -125,7 +107,7 @@ class MslReferee(OperatorTakeover, Judge):
         # the same limits at the precision of the messages' float32 positions, which NumPy compares with a
         # Python float in float32: comparing the positions read as plain floats with these is the same test
         self._xlim32, self._ylim32 = msgs.f32s(self._xlim, self._ylim)
-        # (each limit and its negative, made once: a negation makes a new float, at every step)
+        # (each limit and its negative, made once for the test at every step)
         self._lims = (self._xlim, -self._xlim, self._ylim, -self._ylim)
         self._lims32 = (self._xlim32, -self._xlim32, self._ylim32, -self._ylim32)
         self._ball_row = -1
@@ -163,7 +145,8 @@ class MslReferee(OperatorTakeover, Judge):
         self.pub_operator = bus.publisher(topics.OPERATOR, msgs.OperatorCommand)
         self.log = EventLog(pub_events.put)
         self.subs = [
-            # the latest states kept by the observation (a reference): set from C, no Python frame at every step
+            # the latest states kept by the observation (a reference), set by the bus itself: no callback of
+            # ours runs at every step
             bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, partial(setattr, self.m.obs, "msg")),
             bus.subscribe(topics.BALL_CONTACTS, msgs.BallContacts, self._on_contacts),
             bus.subscribe(self.operator_topic, msgs.RefereeCommand, self._on_operator),
@@ -193,7 +176,7 @@ class MslReferee(OperatorTakeover, Judge):
         if phase is _ENDED:
             return
         if phase is not _PAUSED:
-            d = g.stages[g.stage_index].duration  # (`g.stage`, without the property's call: every step)
+            d = g.stages[g.stage_index].duration  # (`g.stage` read directly: this runs at every step)
             if d is not None and g.stage_steps * self.dt >= d - 1e-9:
                 self._end_stage(now)
                 if g.phase is _ENDED:
@@ -202,7 +185,7 @@ class MslReferee(OperatorTakeover, Judge):
             g.phase_steps += 1
             pose = msg.pose
             b = self._ball_row
-            if pose.dtype is _F32:  # read as plain floats (NumPy scalars cost more to make and compare, every step)
+            if pose.dtype is _F32:  # read as plain floats: the test at every step compares Python floats
                 item = pose.item
                 bx, by = item(b), item(b + 1)
                 xlim, nxlim, ylim, nylim = self._lims32
@@ -243,10 +226,11 @@ class MslReferee(OperatorTakeover, Judge):
 
     # --- every control period ------------------------------------------------------------------------------
     def _control(self, now: float) -> None:
+        """Every control period: the phase's own handling, then the rules that judge in it, each call enacted
+        (the first that changes the phase ends the round), then every team's command re-sent."""
         m = self.m
         g = m.game
-        obs = m.obs
-        obs.refresh()
+        m.obs.refresh()
         if g.phase is not _Phase.PAUSED:
             m.contacts.update()
         if g.phase is _Phase.STOPPED or g.phase is _Phase.PREPARE:
@@ -257,21 +241,8 @@ class MslReferee(OperatorTakeover, Judge):
         elif g.phase is _Phase.PREPARE:
             self._prepare(now)
         elif g.phase is _Phase.TAKING:
-            r = g.restart
-            moved = math.hypot(obs.bx - r.x, obs.by - r.y)
-            if moved >= self.p.in_play_distance:
-                self._log(
-                    now,
-                    "ball_in_play",
-                    team=r.team,
-                    x=obs.bx,
-                    y=obs.by,
-                    value=moved,
-                    limit=self.p.in_play_distance,
-                    detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play",
-                )
-                g.go(_Phase.PLAY)
-        shootout = g.stages[g.stage_index].kind == "shootout"  # (`g.stage`, without the property's call)
+            self._taking(now)
+        shootout = g.stages[g.stage_index].kind == "shootout"  # (`g.stage` read directly, as in `tick`)
         if shootout and (g.phase is _Phase.TAKING or g.phase is _Phase.PLAY):
             self._shootout_check(now)
             shootout = g.stages[g.stage_index].kind == "shootout"
@@ -286,6 +257,24 @@ class MslReferee(OperatorTakeover, Judge):
                 if g.phase is not phase:
                     break
         self._publish(now)
+
+    def _taking(self, now: float) -> None:
+        """A set piece is being taken: the ball is in play once it has moved ``in_play_distance``."""
+        g, obs = self.m.game, self.m.obs
+        r = g.restart
+        moved = math.hypot(obs.bx - r.x, obs.by - r.y)
+        if moved >= self.p.in_play_distance:
+            self._log(
+                now,
+                "ball_in_play",
+                team=r.team,
+                x=obs.bx,
+                y=obs.by,
+                value=moved,
+                limit=self.p.in_play_distance,
+                detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play",
+            )
+            g.go(_Phase.PLAY)
 
     def _stopped(self, now: float) -> None:
         g = self.m.game
@@ -393,150 +382,20 @@ class MslReferee(OperatorTakeover, Judge):
         if call is not None:
             self._enact(now, call)
 
-    def _end_stage(self, now: float) -> None:
-        m = self.m
-        g = m.game
-        ended = g.stage
-        self._log(now, "stage", value=g.clock, limit=ended.duration or 0.0, detail=f"{ended.name} is over")
-        nxt = g.next_stage()
-        if nxt.kind == "shootout" and g.score[self.teams[0]] != g.score[self.teams[1]]:
-            nxt = g.next_stage()
-        if nxt.kind == "ended":
-            self._end_match(now)
-            return
-        change = ended.kind == "half" and self.match_spec.change_ends
-        if change:
-            self._change_ends(now, "before the penalty shoot-out" if nxt.kind == "shootout" else "at half time")
-        self._log(now, "stage", value=nxt.duration or 0.0, detail=f"{nxt.name} begins")
-        if nxt.kind == "shootout":
-            self.shootout = ShootOut(m.obs, self.p, m.spots, self.match_spec.kickoff)
-            restart = self.shootout.next_restart()
-            reason = "penalty shoot-out"
-        else:
-            half = next((s.half for s in g.stages[g.stage_index :] if s.kind == "half"), 1)
-            first = self.match_spec.kickoff
-            g.kickoff_team = first if half % 2 == 1 else m.obs.other(first)
-            restart = m.spots.kickoff(g.kickoff_team)
-            reason = "half time" if nxt.kind == "break" else f"{nxt.name}"
-        self._stop(now, restart, reason)
-        if change:  # at once, whatever the step: the perception turns from the next observation on
-            self._publish(now, force=True)
-
-    def _change_ends(self, now: float, when: str) -> None:
-        """The teams change ends: every team's frame turns (the simulator's perception, the commands' points,
-        every side the rules judge), the robots are placed at their start poses for the new ends (sent-off
-        robots parked beside their new half) and the ball on the centre mark."""
-        m = self.m
-        obs = m.obs
-        for t in self.teams:
-            sign = -obs.sign[t]
-            obs.set_sign(t, sign)
-            self.world.set_team_sign(t, sign)
-        spec = self.scene.spec
-        for t in self.teams:
-            mirrored = obs.sign[t] != obs.scene_sign[t]
-            for rid, (x, y, yaw) in zip(spec.teams[t].robot_ids(), spec.teams[t].start):
-                i = obs.index[f"{t}/{rid}"]
-                if i in self.discipline.off_until:
-                    self.discipline.park(i)
-                    continue
-                if mirrored:
-                    x, y, yaw = -x, -y, math.remainder(yaw + math.pi, 2.0 * math.pi)
-                self.world.set_model_state(obs.names[i], x=x, y=y, yaw=yaw, vx=0.0, vy=0.0, wz=0.0)
-        self._place_ball(0.0, 0.0)
-        m.touches.on_restart()
-        for rule in self.rules:
-            rule.on_restart()
-        m.game.version += 1
-        sides = ", ".join(f"{t} attacks {obs.attacks(t)}" for t in self.teams)
-        self._log(
-            now,
-            "ends_changed",
-            detail=f"the teams change ends {when}: {sides}; every robot is placed at its start pose for these "
-            f"ends, the ball on the centre mark",
-        )
-
-    def _end_match(self, now: float) -> None:
-        g = self.m.game
-        winner = report.winner(self)
-        score = ", ".join(f"{t} {g.score[t]}" for t in self.teams)
-        extra = ""
-        if self.shootout is not None:
-            extra = " (shoot-out " + ", ".join(f"{t} {self.shootout.goals(t)}" for t in self.teams) + ")"
-        self._send(now, MatchMode.STOPROBOT, "", "the match is over")
-        g.stage_index = len(g.stages) - 1
-        g.go(_Phase.ENDED)
-        g.version += 1
-        self._log(
-            now,
-            "match_end",
-            team=winner or "",
-            detail=f"final score {score}{extra}: " + (f"{winner} wins" if winner else "a draw"),
-        )
-        self.done = True
-        self._publish(now, force=True)
-
     # --- decisions ----------------------------------------------------------------------------------------------
     def _enact(self, now: float, call: Call) -> None:
+        """A rule's call: logged, then enforced (in manual mode only logged, as a proposal to the operator)."""
         m = self.m
         g = m.game
-        obs = m.obs
-        rid = obs.rid[call.robot] if call.robot >= 0 else 0
         if not g.auto:
-            self._log(
-                now,
-                "proposal",
-                team=call.team,
-                robot=rid,
-                x=call.x,
-                y=call.y,
-                value=call.value,
-                limit=call.limit,
-                detail=f"{call.type} (not enforced: manual mode): {call.detail}",
-            )
+            self._log_call(now, call, "proposal", f"{call.type} (not enforced: manual mode): {call.detail}")
             return
+        self._log_call(now, call)
         if g.stage.kind == "shootout" and call.restart is not None and g.restart is not None:
-            # in a shoot-out a foul does not restart play: the kicking team's misses the kick, the
-            # defending team's has the kick taken again
-            self._log(
-                now,
-                call.type,
-                team=call.team,
-                robot=rid,
-                x=call.x,
-                y=call.y,
-                value=call.value,
-                limit=call.limit,
-                detail=call.detail,
-            )
-            if call.card and call.robot >= 0:
-                self.discipline.card(call.robot, call.card, now, call.detail)
-            if call.team == g.restart.team:
-                self._shootout_result(
-                    now, False, f"{call.type} by {obs.names[call.robot]}" if call.robot >= 0 else call.type
-                )
-            else:
-                self._stop(now, g.restart, f"{call.type}: the penalty is taken again")
+            self._shootout_foul(now, call)
             return
-        self._log(
-            now,
-            call.type,
-            team=call.team,
-            robot=rid,
-            x=call.x,
-            y=call.y,
-            value=call.value,
-            limit=call.limit,
-            detail=call.detail,
-        )
         if call.goal_for:
-            g.score[call.goal_for] += 1
-            g.version += 1
-            scorer = call.scorer if call.scorer >= 0 else call.robot
-            goal = {"t": round(now, 6), "team": call.goal_for, "robot": obs.names[scorer] if scorer >= 0 else ""}
-            if scorer >= 0 and obs.team_of[scorer] != call.goal_for:
-                goal["own_goal"] = True
-            self.goals.append(goal)
+            self._score(now, call)
         if call.card and call.robot >= 0:
             self.discipline.card(call.robot, call.card, now, call.detail)
         if call.in_play and g.phase is _Phase.TAKING:
@@ -546,40 +405,16 @@ class MslReferee(OperatorTakeover, Judge):
         if call.restart is not None:
             self._stop(now, call.restart, call.detail)
 
-    # --- the penalty shoot-out -------------------------------------------------------------------------------------
-    def _shootout_check(self, now: float) -> None:
-        m = self.m
-        touches, obs, r = m.touches, m.obs, m.game.restart
-        k = obs.teams.index(r.team)
-        taker = touches.taker
-        if touches.retouch is not None or any(i != taker for i in touches.touched_by(k)):
-            self._shootout_result(now, False, "the kicking team touched the ball again")
-        elif (self.ctx.step() - self._kick_step) * self.dt >= self.p.shootout_shot_time - 1e-9:
-            self._shootout_result(now, False, f"no goal {self.p.shootout_shot_time:.0f} s after START")
-
-    def _shootout_result(self, now: float, scored: bool, why: str) -> None:
-        m = self.m
-        so, r = self.shootout, m.game.restart
-        so.record(r.team, scored)
-        taker = m.touches.taker
-        rid = m.obs.rid[taker] if taker >= 0 else 0
-        tally = ", ".join(f"{t} {so.goals(t)}/{len(so.kicks[t])}" for t in self.teams)
-        self._log(
-            now,
-            "shootout_kick",
-            team=r.team,
-            robot=rid,
-            x=m.obs.bx,
-            y=m.obs.by,
-            value=1.0 if scored else 0.0,
-            limit=1.0,
-            detail=f"{r.team}'s penalty {'scored' if scored else 'missed'}: {why} (shoot-out: {tally})",
-        )
-        m.game.version += 1
-        if so.decided():
-            self._end_match(now)
-        else:
-            self._stop(now, so.next_restart(), "shoot-out: next kick")
+    def _score(self, now: float, call: Call) -> None:
+        """A goal that counts: the score, and the goal in the result (its scorer; whether it is an own goal)."""
+        g, obs = self.m.game, self.m.obs
+        g.score[call.goal_for] += 1
+        g.version += 1
+        scorer = call.scorer if call.scorer >= 0 else call.robot
+        goal = {"t": round(now, 6), "team": call.goal_for, "robot": obs.names[scorer] if scorer >= 0 else ""}
+        if scorer >= 0 and obs.team_of[scorer] != call.goal_for:
+            goal["own_goal"] = True
+        self.goals.append(goal)
 
     # --- commands to the teams ---------------------------------------------------------------------------------------
     def _send(self, now: float, cmd: MatchMode, team: str, reason: str) -> None:
@@ -635,6 +470,20 @@ class MslReferee(OperatorTakeover, Judge):
 
     def _log(self, now: float, type: str, **fields):
         return self.log.add(now, type, **fields)
+
+    def _log_call(self, now: float, call: Call, type: str = "", detail: str | None = None) -> None:
+        """Log a rule's call: as its own type and detail, or as ``type`` with ``detail``."""
+        self.log.add(
+            now,
+            type or call.type,
+            team=call.team,
+            robot=self.m.obs.rid[call.robot] if call.robot >= 0 else 0,
+            x=call.x,
+            y=call.y,
+            value=call.value,
+            limit=call.limit,
+            detail=call.detail if detail is None else detail,
+        )
 
     def _log_robot(
         self, type: str, i: int, value: float, limit: float, detail: str, at: tuple[float, float] | None = None

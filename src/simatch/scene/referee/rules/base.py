@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, ClassVar
 from ..state import LIVE, Phase
 
 if TYPE_CHECKING:
-    from ..referee import Match
+    from ..match import Match
     from ..restarts import Restart
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 from ..state import LIVE, Phase
 from .base import Call, Rule
 
-_TAKING, _PLAY = Phase.TAKING, Phase.PLAY  # LIVE's members as globals (an Enum class's attribute is slow)
+_TAKING, _PLAY = Phase.TAKING, Phase.PLAY  # LIVE's members as globals, compared by identity at every tick
 assert LIVE == {_TAKING, _PLAY}
 
 
@@ -33,7 +33,7 @@ class GoalkeeperContactRule(Rule):
         m = self.m
         obs, contacts = m.obs, m.contacts
         phase = m.game.phase
-        live = phase is _TAKING or phase is _PLAY  # (in LIVE, without the Enum's hash, a Python call: every tick)
+        live = phase is _TAKING or phase is _PLAY  # (in LIVE: by identity, with no Enum hash, at every tick)
         judged: set[int] = set()
         call = None
         for c in contacts.now:

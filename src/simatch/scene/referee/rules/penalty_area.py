@@ -15,7 +15,7 @@ from __future__ import annotations
 from ..state import Phase
 from .base import Call, Rule
 
-_PLAY = Phase.PLAY  # (a global: an Enum class's attribute takes its metaclass's slow path, at every tick)
+_PLAY = Phase.PLAY  # (a global, read at every tick without the Enum metaclass's attribute lookup)
 
 
 class PenaltyAreaRule(Rule):

@@ -11,7 +11,7 @@ from ..restarts import NAMES
 from ..state import Phase
 from .base import Call, Rule
 
-_BEFORE_PLAY = (Phase.PREPARE, Phase.TAKING)  # (made once: an Enum class's attribute is slow, every tick)
+_BEFORE_PLAY = (Phase.PREPARE, Phase.TAKING)  # (made once, read at every tick without the Enum's lookups)
 
 
 class PositionRule(Rule):
