@@ -26,14 +26,12 @@ from ..bus.zenoh_bus import (
     DEFAULT_ENDPOINT,
     LOW_LATENCY,
     MAX_SAMPLE,
-    TransportError,
     ZenohBus,
-    open_session,
-    zenoh_config,
 )
 from ..strategy import NO_NODES
 from ..strategy.team import build_team
 from . import credentials, protocol
+from .connect import ConnectError, open_server_session
 from .warmup import preload_compiled_kernels, rehearse
 
 log = logging.getLogger(__name__)
@@ -111,11 +109,10 @@ class TeamProcess:
         cred = self._credential()
         if cred.name not in (self.team, credentials.ADMIN):
             raise ClientError(f"{self.key} is the credential of {cred.name}, not of team {self.team}")
-        conf = zenoh_config("client", connect=[self.connect], user=cred.name, password=cred.secret)
         try:
-            session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
-        except TransportError as exc:
-            raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
+            session = open_server_session(cred, self.connect, self.key, self.wait, say=self.say)
+        except ConnectError as exc:
+            raise ClientError(str(exc)) from None
         self.bus = ZenohBus(
             session,
             self.run_name,

@@ -31,9 +31,10 @@ from pathlib import Path
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
-from ..bus.zenoh_bus import DEFAULT_ENDPOINT, TransportError, ZenohBus, open_session, zenoh_config
+from ..bus.zenoh_bus import DEFAULT_ENDPOINT, ZenohBus
 from ..distributed import credentials, protocol
 from ..distributed.client import ClientError, TeamProcess
+from ..distributed.connect import ConnectError, open_server_session
 from ..sim.simulator import MAX_COMMAND_SPEED, MAX_COMMAND_TURN
 from . import names
 from .convert import model_poses, robot_pose
@@ -277,11 +278,10 @@ class Bridge:
             time.sleep(0.2)
 
     def _observer_bus(self, cred) -> ZenohBus:
-        conf = zenoh_config("client", connect=[self.connect], user=cred.name, password=cred.secret)
         try:
-            session = open_session(conf, wait=self.wait, what=f"to the server at {self.connect}")
-        except TransportError as exc:
-            raise ClientError(f"{exc} (is the server running, and is {self.key} the right credential?)") from None
+            session = open_server_session(cred, self.connect, self.key, self.wait, say=self.say)
+        except ConnectError as exc:
+            raise ClientError(str(exc)) from None
         return ZenohBus(session, self.run_name, signer=cred.signer(self.run_name))
 
     def _graph(self, scene):
