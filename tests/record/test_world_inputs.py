@@ -371,3 +371,28 @@ def test_fingerprints_of_an_unknown_kind_are_refused(tmp_path, monkeypatch):
             sim.run(seconds=0.2)
     with pytest.raises(VerifyError, match="taken as 'blake3', which this simatch"):
         verify(path)
+
+
+def test_a_tap_reads_the_busy_mark_only_through_the_logs_own_slot():
+    """The taps read ``busy`` where the member descriptor handed to them reads it (``InputLog.busy``); anything
+    else is refused when the tap is made, never read at a guessed offset."""
+    from simatch.sim import inputs as world
+
+    log = world.InputLog()
+
+    def command(*args):
+        return args
+
+    def tap(busy, of=log):
+        return world.Tap("vel", command, command, of, busy, log.kind, log.robot, log.values, world.VEL)
+
+    class Other:
+        __slots__ = ("busy",)
+
+    for wrong, of in ((Other.busy, log), (world.InputLog.kind, object()), (property(lambda s: False), log)):
+        with pytest.raises(TypeError, match="InputLog.busy"):
+            tap(wrong, of)
+    logged = tap(world.InputLog.busy)
+    assert logged(0, 1.0, 2.0, 3.0) == (0, 1.0, 2.0, 3.0) and log.kind == [world.VEL]
+    log.busy = True  # inside a logged call: what it calls in turn is not logged again
+    assert logged(1, 1.0, 2.0, 3.0) == (1, 1.0, 2.0, 3.0) and log.kind == [world.VEL]
