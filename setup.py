@@ -1,10 +1,14 @@
-"""Only the optional C extensions of the messages; everything else is in pyproject.toml.
+"""The C extensions of simatch; everything else is in pyproject.toml.
 
-Both are optional: where they cannot be compiled (no C compiler), simatch uses its pure-Python encoders,
-which write the same bytes, and builds messages by their classes (the same messages). Each build carries the
-digest of the source it was made from (``SOURCE_DIGEST``): an optional extension that fails to compile only
-warns and leaves the last build in place, so tests/msgs/test_extensions.py checks that the extensions in use
-are those of the sources in the tree.
+* ``simatch.msgs._cdr_accel`` (required): the CDR codec (msgs/_cdr_accel.c) and, compiled with it because it
+  calls the encoder directly, the recorder's message log (record/_messagelog.c); they share msgs/_cdr_accel.h.
+* ``simatch.sim._inputs`` (required): the simulator's input taps (sim/_inputs.c).
+* ``simatch.msgs._positional`` (optional): positional construction of messages; where it cannot be compiled,
+  messages are built by their classes (the same messages).
+
+Each build carries the digest of the sources it was made from (``SOURCE_DIGEST``): an optional extension that
+fails to compile only warns and leaves the last build in place, so tests/msgs/test_extensions.py checks that the
+extensions in use are those of the sources in the tree.
 """
 
 import hashlib
@@ -12,19 +16,29 @@ from pathlib import Path
 
 from setuptools import Extension, setup
 
-
-def source_digest(path: str) -> str:
-    """The first 16 hex digits of the SHA-256 of a C source (the same in tests/msgs/test_extensions.py)."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+SRC = "src/simatch/"
 
 
-def extension(name: str, path: str) -> Extension:
-    return Extension(name, [path], optional=True, define_macros=[("SIMATCH_SOURCE_DIGEST", f'"{source_digest(path)}"')])
+def source_digest(paths: list[str]) -> str:
+    """The first 16 hex digits of the SHA-256 of C sources, in order (the same in tests/msgs/test_extensions.py)."""
+    digest = hashlib.sha256()
+    for path in paths:
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def extension(name: str, sources: list[str], headers: list[str] = (), *, optional: bool = False) -> Extension:
+    sources, headers = [SRC + s for s in sources], [SRC + h for h in headers]
+    digest = source_digest(sources + headers)
+    return Extension(
+        name, sources, depends=headers, optional=optional, define_macros=[("SIMATCH_SOURCE_DIGEST", f'"{digest}"')]
+    )
 
 
 setup(
     ext_modules=[
-        extension("simatch.msgs._cdr_accel", "src/simatch/msgs/_cdr_accel.c"),
-        extension("simatch.msgs._positional", "src/simatch/msgs/_positional.c"),
+        extension("simatch.msgs._cdr_accel", ["msgs/_cdr_accel.c", "record/_messagelog.c"], ["msgs/_cdr_accel.h"]),
+        extension("simatch.sim._inputs", ["sim/_inputs.c"]),
+        extension("simatch.msgs._positional", ["msgs/_positional.c"], optional=True),
     ]
 )

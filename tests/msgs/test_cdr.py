@@ -13,7 +13,7 @@ import pytest
 from rosbags.interfaces import Nodetype
 
 from simatch import msgs
-from simatch.msgs.cdr import ACCELERATED, C_DECODER, Codec
+from simatch.msgs.cdr import Codec
 from simatch.record import foxglove_msgs as fg
 
 _INTS = {
@@ -93,10 +93,18 @@ STORES = [(msgs.typestore, name) for name in msgs.names()] + [
 ]
 
 
-def test_the_c_encoder_is_built():
-    """setup.py builds it wherever the project is installed with a C compiler (every machine of ours)."""
-    assert ACCELERATED and C_DECODER
-    assert Codec(msgs.typestore).c_decoding and not Codec(msgs.typestore, accelerate=False).c_decoding
+def test_the_c_codec_refuses_a_numpy_layout_other_than_its_own():
+    """The numpy fields the C codec reads are declared in simatch.msgs.cdr; the extension checks the declaration
+    against its own structs and names the field that differs."""
+    from simatch.msgs import _cdr_accel, cdr
+
+    kinds = {k: np.dtype(cdr.DTYPE[b]) for b, k in cdr._KIND.items()}
+    moved = dict(cdr.NUMPY_ARRAY, descr=cdr.NUMPY_ARRAY["descr"] + 8)
+    with pytest.raises(ImportError, match="array field descr"):
+        _cdr_accel.setup(np.ndarray, kinds, moved, cdr.NUMPY_DTYPE, 1)
+    with pytest.raises(ImportError, match="does not name"):
+        _cdr_accel.setup(np.ndarray, kinds, cdr.NUMPY_ARRAY, {"kind": 24}, 1)
+    _cdr_accel.setup(np.ndarray, kinds, cdr.NUMPY_ARRAY, cdr.NUMPY_DTYPE, 1)  # (as at import)
 
 
 @pytest.mark.parametrize("store, name", STORES, ids=[n for _, n in STORES])

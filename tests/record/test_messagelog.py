@@ -1,15 +1,9 @@
-"""The recorder's message log: the C one (built by setup.py) and the pure-Python one of machines without a C
-compiler write the same records, byte for byte, and a machine without the C extension records and
-re-simulates a run."""
+"""The recorder's message log (``Log``, record/_messagelog.c): the records it writes, its clock, chunks, memo,
+pose template and lent memory."""
 
 from __future__ import annotations
 
-import json
 import mmap
-import os
-import subprocess
-import sys
-import textwrap
 
 import numpy as np
 import pytest
@@ -17,17 +11,8 @@ import pytest
 import simatch
 from simatch import msgs
 from simatch.bus.inproc import InProcessBus
-from simatch.msgs import cdr
-from simatch.record import Recorder, Recording, verify
-from simatch.record.messagelog import CLOCK_STEP, CLOCK_TICK, MESSAGE_HEADER, MessageLog, new_log
-
-from .conftest import NOISY, play_a_little
-
-KINDS = ["c", "python"]
-
-
-def _log(kind: str, fallback):
-    return new_log(fallback, accelerate=(kind == "c"))
+from simatch.record import Recorder, Recording
+from simatch.record.messagelog import CLOCK_STEP, CLOCK_TICK, MESSAGE_HEADER, new_log
 
 
 def _records(data: bytes) -> list[tuple[int, int, bytes]]:
@@ -41,14 +26,9 @@ def _records(data: bytes) -> list[tuple[int, int, bytes]]:
     return out
 
 
-def test_the_c_log_is_built():
-    assert cdr.Log is not None and not isinstance(new_log(print), MessageLog)
-
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback(kind):
+def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback():
     refused = []
-    log = _log(kind, lambda topic, msg: refused.append((topic, msg)))
+    log = new_log(lambda topic, msg: refused.append((topic, msg)))
     log.add("cyan/1/VelCmd", 3, "simatch_msgs/msg/VelCmd")
     log.add("model_states", 4, "simatch_msgs/msg/ModelStates")
     log.now = 7_000_000
@@ -80,9 +60,8 @@ def test_records_messages_counts_them_and_leaves_the_rest_to_the_fallback(kind):
     assert bytes(empty) == b"" and len(empty) == 0 and rest == [{}, -1, -1]
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_clock_messages_set_the_time_and_end_chunks(kind):
-    log = _log(kind, lambda topic, msg: None)
+def test_clock_messages_set_the_time_and_end_chunks():
+    log = new_log(lambda topic, msg: None)
     chunks = []
     log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
     log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
@@ -111,9 +90,8 @@ def test_clock_messages_set_the_time_and_end_chunks(kind):
     assert (first, last) == (1_000_000_000, 1_145_000_000) and counts == {1: 6, 2: 30, 3: 30}
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_encoded_messages_and_raw_records(kind):
-    log = _log(kind, lambda topic, msg: None)
+def test_encoded_messages_and_raw_records():
+    log = new_log(lambda topic, msg: None)
     log.now = 42
     log.append(b"raw")
     log.record(9, b"\x00\x01\x00\x00abc")
@@ -125,30 +103,13 @@ def test_encoded_messages_and_raw_records(kind):
     assert counts == {9: 1} and first == last == 42
 
 
-def test_c_and_python_recordings_hold_the_same_bytes(tmp_path):
-    """A whole run with operator commands, noisy perception, coaches and the 3D scene, recorded twice."""
-
-    def record(path, accelerate):
-        with simatch.Simulation("msl_5v5", seed=4, overrides=NOISY) as sim:
-            with Recorder.for_run(sim, path, command_line=["pytest"], accelerate=accelerate):
-                play_a_little(sim)
-            return sim.state_digest()
-
-    assert record(tmp_path / "c.mcap", True) == record(tmp_path / "py.mcap", False)
-    c, py = Recording(tmp_path / "c.mcap"), Recording(tmp_path / "py.mcap")
-    assert list(c.raw()) == list(py.raw())
-    assert c.end["messages"] == py.end["messages"] and json.loads(c.end["encode_errors"]) == {}
-    assert [(x.start, x.end) for x in c.chunks] == [(x.start, x.end) for x in py.chunks]
-
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_the_log_writes_ros_2s_clock_after_each_clock_message(kind):
+def test_the_log_writes_ros_2s_clock_after_each_clock_message():
     """``ros_clock``: ROS 2's /clock at the time of each clock message's step, right after it, for a channel
     added before or after; a time beyond int32 seconds is not written (nothing a run does can stop on it)."""
     from simatch.record.layout import ros_clock
 
     refused = []
-    log = _log(kind, lambda topic, msg: refused.append(msg.step))
+    log = new_log(lambda topic, msg: refused.append(msg.step))
     log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
     log.ros_clock("clock", 7)
     log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
@@ -204,11 +165,10 @@ def _memo_traffic() -> list[tuple[str, object]]:
     return out
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_what_the_memo_gives_again_is_what_encoding_gives(kind):
+def test_what_the_memo_gives_again_is_what_encoding_gives():
     """Every record of what the memo serves (lists and messages met again) holds the bytes of encoding the
     message on its own, in the C log (whose memo is its own tables) and in the Python one."""
-    log = _log(kind, lambda topic, msg: pytest.fail(f"{topic} went to the fallback"))
+    log = new_log(lambda topic, msg: pytest.fail(f"{topic} went to the fallback"))
     traffic = _memo_traffic()
     channels: dict[str, int] = {}
     for topic, msg in traffic:
@@ -221,8 +181,7 @@ def test_what_the_memo_gives_again_is_what_encoding_gives(kind):
     assert [(cid, data) for cid, _, data in records] == [(channels[t], msgs.encode(m)) for t, m in traffic]
 
 
-@pytest.mark.parametrize("accelerate", [True, False])
-def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, accelerate):
+def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path):
     """Lists for arrays, numpy scalars, an equal dtype object of its own: what the C encoder does not take as
     it is goes through the Python encoder, and every record holds rosbags' bytes."""
     import copy
@@ -271,7 +230,7 @@ def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, ac
         ),
     ]
     assert pairs[1][0].pose.dtype is own
-    with Recorder(bus, path, scene=scene, seed=0, dt=0.005, accelerate=accelerate):
+    with Recorder(bus, path, scene=scene, seed=0, dt=0.005):
         states, info = (
             bus.publisher("model_states", msgs.ModelStates),
             bus.publisher("cyan/1/StrategyInfo", msgs.StrategyInfo),
@@ -282,46 +241,10 @@ def test_odd_but_valid_messages_are_recorded_as_rosbags_writes_them(tmp_path, ac
     assert got == [bytes(msgs.typestore.serialize_cdr(m, m.__msgtype__)) for _, m in pairs]
 
 
-PURE_PYTHON = textwrap.dedent("""
-    import sys
-    from simatch.msgs import cdr
-    assert not cdr.ACCELERATED and cdr.Log is None          # as on a machine without a C compiler
-    from simatch.record import Recorder, verify
-    from simatch.record.messagelog import MessageLog
-    import simatch
-    with simatch.Simulation("msl_5v5", seed=5, overrides={"judge.kind": "none"}) as sim:
-        with Recorder.for_run(sim, sys.argv[1]) as rec:
-            assert isinstance(rec._log, MessageLog)
-            for coach in sim.coaches.values():
-                coach.start_play()
-            sim.run(seconds=1.2)
-    assert verify(sys.argv[1]).identical
-    print(sim.state_digest())
-""")
-
-
-def test_a_machine_without_the_c_extension_records_the_same_run(tmp_path):
-    path = tmp_path / "pure.mcap"
-    env = dict(os.environ, **{cdr.PURE_PYTHON_ENV: "1"})
-    proc = subprocess.run(
-        [sys.executable, "-c", PURE_PYTHON, str(path)], capture_output=True, text=True, timeout=300, env=env
-    )
-    assert proc.returncode == 0, proc.stderr
-    with simatch.Simulation("msl_5v5", seed=5, overrides={"judge.kind": "none"}) as sim:
-        with Recorder.for_run(sim, tmp_path / "c.mcap"):
-            for coach in sim.coaches.values():
-                coach.start_play()
-            sim.run(seconds=1.2)
-        assert proc.stdout.strip() == sim.state_digest()
-    assert list(Recording(path).raw()) == list(Recording(tmp_path / "c.mcap").raw())
-    assert verify(path).identical
-
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_a_clock_message_with_an_absurd_step_does_not_move_the_time(kind):
+def test_a_clock_message_with_an_absurd_step_does_not_move_the_time():
     """A remote process may publish anything on a clock topic: a step that is no step, or whose time does not
     fit the log's 64 bits, leaves the time where it is; the message is still recorded."""
-    log = _log(kind, lambda topic, msg: None)
+    log = new_log(lambda topic, msg: None)
     log.add("clock", 1, "simatch_msgs/msg/Clock", CLOCK_STEP | CLOCK_TICK)
     log.timing(5_000_000, 500_000_000, lambda: None)
     log("clock", msgs.new(msgs.Clock, step=40))
@@ -331,8 +254,7 @@ def test_a_clock_message_with_an_absurd_step_does_not_move_the_time(kind):
     assert [t for _, t, _ in _records(log.take()[0])] == [200_000_000] * 3
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(kind):
+def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does():
     """Every 10th physics step of the model states, the log writes the 3D scene's game update itself; what
     its template does not take (no template yet, other models, poses that are no float buffer, too few rows)
     goes to the fallback, which sets a new template or says what is wrong. The log's bytes are the scene
@@ -341,7 +263,7 @@ def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(ki
     from simatch.record.scene3d import GRID, TURN_GRID, SceneBuilder
 
     builder = SceneBuilder(load_scene("msl_5v5").spec)
-    log = _log(kind, lambda topic, msg: None)
+    log = new_log(lambda topic, msg: None)
     log.add("model_states", 2, "simatch_msgs/msg/ModelStates", CLOCK_STEP)
     log.timing(5_000_000, 500_000_000, lambda: None)
     handed, refused = [], []
@@ -393,23 +315,21 @@ def test_the_pose_template_writes_each_scene_update_as_the_scene_builder_does(ki
 
 
 def test_the_pose_template_refuses_slots_outside_it():
-    for kind in KINDS:
-        log = _log(kind, lambda topic, msg: None)
+    log = new_log(lambda topic, msg: None)
+    with pytest.raises(ValueError):
+        log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 1024.0, 4096.0)  # poses() first
+    log.poses("model_states", 7, 10, lambda msg: None)
+    for slots in ([(10, 0, 0.0, False)], [(2, 0, 0.0, False)], [(4, -1, 0.0, False)]):
         with pytest.raises(ValueError):
-            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 1024.0, 4096.0)  # poses() first
-        log.poses("model_states", 7, 10, lambda msg: None)
-        for slots in ([(10, 0, 0.0, False)], [(2, 0, 0.0, False)], [(4, -1, 0.0, False)]):
-            with pytest.raises(ValueError):
-                log.pose_template(["ball"], b"\x00" * 64, slots, 1024.0, 4096.0)
-        with pytest.raises(ValueError):
-            log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 0.0, 4096.0)
+            log.pose_template(["ball"], b"\x00" * 64, slots, 1024.0, 4096.0)
+    with pytest.raises(ValueError):
+        log.pose_template(["ball"], b"\x00" * 64, [(4, 0, 0.0, False)], 0.0, 4096.0)
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_a_taken_chunk_is_the_logs_buffer_and_stays_whole(kind):
+def test_a_taken_chunk_is_the_logs_buffer_and_stays_whole():
     """``take`` hands the buffer over without a copy; a chunk still held keeps its bytes while the log goes on,
     and the memory of a dropped one serves the next chunk with the right bytes."""
-    log = _log(kind, lambda topic, msg: None)
+    log = new_log(lambda topic, msg: None)
     log.append(b"first" * 100_000)
     held = log.take()[0]
     log.append(b"second")
@@ -422,14 +342,13 @@ def test_a_taken_chunk_is_the_logs_buffer_and_stays_whole(kind):
     assert bytes(third) == b"third" and len(third) == 5 and bytes(memoryview(third)[1:3]) == b"hi"
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_a_chunk_goes_into_the_memory_lent_to_the_log(kind):
+def test_a_chunk_goes_into_the_memory_lent_to_the_log():
     """``into``: a chunk's records go into the memory given (shared with the writer process); ``take`` hands a
     view of it over, with the bytes the log writes without it; the log writes no more into it once taken; a
     chunk that outgrows it is handed over as without it; read-only memory is refused."""
     memory = mmap.mmap(-1, 3 * 4096)
     slots = [memoryview(memory)[i * 4096 : (i + 1) * 4096] for i in range(3)]
-    lent, plain = _log(kind, lambda topic, msg: None), _log(kind, lambda topic, msg: None)
+    lent, plain = new_log(lambda topic, msg: None), new_log(lambda topic, msg: None)
     for log in (lent, plain):
         log.add("cyan/1/VelCmd", 3, "simatch_msgs/msg/VelCmd")
         log.now = 5_000_000
@@ -438,8 +357,8 @@ def test_a_chunk_goes_into_the_memory_lent_to_the_log(kind):
     for tick in range(20):
         for log in (lent, plain):
             log("cyan/1/VelCmd", msgs.new(msgs.VelCmd, tick=tick, vx=0.5 * tick))
-    if kind == "c":  # written there as they come
-        assert bytes(slots[0][:4]) == b"held" and len(_records(bytes(slots[0][4 : 4 + plain.size - 4]))) == 20
+    # written there as they come
+    assert bytes(slots[0][:4]) == b"held" and len(_records(bytes(slots[0][4 : 4 + plain.size - 4]))) == 20
     data, counts, first, last = lent.take()
     assert isinstance(data, memoryview) and data.obj is memory and bytes(data) == bytes(slots[0][: len(data)])
     expected, *rest = plain.take()
@@ -467,13 +386,12 @@ def test_a_chunk_goes_into_the_memory_lent_to_the_log(kind):
             lent.into(refused)
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_the_logs_callable_for_a_topic_logs_as_the_log_does(kind):
+def test_the_logs_callable_for_a_topic_logs_as_the_log_does():
     """``for_topic(topic)(msg)`` is ``log(topic, msg)``: the fallback's before the topic is added, its channel
     once added, the new one when it is added again (the C log finds the channel once per change)."""
     refused = []
     fallback = lambda topic, msg: refused.append((topic, msg.tick))  # noqa: E731
-    log, plain = _log(kind, fallback), _log(kind, lambda topic, msg: None)
+    log, plain = new_log(fallback), new_log(lambda topic, msg: None)
     vel = log.for_topic("cyan/1/VelCmd")
     vel(msgs.new(msgs.VelCmd, tick=1))
     assert refused == [("cyan/1/VelCmd", 1)] and log.size == 0

@@ -213,22 +213,16 @@ CALLS = [  # (method, args, kwargs): the common forms and every odd one
 ]
 
 
-@pytest.mark.parametrize("accelerated", [True, False])
-def test_the_c_taps_log_what_the_python_twins_log(accelerated, monkeypatch):
-    """The C taps (`simatch.msgs.cdr.Tap`) and the Python twins give the same entries for every form of call,
-    and the same results: the simulator's method is called with the same arguments."""
-    from simatch.msgs import cdr
+def test_the_taps_log_every_form_of_call(monkeypatch):
+    """The taps (sim/_inputs.c) log each form of call as expected, and the simulator's method is called with
+    the same arguments (the same results)."""
     from simatch.sim import inputs as world
 
-    if not accelerated:
-        monkeypatch.setattr(cdr, "Tap", None)
-    elif cdr.Tap is None:
-        pytest.skip("the C extension is not built")
     sim = Simulator(simatch.Simulation("msl_5v5").scene.spec)
     sim.inputs = None
     log = world.InputLog()
     sim.inputs = log
-    assert (type(sim.__dict__["command_velocity"]).__name__ == "Tap") == accelerated
+    assert type(sim.__dict__["command_velocity"]).__name__ == "Tap"
     results = []
     for name, args, kwargs in CALLS:
         try:
@@ -293,18 +287,20 @@ class _TextCommands(Node):
         s.command_velocity(s.index_of("cyan/3"), 1.5, 0.0, 0.0)
 
 
-@pytest.mark.parametrize("accelerated", [True, False])
-def test_a_number_written_as_text_is_logged_as_refused(accelerated, tmp_path, monkeypatch):
-    from simatch.msgs import cdr
+def test_a_number_written_as_text_is_logged_as_refused(tmp_path):
     from simatch.sim import inputs as world
 
-    if not accelerated:
-        monkeypatch.setattr(cdr, "Tap", None)
-    elif cdr.Tap is None:
-        pytest.skip("the C extension is not built")
     log = world.InputLog()
-    log.vel(0, "1.5", 0.25, np.float32(0.5))
-    log.action(1, True, b"2", False)
+
+    def command(*args):
+        pass
+
+    for form, code, args in (
+        ("vel", world.VEL, (0, "1.5", 0.25, np.float32(0.5))),
+        ("action", world.ACTION, (1, True, b"2", False)),
+    ):
+        tap = world.Tap(form, command, command, log, world.InputLog.busy, log.kind, log.robot, log.values, code)
+        tap(*args)
     assert [str(v) for v in log.take(0.0, 0, False).values.tolist()] == [
         *("nan", "0.25", "0.5"),
         *("1.0", "nan", "0.0", "nan"),
@@ -322,18 +318,12 @@ def test_a_number_written_as_text_is_logged_as_refused(accelerated, tmp_path, mo
     assert verify(path).identical
 
 
-@pytest.mark.parametrize("accelerated", [True, False])
-def test_the_inputs_numbers_are_converted_as_numpy_converts_them(accelerated, monkeypatch):
-    """The WorldInputs arrays made from the log's lists (in C by `cdr.pack`, else by the array module) hold
-    the numbers numpy's constructor makes of the same lists; what is not a plain number is left to the
-    one-by-one conversion."""
-    from simatch.msgs import cdr
+def test_the_inputs_numbers_are_converted_as_numpy_converts_them():
+    """The WorldInputs arrays made from the log's lists (in C by `pack`, or by the array module where numpy
+    scalars are among them) hold the numbers numpy's constructor makes of the same lists; what is not a
+    number is left to the one-by-one conversion."""
     from simatch.sim import inputs as world
 
-    if not accelerated:
-        monkeypatch.setattr(cdr, "pack", None)
-    elif cdr.pack is None:
-        pytest.skip("the C extension is not built")
     plain = [0.1, -0.0, 2**53 + 1, 2**70, -(2**63) - 1, True, False, 7, math.inf, np.float32(0.1), np.int64(-3)]
     made = world._machine_array(plain, "d", np.float64)
     assert made.dtype == np.float64 and made.flags.writeable
@@ -344,10 +334,10 @@ def test_the_inputs_numbers_are_converted_as_numpy_converts_them(accelerated, mo
     assert world._machine_array([-1, 32767, -32768], "h", np.int16).tolist() == [-1, 32767, -32768]
     for code, bad in (("B", 256), ("B", -1), ("h", 32768), ("h", 1.0)):
         assert world._machine_array([0, bad], code, np.uint8 if code == "B" else np.int16) is None
-    if accelerated:
-        assert cdr.pack([1, 2.5, True], "d") == bytearray(np.array([1.0, 2.5, 1.0]).tobytes())
-        with pytest.raises(ValueError):
-            cdr.pack([1], "q")
+    assert world.pack([1, 2.5, True], "d") == bytearray(np.array([1.0, 2.5, 1.0]).tobytes())
+    assert world.pack([1.0, np.float32(0.1)], "d") is None  # (the array module's)
+    with pytest.raises(ValueError):
+        world.pack([1], "q")
 
 
 def test_a_recording_with_sha256_fingerprints_is_verified_with_them(tmp_path, monkeypatch):
@@ -381,3 +371,28 @@ def test_fingerprints_of_an_unknown_kind_are_refused(tmp_path, monkeypatch):
             sim.run(seconds=0.2)
     with pytest.raises(VerifyError, match="taken as 'blake3', which this simatch"):
         verify(path)
+
+
+def test_a_tap_reads_the_busy_mark_only_through_the_logs_own_slot():
+    """The taps read ``busy`` where the member descriptor handed to them reads it (``InputLog.busy``); anything
+    else is refused when the tap is made, never read at a guessed offset."""
+    from simatch.sim import inputs as world
+
+    log = world.InputLog()
+
+    def command(*args):
+        return args
+
+    def tap(busy, of=log):
+        return world.Tap("vel", command, command, of, busy, log.kind, log.robot, log.values, world.VEL)
+
+    class Other:
+        __slots__ = ("busy",)
+
+    for wrong, of in ((Other.busy, log), (world.InputLog.kind, object()), (property(lambda s: False), log)):
+        with pytest.raises(TypeError, match="InputLog.busy"):
+            tap(wrong, of)
+    logged = tap(world.InputLog.busy)
+    assert logged(0, 1.0, 2.0, 3.0) == (0, 1.0, 2.0, 3.0) and log.kind == [world.VEL]
+    log.busy = True  # inside a logged call: what it calls in turn is not logged again
+    assert logged(1, 1.0, 2.0, 3.0) == (1, 1.0, 2.0, 3.0) and log.kind == [world.VEL]

@@ -1,9 +1,8 @@
 """Bundles: several samples of one process carried in one Zenoh sample.
 
-Every Zenoh put from Python costs some tens of microseconds when the link is idle (a wake-up of Zenoh's
-sending task, a write), and every sample received costs a callback that must take the GIL. A lockstep
-process sends a handful of small messages per control tick, all at once: carried in one sample they cost
-one put, one callback and one signature instead of a dozen or more.
+Every Zenoh put wakes Zenoh's sending task and writes, and every sample received is a callback that must
+take the GIL. A lockstep process sends a handful of small messages per control tick, all at once: carried in
+one sample they are one put, one callback and one signature instead of a dozen or more.
 
 The format is meant to be easy to write in any language (all integers little-endian)::
 

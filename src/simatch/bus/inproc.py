@@ -19,7 +19,7 @@ from .base import AnyCallback, BusStats, Callback
 class _Publisher:
     """A topic's sending end: ``put(msg)`` delivers to every subscriber, in subscription order. ``active``
     (whether anybody listens) is a plain attribute, set again whenever a subscriber comes or goes: it is
-    read before building a message that nobody may want, hundreds of times per simulated second. ``_one``
+    read before building a message that nobody may want, so it costs no call. ``_one``
     is the subscriber when there is exactly one (most topics: a robot's commands, its perception, the
     model states), called without the loop over the list."""
 
@@ -66,8 +66,8 @@ class _Subscription:
     def _bind(self, pub: _Publisher) -> None:
         if self.any_type:
             # the listener's own callable for the topic where it offers one (``for_topic``: the recorder's message
-            # log, which hears some two thousand messages per simulated second, finds the topic's channel once
-            # instead of per message), else a partial, not a lambda: called in C, no extra Python frame
+            # log finds the topic's channel once instead of per message), else a partial, not a lambda: called in
+            # C, no extra Python frame
             for_topic = getattr(self.callback, "for_topic", None)
             bound: Callback = for_topic(pub.topic) if for_topic is not None else partial(self.callback, pub.topic)
         else:

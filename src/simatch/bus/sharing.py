@@ -5,15 +5,14 @@ parts between messages: the simulator gives the five robots of a team the same l
 OmniVisionInfo (a team shares its robots' positions). Nodes rely on that identity to do team-wide work once:
 nubot's robots build their team's view, and the team picture, once per team and tick when they hold the very
 same list, and each robot on its own otherwise. Serialised, each message carries its own copy, and decoding
-gives each its own list: a team process then built its view and picture five times per tick where the
-embedded run built them once (measured: 2.5 pictures per team and tick against 0.5, the team's decisions
-about twice as expensive).
+gives each its own list: a team process would build its view and picture five times per tick where the
+embedded run builds them once.
 
 `share_equal_lists` gives that identity back: among messages of one type decoded from one bundle, a list
 field whose CDR equals, byte for byte, the same field's of an earlier message becomes that earlier message's
 list object. Equal bytes are equal values bit for bit, so no node sees a value it would not have seen, and a
-node that compares by identity sees what it sees in one process. The comparison costs a few microseconds per
-message: a list that is a message's last field (RobotInfo[] in OmniVisionInfo) is the tail of its CDR, found
+node that compares by identity sees what it sees in one process. To keep the comparison cheap, a list that
+is a message's last field (RobotInfo[] in OmniVisionInfo) is the tail of its CDR, found
 by encoding the message once with that field emptied; any other list is compared by encoding its elements.
 """
 

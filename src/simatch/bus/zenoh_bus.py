@@ -24,59 +24,62 @@ also at interpreter exit: a session left open with subscribers hangs the interpr
 from __future__ import annotations
 
 import atexit
-import json
 import logging
-import os
-import re
 import threading
 import time
 import weakref
 from collections import deque
-from collections.abc import Callable, Collection, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import zenoh
 from zenoh.handlers import Callback as _ZCallback
 
 from .. import msgs
-from . import bundle as _bundle
 from . import topics as _topics
 from .base import AnyCallback, BusStats, Callback
 from .inproc import InProcessBus
-from .sharing import share_equal_lists
+from .zenoh_bundles import Bundles
+from .zenoh_endpoints import (
+    _ENCODING_PREFIX,
+    Feed,
+    RawPublisher,
+    _Publisher,
+    _RemoteSub,
+    _Subscription,
+    _type_of,
+)
+from .zenoh_session import (
+    DEFAULT_ENDPOINT,
+    LOW_LATENCY,
+    MAX_SAMPLE,
+    RUNTIME,
+    TransportError,
+    calm_sending_threads,
+    check_run_name,
+    open_session,
+    zenoh_config,
+)
+
+__all__ = [
+    "DEFAULT_ENDPOINT",
+    "LOW_LATENCY",
+    "MAX_SAMPLE",
+    "RUNTIME",
+    "EntryVerifier",
+    "Feed",
+    "RawPublisher",
+    "Signer",
+    "TransportError",
+    "Verifier",
+    "ZenohBus",
+    "calm_sending_threads",
+    "check_run_name",
+    "open_session",
+    "zenoh_config",
+]
 
 log = logging.getLogger(__name__)
-
-#: the endpoint a server listens on and a team connects to when none is given: loopback only
-DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
-
-#: the largest payload a sample may carry on Zenoh's low-latency transport [bytes]: it writes each sample
-#: as one frame of at most three quarters of its 64 KiB batch, and a larger one breaks the link (measured
-#: with eclipse-zenoh 1.10: 49,000 bytes arrive, 49,500 are lost with the next sample). A bus on that
-#: transport (``ZenohBus(max_sample=MAX_SAMPLE)``) sends no larger message (logged) and cuts bundles and
-#: feeds into several samples below it; on the ordinary transport Zenoh fragments large samples itself.
-MAX_SAMPLE = 48_000
-
-#: ``SIMATCH_ZENOH_LOW_LATENCY=1`` in the environment: simatch's server, team and robot processes ask for
-#: the low-latency transport (see `zenoh_config`). Off by default: it cut the tail of a lockstep round trip
-#: (p99 0.7-0.8 against 1-3 ms on a busy 2-core machine) but moved neither the lockstep real-time factor nor
-#: the real-time latency measurably, and it caps every sample at `MAX_SAMPLE`.
-LOW_LATENCY = os.environ.get("SIMATCH_ZENOH_LOW_LATENCY", "") == "1"
-
-#: Zenoh's runtime threads in a simatch process (Zenoh reads ``ZENOH_RUNTIME`` when its runtime starts; a
-#: value the user sets wins): one receiving worker instead of two. Every sample's callback needs the GIL,
-#: so a second worker adds no parallelism, only wake-ups: idle workers are woken to steal the task the
-#: other one just got. Measured on 2 cores with 11 processes: the server's receiving threads went from
-#: about 9 to 4 context switches per control tick, a robot process's from 4 to 3.
-RUNTIME = "(rx: (worker_threads: 1), app: (worker_threads: 1), acc: (worker_threads: 1))"
-
-#: the ``pre`` of an inbox item that was neither refused nor decoded in advance (see `ZenohBus.deliver`)
-_UNCHECKED = (None, None, None)
-#: the names of Zenoh's sending threads (its "tx" runtime's workers)
-_SENDER_THREAD = re.compile(r"^tx-\d+$")
-
-_RUN_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")
-_ENCODING_PREFIX = "application/cdr;"
 
 #: (topic, payload, attachment) -> None if acceptable, else why it is refused
 Verifier = Callable[[str, bytes, bytes | None], str | None]
@@ -84,60 +87,6 @@ Verifier = Callable[[str, bytes, bytes | None], str | None]
 Signer = Callable[[str, bytes], bytes]
 #: (attachment of the bundle, entry topic, entry payload) -> None if the entry may be used, else why not
 EntryVerifier = Callable[[bytes | None, str, bytes], str | None]
-
-
-class TransportError(RuntimeError):
-    """The Zenoh session could not be opened or used (e.g. nothing listens at the endpoint)."""
-
-
-def check_run_name(run: str) -> str:
-    if not _RUN_NAME.match(run or ""):
-        raise ValueError(f"run name {run!r}: use letters, digits, '_', '-' or '.' (it becomes a key chunk)")
-    return run
-
-
-def zenoh_config(
-    mode: str = "peer",
-    listen: Sequence[str] = (),
-    connect: Sequence[str] = (),
-    user: str | None = None,
-    password: str | None = None,
-    users_file: str | None = None,
-    access_control: dict | None = None,
-    low_latency: bool | None = None,
-) -> zenoh.Config:
-    """A Zenoh configuration with simatch's safe defaults: no scouting, only the endpoints given, no shared
-    memory; ``user``/``password`` authenticate this session, ``users_file`` (a router) checks others'.
-
-    ``low_latency`` (default: `LOW_LATENCY`): Zenoh's low-latency unicast transport, used when both ends of
-    a link ask for it (a client that does not gets the ordinary transport from the same server). A sample is
-    written to the socket by the thread that puts it, where the ordinary transport hands it to a sending
-    thread first: one wake-up less per sample. It has no priorities (qos is off) and carries samples of at
-    most `MAX_SAMPLE` bytes: give the bus on such a session ``max_sample=MAX_SAMPLE``."""
-    conf = zenoh.Config()
-    if low_latency is None:
-        low_latency = LOW_LATENCY
-
-    def put(key: str, value: Any) -> None:
-        conf.insert_json5(key, json.dumps(value))
-
-    put("mode", mode)
-    put("scouting/multicast/enabled", False)
-    put("scouting/gossip/enabled", False)
-    put("listen/endpoints", list(listen))
-    put("connect/endpoints", list(connect))
-    put("transport/shared_memory/enabled", False)
-    if low_latency:
-        put("transport/unicast/lowlatency", True)
-        put("transport/unicast/qos/enabled", False)
-    if user is not None or users_file is not None:
-        usrpwd: dict[str, Any] = {"user": user, "password": password}
-        if users_file is not None:
-            usrpwd["dictionary_file"] = users_file
-        put("transport/auth/usrpwd", usrpwd)
-    if access_control is not None:
-        put("access_control", access_control)
-    return conf
 
 
 _SESSIONS: weakref.WeakSet[ZenohBus] = weakref.WeakSet()
@@ -149,234 +98,7 @@ def _close_all() -> None:
         bus.close()
 
 
-def open_session(conf: zenoh.Config, wait: float = 0.0, what: str = "") -> zenoh.Session:
-    """Open a session, retrying for up to ``wait`` seconds (e.g. while the server starts)."""
-    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME)  # before Zenoh's runtime starts (its first session)
-    deadline = time.monotonic() + wait
-    while True:
-        try:
-            return zenoh.open(conf)
-        except zenoh.ZError as exc:
-            if time.monotonic() >= deadline:
-                first = str(exc).split(" at ", 1)[0]
-                raise TransportError(f"cannot open the Zenoh session{' ' + what if what else ''}: {first}") from None
-            time.sleep(0.2)
-
-
-def calm_sending_threads() -> int:
-    """Make Zenoh's sending threads of this process ``SCHED_BATCH`` (Linux; elsewhere nothing): they still
-    get their share of the CPU, but waking one no longer preempts the thread that woke it. On the ordinary
-    transport every put wakes the sending thread; without this, a lockstep server putting its feeds was
-    preempted by it right after the first one, and on a busy 2-core machine the next team's feed then left
-    0.6-0.7 ms later (median; measured per put: 0.66 ms of wall time for 0.04 ms of CPU), which that team
-    lost at every tick. The sending thread now runs once the putting thread waits (or on an idle core).
-    Returns how many threads were changed."""
-    if not hasattr(os, "sched_setscheduler") or not os.path.isdir("/proc/self/task"):
-        return 0
-    changed = 0
-    for tid in os.listdir("/proc/self/task"):
-        try:
-            with open(f"/proc/self/task/{tid}/comm", encoding="utf-8") as f:
-                name = f.read().strip()
-            if _SENDER_THREAD.match(name):
-                os.sched_setscheduler(int(tid), os.SCHED_BATCH, os.sched_param(0))
-                changed += 1
-        except (OSError, ValueError):  # the thread ended meanwhile, or the system does not allow it
-            continue
-    return changed
-
-
-class _RemoteSub:
-    """One subscription's Zenoh side: what arrives is queued, then decoded and delivered by the owner."""
-
-    __slots__ = (
-        "topic",
-        "msgtype",
-        "callback",
-        "any_type",
-        "raw",
-        "verify",
-        "closed",
-        "zsub",
-        "wakes",
-        "fed",
-        "bundled",
-        "early",
-        "__weakref__",
-    )
-
-    def __init__(
-        self,
-        topic: str,
-        msgtype: Any,
-        callback,
-        any_type: bool = False,
-        raw: bool = False,
-        verify: bool = True,
-        wakes: bool = True,
-    ):
-        self.topic = topic
-        self.msgtype = None if msgtype is None else msgs.msgtype_name(msgtype)
-        self.callback = callback
-        self.any_type = any_type
-        self.raw = raw
-        self.verify = verify
-        self.wakes = wakes
-        #: ``early(topic, payload) -> bool``, run in Zenoh's thread as a sample is queued: whether it wakes
-        #: the owner (None: ``wakes`` says)
-        self.early: Callable[[str, bytes], bool] | None = None
-        self.closed = False
-        self.zsub = None
-        self.fed = False  # served by a feed (`ZenohBus.take_feed`), not by a Zenoh subscriber of its own
-        self.bundled = True  # bundle entries may reach it (not liveliness: only Zenoh tells who is alive)
-
-
-class _Subscription:
-    __slots__ = ("topic", "_local", "_remote", "_bus")
-
-    def __init__(self, bus: ZenohBus, topic: str, local, remote: _RemoteSub):
-        self.topic = topic
-        self._bus = bus
-        self._local = local
-        self._remote = remote
-
-    def close(self) -> None:
-        if self._local is not None:
-            self._local.close()
-        self._bus._drop_remote(self._remote)
-
-
-class _Matching:
-    __slots__ = ()
-    """Whether a subscriber in another process matches a Zenoh publisher (kept up to date by Zenoh's
-    matching listener)."""
-
-    def _watch(self, zpub) -> None:
-        self._z = zpub
-        self.matching = False
-
-        def on_status(status) -> None:
-            self.matching = status.matching
-
-        self._listener = zpub.declare_matching_listener(_ZCallback(on_status, indirect=False))
-        self.refresh()
-
-    def refresh(self) -> None:
-        """Ask Zenoh now whether remote subscribers match (the listener may not have spoken yet)."""
-        try:
-            self.matching = self._z.matching_status.matching
-        except zenoh.ZError:  # the session is closing
-            self.matching = False
-
-    def close(self) -> None:
-        for thing in (self._listener, self._z):
-            try:
-                thing.undeclare()
-            except zenoh.ZError:
-                pass
-
-
-class Feed(_Matching):
-    """What this process sends to one kind of receiver, gathered and sent as one bundle when the owner
-    flushes it (`ZenohBus.flush_feeds`): a copy of every message published on a topic ``covers`` matches,
-    and of every protocol sample (`ZenohBus.put_raw`) on such a topic; kept only while somebody listens."""
-
-    def __init__(self, topic: str, covers: Sequence[str], zpub):
-        self.topic = topic
-        self.covers = tuple(covers)
-        self.entries: list[tuple[str, str, bytes]] = []
-        self._covered: dict[str, bool] = {}  # topic -> covered: a raw sample (the tick) asks at every tick
-        self._watch(zpub)
-
-    def covering(self, topic: str) -> bool:
-        known = self._covered.get(topic)
-        if known is None:
-            known = any(_topics.matches(c, topic) for c in self.covers)
-            if len(self._covered) < 4096:
-                self._covered[topic] = known
-        return known
-
-
-class RawPublisher(_Matching):
-    """Bytes sent often on one topic (`ZenohBus.raw_publisher`), signed like every sample of the process."""
-
-    def __init__(self, bus: ZenohBus, topic: str, zpub, always: bool):
-        self.topic = topic
-        self._bus = bus
-        self.always = always
-        self._watch(zpub)
-
-    def put(self, payload: bytes, count: bool = True) -> None:
-        """``count``: counts as a published sample (not a bundle, whose entries were counted)."""
-        bus = self._bus
-        if bus._gather(self.topic, payload):
-            return
-        if not bus._fits(self.topic, len(payload)):
-            return
-        if not self.matching:
-            if self.always:
-                bus._put_signed(self.topic, payload, count)
-            return
-        signer = bus.signer
-        try:
-            self._z.put(payload, attachment=signer(self.topic, payload) if signer is not None else None)
-        except zenoh.ZError as exc:
-            log.debug("put on %s failed: %s", self.topic, exc)
-            return
-        if count:
-            bus.stats.published += 1
-
-
-class _Publisher(_Matching):
-    __slots__ = ("topic", "msgtype", "typename", "feeds", "_local", "_z", "_bus", "matching", "_listener")
-
-    def __init__(self, bus: ZenohBus, topic: str, msgtype: Any, local, zpub):
-        self.topic = topic
-        self.msgtype = msgtype
-        self.typename = msgs.msgtype_name(msgtype)
-        self._bus = bus
-        self._local = local
-        #: the feeds that carry this topic too
-        self.feeds: list[Feed] = [f for f in bus._feeds if f.covering(topic)]
-        self._watch(zpub)
-
-    @property
-    def active(self) -> bool:
-        return self.matching or self._bus.eager or self._local.active or any(f.matching for f in self.feeds)
-
-    def put(self, msg: Any) -> None:
-        local = self._local
-        if local._callbacks:
-            local.put(msg)
-        bus = self._bus
-        remote = self.matching or bus.eager
-        fed = [f for f in self.feeds if f.matching] if self.feeds else ()
-        if remote or fed:
-            data = msgs.encode(msg)
-            for feed in fed:
-                feed.entries.append((self.topic, self.typename, data))
-            if not remote:
-                return
-            if not bus._fits(self.topic, len(data)):
-                return
-            batch = bus._batch
-            if batch is not None:
-                batch.append((self.topic, self.typename, data))
-                bus.stats.published += 1
-                return
-            signer = bus.signer
-            try:
-                if signer is None:
-                    self._z.put(data)
-                else:
-                    self._z.put(data, attachment=signer(self.topic, data))
-            except zenoh.ZError as exc:
-                log.debug("put on %s failed: %s", self.topic, exc)
-                return
-            bus.stats.published += 1
-
-
-class ZenohBus:
+class ZenohBus(Bundles):
     """Publish/subscribe between the nodes of this process and, over Zenoh, every other process of ``run``.
 
     ``signer`` adds to each sample this process sends the proof of who sent it; ``verifier`` checks each
@@ -533,25 +255,13 @@ class ZenohBus:
 
     def raw_publisher(self, topic: str, always: bool = True) -> RawPublisher:
         """A declared publisher of bytes on ``topic``, for samples sent often: a put on a declared Zenoh
-        publisher costs a few microseconds, a `put_raw` (the session's put) up to hundreds. Receivers must
-        subscribe to the exact key (not a pattern), or the server's access control may hide them; until a
-        receiver is known, a put goes out as a `put_raw` (``always``) or not at all."""
+        publisher is far cheaper than a `put_raw` (the session's put, which resolves the key each time).
+        Receivers must subscribe to the exact key (not a pattern), or the server's access control may hide
+        them; until a receiver is known, a put goes out as a `put_raw` (``always``) or not at all."""
         pub = self._raw_pubs.get(topic)
         if pub is None:
             pub = self._raw_pubs[topic] = RawPublisher(self, topic, self._declare_zpub(topic, express=True), always)
         return pub
-
-    def _gather(self, topic: str, payload: bytes) -> bool:
-        """Copy a protocol sample into the feeds that cover it; True if it joined the batch instead of
-        leaving now."""
-        for feed in self._feeds:
-            if feed.matching and feed.covering(topic):
-                feed.entries.append((topic, "", payload))
-        if self._batch is not None:
-            self._batch.append((topic, "", payload))
-            self.stats.published += 1
-            return True
-        return False
 
     def _declare_zpub(self, topic: str, encoding: str | None = None, express: bool = False):
         """``express``: sent at once by the calling thread, not batched by Zenoh's sending task: for a sample
@@ -566,64 +276,7 @@ class ZenohBus:
             express=express,
         )
 
-    # --- bundles ----------------------------------------------------------------------------------------------
-    def begin_batch(self) -> None:
-        """From now until `send_batch`, what this process sends to others is gathered, not sent."""
-        self._batch = []
-
-    def send_batch(self, topic: str) -> int:
-        """Send what was gathered since `begin_batch` as one bundle on ``topic`` (through `raw_publisher`:
-        its receivers subscribe to ``topic`` exactly); returns how many entries it carried."""
-        entries, self._batch = self._batch, None
-        if entries:
-            pub = self.raw_publisher(topic)
-            for run in self._runs(topic, entries):
-                pub.put(_bundle.pack(run), count=False)
-        return len(entries or ())
-
-    def _runs(self, topic: str, entries: list) -> list[list]:
-        """The entries of a bundle on ``topic`` in runs that each fit in a sample (one run, nearly always)."""
-        cap = self.max_sample
-        if cap is None or sum(map(_bundle.size, entries)) + len(_bundle.MAGIC) <= cap:
-            return [entries]
-        runs, too_large = _bundle.split(entries, cap)
-        for entry in too_large:
-            self._fits(entry[0], _bundle.size(entry))
-        return runs
-
-    def declare_feed(self, topic: str, covers: Sequence[str]) -> Feed:
-        """A feed on ``topic`` of what is published on the topics ``covers`` matches (see the class)."""
-        feed = Feed(topic, covers, self._declare_zpub(topic, express=True))
-        self._feeds.append(feed)
-        for pub in self._pubs.values():
-            if feed.covering(pub.topic):
-                pub.feeds.append(feed)
-        return feed
-
-    def flush_feeds(self, only: Collection[str] | None = None) -> None:
-        """Send each feed's gathered entries as one bundle (feeds nobody listens to gather nothing); with
-        ``only``, just the feeds on those topics (the others keep gathering)."""
-        signer = self.signer
-        ready = []
-        for feed in self._feeds:
-            if only is not None and feed.topic not in only:
-                continue
-            entries, feed.entries = feed.entries, []
-            if not (entries and feed.matching):
-                continue
-            for run in self._runs(feed.topic, entries):
-                data = _bundle.pack(run)
-                ready.append((feed, data, signer(feed.topic, data) if signer is not None else None))
-        # every feed packed and signed before the first leaves: the receivers start (nearly) together, and
-        # a receiver woken by the first put does not hold up the others' packing
-        for feed, data, attachment in ready:
-            try:
-                feed._z.put(data, attachment=attachment)
-            except zenoh.ZError as exc:
-                log.debug("put on %s failed: %s", feed.topic, exc)
-                continue
-            self.stats.published += 1
-
+    # --- sending (bundles: `Bundles`, simatch.bus.zenoh_bundles) ------------------------------------------------
     def _fits(self, topic: str, size: int) -> bool:
         """Whether a sample of ``size`` bytes may be sent (see ``max_sample``); if not, it is counted in
         ``oversize`` and logged (the first time for each topic, then every hundredth)."""
@@ -648,113 +301,6 @@ class ZenohBus:
         )
         if count:
             self.stats.published += 1
-
-    def accept_bundles(self, pattern: str, verify: bool = True) -> None:
-        """Open the bundles that arrive on ``pattern``: each entry goes to this process's subscriptions as if
-        it had arrived alone (to those a feed serves if ``pattern`` is the feed taken by `take_feed`, else
-        to the others). With ``verify``, the bundle is checked by ``verifier`` and each entry by
-        ``entry_verifier``; a broken bundle is dropped whole and counted as malformed."""
-        self._declare_bundles(pattern, fed=False, verify=verify)
-
-    def take_feed(self, topic: str, covers: Sequence[str], handle: Callable[[], None] | None = None) -> None:
-        """Receive the topics ``covers`` matches only from the feed on ``topic`` (see `declare_feed`); call it
-        before subscribing. Subscriptions to those exact topics (no wildcard) then declare nothing in Zenoh,
-        so nothing arrives twice; the feed's sender is not checked (like every sample from the server).
-
-        ``handle``: called in Zenoh's receiving thread once a feed sample is queued, instead of waking the
-        owner: an owner whose only work is to answer its feed (a lockstep client) saves a thread hand-off
-        per sample. It must deliver under the same lock as the owner's own deliveries."""
-        self._fed_covers = (*self._fed_covers, *covers)
-        self._declare_bundles(topic, fed=True, verify=False, handle=handle)
-
-    def _declare_bundles(self, pattern: str, fed: bool, verify: bool, handle: Callable[[], None] | None = None) -> None:
-        n = len(self.prefix)
-        clock = time.monotonic
-        notices = self._notices
-
-        def on_sample(sample) -> None:
-            att = sample.attachment
-            topic, payload = str(sample.key_expr)[n:], sample.payload.to_bytes()
-            attachment = att.to_bytes() if att is not None else None
-            arrival = clock()
-            try:
-                items = self._open_bundle(topic, payload, attachment, arrival, fed, verify)
-            except Exception as exc:  # never fail in Zenoh's thread: the owner reports it
-                items = [(notices, topic, payload, None, "", arrival, (None, None, exc))]
-            if handle is None:
-                self._queue_all(items)
-                return
-            with self._queue_lock:
-                self._inbox.extend(items)
-            try:
-                handle()
-            except Exception:  # never fail in Zenoh's thread: wake the owner to deal with it
-                log.exception("handling a feed sample failed")
-                self._wake.set()
-
-        zsub = self.session.declare_subscriber(
-            self.key(pattern), _ZCallback(on_sample, indirect=False), allowed_origin=zenoh.Locality.REMOTE
-        )
-        self._declared.append(zsub)
-
-    def _open_bundle(self, topic: str, payload: bytes, attachment, arrival: float, fed: bool, verify: bool) -> list:
-        """The inbox items of one bundle: its entries, each with what `deliver` needs to know
-        (``pre``: why refused / decoded message / error), or one notice if the bundle is refused or broken."""
-        notices = self._notices
-        if verify and self.verifier is not None:
-            why = self.verifier(topic, payload, attachment)
-            if why is not None:
-                return [(notices, topic, payload, None, "", arrival, (why, None, None))]
-        try:
-            entries = _bundle.unpack(payload)
-        except _bundle.BundleError as exc:
-            return [(notices, topic, payload, None, "", arrival, (None, None, msgs.MessageError(str(exc))))]
-        check = self.entry_verifier if verify else None
-        decode = self.prepare_on_arrival
-        routes = self._routes
-        out = []
-        made = [] if fed and decode else None  # a feed's messages, to share their equal parts (`sharing`)
-        for entry_topic, msgtype, data in entries:
-            raw = not msgtype
-            subs = routes.get((entry_topic, raw, fed))
-            if subs is None:
-                subs = self._route(entry_topic, raw, fed)
-            if not subs:
-                continue
-            if check is not None:
-                why = check(attachment, entry_topic, data)
-                if why is not None:
-                    out.append((notices, entry_topic, data, None, "", arrival, (why, None, None)))
-                    continue
-            encoding = "" if raw else _ENCODING_PREFIX + msgtype
-            decoded = None  # (type, pre): decoded once for every subscription of that type, and the
-            for rsub in subs:  # message shared by them, as the in-process bus shares one message object
-                pre = _UNCHECKED
-                if decode and not raw:
-                    try:
-                        name = rsub.msgtype or _type_of(encoding)
-                        if decoded is None or decoded[0] != name:
-                            decoded = (name, (None, msgs.decode(name, data), None))
-                            if made is not None:
-                                made.append((decoded[1][1], data))
-                        pre = decoded[1]
-                    except msgs.MessageError as exc:
-                        pre = (None, None, exc)
-                out.append((rsub, entry_topic, data, None, encoding, arrival, pre))
-        if made:
-            share_equal_lists(made)
-        return out
-
-    def _route(self, topic: str, raw: bool, fed: bool) -> tuple:
-        """The subscriptions an entry on ``topic`` goes to (remembered until subscriptions change)."""
-        with self._routes_lock:
-            subs = tuple(
-                r
-                for r in self._remote
-                if r.raw == raw and r.fed == fed and r.bundled and not r.closed and _topics.matches(r.topic, topic)
-            )
-            self._routes[(topic, raw, fed)] = subs
-        return subs
 
     def _add_remote(self, rsub: _RemoteSub) -> None:
         with self._routes_lock:
@@ -1027,12 +573,3 @@ def _wakes(rsub: _RemoteSub, topic: str, payload) -> bool:
     except Exception:  # the owner will look at it anyway
         log.exception("deciding whether a sample on %s wakes the owner failed", topic)
         return True
-
-
-def _type_of(encoding: str) -> str:
-    if not encoding.startswith(_ENCODING_PREFIX):
-        raise msgs.MessageError(f"sample with encoding {encoding or '(none)'!r}: expected {_ENCODING_PREFIX}<type>")
-    name = encoding[len(_ENCODING_PREFIX) :]
-    if name not in msgs.typestore.types:
-        raise msgs.MessageError(f"sample of unknown type {name!r}")
-    return name

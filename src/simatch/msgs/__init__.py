@@ -58,6 +58,14 @@ class MessageError(ValueError):
     """A payload that does not decode into the expected message type."""
 
 
+def unbuilt(extension: str, exc: ImportError) -> ImportError:
+    """The error to raise when one of simatch's C extensions (built by ``pip install -e .``) cannot be imported."""
+    return ImportError(
+        f"simatch's C extension {extension} cannot be imported ({exc}): build it with `pip install -e .` "
+        "(or `make setup`) in the simatch checkout"
+    )
+
+
 def _load_definitions() -> dict[str, str]:
     folder = resources.files(__package__).joinpath(PACKAGE, "msg")
     texts = {}
@@ -115,10 +123,11 @@ def _with_slots(cls: type, defaults: dict[str, Any]) -> type:
     """The same message class with ``__slots__``: the same fields in the same order, constants and
     ``__msgtype__``, and no per-instance dict.
 
-    Why: a recording encodes some two thousand messages per simulated second; the C encoder
-    (`simatch.msgs.cdr`) reads the fields of a slotted instance at fixed offsets instead of looking each
-    name up in a dict (the larger part of its cost), and a slotted message is smaller. A field cannot be
-    added to a message by mistake either (``msg.vz = 1`` on a VelCmd raises AttributeError)."""
+    Why: the C codec (`simatch.msgs.cdr`, _cdr_accel.c) reads and fills the fields of a slotted instance at
+    the offsets its class's member descriptors give (checked against the class's version tag) instead of
+    looking each name up in a dict, and a slotted message is smaller. A field cannot be added to a message by
+    mistake either (``msg.vz = 1`` on a VelCmd raises AttributeError). The C codec relies on this layout: a
+    message class must keep its fields in object slots, created here."""
     # rosbags declares the constants and ``__msgtype__`` as "ClassVar[...]" strings, which dataclasses takes
     # for fields with a default: here they are class attributes only
     fields = [

@@ -1,56 +1,38 @@
-/* CDR encoding of message objects in C: the hot path of `simatch.msgs.cdr` (see its docstring).
+/* The CDR codec in C: the encoder and decoder behind `simatch.msgs.cdr` (see its docstring).
  *
- * A recording encodes some two thousand messages per simulated second on the thread that runs the
- * simulation; the generated Python encoders are at their floor there (bytecode per field), so this module
- * walks a message with a "program" that `simatch.msgs.cdr` compiles once per type from the type store:
+ * `simatch.msgs.cdr` compiles, once per message type, a "program" from the type store:
  *
  *     program = ((kind, attribute name, argument), ...)
  *
- * kinds (K_* below): a primitive (argument unused), a string, a nested message (argument: its program),
- * a sequence or fixed array of primitives (argument: (element kind, length or -1)), of strings (argument:
- * length or -1) or of messages (argument: (program, length or -1, alignment of its first field)).
- * `compile` turns such a tuple into C structures once (no tuple unpacking or int conversion per field).
- *
- * The same programs, with each message's class, decode payloads (`decode`, below). The module also holds
- * the recorder's message log (`Log`, below), which frames and encodes each message it is given straight into
- * the recording's chunk buffer.
+ * kinds (K_* in _cdr_accel.h): a primitive (argument unused), a string, a nested message (argument: its
+ * program), a sequence or fixed array of primitives (argument: (element kind, length or -1)), of strings
+ * (argument: length or -1) or of messages (argument: (program, length or -1, alignment of its first field)).
+ * `compile` turns such a tuple into C structures once; `encode` walks a message with it. The same programs,
+ * with each message's class, decode payloads (`decode`). The recorder's message log (`Log`,
+ * simatch/record/_messagelog.c) is compiled into this extension and encodes with the same functions.
  *
  * Output: XCDR1 little endian with the 4-byte encapsulation header, byte for byte what rosbags writes
- * (checked type by type by tests/msgs/test_cdr.py). Anything this fast path does not take as it is (a
- * primitive sequence that is not a contiguous little-endian buffer of the wire's type, a wrong fixed
- * length, a value of the wrong type) makes it return None without an exception: the caller then uses the
- * pure-Python encoder, which converts what it can and raises the canonical error otherwise.
+ * (checked type by type by tests/msgs/test_cdr.py). Anything the encoder does not take as it is (a primitive
+ * sequence that is not a contiguous little-endian buffer of the wire's type, a wrong fixed length, a value of
+ * the wrong type) makes it return None without an exception: the caller then uses the generated Python
+ * encoder, which converts what it can and raises the canonical error otherwise.
+ *
+ * What this unit reads by offset, and who declares it:
+ * - numpy's array and dtype objects: `simatch.msgs.cdr` declares the fields' offsets and checks them on an
+ *   array; `setup` checks them against `ArrayHead` and `DescrHead` below.
+ * - a message's fields: the slots of its class, found through the class's member descriptors (`slot_offset`,
+ *   guarded by the class's version tag; the classes are made slotted by `simatch.msgs._with_slots`).
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
-#include <limits.h>
-#include <math.h>
-#include <stdarg.h>
-#include <stdint.h>
-#include <string.h>
-#include <structmember.h>
-
-enum {
-    K_BOOL = 1, K_I8, K_U8, K_I16, K_U16, K_I32, K_U32, K_I64, K_U64, K_F32, K_F64,
-    K_STR = 20, K_MSG, K_PSEQ, K_SSEQ, K_MSEQ
-};
-
-typedef struct {
-    char *p;
-    Py_ssize_t n, cap;
-    int lent;                      /* p is memory lent by another object (a message log's `into`): never
-                                    * reallocated or freed here; growing past cap moves the bytes to memory
-                                    * of the Buf's own */
-} Buf;
+#include "_cdr_accel.h"
 
 static Buf scratch = {NULL, 0, 0, 0}; /* `encode`'s output, reused between calls: the GIL is held throughout */
-static Buf *out = &scratch;         /* where the encoder writes now: `scratch` or a message log's buffer */
-static Py_ssize_t body = 4;         /* offset in `out` of the CDR body being written (alignment counts from it) */
+Buf *out = &scratch;
+Py_ssize_t body = 4;
 
 /* numpy arrays without numpy's headers: the leading fields of numpy's array object, whose layout is part of
- * numpy's ABI (extensions built against old headers run with new numpy). `setup` hands over the ndarray
- * type and the dtype object of each kind, and checks this reading on a sample array before enabling it;
- * without it every array goes through the buffer protocol. */
+ * numpy's ABI (extensions built against old headers run with new numpy). The layout is declared, and checked
+ * against numpy, by `simatch.msgs.cdr` (`NUMPY_ARRAY`, `NUMPY_DTYPE`); `setup` receives those offsets and
+ * refuses to start if they are not those of the structs below. */
 typedef struct {
     PyObject_HEAD
     char *data;
@@ -70,14 +52,12 @@ typedef struct {
     char kind, type, byteorder;
 } DescrHead;
 
-#define C_CONTIGUOUS 0x0001
+static int c_contiguous = 0;      /* numpy's flag of a C-contiguous array (`setup`) */
 static PyTypeObject *ndarray = NULL;
 static PyObject *dtypes[16];       /* by kind: the dtype object of contiguous arrays taken as they are */
 
-#define FALLBACK 1                 /* not for the fast path: the caller uses the Python encoder */
-#define FAILED -1                  /* a Python exception is set (memory) */
 
-static int grow(Py_ssize_t need) {
+int grow(Py_ssize_t need) {
     Py_ssize_t cap = out->cap ? out->cap : 4096;
     while (cap < out->n + need)
         cap *= 2;
@@ -95,30 +75,6 @@ static int grow(Py_ssize_t need) {
     return 0;
 }
 
-/* room for `need` more bytes in `out` (the test inline: it is made for every field and record) */
-static inline int reserve(Py_ssize_t need) {
-    return out->n + need <= out->cap ? 0 : grow(need);
-}
-
-/* pad with zeros to a multiple of `a`, counted from the start of the body (after the 4-byte header) */
-static inline int align(int a) {
-    Py_ssize_t pad = (body - out->n) & (a - 1);       /* a is 1, 2, 4 or 8 */
-    if (pad) {
-        if (reserve(pad) < 0)
-            return FAILED;
-        memset(out->p + out->n, 0, pad);
-        out->n += pad;
-    }
-    return 0;
-}
-
-static inline int put(const void *src, Py_ssize_t size) {
-    if (reserve(size) < 0)
-        return FAILED;
-    memcpy(out->p + out->n, src, size);
-    out->n += size;
-    return 0;
-}
 
 static int size_of(long kind) {
     switch (kind) {
@@ -164,9 +120,8 @@ static inline int pack_int(long kind, long long x, unsigned char *b) {
 /* The common cases of a primitive value (a message's numbers are Python floats, bools and small ints): each
  * is written straight into the buffer, with the bytes of the general path of `put_primitive`; NOT_FAST for
  * anything else. A float32 is the cast that PyFloat_Pack4 makes; NaN (whose bit pattern that function treats
- * with care) and overflow take the general path. Inline, and it runs no Python code: `encode_program` calls it
- * on the field it reads, without a reference of its own (some 100,000 numbers per simulated second of a
- * recorded match: the call and the reference count were a third of their cost). */
+ * with care) and overflow take the general path. Inline, and it runs no Python code, so that `encode_program`
+ * can call it on the field it reads without taking a reference of its own. */
 static inline int put_number(long kind, PyObject *v) {
     if (PyFloat_CheckExact(v)) {
         double d = PyFloat_AS_DOUBLE(v);
@@ -278,8 +233,7 @@ static int put_string(PyObject *v) {
     return 0;
 }
 
-/* does a buffer's struct format describe the wire's element type (little endian or native)? */
-static int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
+int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
     if (fmt == NULL)
         return 0;
     if (*fmt == '<' || *fmt == '=' || *fmt == '@')
@@ -301,31 +255,7 @@ static int format_fits(long kind, const char *fmt, Py_ssize_t itemsize) {
     }
 }
 
-/* A program compiled once (`compile`): the same steps as its tuple, as C values. */
-typedef struct Program Program;
-typedef struct {
-    int kind;
-    int elem;                      /* K_PSEQ: the element kind; K_MSEQ: the alignment of the first field */
-    Py_ssize_t fixed;              /* sequences: the fixed length of an array, or -1 */
-    PyObject *name;                /* the attribute (interned) */
-    Program *sub;                  /* K_MSG, K_MSEQ: the nested message's program */
-    Py_ssize_t offset;             /* where instances of the program's `type` hold this field (slotted) */
-} Op;
-/* Field reads: the message classes of simatch.msgs have __slots__, so an instance holds each field at a fixed
- * offset. A program learns the offsets from the first message's class (its `type`, kept with the class's
- * version tag, which changes whenever the class is modified) and then reads fields there directly: looking
- * each name up, as PyObject_GetAttr does, was the larger part of encoding a message. Any other class (a
- * dict-based one, a class with a property or __getattribute__ of its own) is read with PyObject_GetAttr. */
-struct Program {
-    Py_ssize_t count;
-    PyTypeObject *type;            /* the class last met (a strong reference), or NULL */
-    unsigned int version;          /* its version tag then */
-    int slotted;                   /* read its instances' fields at `offset` */
-    int direct;                    /* decoding: make instances of `type` by filling their slots (see below) */
-    Op ops[];
-};
 
-static int encode_program(Program *program, PyObject *msg);
 static int put_items(PyObject *v, Py_ssize_t fixed, Program *program, int align_first);
 
 /* the dtype of the wire's element type (`ref`, from `setup`): that very object, or one of the same class with
@@ -342,7 +272,7 @@ static int same_dtype(PyObject *descr, PyObject *ref) {
 static int put_primitives(PyObject *v, long kind, Py_ssize_t fixed) {
     if (Py_TYPE(v) == ndarray && kind < 16) {
         ArrayHead *a = (ArrayHead *)v;
-        if (a->nd == 1 && (a->flags & C_CONTIGUOUS) && same_dtype(a->descr, dtypes[kind])) {
+        if (a->nd == 1 && (a->flags & c_contiguous) && same_dtype(a->descr, dtypes[kind])) {
             Py_ssize_t n = a->dimensions[0];
             int r;
             if (fixed >= 0) {
@@ -384,20 +314,8 @@ done:
 /* The memo (see simatch.msgs.cdr): this period's and the last one's, id(object) -> (object, phase, bytes): a
  * list met again at the same phase (offset modulo 8), or a message encoded on its own (phase 0, its body) met
  * again inside a sequence. Two forms: `encode` takes two dicts (id -> (object, phase, bytes)); the message log
- * holds two tables of its own (`MemoTable`: no Python object per entry, the bytes in one buffer per period),
- * because the dicts' keys, tuples and bytes, made and dropped for a few hundred entries per simulated second,
- * cost more than the encoding they saved. NULL (both forms): no memo. */
-typedef struct {
-    PyObject *obj;                 /* a strong reference: while it is held, no other object has its id */
-    long phase;
-    Py_ssize_t at, size;           /* its bytes in the table's `bytes` */
-} MemoEntry;
-
-typedef struct {
-    MemoEntry *entries;            /* open addressing (linear probing), `cap` a power of two; obj NULL: free */
-    Py_ssize_t cap, used;
-    Buf bytes;
-} MemoTable;
+ * holds two tables of its own (`MemoTable`: no Python object per entry, the bytes in one buffer per period), so
+ * that remembering an entry makes no keys, tuples or bytes objects. NULL (both forms): no memo. */
 
 static PyObject *memo_now = NULL, *memo_old = NULL;
 static MemoTable *table_now = NULL, *table_old = NULL;
@@ -440,14 +358,14 @@ static int table_grow(MemoTable *t) {
 }
 
 /* the entries' objects, for the garbage collector */
-static int table_traverse(const MemoTable *t, visitproc visit, void *arg) {
+int table_traverse(const MemoTable *t, visitproc visit, void *arg) {
     for (Py_ssize_t i = 0; i < t->cap; i++)
         Py_VISIT(t->entries[i].obj);
     return 0;
 }
 
 /* empty the table (its memory is kept for the next period) */
-static void table_clear(MemoTable *t) {
+void table_clear(MemoTable *t) {
     if (t->used) {
         for (Py_ssize_t i = 0; i < t->cap; i++) {
             PyObject *obj = t->entries[i].obj;
@@ -459,7 +377,7 @@ static void table_clear(MemoTable *t) {
     t->bytes.n = 0;
 }
 
-static void table_free(MemoTable *t) {
+void table_free(MemoTable *t) {
     table_clear(t);
     PyMem_Free(t->entries);
     PyMem_Free(t->bytes.p);
@@ -499,7 +417,7 @@ static int memo_find(PyObject *obj, long phase, const char **p, Py_ssize_t *size
 }
 
 /* remember the bytes written since `start` as those of `obj` at `phase` */
-static int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
+int memo_keep(PyObject *obj, long phase, Py_ssize_t start) {
     if (table_now != NULL) {
         MemoTable *t = table_now;
         if ((t->used + 1) * 2 > t->cap && table_grow(t) < 0)
@@ -625,7 +543,7 @@ done:
     program->version = tp->tp_version_tag;                      /* the look-ups above assign one */
 }
 
-static int encode_program(Program *program, PyObject *msg) {
+int encode_program(Program *program, PyObject *msg) {
     PyTypeObject *tp = Py_TYPE(msg);
     if (tp != program->type || tp->tp_version_tag != program->version)
         learn(program, tp);
@@ -768,20 +686,12 @@ static PyObject *compile(PyObject *self, PyObject *program) {
     return capsule_of(compile_tuple(program));
 }
 
-static Program *program_of(PyObject *capsule) {
+Program *program_of(PyObject *capsule) {
     return PyCapsule_GetPointer(capsule, PROGRAM_CAPSULE);    /* NULL, with an exception, if it is not one */
 }
 
-/* The encoder's globals while one call runs (saved and restored: a field's __float__ may run Python code that
- * encodes too). */
-typedef struct {
-    Buf *out;
-    Py_ssize_t body;
-    PyObject *memo_now, *memo_old;
-    MemoTable *table_now, *table_old;
-} State;
 
-static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old, MemoTable *tnow, MemoTable *told) {
+State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old, MemoTable *tnow, MemoTable *told) {
     State saved = {out, body, memo_now, memo_old, table_now, table_old};
     out = to;
     body = at;
@@ -792,7 +702,7 @@ static State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old, MemoTab
     return saved;
 }
 
-static void leave(State saved) {
+void leave(State saved) {
     out = saved.out;
     body = saved.body;
     memo_now = saved.memo_now;
@@ -857,13 +767,12 @@ static PyObject *encode(PyObject *self, PyObject *args) {
 /* --- Decoding ------------------------------------------------------------------------------------------------
  *
  * `decode(compiled decoder program, payload)`: the message a little-endian CDR payload (header included) holds,
- * read as the generated Python decoders of `simatch.msgs.cdr` read it (they stay the reference, and what runs
- * where this module is not built): primitive sequences become read-only numpy arrays viewing the payload, a
+ * read as the generated Python decoders (`simatch.msgs.cdr_decoders`) read it (the tests and the fuzzing targets
+ * hold the two to the same verdict on every input): primitive sequences become read-only numpy arrays viewing the payload, a
  * string must end with its NUL and be UTF-8, every length is checked against what is left before it is used,
  * and whatever does not fit raises `MessageError` (from `setup_decoding`), never anything else. The program is
  * the encoder's with each message's class: (class, ((kind, field, argument), ...)), a nested message's
- * argument being its own (class, ops). A process of a distributed run decodes the perception, its team's
- * picture and the coach's command at every control tick, on its critical path.
+ * argument being its own (class, ops).
  *
  * Messages are made as the classes' own __init__ makes them: a slotted class without __post_init__ (every
  * message class of simatch.msgs) is allocated and its slots filled directly; any other class is called with
@@ -1088,1133 +997,57 @@ static PyObject *setup_decoding(PyObject *self, PyObject *error) {
     Py_RETURN_NONE;
 }
 
-/* --- The recorder's message log -----------------------------------------------------------------------------
- *
- * `Log(programs, fallback)` is a bus callback, ``log(topic, msg)``, that appends each message to one buffer as
- * an MCAP Message record: opcode 0x05, record length, channel id, sequence 0, log time and publish time =
- * `log.now` (u64 nanoseconds), then the message's CDR bytes, encoded in place by the programs above. A
- * recording spends most of its time here, some two thousand times per simulated second, so the whole path
- * (topic look-up, clock, record header, encoding, count) is one C call with no Python frame and no object per
- * message. `simatch.record.messagelog.MessageLog` is the same thing in Python, byte for byte; its docstring
- * describes the interface. */
-
-#define RECORD_HEAD 31             /* opcode u8, length u64, channel u16, sequence u32, log time u64, publish u64 */
-#define CLOCK_STEP 1               /* add(..., clock=): the message's `step` sets the log time */
-#define CLOCK_TICK 2               /* ... and opens a new memo period */
-
-/* A pose template (``log.poses``): every `every` physics steps, a message on `topic` (model states: `name`, and
- * `pose` as rows of x y z qw qx qy qz) also yields a record on `channel`: a copy of `template` (a message
- * encoded once, header included) with a geometry_msgs/Pose (7 float64: position, then quaternion x y z w)
- * written at each slot's offset from its row, snapped to a grid. The recorder's 3D scene is made so: a
- * Python callback and a field-by-field update for each of them cost more than a millisecond per
- * simulated second. Whatever this does not take as it is (no template yet, other names, a pose that is
- * not a contiguous float buffer of enough rows) goes to `fallback(msg)`, which may set a new template. */
-typedef struct {
-    Py_ssize_t offset;             /* of the Pose in the template */
-    Py_ssize_t row;                /* of the model in `pose` */
-    double z;                      /* the height drawn, or NaN: the row's (snapped) */
-    int turn;                      /* the orientation: the row's turn about z (snapped), else none */
-} PoseSlot;
-
-typedef struct {
-    PyObject *topic, *fallback;    /* NULL: no pose template */
-    long channel;
-    long long every;
-    PyObject *names, *template;    /* NULL until `pose_template` */
-    PoseSlot *slots;
-    Py_ssize_t nslots;
-    double grid, turn_grid;        /* steps per metre, per unit of a quaternion */
-} Poses;
-
-typedef struct {
-    PyObject_HEAD
-    vectorcallfunc vectorcall;
-    Buf buf;
-    Py_buffer target;              /* `into`: memory lent for this chunk's records (target.obj NULL: none) */
-    PyObject *channels;            /* topic -> Channel (in a capsule) */
-    unsigned long generation;      /* changes whenever `channels` does (a `for_topic` callable finds it again) */
-    PyObject *programs, *fallback, *on_chunk;
-    MemoTable memo[2];             /* the memo's tables: this period's is memo[current] */
-    int current;
-    long long now, first, last;    /* log time; of the first and last message since the last take (-1: none) */
-    long long step_ns, chunk_ns, next_chunk;
-    long long step;                /* the physics step of the last clock message (-1: none usable) */
-    Py_ssize_t *counts, ncounts;   /* messages since the last take, by channel id */
-    Poses poses;
-    PyObject *ros_topic;           /* `ros_clock`: after each message on it, ROS 2's clock (NULL: none) */
-    long ros_channel;
-} Log;
-
-typedef struct {
-    long id;
-    int keep;                      /* remember each message's body in the memo */
-    int clock;                     /* CLOCK_* flags */
-    int poses;                     /* the topic of the pose template */
-    int ros_clock;                 /* the topic of `ros_clock` */
-    Program *program;
-    PyObject *owner;               /* the program's capsule */
-} Channel;
-
-static PyObject *step_name = NULL, *name_name = NULL, *pose_name = NULL; /* "step", "name", "pose" */
-
-static void channel_free(PyObject *capsule) {
-    Channel *ch = PyCapsule_GetPointer(capsule, NULL);
-    if (ch != NULL) {
-        Py_XDECREF(ch->owner);
-        PyMem_Free(ch);
-    }
-}
-
-static void put_le(char *p, unsigned long long v, int size) {
-    for (int i = 0; i < size; i++, v >>= 8)
-        p[i] = (char)(v & 0xff);
-}
-
-static int count_message(Log *log, long cid) {
-    if (cid >= log->ncounts) {
-        Py_ssize_t n = cid + 64;
-        Py_ssize_t *c = PyMem_Realloc(log->counts, n * sizeof(Py_ssize_t));
-        if (c == NULL) {
-            PyErr_NoMemory();
-            return FAILED;
-        }
-        memset(c + log->ncounts, 0, (n - log->ncounts) * sizeof(Py_ssize_t));
-        log->counts = c;
-        log->ncounts = n;
-    }
-    log->counts[cid]++;
-    if (log->first < 0)
-        log->first = log->now;
-    log->last = log->now;
-    return 0;
-}
-
-static void put_head(Log *log, Py_ssize_t start, long cid) {
-    char *p = log->buf.p + start;
-    p[0] = 0x05;
-    put_le(p + 1, (unsigned long long)(log->buf.n - start - 9), 8);
-    put_le(p + 9, (unsigned long long)cid, 2);
-    put_le(p + 11, 0, 4);
-    put_le(p + 15, (unsigned long long)log->now, 8);
-    put_le(p + 23, (unsigned long long)log->now, 8);
-}
-
-static int check_channel(long cid) {
-    if (cid < 0 || cid > 65535) {
-        if (!PyErr_Occurred())
-            PyErr_SetString(PyExc_ValueError, "channel id: 0 to 65535");
-        return FAILED;
-    }
-    return 0;
-}
-
-/* the record begun at `start` is written (r == 0): count it and write its header; else take it back */
-static int finish_record(Log *log, Py_ssize_t start, long cid, int r) {
-    if (r == 0)
-        r = count_message(log, cid);
-    if (r != 0) {
-        log->buf.n = start;
-        return r;
-    }
-    put_head(log, start, cid);
-    return 0;
-}
-
-/* encode msg as one record; FALLBACK (nothing appended) if the C encoder does not take it */
-static int log_message(Log *log, const Channel *ch, PyObject *msg) {
-    Py_ssize_t start = log->buf.n;
-    State saved = enter(&log->buf, start + RECORD_HEAD + 4, NULL, NULL, &log->memo[log->current],
-                        &log->memo[!log->current]);
-    int r = reserve(RECORD_HEAD + 4);
-    if (r == 0) {
-        memcpy(out->p + start + RECORD_HEAD, "\x00\x01\x00\x00", 4);
-        out->n = start + RECORD_HEAD + 4;
-        r = encode_program(ch->program, msg);
-    }
-    if (r == 0 && ch->keep)
-        r = memo_keep(msg, 0, start + RECORD_HEAD + 4);
-    leave(saved);
-    return finish_record(log, start, ch->id, r);
-}
-
-static int forget(Log *log) {
-    log->current = !log->current;                   /* this period's table becomes the last one's */
-    table_clear(&log->memo[log->current]);          /* (Python code may run as its objects go) */
-    return 0;
-}
-
-/* the run is at physics step `step`: messages from now on carry its time; a chunk may end first */
-static int advance(Log *log, long long step) {
-    if (log->step_ns <= 0 || step > LLONG_MAX / log->step_ns)      /* no timing, or an absurd step: ignored */
-        return 0;
-    long long now = step * log->step_ns;
-    if (now == log->now)
-        return 0;
-    log->now = now;
-    if (log->on_chunk == NULL || log->chunk_ns <= 0 || now < log->next_chunk)
-        return 0;
-    log->next_chunk = (now / log->chunk_ns + 1) * log->chunk_ns;
-    PyObject *r = PyObject_CallNoArgs(log->on_chunk);
-    Py_XDECREF(r);
-    return r == NULL ? FAILED : 0;
-}
-
-/* a clock message: its step (if it has a usable one) sets the time */
-static int clock_message(Log *log, const Channel *ch, PyObject *msg) {
-    PyObject *v = PyObject_GetAttr(msg, step_name);
-    long long step = -1;
-    if (v != NULL) {
-        PyObject *i = PyNumber_Index(v);      /* an int, or a numpy integer */
-        Py_DECREF(v);
-        if (i != NULL) {
-            step = PyLong_AsLongLong(i);
-            Py_DECREF(i);
-        }
-    }
-    log->step = step;
-    if (step < 0)
-        PyErr_Clear();
-    else if (advance(log, step) < 0)
-        return FAILED;
-    return (ch->clock & CLOCK_TICK) ? forget(log) : 0;
-}
-
-static double snap(double v, double grid) {
-    return nearbyint(v * grid) / grid;          /* to nearest, ties to even: as numpy's round */
-}
-
-/* the pose template's record for a model-states message (see Poses); FALLBACK: for `poses.fallback` */
-static int pose_record(Log *log, PyObject *msg) {
-    Poses *ps = &log->poses;
-    if (ps->template == NULL)
-        return FALLBACK;
-    PyObject *names = PyObject_GetAttr(msg, name_name);
-    int same = names == NULL ? -1 : PyObject_RichCompareBool(names, ps->names, Py_EQ);
-    Py_XDECREF(names);
-    if (same <= 0) {
-        PyErr_Clear();
-        return FALLBACK;
-    }
-    PyObject *pose = PyObject_GetAttr(msg, pose_name);
-    Py_buffer view;
-    if (pose == NULL || PyObject_GetBuffer(pose, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
-        Py_XDECREF(pose);
-        PyErr_Clear();
-        return FALLBACK;
-    }
-    Py_DECREF(pose);
-    int f32 = format_fits(K_F32, view.format, view.itemsize), f64 = format_fits(K_F64, view.format, view.itemsize);
-    Py_ssize_t values = view.itemsize ? view.len / view.itemsize : 0, rows = values / 7;
-    int r = (f32 || f64) && values % 7 == 0 ? 0 : FALLBACK;
-    for (Py_ssize_t i = 0; i < ps->nslots && r == 0; i++)
-        if (ps->slots[i].row >= rows)
-            r = FALLBACK;
-    Py_ssize_t start = log->buf.n, size = PyBytes_GET_SIZE(ps->template);
-    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
-    if (r == 0 && (r = reserve(RECORD_HEAD + size)) == 0) {
-        char *at = out->p + start + RECORD_HEAD;
-        memcpy(at, PyBytes_AS_STRING(ps->template), size);
-        for (Py_ssize_t i = 0; i < ps->nslots; i++) {
-            const PoseSlot *slot = &ps->slots[i];
-            double p[7], v[7];
-            for (int j = 0; j < 7; j++)
-                p[j] = f32 ? (double)((const float *)view.buf)[slot->row * 7 + j]
-                           : ((const double *)view.buf)[slot->row * 7 + j];
-            v[0] = snap(p[0], ps->grid);
-            v[1] = snap(p[1], ps->grid);
-            v[2] = isnan(slot->z) ? snap(p[2], ps->grid) : slot->z;
-            v[3] = v[4] = 0.0;
-            v[5] = slot->turn ? snap(p[6], ps->turn_grid) : 0.0;
-            v[6] = slot->turn ? snap(p[3], ps->turn_grid) : 1.0;
-            memcpy(at + slot->offset, v, sizeof v);
-        }
-        out->n = start + RECORD_HEAD + size;
-    }
-    leave(saved);
-    PyBuffer_Release(&view);
-    return finish_record(log, start, ps->channel, r);
-}
-
-/* after a message on the pose template's topic was logged */
-/* the result of a call whose value is not wanted: 0, or FAILED (its exception set) */
-static int called(PyObject *result) {
-    Py_XDECREF(result);
-    return result == NULL ? FAILED : 0;
-}
-
-static int poses_after(Log *log, PyObject *msg) {
-    Poses *ps = &log->poses;
-    if (ps->fallback == NULL || log->step < 0 || log->step % ps->every != 0)
-        return 0;
-    int r = pose_record(log, msg);
-    if (r != FALLBACK)
-        return r;
-    return called(PyObject_CallOneArg(ps->fallback, msg));
-}
-
-/* ROS 2's clock (rosgraph_msgs/msg/Clock: builtin_interfaces/Time, int32 sec and uint32 nanosec) at the log
- * time, on `ros_channel` (what `simatch.record.layout.ros_clock` encodes; a time beyond int32 seconds is not
- * written, by either log) */
-static int ros_clock_record(Log *log) {
-    long long sec = log->now / 1000000000LL, nsec = log->now % 1000000000LL;
-    if (nsec < 0) {                                /* floored, as Python's divmod */
-        sec -= 1;
-        nsec += 1000000000LL;
-    }
-    if (sec < INT32_MIN || sec > INT32_MAX)
-        return 0;
-    Py_ssize_t start = log->buf.n;
-    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
-    int r = reserve(RECORD_HEAD + 12);
-    if (r == 0) {
-        char *p = out->p + start + RECORD_HEAD;
-        memcpy(p, "\x00\x01\x00\x00", 4);
-        put_le(p + 4, (unsigned long long)(sec & 0xffffffffLL), 4);
-        put_le(p + 8, (unsigned long long)nsec, 4);
-        out->n = start + RECORD_HEAD + 12;
-    }
-    leave(saved);
-    return finish_record(log, start, log->ros_channel, r);
-}
-
-/* ros_clock(topic, channel_id): after each message on topic, a record of ROS 2's clock at the log time */
-static PyObject *log_ros_clock(Log *log, PyObject *args) {
-    PyObject *topic, *key, *value;
-    long cid;
-    if (!PyArg_ParseTuple(args, "Ul", &topic, &cid) || check_channel(cid) < 0)
-        return NULL;
-    Py_XSETREF(log->ros_topic, Py_NewRef(topic));
-    log->ros_channel = cid;
-    Py_ssize_t pos = 0;
-    while (PyDict_Next(log->channels, &pos, &key, &value)) {      /* a channel added before */
-        Channel *ch = PyCapsule_GetPointer(value, NULL);
-        if (ch == NULL)
-            return NULL;
-        ch->ros_clock = PyUnicode_Compare(key, topic) == 0;
-    }
-    Py_RETURN_NONE;
-}
-
-/* ``log(topic, msg)`` where `entry` is the topic's channel (a capsule), or NULL for a topic not added */
-static PyObject *deliver(Log *log, PyObject *topic, PyObject *entry, PyObject *msg) {
-    PyObject *args[2] = {topic, msg};
-    if (entry == NULL)             /* a topic not added: the fallback's */
-        return PyObject_Vectorcall(log->fallback, args, 2, NULL);
-    Py_INCREF(entry);              /* on_chunk and the fallbacks run Python: keep the channel alive meanwhile */
-    const Channel *ch = PyCapsule_GetPointer(entry, NULL);
-    int r = ch->clock ? clock_message(log, ch, msg) : 0;
-    if (r == 0)
-        r = log_message(log, ch, msg);
-    if (r == FALLBACK)             /* the fallback encodes it, or says what is wrong; its poses follow all the same */
-        r = called(PyObject_Vectorcall(log->fallback, args, 2, NULL));
-    if (r == 0 && ch->poses)
-        r = poses_after(log, msg);
-    if (r == 0 && ch->ros_clock)
-        r = ros_clock_record(log);
-    Py_DECREF(entry);
-    if (r != 0)
-        return NULL;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
-    Log *log = (Log *)self;
-    if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
-        PyErr_SetString(PyExc_TypeError, "log(topic, msg)");
-        return NULL;
-    }
-    PyObject *entry = PyDict_GetItemWithError(log->channels, args[0]);
-    if (entry == NULL && PyErr_Occurred())
-        return NULL;
-    return deliver(log, args[0], entry, args[1]);
-}
-
-/* `log.for_topic(topic)`: the log's callback for the messages of one topic, ``f(msg)`` = ``log(topic, msg)``. The
- * in-process bus calls such a callable, when a wildcard subscriber offers one, instead of a partial of the
- * subscriber (`simatch.bus.inproc`): no partial's call and no look-up of the topic per message, the channel is
- * found once (and again after the log's channels change). */
-typedef struct {
-    PyObject_HEAD
-    vectorcallfunc vectorcall;
-    Log *log;
-    PyObject *topic;
-    PyObject *entry;               /* the topic's channel as of `generation`, or NULL (none yet: looked up again) */
-    unsigned long generation;
-} LogTopic;
-
-static PyObject *log_topic_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
-    LogTopic *lt = (LogTopic *)self;
-    if (PyVectorcall_NARGS(nargsf) != 1 || (kwnames != NULL && PyTuple_GET_SIZE(kwnames))) {
-        PyErr_SetString(PyExc_TypeError, "for_topic(topic)(msg)");
-        return NULL;
-    }
-    Log *log = lt->log;
-    if (log == NULL) {             /* (cleared by the garbage collector) */
-        PyErr_SetString(PyExc_ValueError, "the log of this callable is gone");
-        return NULL;
-    }
-    if (lt->entry == NULL || lt->generation != log->generation) {
-        PyObject *entry = PyDict_GetItemWithError(log->channels, lt->topic);
-        if (entry == NULL && PyErr_Occurred())
-            return NULL;
-        Py_XSETREF(lt->entry, Py_XNewRef(entry));
-        lt->generation = log->generation;
-    }
-    return deliver(log, lt->topic, lt->entry, args[0]);
-}
-
-static int log_topic_traverse(LogTopic *self, visitproc visit, void *arg) {
-    Py_VISIT(self->log);
-    Py_VISIT(self->topic);
-    Py_VISIT(self->entry);
-    return 0;
-}
-
-static int log_topic_clear(LogTopic *self) {
-    Py_CLEAR(self->log);
-    Py_CLEAR(self->topic);
-    Py_CLEAR(self->entry);
-    return 0;
-}
-
-static void log_topic_dealloc(LogTopic *self) {
-    PyObject_GC_UnTrack(self);
-    log_topic_clear(self);
-    Py_TYPE(self)->tp_free((PyObject *)self);
-}
-
-static PyTypeObject LogTopicType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "simatch.msgs._cdr_accel.LogTopic",
-    .tp_doc = "log.for_topic(topic): f(msg) logs msg as log(topic, msg) does",
-    .tp_basicsize = sizeof(LogTopic),
-    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
-    .tp_dealloc = (destructor)log_topic_dealloc,
-    .tp_traverse = (traverseproc)log_topic_traverse,
-    .tp_clear = (inquiry)log_topic_clear,
-    .tp_call = PyVectorcall_Call,
-    .tp_vectorcall_offset = offsetof(LogTopic, vectorcall),
-};
-
-static PyObject *log_for_topic(Log *log, PyObject *topic) {
-    if (!PyUnicode_Check(topic)) {
-        PyErr_SetString(PyExc_TypeError, "for_topic(topic): a str");
-        return NULL;
-    }
-    LogTopic *lt = PyObject_GC_New(LogTopic, &LogTopicType);
-    if (lt == NULL)
-        return NULL;
-    lt->vectorcall = log_topic_vectorcall;
-    lt->log = (Log *)Py_NewRef((PyObject *)log);
-    lt->topic = Py_NewRef(topic);
-    lt->entry = NULL;
-    lt->generation = 0;
-    PyObject_GC_Track(lt);
-    return (PyObject *)lt;
-}
-
-static PyObject *log_add(Log *log, PyObject *args, PyObject *kwds) {
-    PyObject *topic, *typename;
-    long cid;
-    int clock = 0;
-    static char *kwlist[] = {"topic", "channel_id", "typename", "clock", NULL};
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "UlO|i", kwlist, &topic, &cid, &typename, &clock)
-        || check_channel(cid) < 0)
-        return NULL;
-    PyObject *found = PyObject_CallOneArg(log->programs, typename);
-    if (found == NULL)
-        return NULL;
-    if (!PyTuple_Check(found) || PyTuple_GET_SIZE(found) != 2) {
-        Py_DECREF(found);
-        PyErr_SetString(PyExc_TypeError, "programs(typename) must return (compiled program, keep)");
-        return NULL;
-    }
-    Program *program = program_of(PyTuple_GET_ITEM(found, 0));
-    int keep = program == NULL ? -1 : PyObject_IsTrue(PyTuple_GET_ITEM(found, 1));
-    Channel *ch = keep < 0 ? NULL : PyMem_Malloc(sizeof(Channel));
-    if (ch == NULL) {
-        Py_DECREF(found);
-        return keep < 0 ? NULL : PyErr_NoMemory();
-    }
-    int poses = log->poses.topic != NULL && PyUnicode_Compare(topic, log->poses.topic) == 0;
-    int ros = log->ros_topic != NULL && PyUnicode_Compare(topic, log->ros_topic) == 0;
-    *ch = (Channel){cid, keep, clock & (CLOCK_STEP | CLOCK_TICK), poses, ros, program,
-                    Py_NewRef(PyTuple_GET_ITEM(found, 0))};
-    Py_DECREF(found);
-    PyObject *entry = PyCapsule_New(ch, NULL, channel_free);
-    if (entry == NULL) {
-        Py_DECREF(ch->owner);
-        PyMem_Free(ch);
-        return NULL;
-    }
-    int r = PyDict_SetItem(log->channels, topic, entry);
-    Py_DECREF(entry);
-    if (r < 0)
-        return NULL;
-    log->generation++;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_timing(Log *log, PyObject *args, PyObject *kwds) {
-    long long step_ns, chunk_ns;
-    PyObject *on_chunk;
-    static char *kwlist[] = {"step_ns", "chunk_ns", "on_chunk", NULL};
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "LLO", kwlist, &step_ns, &chunk_ns, &on_chunk))
-        return NULL;
-    if (step_ns <= 0 || chunk_ns <= 0 || !PyCallable_Check(on_chunk)) {
-        PyErr_SetString(PyExc_ValueError, "timing(step_ns > 0, chunk_ns > 0, on_chunk callable)");
-        return NULL;
-    }
-    log->step_ns = step_ns;
-    log->chunk_ns = chunk_ns;
-    log->next_chunk = (log->now / chunk_ns + 1) * chunk_ns;
-    Py_XSETREF(log->on_chunk, Py_NewRef(on_chunk));
-    Py_RETURN_NONE;
-}
-
-/* the Python objects a Log holds, in one list each for the garbage collector's visit and clear */
-#define LOG_OBJECTS(X) X(channels) X(programs) X(fallback) X(on_chunk) X(ros_topic)
-#define POSES_OBJECTS(X) X(topic) X(fallback) X(names) X(template)
-
-static void poses_clear(Poses *ps) {
-#define CLEAR_POSES(field) Py_CLEAR(ps->field);
-    POSES_OBJECTS(CLEAR_POSES)
-#undef CLEAR_POSES
-    PyMem_Free(ps->slots);
-    ps->slots = NULL;
-    ps->nslots = 0;
-}
-
-static PyObject *log_poses(Log *log, PyObject *args, PyObject *kwds) {
-    PyObject *topic, *fallback;
-    long cid;
-    long long every;
-    static char *kwlist[] = {"topic", "channel_id", "every", "fallback", NULL};
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "UlLO", kwlist, &topic, &cid, &every, &fallback)
-        || check_channel(cid) < 0)
-        return NULL;
-    if (every <= 0 || !PyCallable_Check(fallback)) {
-        PyErr_SetString(PyExc_ValueError, "poses(topic, channel_id, every > 0, fallback callable)");
-        return NULL;
-    }
-    poses_clear(&log->poses);
-    log->poses = (Poses){Py_NewRef(topic), Py_NewRef(fallback), cid, every, NULL, NULL, NULL, 0, 0.0, 0.0};
-    PyObject *key, *value;
-    Py_ssize_t pos = 0;
-    while (PyDict_Next(log->channels, &pos, &key, &value)) {
-        Channel *ch = PyCapsule_GetPointer(value, NULL);
-        if (ch == NULL)
-            return NULL;
-        ch->poses = PyUnicode_Compare(key, topic) == 0;
-    }
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_pose_template(Log *log, PyObject *args, PyObject *kwds) {
-    PyObject *names, *template, *slots;
-    double grid, turn_grid;
-    static char *kwlist[] = {"names", "template", "slots", "grid", "turn_grid", NULL};
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OSOdd", kwlist, &names, &template, &slots, &grid, &turn_grid))
-        return NULL;
-    if (log->poses.fallback == NULL) {
-        PyErr_SetString(PyExc_ValueError, "pose_template: call poses() first");
-        return NULL;
-    }
-    if (!(grid > 0.0) || !(turn_grid > 0.0)) {
-        PyErr_SetString(PyExc_ValueError, "pose_template: grids must be positive");
-        return NULL;
-    }
-    PyObject *seq = PySequence_Fast(slots, "pose_template: slots must be a sequence");
-    if (seq == NULL)
-        return NULL;
-    Py_ssize_t n = PySequence_Fast_GET_SIZE(seq), size = PyBytes_GET_SIZE(template);
-    PoseSlot *parsed = PyMem_Calloc(n ? n : 1, sizeof(PoseSlot));
-    if (parsed == NULL) {
-        Py_DECREF(seq);
-        return PyErr_NoMemory();
-    }
-    for (Py_ssize_t i = 0; i < n; i++) {
-        PoseSlot *slot = &parsed[i];
-        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(seq, i), "nndp;slot: (offset, row, z, turn)",
-                              &slot->offset, &slot->row, &slot->z, &slot->turn)
-            || slot->offset < 4 || slot->offset + 7 * (Py_ssize_t)sizeof(double) > size || slot->row < 0) {
-            if (!PyErr_Occurred())
-                PyErr_SetString(PyExc_ValueError, "pose_template: a slot outside the template");
-            PyMem_Free(parsed);
-            Py_DECREF(seq);
-            return NULL;
-        }
-    }
-    Py_DECREF(seq);
-    Poses *ps = &log->poses;
-    Py_XSETREF(ps->names, Py_NewRef(names));
-    Py_XSETREF(ps->template, Py_NewRef(template));
-    PyMem_Free(ps->slots);
-    ps->slots = parsed;
-    ps->nslots = n;
-    ps->grid = grid;
-    ps->turn_grid = turn_grid;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_record(Log *log, PyObject *args) {
-    long cid;
-    Py_buffer data;
-    if (!PyArg_ParseTuple(args, "ly*", &cid, &data))
-        return NULL;
-    Py_ssize_t start = log->buf.n;
-    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
-    int r = check_channel(cid);
-    if (r == 0 && (r = reserve(RECORD_HEAD)) == 0) {
-        out->n += RECORD_HEAD;
-        r = put(data.buf, data.len);
-    }
-    leave(saved);
-    PyBuffer_Release(&data);
-    if (finish_record(log, start, cid, r) != 0)
-        return NULL;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_append(Log *log, PyObject *args) {
-    Py_buffer data;
-    if (!PyArg_ParseTuple(args, "y*", &data))
-        return NULL;
-    State saved = enter(&log->buf, 0, NULL, NULL, NULL, NULL);
-    int r = put(data.buf, data.len);
-    leave(saved);
-    PyBuffer_Release(&data);
-    if (r != 0)
-        return NULL;
-    Py_RETURN_NONE;
-}
-
-/* A chunk's records as `take` hands them over: the log's buffer itself, not a copy (a chunk of a match is some
- * 400 kB; copying it into a bytes object, whose fresh pages the system maps anew each time, cost the simulation
- * thread some 0.3 ms per chunk). Read through the buffer protocol (the writer writes it to its pipe); when it
- * is dropped, its memory becomes the spare buffer that the next `take` gives the log, so the same pages serve
- * every chunk. */
-typedef struct {
-    PyObject_HEAD
-    Buf buf;
-    Py_ssize_t exports;
-} Chunk;
-
-static Buf spare = {NULL, 0, 0, 0};     /* a dropped chunk's memory, for the log's next buffer (the GIL is held) */
-
-static int chunk_getbuffer(Chunk *self, Py_buffer *view, int flags) {
-    int r = PyBuffer_FillInfo(view, (PyObject *)self, self->buf.p ? self->buf.p : "", self->buf.n, 1, flags);
-    if (r == 0)
-        self->exports++;
-    return r;
-}
-
-static void chunk_releasebuffer(Chunk *self, Py_buffer *view) {
-    self->exports--;
-}
-
-static Py_ssize_t chunk_length(Chunk *self) {
-    return self->buf.n;
-}
-
-/* `buf`, which holds no more records, as the spare buffer (the larger one is kept) */
-static void keep_spare(Buf buf) {
-    if (buf.lent)
-        return;
-    if (spare.cap < buf.cap) {
-        PyMem_Free(spare.p);
-        spare = buf;
-        spare.n = 0;
-    } else {
-        PyMem_Free(buf.p);
-    }
-}
-
-static void chunk_dealloc(Chunk *self) {
-    keep_spare(self->buf);
-    Py_TYPE(self)->tp_free((PyObject *)self);
-}
-
-static PyObject *chunk_bytes(Chunk *self, PyObject *unused) {
-    return PyBytes_FromStringAndSize(self->buf.p ? self->buf.p : "", self->buf.n);
-}
-
-static PyBufferProcs chunk_as_buffer = {(getbufferproc)chunk_getbuffer, (releasebufferproc)chunk_releasebuffer};
-static PySequenceMethods chunk_as_sequence = {.sq_length = (lenfunc)chunk_length};
-static PyMethodDef chunk_methods[] = {
-    {"__bytes__", (PyCFunction)chunk_bytes, METH_NOARGS, "the records as bytes (a copy)"},
-    {NULL, NULL, 0, NULL},
-};
-
-static PyTypeObject ChunkType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "simatch.msgs._cdr_accel.Chunk",
-    .tp_basicsize = sizeof(Chunk),
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "the records of one chunk, as Log.take hands them over (a read-only buffer; bytes(chunk) copies)",
-    .tp_dealloc = (destructor)chunk_dealloc,
-    .tp_as_buffer = &chunk_as_buffer,
-    .tp_as_sequence = &chunk_as_sequence,
-    .tp_methods = chunk_methods,
-};
-
-static PyObject *log_take(Log *log, PyObject *unused) {
-    PyObject *counts = PyDict_New();
-    if (counts == NULL)
-        return NULL;
-    for (Py_ssize_t cid = 0; cid < log->ncounts; cid++) {
-        if (!log->counts[cid])
-            continue;
-        PyObject *k = PyLong_FromSsize_t(cid), *v = PyLong_FromSsize_t(log->counts[cid]);
-        int r = (k && v) ? PyDict_SetItem(counts, k, v) : -1;
-        Py_XDECREF(k);
-        Py_XDECREF(v);
-        if (r < 0) {
-            Py_DECREF(counts);
-            return NULL;
-        }
-    }
-    PyObject *result = NULL;
-    if (log->buf.lent) {               /* the records are in the memory lent by `into`: a view of them */
-        PyObject *whole = PyMemoryView_FromObject(log->target.obj);
-        PyObject *data = whole ? PySequence_GetSlice(whole, 0, log->buf.n) : NULL;
-        Py_XDECREF(whole);
-        if (data != NULL)
-            result = Py_BuildValue("(NNLL)", data, counts, log->first, log->last);
-        if (result == NULL) {
-            Py_DECREF(counts);
-            return NULL;
-        }
-        PyBuffer_Release(&log->target);   /* the log writes no more into it: the memory is the taker's now */
-        log->buf = spare;                 /* until the next `into` */
-        spare = (Buf){NULL, 0, 0, 0};
-    } else {
-        Chunk *data = PyObject_New(Chunk, &ChunkType);
-        if (data != NULL) {
-            data->buf = log->buf;          /* the buffer itself; the log goes on in the spare one */
-            data->exports = 0;
-            log->buf = spare;
-            spare = (Buf){NULL, 0, 0, 0};
-            result = Py_BuildValue("(NNLL)", (PyObject *)data, counts, log->first, log->last);
-        }
-        if (result == NULL) {
-            Py_XDECREF(data);
-            Py_DECREF(counts);
-            return NULL;
-        }
-    }
-    log->buf.n = 0;
-    log->first = log->last = -1;
-    if (log->ncounts)
-        memset(log->counts, 0, log->ncounts * sizeof(Py_ssize_t));
-    return result;
-}
-
-/* stop writing into the memory lent by `into`: the records held there move to memory of the log's own */
-static int leave_target(Log *log) {
-    if (log->target.obj == NULL)
-        return 0;
-    if (log->buf.lent) {
-        Buf own = spare;
-        if (own.cap < log->buf.n) {
-            char *p = PyMem_Realloc(own.p, log->buf.n);
-            if (p == NULL) {
-                PyErr_NoMemory();
-                return FAILED;
-            }
-            own.p = p;
-            own.cap = log->buf.n;
-        }
-        spare = (Buf){NULL, 0, 0, 0};
-        if (log->buf.n)
-            memcpy(own.p, log->buf.p, log->buf.n);
-        own.n = log->buf.n;
-        log->buf = own;
-    }
-    PyBuffer_Release(&log->target);
-    return 0;
-}
-
-/* into(buffer or None): write the records from now on into `buffer` (a writable buffer: memory shared with the
- * process that writes the file), as long as they fit; those held since the last take move there (if they
- * fit). `take` then hands them over as a memoryview of `buffer`, and the log writes no more into it until it
- * is given again. None: back to memory of the log's own. */
-static PyObject *log_into(Log *log, PyObject *arg) {
-    Py_buffer view = {0};
-    if (arg != Py_None && PyObject_GetBuffer(arg, &view, PyBUF_WRITABLE) < 0)
-        return NULL;
-    if (leave_target(log) < 0) {
-        if (view.obj != NULL)
-            PyBuffer_Release(&view);
-        return NULL;
-    }
-    if (view.obj == NULL)
-        Py_RETURN_NONE;
-    if (log->buf.n > view.len) {      /* what is held does not fit: it stays where it is */
-        PyBuffer_Release(&view);
-        Py_RETURN_NONE;
-    }
-    if (log->buf.n)
-        memcpy(view.buf, log->buf.p, log->buf.n);
-    Py_ssize_t n = log->buf.n;
-    keep_spare(log->buf);
-    log->buf = (Buf){view.buf, n, view.len, 1};
-    log->target = view;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_forget(Log *log, PyObject *unused) {
-    if (forget(log) < 0)
-        return NULL;
-    Py_RETURN_NONE;
-}
-
-static PyObject *log_size(Log *log, void *closure) {
-    return PyLong_FromSsize_t(log->buf.n);
-}
-
-/* the garbage collector's visit and clear of the objects a `self` holds (listed by an X macro: LOG_OBJECTS) */
-#define VISIT_MEMBER(field) Py_VISIT(self->field);
-#define CLEAR_MEMBER(field) Py_CLEAR(self->field);
-
-static int log_traverse(Log *self, visitproc visit, void *arg) {
-#define VISIT_POSES(field) Py_VISIT(self->poses.field);
-    LOG_OBJECTS(VISIT_MEMBER)
-    POSES_OBJECTS(VISIT_POSES)
-    Py_VISIT(self->target.obj);
-#undef VISIT_POSES
-    for (int i = 0; i < 2; i++) {
-        int r = table_traverse(&self->memo[i], visit, arg);
-        if (r)
-            return r;
-    }
-    return 0;
-}
-
-static int log_clear(Log *self) {
-    LOG_OBJECTS(CLEAR_MEMBER)
-    poses_clear(&self->poses);
-    if (self->target.obj != NULL) {   /* the records held in the lent memory are dropped with it */
-        if (self->buf.lent)
-            self->buf = (Buf){NULL, 0, 0, 0};
-        PyBuffer_Release(&self->target);
-    }
-    table_clear(&self->memo[0]);
-    table_clear(&self->memo[1]);
-    return 0;
-}
-
-static void log_dealloc(Log *log) {
-    PyObject_GC_UnTrack(log);
-    log_clear(log);
-    table_free(&log->memo[0]);
-    table_free(&log->memo[1]);
-    if (!log->buf.lent)
-        PyMem_Free(log->buf.p);
-    PyMem_Free(log->counts);
-    Py_TYPE(log)->tp_free((PyObject *)log);
-}
-
-static PyObject *log_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
-    PyObject *programs, *fallback;
-    static char *kwlist[] = {"programs", "fallback", NULL};
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OO", kwlist, &programs, &fallback))
-        return NULL;
-    if (!PyCallable_Check(programs) || !PyCallable_Check(fallback)) {
-        PyErr_SetString(PyExc_TypeError, "Log(programs, fallback): two callables");
-        return NULL;
-    }
-    Log *log = (Log *)type->tp_alloc(type, 0);
-    if (log == NULL)
-        return NULL;
-    log->vectorcall = log_vectorcall;
-    log->first = log->last = log->step = -1;
-    log->channels = PyDict_New();
-    log->programs = Py_NewRef(programs);
-    log->fallback = Py_NewRef(fallback);
-    if (log->channels == NULL) {
-        Py_DECREF(log);
-        return NULL;
-    }
-    return (PyObject *)log;
-}
-
-static PyMethodDef log_methods[] = {
-    {"add", (PyCFunction)(void (*)(void))log_add, METH_VARARGS | METH_KEYWORDS,
-     "add(topic, channel_id, typename, clock=0): record topic on that channel"},
-    {"timing", (PyCFunction)(void (*)(void))log_timing, METH_VARARGS | METH_KEYWORDS,
-     "timing(step_ns, chunk_ns, on_chunk): how clock messages set the time and end chunks"},
-    {"ros_clock", (PyCFunction)log_ros_clock, METH_VARARGS,
-     "ros_clock(topic, channel_id): after each message on topic, ROS 2's clock at the log time on that channel"},
-    {"poses", (PyCFunction)(void (*)(void))log_poses, METH_VARARGS | METH_KEYWORDS,
-     "poses(topic, channel_id, every, fallback): a pose template's record every `every` steps of topic"},
-    {"pose_template", (PyCFunction)(void (*)(void))log_pose_template, METH_VARARGS | METH_KEYWORDS,
-     "pose_template(names, template, slots, grid, turn_grid): the template for model states of these names"},
-    {"record", (PyCFunction)log_record, METH_VARARGS, "record(channel_id, data): an encoded message, at `now`"},
-    {"append", (PyCFunction)log_append, METH_VARARGS, "append(data): raw records"},
-    {"take", (PyCFunction)log_take, METH_NOARGS,
-     "take() -> (chunk, {channel_id: messages}, first time, last time) since the last take; chunk: a buffer"},
-    {"for_topic", (PyCFunction)log_for_topic, METH_O,
-     "for_topic(topic) -> f: f(msg) logs msg as log(topic, msg) does (the in-process bus calls it)"},
-    {"into", (PyCFunction)log_into, METH_O,
-     "into(buffer or None): write the next records into buffer (writable) while they fit; take hands a view of it"},
-    {"forget", (PyCFunction)log_forget, METH_NOARGS, "forget(): start a new memo period"},
-    {NULL, NULL, 0, NULL},
-};
-
-static PyMemberDef log_members[] = {
-    {"now", T_LONGLONG, offsetof(Log, now), 0, "log time of the next messages [ns]"},
-    {NULL, 0, 0, 0, NULL},
-};
-
-static PyGetSetDef log_getset[] = {
-    {"size", (getter)log_size, NULL, "bytes held since the last take", NULL},
-    {NULL, NULL, NULL, NULL, NULL},
-};
-
-/* the slots of a callable object type that holds Python objects (Log, Tap): its struct T, functions prefix_* */
-#define CALLABLE_TYPE(T, prefix)                                                                           \
-    .tp_basicsize = sizeof(T), .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL, \
-    .tp_new = prefix##_new, .tp_dealloc = (destructor)prefix##_dealloc,                                        \
-    .tp_traverse = (traverseproc)prefix##_traverse, .tp_clear = (inquiry)prefix##_clear,                        \
-    .tp_call = PyVectorcall_Call, .tp_vectorcall_offset = offsetof(T, vectorcall)
-
-static PyTypeObject LogType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "simatch.msgs._cdr_accel.Log",
-    .tp_doc = "Log(programs, fallback): MCAP message records of bus messages, encoded to CDR in C",
-    CALLABLE_TYPE(Log, log),
-    .tp_methods = log_methods,
-    .tp_members = log_members,
-    .tp_getset = log_getset,
-};
-
-/* ------------------------------------------------------------------------------------------------------------
- * The world's input taps (`simatch.sim.inputs`): the logging twins of the simulator's velocity and action
- * commands, which a match calls hundreds of times per simulated second while a recorder listens. A Python
- * twin cost a frame (and a tuple of its arguments) per call; a tap is one C call that appends the command to
- * the input log's lists, as `InputLog.vel`/`InputLog.action` do, and calls the simulator's method. Any other
- * call (keywords, another count of arguments, a robot index that is not a small int, a call made while the
- * log is busy) goes to `general`, the Python twin that logs it as a call. */
-
-#define TAP_VEL 1
-#define TAP_ACTION 2
-
-typedef struct {
-    PyObject_HEAD
-    vectorcallfunc vectorcall;
-    int form;                      /* TAP_VEL or TAP_ACTION */
-    PyObject *original, *general, *log, *kind, *robot, *values, *code; /* code: the kind's int */
-    PyTypeObject *log_type;        /* the log's class when it holds `busy` in a slot (at `busy_at`), else NULL */
-    unsigned int log_version;      /* ... and its version tag then (the slot is read while it is the same) */
-    Py_ssize_t busy_at;
-} Tap;
-
-static PyObject *busy_name;       /* (below, with the taps' other constants) */
-
-/* the log's `busy` mark: read in its slot (as `encode_program` reads a message's fields), else by name */
-static int tap_busy(Tap *tap) {
-    PyTypeObject *tp = Py_TYPE(tap->log);
-    if (tp == tap->log_type && tp->tp_version_tag == tap->log_version) {
-        PyObject *busy = *(PyObject **)((char *)tap->log + tap->busy_at);
-        if (busy == Py_False)
-            return 0;
-        if (busy == Py_True)
-            return 1;
-    }
-    PyObject *busy = PyObject_GetAttr(tap->log, busy_name);
-    if (busy == NULL)
+/* --- Setup and the module ------------------------------------------------------------------------------------ */
+
+/* `declared` ({field: offset}, from simatch.msgs.cdr) names the `n` fields of numpy's `what` at `offsets` */
+static int check_offsets(PyObject *declared, const char *what, const char *const *names, const Py_ssize_t *offsets,
+                         int n) {
+    if (!PyDict_Check(declared) || PyDict_GET_SIZE(declared) != n) {
+        PyErr_Format(PyExc_ImportError, "simatch.msgs._cdr_accel: the %s layout declared by simatch.msgs.cdr "
+                                        "does not name the %d fields this extension reads", what, n);
         return -1;
-    int b = PyObject_IsTrue(busy);
-    Py_DECREF(busy);
-    return b;
-}
-
-static PyObject *busy_name = NULL, *zero = NULL, *one = NULL, *nan_value = NULL;
-
-static int tap_append(Tap *tap, PyObject *index, PyObject *const *numbers, int n) {
-    if (PyList_Append(tap->kind, tap->code) < 0 || PyList_Append(tap->robot, index) < 0)
-        return FAILED;
-    for (int k = 0; k < n; k++)
-        if (PyList_Append(tap->values, numbers[k]) < 0)
-            return FAILED;
-    return 0;
-}
-
-static PyObject *tap_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
-    Tap *tap = (Tap *)self;
-    Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
-    int compact = (kwnames == NULL || PyTuple_GET_SIZE(kwnames) == 0)
-                  && (tap->form == TAP_VEL ? nargs == 4 : (nargs >= 2 && nargs <= 5)) && PyLong_CheckExact(args[0]);
-    if (compact) {
-        int overflow = 0;
-        long i = PyLong_AsLongAndOverflow(args[0], &overflow);
-        compact = !overflow && i >= 0 && i < 32768;
     }
-    if (compact) {
-        int b = tap_busy(tap);
-        if (b < 0)
-            return NULL;
-        compact = !b;
-    }
-    if (!compact)
-        return PyObject_Vectorcall(tap->general, args, nargsf, kwnames);
-    int r;
-    if (tap->form == TAP_VEL) {
-        r = tap_append(tap, args[0], args + 1, 3);
-    } else {                       /* dribble (0/1), kick_speed as given, lob (0/1), window (NaN: none) */
-        int dribble = PyObject_IsTrue(args[1]), lob = nargs > 3 ? PyObject_IsTrue(args[3]) : 0;
-        if (dribble < 0 || lob < 0)
-            return NULL;
-        PyObject *numbers[4] = {
-            dribble ? one : zero,
-            nargs > 2 ? args[2] : zero,
-            lob ? one : zero,
-            nargs > 4 && args[4] != Py_None ? args[4] : nan_value,
-        };
-        r = tap_append(tap, args[0], numbers, 4);
-    }
-    if (r < 0)
-        return NULL;
-    return PyObject_Vectorcall(tap->original, args, nargs, NULL);
-}
-
-#define TAP_OBJECTS(X) X(original) X(general) X(log) X(kind) X(robot) X(values) X(code)
-
-static int tap_traverse(Tap *self, visitproc visit, void *arg) {
-    TAP_OBJECTS(VISIT_MEMBER)
-    return 0;
-}
-
-static int tap_clear(Tap *self) {
-    TAP_OBJECTS(CLEAR_MEMBER)
-    return 0;
-}
-
-static void tap_dealloc(Tap *tap) {
-    PyObject_GC_UnTrack(tap);
-    tap_clear(tap);
-    Py_TYPE(tap)->tp_free((PyObject *)tap);
-}
-
-static PyObject *tap_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
-    static char *kwlist[] = {"form", "original", "general", "log", "kind", "robot", "values", "code", NULL};
-    const char *form;
-    PyObject *original, *general, *log, *kind, *robot, *values, *code;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "sOOOO!O!O!O", kwlist, &form, &original, &general, &log,
-                                     &PyList_Type, &kind, &PyList_Type, &robot, &PyList_Type, &values, &code))
-        return NULL;
-    int f = strcmp(form, "vel") == 0 ? TAP_VEL : strcmp(form, "action") == 0 ? TAP_ACTION : 0;
-    if (!f || !PyCallable_Check(original) || !PyCallable_Check(general)) {
-        PyErr_SetString(PyExc_ValueError, "Tap(form: \"vel\" or \"action\", original, general, log, lists, code)");
-        return NULL;
-    }
-    Tap *tap = (Tap *)type->tp_alloc(type, 0);
-    if (tap == NULL)
-        return NULL;
-    tap->vectorcall = tap_vectorcall;
-    tap->form = f;
-    tap->original = Py_NewRef(original);
-    tap->general = Py_NewRef(general);
-    tap->log = Py_NewRef(log);
-    tap->kind = Py_NewRef(kind);
-    tap->robot = Py_NewRef(robot);
-    tap->values = Py_NewRef(values);
-    tap->code = Py_NewRef(code);
-    PyTypeObject *lt = Py_TYPE(log);                /* does the log hold `busy` in a slot? (InputLog does) */
-    Py_ssize_t busy_at = slot_offset(lt, busy_name);
-    if (busy_at > 0 && PyType_HasFeature(lt, Py_TPFLAGS_VALID_VERSION_TAG)) {
-        tap->log_type = lt;
-        tap->log_version = lt->tp_version_tag;
-        tap->busy_at = busy_at;
-    }
-    return (PyObject *)tap;
-}
-
-static PyObject *tap_get_wrapped(Tap *tap, void *closure) {
-    return Py_NewRef(tap->original);
-}
-
-static PyGetSetDef tap_getset[] = {
-    {"__wrapped__", (getter)tap_get_wrapped, NULL, "the simulator's method", NULL},
-    {NULL, NULL, NULL, NULL, NULL},
-};
-
-static PyTypeObject TapType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "simatch.msgs._cdr_accel.Tap",
-    .tp_doc = "Tap(form, original, general, log, kind, robot, values, code): a world input's logging twin in C",
-    CALLABLE_TYPE(Tap, tap),
-    .tp_getset = tap_getset,
-};
-
-/* pack(list, code) -> bytearray | None: the list's numbers as one machine array ("d": float64 from exact floats,
- * exact ints (correctly rounded, as float() rounds them) and bools; "B": uint8 and "h": int16 from exact ints
- * in range), or None if an item is anything else (the caller converts those lists itself). The world inputs'
- * message takes its arrays so (`simatch.sim.inputs`): the array module's constructor parses each item's
- * format, some hundred instructions per number. */
-static PyObject *pack(PyObject *self, PyObject *args) {
-    PyObject *list;
-    int code;
-    if (!PyArg_ParseTuple(args, "O!C", &PyList_Type, &list, &code))
-        return NULL;
-    if (code != 'd' && code != 'B' && code != 'h') {
-        PyErr_SetString(PyExc_ValueError, "pack: code 'd', 'B' or 'h'");
-        return NULL;
-    }
-    Py_ssize_t n = PyList_GET_SIZE(list), size = code == 'd' ? 8 : code == 'h' ? 2 : 1;
-    PyObject *result = PyByteArray_FromStringAndSize(NULL, n * size);
-    if (result == NULL)
-        return NULL;
-    char *p = PyByteArray_AS_STRING(result);
-    for (Py_ssize_t i = 0; i < n; i++) {
-        PyObject *v = PyList_GET_ITEM(list, i);
-        if (code == 'd') {
-            double d;
-            if (PyFloat_CheckExact(v))
-                d = PyFloat_AS_DOUBLE(v);
-            else if (v == Py_True || v == Py_False)
-                d = v == Py_True;
-            else if (PyLong_CheckExact(v)) {
-                d = PyLong_AsDouble(v);
-                if (d == -1.0 && PyErr_Occurred())
-                    goto other;                        /* beyond float64: the caller's */
-            } else
-                goto other;
-            memcpy(p + 8 * i, &d, 8);
-            continue;
-        }
-        if (!PyLong_CheckExact(v))
-            goto other;
-        int overflow;
-        long x = PyLong_AsLongAndOverflow(v, &overflow);
-        if (overflow || (code == 'B' ? (x < 0 || x > 255) : (x < -32768 || x > 32767)))
-            goto other;
-        if (code == 'B')
-            p[i] = (char)(unsigned char)x;
-        else {
-            short h = (short)x;
-            memcpy(p + 2 * i, &h, 2);
+    for (int i = 0; i < n; i++) {
+        PyObject *v = PyDict_GetItemString(declared, names[i]);      /* borrowed */
+        Py_ssize_t at = v == NULL ? -1 : PyLong_AsSsize_t(v);
+        if (at == -1 && PyErr_Occurred())
+            return -1;
+        if (at != offsets[i]) {
+            PyErr_Format(PyExc_ImportError, "simatch.msgs._cdr_accel reads the %s field %s at byte %zd, and "
+                                            "simatch.msgs.cdr declares it at %zd: rebuild the extension "
+                                            "(pip install -e .) or mend the declaration", what, names[i],
+                         offsets[i], at);
+            return -1;
         }
     }
-    return result;
-other:
-    PyErr_Clear();
-    Py_DECREF(result);
-    Py_RETURN_NONE;
+    return 0;
 }
 
-/* setup(ndarray type, {kind: dtype}, sample float64 array) -> whether arrays are read directly */
+/* setup(ndarray type, {kind: dtype}, {field: offset} of the array, {field: offset} of the dtype, C-contiguous
+ * flag): the arrays the encoder reads directly and the decoder makes. The offsets are those that
+ * `simatch.msgs.cdr` declares and has checked on an array; they must be those of `ArrayHead` and `DescrHead`. */
 static PyObject *setup(PyObject *self, PyObject *args) {
-    PyObject *type, *kinds, *sample;
-    if (!PyArg_ParseTuple(args, "O!O!O", &PyType_Type, &type, &PyDict_Type, &kinds, &sample))
+    PyObject *type, *kinds, *array_layout, *dtype_layout;
+    int contiguous;
+    if (!PyArg_ParseTuple(args, "O!O!OOi", &PyType_Type, &type, &PyDict_Type, &kinds, &array_layout, &dtype_layout,
+                          &contiguous))
         return NULL;
-    if (Py_TYPE(sample) != (PyTypeObject *)type || ((PyTypeObject *)type)->tp_basicsize < (Py_ssize_t)sizeof(ArrayHead))
-        Py_RETURN_FALSE;
-    ArrayHead *a = (ArrayHead *)sample;
-    /* the sample is np.arange(3.0): one dimension of 3, contiguous, values 0 1 2 */
-    if (a->nd != 1 || a->dimensions[0] != 3 || !(a->flags & C_CONTIGUOUS) || ((double *)a->data)[2] != 2.0)
-        Py_RETURN_FALSE;
+    static const char *const array_names[] = {"data", "nd", "dimensions", "strides", "base", "descr", "flags"};
+    static const Py_ssize_t array_offsets[] = {
+        offsetof(ArrayHead, data), offsetof(ArrayHead, nd), offsetof(ArrayHead, dimensions),
+        offsetof(ArrayHead, strides), offsetof(ArrayHead, base), offsetof(ArrayHead, descr),
+        offsetof(ArrayHead, flags)};
+    static const char *const dtype_names[] = {"typeobj", "kind", "type", "byteorder"};
+    static const Py_ssize_t dtype_offsets[] = {offsetof(DescrHead, typeobj), offsetof(DescrHead, kind),
+                                               offsetof(DescrHead, type), offsetof(DescrHead, byteorder)};
+    if (check_offsets(array_layout, "array", array_names, array_offsets, 7) < 0
+        || check_offsets(dtype_layout, "dtype", dtype_names, dtype_offsets, 4) < 0)
+        return NULL;
+    if (((PyTypeObject *)type)->tp_basicsize < (Py_ssize_t)sizeof(ArrayHead)) {
+        PyErr_SetString(PyExc_ImportError, "simatch.msgs._cdr_accel: numpy's array object is smaller than the "
+                                           "fields declared by simatch.msgs.cdr");
+        return NULL;
+    }
     PyObject *key, *value;
     Py_ssize_t pos = 0;
     while (PyDict_Next(kinds, &pos, &key, &value)) {
@@ -2226,18 +1059,16 @@ static PyObject *setup(PyObject *self, PyObject *args) {
         Py_INCREF(value);
         Py_XSETREF(dtypes[k], value);
     }
-    const DescrHead *d = (const DescrHead *)a->descr;
-    if (dtypes[K_F64] != a->descr || d->kind != 'f' || d->type != 'd')
-        Py_RETURN_FALSE;
+    c_contiguous = contiguous;
     Py_INCREF(type);
     Py_XSETREF(ndarray, (PyTypeObject *)type);
-    Py_RETURN_TRUE;
+    Py_RETURN_NONE;
 }
 
 static PyMethodDef methods[] = {
     {"encode", encode, METH_VARARGS, "encode(compiled program, msg) -> CDR bytes with the header, or None: use Python"},
-    {"setup", setup, METH_VARARGS, "setup(ndarray, {kind: dtype}, np.arange(3.0)) -> arrays read directly"},
-    {"pack", pack, METH_VARARGS, "pack(list, 'd'|'B'|'h') -> the numbers as a bytearray, or None: convert them yourself"},
+    {"setup", setup, METH_VARARGS,
+     "setup(ndarray, {kind: dtype}, array layout, dtype layout, C-contiguous flag): numpy as simatch.msgs.cdr declares"},
     {"compile", compile, METH_O, "compile(program tuple) -> the compiled program that encode and Log take"},
     {"compile_decoder", compile_decoder, METH_O, "compile_decoder((class, ops)) -> the program decode takes"},
     {"decode", decode, METH_VARARGS, "decode(compiled decoder program, payload bytes) -> message, or MessageError"},
@@ -2247,27 +1078,17 @@ static PyMethodDef methods[] = {
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_cdr_accel", NULL, -1, methods};
 
-/* what this build was made from (setup.py: the first 16 hex digits of this file's SHA-256), so that a test can
- * tell an extension left from an older source (an optional extension that fails to compile leaves the last one) */
+/* what this build was made from (setup.py: the first 16 hex digits of the SHA-256 of its sources), so that a test
+ * can tell an extension left from older sources */
 #ifndef SIMATCH_SOURCE_DIGEST
 #define SIMATCH_SOURCE_DIGEST ""
 #endif
 
 PyMODINIT_FUNC PyInit__cdr_accel(void) {
-    if (PyType_Ready(&LogType) < 0 || PyType_Ready(&ChunkType) < 0 || PyType_Ready(&TapType) < 0
-        || PyType_Ready(&LogTopicType) < 0
-        || (busy_name = PyUnicode_InternFromString("busy")) == NULL || (zero = PyFloat_FromDouble(0.0)) == NULL
-        || (one = PyFloat_FromDouble(1.0)) == NULL || (nan_value = PyFloat_FromDouble(Py_NAN)) == NULL
-        || (step_name = PyUnicode_InternFromString("step")) == NULL
-        || (name_name = PyUnicode_InternFromString("name")) == NULL
-        || (pose_name = PyUnicode_InternFromString("pose")) == NULL)
-        return NULL;
     PyObject *m = PyModule_Create(&module);
     if (m == NULL)
         return NULL;
-    if (PyModule_AddObjectRef(m, "Log", (PyObject *)&LogType) < 0
-        || PyModule_AddObjectRef(m, "Tap", (PyObject *)&TapType) < 0
-        || PyModule_AddStringConstant(m, "SOURCE_DIGEST", SIMATCH_SOURCE_DIGEST) < 0) {
+    if (messagelog_add_types(m) < 0 || PyModule_AddStringConstant(m, "SOURCE_DIGEST", SIMATCH_SOURCE_DIGEST) < 0) {
         Py_DECREF(m);
         return NULL;
     }

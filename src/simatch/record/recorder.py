@@ -9,8 +9,8 @@ appends its record to the current chunk; every half simulated second the chunk g
 chunk's records straight into memory shared with that process (`McapWriter.buffer`). The 3D scene's game
 updates are written by the log too (its pose template), from the model states it logs.
 
-The hot path is one Python-to-C call per message: measured, every Python frame and attribute access on it
-cost a visible share of a match's time. Bus deliveries come from the thread that runs the bus (the in-process
+The hot path is one Python-to-C call per message, so that recording adds no Python frame or attribute access
+per message to the run. Bus deliveries come from the thread that runs the bus (the in-process
 bus calls synchronously; the Zenoh bus delivers from its owner's thread), so the hot path takes no lock.
 
 What it records: every robot and team topic (``<team>/**``), the clock, model states (every physics step), ball
@@ -18,7 +18,7 @@ contacts, events, game state and operator commands, plus the two 3D-scene channe
 change ends) and the simulated time as ROS 2's ``/clock`` (`layout.ros_clock`). Given a folder (`rosbag2`), the
 recording is a rosbag2 folder: the MCAP file and the ``metadata.yaml`` that ``ros2 bag`` writes beside it. Link
 states are recorded only on request (``links=True``): a listener makes the simulator compute every wheel's pose
-each physics step, which costs several times a whole physics step, and base and ball links are the model states
+each physics step, far more work than the physics step itself, and base and ball links are the model states
 anyway.
 
 Nothing a producer sends can stop the run: a message whose type is unknown or that does not encode is
@@ -60,13 +60,37 @@ WORLD_TOPICS = (
 TEAM_TOPICS = "*/*/**"  # <team>/<leaf> and <team>/<id>/<leaf> (and deeper)
 #: topics whose messages carry the physics step and so set the log time (the clock also marks a control tick)
 CLOCKS = {topics.MODEL_STATES: CLOCK_STEP, topics.CLOCK: CLOCK_STEP | CLOCK_TICK}
-#: zstd level of the chunks: level 3 costs what level 1 does here and saves 1 %; levels 5-9 save 2-3 % more
-#: for three to five times the writer process's time (measured on a match, docs/recording.md "Cost")
+#: zstd level of the chunks: the smallest files for the writer process's time (docs/recording.md "Cost")
 COMPRESSION_LEVEL = 3
 
 
 class RecordError(Exception):
     """A recording that cannot be started (bad path, existing file) or written."""
+
+
+def _run_metadata(
+    bus, scene: LoadedScene, seed: int, dt: float, first_step: int, command_line, *, links: bool, world_inputs: bool
+) -> dict[str, str]:
+    """The metadata that describes the run at the start of a recording (what reproducing it needs)."""
+    return {
+        "format": layout.FORMAT,
+        "format_version": layout.FORMAT_VERSION,
+        "simatch_version": version(),
+        "scene_name": scene.name,
+        "scene_source": scene.source,
+        "scene_text": scene.text,
+        "overrides": json.dumps(scene.overrides),
+        "seed": str(int(seed)),
+        "run": str(getattr(bus, "run", "")),
+        "dt": repr(float(dt)),
+        "control_period": repr(float(scene.spec.control.period)),
+        "first_step": str(first_step),
+        "links": json.dumps(bool(links)),
+        "world_inputs": "1" if world_inputs and first_step == 0 else "0",
+        "fingerprint": _fingerprint_kind(),
+        "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
+        "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+    }
 
 
 class _Channel:
@@ -81,8 +105,7 @@ class Recorder:
 
     ``scene``, ``seed`` and ``dt`` describe the run (they go into the metadata, so that the run can be
     reproduced, and draw the 3D scene); ``first_step`` is the physics step the run is at when recording
-    starts (0: from the beginning, which `simatch replay --verify` needs). ``accelerate=False`` uses the
-    pure-Python message log and encoders even where the C extension is built (the same bytes).
+    starts (0: from the beginning, which `simatch replay --verify` needs).
     ``world_inputs``: the bus carries every input of the world from the start (a `Simulation`'s does: see
     `simatch.sim.inputs`), so the run can be re-simulated from them (noted in the metadata)."""
 
@@ -99,7 +122,6 @@ class Recorder:
         links: bool = False,
         extra_topics: Iterable[str] = (),
         compression_level: int = COMPRESSION_LEVEL,
-        accelerate: bool = True,
         world_inputs: bool = False,
         rosbag2_folder: bool = False,
     ):
@@ -117,9 +139,9 @@ class Recorder:
             )
         except WriterError as exc:
             raise RecordError(f"cannot write the recording: {exc}") from None
-        self._log = new_log(self._fallback, accelerate=accelerate)
+        self._log = new_log(self._fallback)
         self._log.into(self._writer.buffer())  # the chunk's records straight into memory shared with the writer
-        self._codec = Codec(msgs.typestore, accelerate=accelerate)  # for what the log does not take as it is
+        self._codec = Codec(msgs.typestore)  # for what the log does not take as it is
         self._schemas: dict[str, int] = {}
         self._channel_info: dict[int, tuple[str, str, object]] = {}  # channel id -> (channel, type, store)
         self._channels: dict[str, _Channel | None] = {}
@@ -130,25 +152,7 @@ class Recorder:
         self.first_step = first_step
         self._writer.metadata(
             layout.META_START,
-            {
-                "format": layout.FORMAT,
-                "format_version": layout.FORMAT_VERSION,
-                "simatch_version": version(),
-                "scene_name": scene.name,
-                "scene_source": scene.source,
-                "scene_text": scene.text,
-                "overrides": json.dumps(scene.overrides),
-                "seed": str(int(seed)),
-                "run": str(getattr(bus, "run", "")),
-                "dt": repr(float(dt)),
-                "control_period": repr(float(scene.spec.control.period)),
-                "first_step": str(first_step),
-                "links": json.dumps(bool(links)),
-                "world_inputs": "1" if world_inputs and first_step == 0 else "0",
-                "fingerprint": _fingerprint_kind(),
-                "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
-                "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-            },
+            _run_metadata(bus, scene, seed, dt, first_step, command_line, links=links, world_inputs=world_inputs),
         )
         self._writer.epitaph(
             layout.META_END,

@@ -218,6 +218,91 @@ def _messages(data: bytes) -> list[tuple[int, int, int]]:
     return out
 
 
+class _Out:
+    """The recovered file as it is written: where the next record starts."""
+
+    def __init__(self, f):
+        self.f, self.pos = f, 0
+
+    def put(self, data: bytes) -> None:
+        self.f.write(data)
+        self.pos += len(data)
+
+
+def _drop_lost(record: Chunk, data: bytes, known: set[int], b: RecordBuilder, compressor, report: Recovered):
+    """The chunk and its messages (`_messages`), again without the messages of channels whose definition was lost
+    (reported); None if none is left."""
+    found = _messages(data)
+    lost = [m for m in found if m[0] not in known]
+    if not lost:
+        return record, found
+    ids = sorted({m[0] for m in lost})
+    report.skipped.append(
+        f"{len(lost)} message(s) at t={record.message_start_time / layout.NS:.3f}.."
+        f"{record.message_end_time / layout.NS:.3f} s of {len(ids)} channel(s) (ids "
+        f"{', '.join(map(str, ids[:5]))}{', ...' if len(ids) > 5 else ''}) whose definition was lost"
+    )
+    for item in _inner(data):
+        if not (isinstance(item, Message) and item.channel_id not in known):
+            item.write(b)
+    data = b.end()
+    found = _messages(data)
+    if not found:
+        return None
+    record = Chunk(
+        compression="zstd",
+        data=compressor.compress(data),
+        message_start_time=min(m[1] for m in found),
+        message_end_time=max(m[1] for m in found),
+        uncompressed_crc=0,
+        uncompressed_size=len(data),
+    )
+    return record, found
+
+
+def _put_chunk(out: _Out, b: RecordBuilder, record: Chunk, found: list, counts: dict[int, int]) -> ChunkIndex:
+    """Write a chunk and its message indexes; count its messages by channel; its entry of the chunk index."""
+    start = out.pos
+    record.write(b)
+    out.put(b.end())
+    chunk_length = out.pos - start
+    by_channel: dict[int, list[tuple[int, int]]] = {}
+    for cid, log_time, offset in found:
+        by_channel.setdefault(cid, []).append((log_time, offset))
+        counts[cid] = counts.get(cid, 0) + 1
+    offsets = {}
+    index_start = out.pos
+    for cid in sorted(by_channel):
+        offsets[cid] = out.pos
+        MessageIndex(channel_id=cid, records=by_channel[cid]).write(b)
+        out.put(b.end())
+    return ChunkIndex(
+        message_start_time=record.message_start_time,
+        message_end_time=record.message_end_time,
+        chunk_start_offset=start,
+        chunk_length=chunk_length,
+        message_index_offsets=offsets,
+        message_index_length=out.pos - index_start,
+        compression=record.compression,
+        compressed_size=len(record.data),
+        uncompressed_size=record.uncompressed_size,
+    )
+
+
+def _end_metadata(scan: _Scan, counts: dict[int, int], last: int) -> Metadata:
+    """The end metadata of a recording that was never finalised, as far as the recovered file tells."""
+    topics = {c.id: layout.bus_topic(c.topic) for c in scan.channels.values()}
+    return Metadata(
+        name=layout.META_END,
+        metadata={
+            "status": "recovered: the recording was never finalised (its writer process stopped too); "
+            "simatch recover kept what was intact",
+            "sim_seconds": repr(last / layout.NS),
+            "messages": json.dumps({topics[c]: n for c, n in sorted(counts.items()) if c in topics}),
+        },
+    )
+
+
 def _write(scan: _Scan, dst: Path, report: Recovered) -> None:
     import zstandard
 
@@ -230,81 +315,27 @@ def _write(scan: _Scan, dst: Path, report: Recovered) -> None:
     chunk_indexes: list[ChunkIndex] = []
     first = last = None
     with open(dst, "xb") as f:
-        pos = 0
-
-        def put(data: bytes) -> None:
-            nonlocal pos
-            f.write(data)
-            pos += len(data)
-
-        put(MAGIC + b.end())
+        out = _Out(f)
+        out.put(MAGIC + b.end())
         for m in first_meta:
             m.write(b)
             record = b.end()
-            metadata_index.append((pos, len(record), m.name))
-            put(record)
+            metadata_index.append((out.pos, len(record), m.name))
+            out.put(record)
         for s in sorted(scan.schemas.values(), key=lambda r: r.id):
             s.write(b)
         for c in sorted(scan.channels.values(), key=lambda r: r.id):
             if c.schema_id == 0 or c.schema_id in scan.schemas:
                 c.write(b)
-        put(b.end())
+        out.put(b.end())
         known = {c.id for c in scan.channels.values() if c.schema_id == 0 or c.schema_id in scan.schemas}
         compressor = zstandard.ZstdCompressor(level=3, write_checksum=True)
         for record, data in scan.chunks:
-            found = _messages(data)
-            lost = [m for m in found if m[0] not in known]
-            if lost:  # messages of a channel whose definition was lost: the chunk again without them
-                ids = sorted({m[0] for m in lost})
-                report.skipped.append(
-                    f"{len(lost)} message(s) at t={record.message_start_time / layout.NS:.3f}.."
-                    f"{record.message_end_time / layout.NS:.3f} s of {len(ids)} channel(s) (ids "
-                    f"{', '.join(map(str, ids[:5]))}{', ...' if len(ids) > 5 else ''}) whose definition was lost"
-                )
-                keep = [
-                    item for item in _inner(data) if not (isinstance(item, Message) and item.channel_id not in known)
-                ]
-                for item in keep:
-                    item.write(b)
-                data = b.end()
-                found = _messages(data)
-                if not found:
-                    continue
-                record = Chunk(
-                    compression="zstd",
-                    data=compressor.compress(data),
-                    message_start_time=min(m[1] for m in found),
-                    message_end_time=max(m[1] for m in found),
-                    uncompressed_crc=0,
-                    uncompressed_size=len(data),
-                )
-            start = pos
-            record.write(b)
-            put(b.end())
-            chunk_length = pos - start
-            by_channel: dict[int, list[tuple[int, int]]] = {}
-            for cid, log_time, offset in found:
-                by_channel.setdefault(cid, []).append((log_time, offset))
-                counts[cid] = counts.get(cid, 0) + 1
-            offsets = {}
-            index_start = pos
-            for cid in sorted(by_channel):
-                offsets[cid] = pos
-                MessageIndex(channel_id=cid, records=by_channel[cid]).write(b)
-                put(b.end())
-            chunk_indexes.append(
-                ChunkIndex(
-                    message_start_time=record.message_start_time,
-                    message_end_time=record.message_end_time,
-                    chunk_start_offset=start,
-                    chunk_length=chunk_length,
-                    message_index_offsets=offsets,
-                    message_index_length=pos - index_start,
-                    compression=record.compression,
-                    compressed_size=len(record.data),
-                    uncompressed_size=record.uncompressed_size,
-                )
-            )
+            kept = _drop_lost(record, data, known, b, compressor, report)
+            if kept is None:
+                continue
+            record, found = kept
+            chunk_indexes.append(_put_chunk(out, b, record, found, counts))
             if found:
                 first = record.message_start_time if first is None else min(first, record.message_start_time)
                 last = record.message_end_time if last is None else max(last, record.message_end_time)
@@ -315,26 +346,15 @@ def _write(scan: _Scan, dst: Path, report: Recovered) -> None:
                 counts[m.channel_id] = counts.get(m.channel_id, 0) + 1
                 first = m.log_time if first is None else min(first, m.log_time)
                 last = m.log_time if last is None else max(last, m.log_time)
-        put(b.end())
+        out.put(b.end())
         first, last = first or 0, last or 0
         if not any(m.name == layout.META_END for m in rest_meta) and first_meta:
-            topics = {c.id: layout.bus_topic(c.topic) for c in scan.channels.values()}
-            rest_meta.append(
-                Metadata(
-                    name=layout.META_END,
-                    metadata={
-                        "status": "recovered: the recording was never finalised (its writer process stopped too); "
-                        "simatch recover kept what was intact",
-                        "sim_seconds": repr(last / layout.NS),
-                        "messages": json.dumps({topics[c]: n for c, n in sorted(counts.items()) if c in topics}),
-                    },
-                )
-            )
+            rest_meta.append(_end_metadata(scan, counts, last))
         for m in rest_meta:
             m.write(b)
             record_bytes = b.end()
-            metadata_index.append((pos, len(record_bytes), m.name))
-            put(record_bytes)
+            metadata_index.append((out.pos, len(record_bytes), m.name))
+            out.put(record_bytes)
         summary = {
             "schemas": sorted(scan.schemas.values(), key=lambda r: r.id),
             "channels": sorted((c for c in scan.channels.values() if c.id in known), key=lambda r: r.id),
@@ -344,7 +364,7 @@ def _write(scan: _Scan, dst: Path, report: Recovered) -> None:
             "first": first,
             "last": last,
         }
-        put(summary_section(pos, summary, metadata_index, chunk_indexes))
+        out.put(summary_section(out.pos, summary, metadata_index, chunk_indexes))
         f.flush()
         os.fsync(f.fileno())
     report.messages = sum(counts.values())

@@ -1,9 +1,9 @@
 """The MCAP writer of recordings: message records packed on the simulation thread, chunks compressed and
 written by a writer process.
 
-Why not a library writer: ``foxglove-sdk``'s ``log`` costs about 2 us a message (some 4 ms per simulated
-second of 5v5) and the ``mcap`` library's pure-Python writer builds a record object per message; a recorder
-of two thousand messages per simulated second frames each message with its encoding, in one C call. The
+Why not a library writer: ``foxglove-sdk``'s ``log`` is a call per message and the ``mcap`` library's
+pure-Python writer builds a record object per message; the recorder frames each message with its encoding,
+in one C call (docs/recording.md compares them). The
 rare records (header, schemas, channels, metadata, summary, footer) are written with the ``mcap`` library's
 record classes, so the file follows the specification with no hand-made layout beyond the Message and
 Chunk records.
@@ -12,26 +12,22 @@ How the work is split: the recorder's message log (`simatch.record.messagelog`) 
 record (header and CDR bytes) to one buffer per chunk (no object per message); `end_chunk` hands a chunk's
 records to a **writer process** (`simatch.record.writer_process`), which compresses them with zstd and
 writes the chunk. Why a process and not a thread: a writer thread needs the GIL a few times per chunk
-(to take the job, after compressing, after each write), and every such hand-over stopped the simulation
-thread; measured on a 5v5 match, the thread's hand-overs and compression cost the simulation thread
-1.5 ms per simulated second (5 % of the match).
+(to take the job, after compressing, after each write), and every such hand-over stops the simulation
+thread.
 
 **Shared memory.** The chunk buffers are memory shared with the writer process: one anonymous memory file
 (``memfd_create``: no name in ``/dev/shm`` or anywhere, gone with the last process that maps it, however the
 processes end) of `SLOTS` slots, mapped by both. `buffer` lends the message log a free slot (``log.into``),
 the log writes the chunk's records straight into it, and the pipe carries only "chunk in slot i, n bytes"
-and the acknowledgement that frees the slot once the chunk is written. Through the pipe alone, each chunk
-(some 370 kB of the match) was copied into the kernel by the simulation thread and out again by the writer
-process, and the simulation thread waited whenever the writer process, busy compressing or not scheduled on
-a loaded machine, had not yet read the pipe empty (measured under load: 5 ms of CPU time but 210 ms of wall
-time in the pipe's writes per 20 simulated seconds). A chunk that outgrows its slot (the log then moves it
-to memory of its own), and every chunk where there is no ``memfd_create`` (not Linux) or it fails, goes
-through the pipe as before.
+and the acknowledgement that frees the slot once the chunk is written: the simulation thread neither copies
+a chunk into the kernel nor waits for the writer process to read the pipe empty. A chunk that outgrows its
+slot (the log then moves it to memory of its own), and every chunk where there is no ``memfd_create`` (not
+Linux) or it fails, goes through the pipe.
 
 Integrity: each chunk's zstd frame carries zstd's content checksum (XXH64 of the records, checked by every
 zstd decoder, so by every MCAP reader), and the chunk's own CRC32 field is 0 ("not computed", as the MCAP
-specification allows). Measured on a 5v5 match: the CRC32 of a megabyte of records per simulated second
-cost 0.3 ms, the zstd checksum 0.1 ms; both catch any damaged byte (tests/record/test_nothing_lost.py).
+specification allows): the cheaper of the two, and either catches any damaged byte
+(tests/record/test_nothing_lost.py).
 
 Nothing handed over is lost when the recording process is killed: the writer process writes every chunk it
 was handed (its mapping of the shared memory outlives the recording process), then finalises the file
@@ -93,11 +89,9 @@ from .writer_process import (
 log = logging.getLogger(__name__)
 
 #: chunks handed over and not yet written, at most, once the writer process runs: one being written and one in the
-#: pipe (it writes a chunk of the match in some 2 ms, while the match fills one in 6 to 15)
+#: pipe (it writes a chunk far faster than a run fills one)
 MAX_HANDED = 2
-#: ... and while it starts, until it has written a chunk and caught up: it starts in 15 to 40 ms, more on a loaded
-#: machine, and the run does not wait for it (with two, the run stopped for 15 to 18 ms at its third chunk, 2 % of
-#: a simulated minute's run time)
+#: ... and while it starts, until it has written a chunk and caught up: the run does not wait for it to start
 MAX_HANDED_STARTING = 6
 #: shared chunk buffers: one being filled, the others handed over
 SLOTS = MAX_HANDED_STARTING + 1
@@ -365,7 +359,7 @@ def _writer_start(args: list[str]) -> tuple[list[str], dict[str, str]]:
     ``-P`` (nothing of the file's folder on the path) and, where the packages it imports (`writer_process.IMPORTS`:
     zstd's binding and mcap) are found, with ``-S`` and their folders as its ``PYTHONPATH``: without ``site``,
     which in a typical environment imports what its ``.pth`` files name (an editable install's hook, coverage's
-    start-up, ROS wheels' bootstrap: measured 20 of the 40 ms a start took, while the run's first chunks wait)."""
+    start-up, ROS wheels' bootstrap), so that it starts while the run's first chunks wait."""
     folders: list[str] = []
     for name in writer_process.IMPORTS:
         spec = importlib.util.find_spec(name)

@@ -7,7 +7,7 @@ answers on ACKS_FD one `ACK` per chunk written or flush done, then, once the fra
 wrong. With SHARED_FD (a memory file of SLOTS slots of SLOT_SIZE bytes, shared with the recording process),
 a `SHARED` frame says that a chunk's records lie in one of its slots; its acknowledgement frees the slot. It is run as
 a file, not as a module of simatch, and imports only the standard library, zstd and (for the summary)
-mcap, and runs without ``site`` (the packages' folders on its ``PYTHONPATH``): it starts in some 15 ms.
+mcap, and runs without ``site`` (the packages' folders on its ``PYTHONPATH``), so that it starts at once.
 
 It keeps what the summary needs as the frames come (the schemas and channels declared to it, each chunk's
 message counts), so that when the frames end without a `SUMMARY` — the recording process died, killed or
@@ -19,8 +19,8 @@ of the file lives, the file is locked (``flock``, taken by the recording process
 descriptor over), so that a reader can tell a recording being written from one whose writer died.
 
 It runs as a batch process (``SCHED_BATCH``, where the system has it): the frame that hands it a chunk wakes it
-without making it preempt the recording process on that processor. On a loaded machine it did so at every
-chunk, and the simulation thread waited some 2 ms (wall time) per hand-over while the writer compressed.
+without making it preempt the recording process on that processor, so that the simulation thread does not
+wait while the writer compresses.
 """
 
 from __future__ import annotations

@@ -16,9 +16,10 @@ out on a fresh simulator of the same scene, in the same order at the same steps,
 for bit: MuJoCo is deterministic for the same calls, and nothing else changes the world (perception, its
 noise and the referee only read it).
 
-Cost: one test of ``sim.inputs`` per call while nobody listens; a few list appends per call (in C where the
-extension is built: `simatch.msgs.cdr.Tap`) and one small message per step with inputs while a recorder
-listens (a 5v5 match: 40 messages, some 30 kB, per simulated second before compression).
+While the log is off, a marked method is the plain one. While it is on, the velocity and action commands (what
+a match sends most) are replaced by taps written in C (``Tap``, sim/_inputs.c, built by ``pip install -e .``),
+which append the command to the log's lists in the compact form and call the method; every other marked
+method, and a command in another form, is logged as a call (`_logged_call`).
 """
 
 from __future__ import annotations
@@ -33,7 +34,11 @@ from typing import Any
 import numpy as np
 
 from .. import msgs
-from ..msgs import cdr
+
+try:
+    from ._inputs import Tap, pack
+except ImportError as exc:  # (a checkout where the extension was not built, or was built for another Python)
+    raise msgs.unbuilt("simatch.sim._inputs", exc) from exc
 
 VEL, ACTION, CALL = msgs.WorldInputs.VEL, msgs.WorldInputs.ACTION, msgs.WorldInputs.CALL
 #: the Simulator methods marked as world inputs (what a CALL input may name)
@@ -61,11 +66,10 @@ def _number(value: Any) -> float:
 
 
 def _machine_array(items: list, code: str, dtype) -> np.ndarray | None:
-    """``items`` (Python numbers) as a numpy array of ``dtype`` (array module ``code``), or None if some item
-    is not a plain number. In C where the extension is built (`simatch.msgs.cdr.pack`: a match's inputs every
-    control tick), else by the array module; both convert ints, floats and bools as numpy's constructor does,
-    for a fraction of its time on a list."""
-    data = cdr.pack(items, code) if cdr.pack is not None else None
+    """``items`` (Python numbers) as a numpy array of ``dtype`` (array module ``code``: "d", "B" or "h"), converted
+    as numpy's constructor converts them; None if some item is not a number. Exact ints, floats and bools are
+    packed in C (`pack`); a list with other numbers (numpy scalars) goes through the array module."""
+    data = pack(items, code)
     if data is None:
         try:
             data = array(code, items)
@@ -84,7 +88,13 @@ def _plain(value: Any) -> Any:
 
 
 class InputLog:
-    """The inputs of the current physics step, in order (see the module's docstring)."""
+    """The inputs of the current physics step, in order (see the module's docstring).
+
+    Three lists hold the inputs: ``kind`` (VEL, ACTION or CALL), ``robot`` (the robot's index; -1 for a call)
+    and ``values``, the numbers of the compact forms as given (made float64, exactly, when the message is
+    built): VEL ``vx, vy, w``; ACTION ``dribble`` (1.0 or 0.0), ``kick_speed``, ``lob`` (1.0 or 0.0),
+    ``window`` (NaN: none). The taps append to these very lists, and read ``busy`` in its slot (the member
+    descriptor ``InputLog.busy`` is handed to them)."""
 
     __slots__ = ("busy", "kind", "robot", "values", "calls")
 
@@ -94,17 +104,6 @@ class InputLog:
         self.robot: list[int] = []
         self.values: list[float] = []
         self.calls: list[str] = []
-
-    def vel(self, i: int, vx, vy, w) -> None:
-        self.kind.append(VEL)
-        self.robot.append(i)
-        self.values += (vx, vy, w)  # as given: made float64 (exactly) when the message is built
-
-    def action(self, i: int, dribble, kick_speed=0.0, lob=False, window=None) -> None:
-        numbers = (1.0 if dribble else 0.0, kick_speed, 1.0 if lob else 0.0, math.nan if window is None else window)
-        self.kind.append(ACTION)  # (after the truths: one that raises logs nothing)
-        self.robot.append(i)
-        self.values += numbers
 
     def call(self, name: str, args: tuple, kwargs: dict) -> None:
         self.kind.append(CALL)
@@ -118,8 +117,8 @@ class InputLog:
         """The logged inputs as a WorldInputs message (None if there are none), and a fresh log."""
         if not self.kind:
             return None
-        # numbers as float64, exactly, converted in C as numpy would; anything else (text, which must not be read as
-        # a number, huge ints, objects) one by one as the simulator took them
+        # plain numbers as float64, exactly; anything else (text, which must not be read as a number, huge ints,
+        # objects) one by one as the simulator took them
         values = _machine_array(self.values, "d", np.float64)
         if values is None:
             values = np.array([_number(v) for v in self.values], dtype=np.float64)
@@ -139,17 +138,12 @@ class InputLog:
         return msg
 
     def clear(self) -> None:
-        """Empty the log. Its lists stay the same objects (the C taps append to them); the calls are handed to
-        the message, so they are a new list."""
+        """Empty the log. Its lists stay the same objects (the taps append to them); the calls are handed to the
+        message, so they are a new list."""
         self.kind.clear()
         self.robot.clear()
         self.values.clear()
         self.calls = []
-
-
-def _index(i: Any) -> bool:
-    """A robot index that the compact form holds (anything else is logged as a call, exactly as given)."""
-    return type(i) is int and 0 <= i < 32768
 
 
 #: the marked methods: name -> how a call is logged ("call", or the compact "vel" and "action")
@@ -195,43 +189,16 @@ def _logged_call(original: Callable, name: str, log: InputLog) -> Callable:
     return entry
 
 
-def _logged_vel(original: Callable, name: str, log: InputLog) -> Callable:
-    """``command_velocity(i, vx, vy, w)`` in the compact form (VEL): a match makes hundreds of these calls per
-    simulated second, so where the C extension is built the twin is its `Tap` (the same entries, one C call
-    instead of a Python frame per command). It calls no other input, so it needs no ``busy`` mark of its own."""
-    general = _logged_call(original, name, log)
-    if cdr.Tap is not None:
-        return cdr.Tap("vel", original, general, log, log.kind, log.robot, log.values, VEL)
+def _tap(form: str, code: int) -> Callable:
+    def logged(original: Callable, name: str, log: InputLog) -> Callable:
+        """A tap (sim/_inputs.c): the command logged in the compact form ``form``, anything else as a call."""
+        general = _logged_call(original, name, log)
+        return Tap(form, original, general, log, InputLog.busy, log.kind, log.robot, log.values, code)
 
-    @functools.wraps(original)
-    def entry(*args, **kwargs):
-        if log.busy or kwargs or len(args) != 4 or type(args[0]) is not int or not 0 <= args[0] < 32768:
-            return general(*args, **kwargs)
-        log.kind.append(VEL)  # (InputLog.vel, inline: the hot path)
-        log.robot.append(args[0])
-        log.values += args[1:]
-        return original(*args)
-
-    return entry
+    return logged
 
 
-def _logged_action(original: Callable, name: str, log: InputLog) -> Callable:
-    """``command_action(i, dribble, kick_speed, lob[, window])`` in the compact form (ACTION); in C as above."""
-    general = _logged_call(original, name, log)
-    if cdr.Tap is not None:
-        return cdr.Tap("action", original, general, log, log.kind, log.robot, log.values, ACTION)
-
-    @functools.wraps(original)
-    def entry(*args, **kwargs):
-        if log.busy or kwargs or not 2 <= len(args) <= 5 or not _index(args[0]):
-            return general(*args, **kwargs)
-        log.action(*args)
-        return original(*args)
-
-    return entry
-
-
-_LOGGERS = {"call": _logged_call, "vel": _logged_vel, "action": _logged_action}
+_LOGGERS = {"call": _logged_call, "vel": _tap("vel", VEL), "action": _tap("action", ACTION)}
 velocity_input = world_input(form="vel")
 action_input = world_input(form="action")
 
