@@ -32,11 +32,6 @@ LONG_BECAUSE = "Long because:"
 #: issue 36 are splitting now; the lead empties this as those branches merge (an entry that no longer
 #: offends fails `test_no_module_is_too_long` / `test_no_function_is_too_long` until it is taken out)
 PENDING = {
-    "src/simatch/bus/zenoh_bus.py",
-    "src/simatch/msgs/cdr.py",
-    "src/simatch/msgs/cdr.py::Codec._generate_parts",
-    "src/simatch/record/recorder.py::Recorder.__init__",
-    "src/simatch/record/recover.py::_write",
     "src/simatch/sim/ballhandling.py::BallHandling.__init__",
     "src/simatch/sim/flight.py::fly",
     "src/simatch/sim/kernels.py::sense_ground",
