@@ -3,7 +3,8 @@
 One refereed msl_5v5 run in real time (the watchdog keeps a command 0.5 s: the machine may be busy): cyan
 is played from ROS 2 through a team bridge (cyan's credential), magenta stands; an observer bridge (the
 organiser's credential) publishes the ground truth and /clock. A client drives cyan/2 with cmd_vel and
-records its odom and /clock, then sends a NaN command; another watches markers, /tf, both teams'
+records its odom and /clock, then sends a NaN command; another turns cyan/4 with ROS 2's default QoS on every
+topic; another watches markers, /tf, both teams'
 match_mode and the events; at the end a third places the ball through the observer (the organiser's
 set_model_state, forwarded to the server's world service).
 """
@@ -23,6 +24,7 @@ from .conftest import RosProcesses
 pytestmark = pytest.mark.slow
 
 VX = -1.0  # [m/s] cyan/2 drives back from its start (-3.5, 1): nothing in its way for 3 m
+TURN = 1.0  # [rad/s] cyan/4 turns on the spot, driven and heard by a node with ROS 2's default QoS
 BALL_AT = (3.0, -2.0)  # [m] where the organiser's client places the ball (world frame), after the driving
 
 
@@ -35,7 +37,9 @@ def match(tmp_path_factory, ros_interfaces):
         watch = ps.client("watch.py", "90", str(tmp / "watch.json"), "cyan", "magenta")
         observer, team = ps.observer_and_team()
         drive = ps.client("drive.py", "/cyan/robot2", str(VX), "0", "0", "2.5", str(tmp / "drive.json"), "--nan")
+        default = ps.client("default_qos.py", "/cyan/robot4", str(TURN), "2.0", str(tmp / "default.json"))
         assert ps.wait(drive, 150) == 0, ps.stderr(drive)
+        assert ps.wait(default, 150) == 0, ps.stderr(default)
         assert ps.wait(watch, 150) == 0, ps.stderr(watch)
         place = ps.client("place.py", *map(str, BALL_AT), str(tmp / "place.json"))
         assert ps.wait(place, 120) == 0, ps.stderr(place)
@@ -44,6 +48,7 @@ def match(tmp_path_factory, ros_interfaces):
             "drive": json.loads((tmp / "drive.json").read_text()),
             "watch": json.loads((tmp / "watch.json").read_text()),
             "place": json.loads((tmp / "place.json").read_text()),
+            "default": json.loads((tmp / "default.json").read_text()),
             "result": result,
             "team_err": ps.stderr(team),
             "observer_err": ps.stderr(observer),
@@ -67,6 +72,16 @@ def test_the_robot_moves_at_the_commanded_body_speed(match):
     dist = math.hypot(steady[-1, 1] - steady[0, 1], steady[-1, 2] - steady[0, 2])
     assert abs(dist / (steady[-1, 0] - steady[0, 0]) - abs(VX)) <= 0.02 * abs(VX)
     assert np.all(steady[:, 1][1:] <= steady[:, 1][:-1] + 1e-6)  # backwards, in the world's -x
+
+
+def test_a_node_with_the_default_qos_drives_and_hears_its_robot(match):
+    """Reliable subscriptions (ROS 2's default, what most tutorials and nav2-style nodes make) get every state
+    topic: the bridge publishes reliable, which best-effort (sensor-data) subscribers also match."""
+    d = match["default"]
+    assert all(n > 0 for n in d["counts"].values()), d["counts"]
+    steady = d["turning"][len(d["turning"]) // 2 :]
+    assert len(steady) >= 10, d
+    assert all(abs(w - TURN) <= 0.02 * TURN for w in steady), steady
 
 
 def test_clock_is_simulated_time_and_stamps_odom(match):

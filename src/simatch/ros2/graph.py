@@ -9,9 +9,13 @@ Quality of service, as ROS 2 simulators and drivers choose it:
   keep last 10 (ROS 2's default: what ``ros2 topic pub`` and a plain publisher offer);
 * game state and commands (``match_mode``, ``match_type``, ``coach``, ``game_state``): reliable and
   transient local, keep last 1: a node that starts late still gets the current command;
-* high-rate state (``odom``, the perception, ``model_states``): best effort, keep last 5 (ROS 2's sensor-data
-  profile: subscribe with ``rclpy.qos.qos_profile_sensor_data``); ``/clock`` best effort, keep last 1 (what
-  the time source of a ``use_sim_time`` node subscribes with);
+* high-rate state (``odom``, the perception, ``model_states``) and ``/clock``: reliable, keep last 5 (``/clock``
+  keep last 1), as Gazebo's ROS 2 plugins publish: a reliable publisher is matched by both kinds of
+  subscriber, the default (reliable, ``create_subscription(T, topic, cb, 10)``) and the sensor-data profile
+  (best effort, ``qos_profile_sensor_data``) that a ``use_sim_time`` node's clock uses; a best-effort one
+  would leave a default subscriber with nothing (DDS does not match a reliable reader to a best-effort
+  writer). Keep-last history means a slow subscriber never holds the bridge back: the writer drops what it
+  no longer keeps;
 * ``/tf`` reliable, keep last 100 and ``/tf_static`` reliable transient local (tf2's own profiles), markers
   reliable keep last 1 (RViz's default subscription).
 """
@@ -57,8 +61,8 @@ LATCHED = QoSProfile(
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
     history=HistoryPolicy.KEEP_LAST,
 )
-SENSOR = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST)
-CLOCK = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST)
+SENSOR = QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+CLOCK = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
 TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
 MARKERS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
 
