@@ -77,6 +77,10 @@ class RosRobotNode(Node):
         )
         self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
         self.pub_action = bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
+        # in a real-time run a cmd_vel is sent on as it arrives (the server applies it at its next physics
+        # step), not held until the next control tick: ROS commands then reach the simulator as quickly as
+        # a simatch team's; in lockstep the tick sends it, so that the match stays deterministic
+        self.ports.command.on_velocity = self._forward_velocity
 
     def _on_vision(self, info) -> None:
         self.tick_no = int(info.tick)
@@ -90,6 +94,21 @@ class RosRobotNode(Node):
         self.expects_answer = me is not None and me.valid
         if self.expects_answer:
             self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(sign, me)
+
+    def _forward_velocity(self) -> None:
+        """The new cmd_vel onto the bus at once (the executor's thread), when the run is real time."""
+        bridge = self.bridge
+        proc = bridge.proc
+        if proc is None or proc.mode == protocol.LOCKSTEP:
+            return
+
+        def send() -> None:
+            vel, now = bridge.graph.take_velocity(self.ports.command, bridge.command_timeout)
+            if vel is not None:
+                vx, vy, w, vz = _f32s(*vel)
+                self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w, vz=vz))
+
+        proc.between_ticks(send)
 
     def tick(self, now: float) -> None:
         bridge, graph, slot = self.bridge, self.bridge.graph, self.ports.command
@@ -139,6 +158,13 @@ class RosTeamProcess(TeamProcess):
     def _answer(self) -> None:
         super()._answer()
         self.bridge.flush_requests()
+
+    def between_ticks(self, send: Callable[[], None]) -> None:
+        """Run ``send`` (which puts on the bus) from another thread than the bus's, one at a time with the
+        ticks' answers, while the process is joined."""
+        with self._delivering:
+            if self.bus is not None and self.joined and not self.ended:
+                send()
 
 
 class Bridge:

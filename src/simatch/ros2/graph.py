@@ -111,6 +111,9 @@ class CommandSlot:
     received: int = 0
     bad: int = 0
     malformed: int = 0
+    #: called (in the executor's thread, outside the graph's lock) after each new cmd_vel: the bridge sends
+    #: it on at once in a real-time run instead of at the next control tick
+    on_velocity: Callable[[], None] | None = None
 
 
 @dataclass
@@ -283,6 +286,8 @@ class RosGraph:
             if bad:
                 slot.bad += 1
             self._cond.notify_all()
+        if slot.on_velocity is not None:
+            slot.on_velocity()
 
     def _on_dribble(self, slot: CommandSlot, m) -> None:
         with self._cond:
@@ -309,6 +314,16 @@ class RosGraph:
         """Wait up to ``timeout`` wall seconds until every slot has a cmd_vel newer than its given version."""
         with self._cond:
             return self._cond.wait_for(lambda: all(s.version > v for s, v in slots), timeout)
+
+    def take_velocity(self, slot: CommandSlot, timeout: float):
+        """The velocity to send now, between ticks: (vx, vy, w, vz) or None, as `take` decides it at the
+        bridge's newest simulated time (the kick request stays for the tick)."""
+        with self._cond:
+            now = self.now
+            if slot.vel_at is None or now - slot.vel_at > timeout or (slot.vel_bad and slot.vel_sent):
+                return None, now
+            slot.vel_sent = True
+            return (slot.vx, slot.vy, slot.w, slot.vz), now
 
     def take(self, slot: CommandSlot, now: float, timeout: float):
         """The command to send at simulated time ``now``: ((vx, vy, w, vz) or None, dribble, kick, lob), the kick
