@@ -42,6 +42,9 @@ STAND_AT = 3.5
 
 
 class SimpleRobot(RobotStrategy):
+    #: how far from the ball the robots stand at the opponents' set pieces [m]
+    stand_at = STAND_AT
+
     def __init__(self, ctx):
         super().__init__(ctx)
         self.rest = 0
@@ -118,7 +121,7 @@ class SimpleRobot(RobotStrategy):
             d = math.hypot(tx - bx, ty - by)
             if d < KEEP_AWAY and not inside_own_area:
                 d = d or 1.0
-                target = (bx + (tx - bx) / d * STAND_AT, by + (ty - by) / d * STAND_AT)
+                target = (bx + (tx - bx) / d * self.stand_at, by + (ty - by) / d * self.stand_at)
         return self.move(me, target, math.atan2(by - me.y, bx - me.x))
 
     # --- play -----------------------------------------------------------------------------------------

@@ -72,6 +72,19 @@ class RefereeParams(BaseModel):
         description="the set piece must be kicked within this after START; then the "
         "ball is in play for everybody [s] (MSL: 7 s)",
     )
+    caution_distance_at_restarts: bool = Field(
+        True,
+        description="a robot that breaks the distance at a restart after START, so that the restart is taken "
+        "again, is cautioned (yellow card; FIFA Law 12, kept by MSL): a team that encroaches at every "
+        "restart loses its robots to send-offs instead of stopping the match",
+    )
+    max_retakes: int = Field(
+        3,
+        ge=0,
+        le=100,
+        description="a restart is taken again at most this many times in a row; at the next infringement "
+        "that would retake it, the ball is in play for everybody instead (logged as restart_loop)",
+    )
     in_play_distance: float = Field(
         0.5, gt=0.0, le=5.0, description="after a set piece the ball is in play once it moved this far [m] (MSL: 0.5 m)"
     )

@@ -98,6 +98,7 @@ class MslReferee(OperatorTakeover, StageChanges, ShootOutKicks, Judge):
         self.goal_rule = GoalRule(m) if "goal" not in disabled else None
         self.out_rule = BallOutRule(m) if "ball_out" not in disabled else None
         self.log = EventLog()
+        self._retakes = 0  # times in a row the current restart was taken again (see `_enact`)
         self.discipline = Discipline(m.obs, params, world, self._log_robot)
         self.shootout: ShootOut | None = None
         f = m.obs.field
@@ -274,6 +275,7 @@ class MslReferee(OperatorTakeover, StageChanges, ShootOutKicks, Judge):
                 limit=self.p.in_play_distance,
                 detail=f"the {NAMES[r.kind]} is taken: the ball moved {moved:.2f} m, it is in play",
             )
+            self._retakes = 0
             g.go(_Phase.PLAY)
 
     def _stopped(self, now: float) -> None:
@@ -403,7 +405,32 @@ class MslReferee(OperatorTakeover, StageChanges, ShootOutKicks, Judge):
             m.touches.disarm()
             g.go(_Phase.PLAY)
         if call.restart is not None:
+            retake = call.restart is g.restart and g.phase is _Phase.TAKING
+            self._retakes = self._retakes + 1 if retake else 0
+            if retake and self._retakes > self.p.max_retakes:
+                self._end_restart_loop(now, call)
+                return
             self._stop(now, call.restart, call.detail)
+
+    def _end_restart_loop(self, now: float, call: Call) -> None:
+        """The guard no rule provides: a restart that would be taken again more than ``max_retakes`` times in
+        a row is not; the ball is in play for everybody, as when a set piece is not taken in time (the
+        offenders have been cautioned each time). Whatever a team does, the match goes on."""
+        g, r = self.m.game, self.m.game.restart
+        self._retakes = 0
+        self._log(
+            now,
+            "restart_loop",
+            team=r.team,
+            x=r.x,
+            y=r.y,
+            value=self.p.max_retakes + 1,
+            limit=self.p.max_retakes,
+            detail=f"the {NAMES[r.kind]} would be taken again a {self.p.max_retakes + 1}th time in a row "
+            f"({call.type}): it is not; the ball is in play for everybody",
+        )
+        self.m.touches.disarm()
+        g.go(_Phase.PLAY)
 
     def _score(self, now: float, call: Call) -> None:
         """A goal that counts: the score, and the goal in the result (its scorer; whether it is an own goal)."""

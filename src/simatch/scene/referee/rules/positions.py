@@ -1,7 +1,8 @@
 """What the set-piece position rules share: the spot, the kicker, and a list of offenders judged once
 when START is given (logged, play goes on) and then whenever a robot newly breaks the rule before the ball
-is in play (the restart is retaken when the defending team did it, the opponents get a free kick when the
-kicking team did)."""
+is in play (the restart is retaken when the defending team did it, and the offender cautioned, FIFA Law 12;
+the opponents get a free kick when the kicking team did). The referee retakes a restart at most
+``max_retakes`` times in a row (`referee.MslReferee._enact`)."""
 
 from __future__ import annotations
 
@@ -79,14 +80,20 @@ class PositionRule(Rule):
             self.flagged.add(i)
             r = self.m.game.restart
             obs = self.m.obs
+            card = None
             if r.team and obs.team_of[i] == r.team:
                 then = f"free kick for {obs.other(r.team)}"
                 restart = self.m.spots.at_ball("free_kick", obs.other(r.team), r.x, r.y)
             else:
                 then = f"the {self.what()} is taken again"
                 restart = r
+                if self.p.caution_distance_at_restarts:
+                    # FIFA Law 12 (kept by MSL): failing to respect the required distance at a restart is
+                    # cautioned; without it a team could stop the match by encroaching at every restart
+                    card = "yellow"
+                    then += f"; {obs.names[i]} is cautioned for not respecting the distance"
             return self.call(
-                self.name, i, value, limit, f"before the ball was in play: {what}; {then}", restart=restart
+                self.name, i, value, limit, f"before the ball was in play: {what}; {then}", restart=restart, card=card
             )
         return None
 
