@@ -77,3 +77,26 @@ def test_a_refereed_half_against_nubot_on_a_server(ros, tmp_path):
     err = bridge.err.read()
     assert "/rival2/nubotcontrol/velcmd" in err and "NuBot4" in err and "forwarded_velcmd" in err
     assert magenta.wait(60) == 0
+
+
+def test_the_original_habits_play_a_whole_match_through_the_bridge(ros):
+    """The example team with the original Simatch's own habits at the opponents' restarts (``original:=true``:
+    3.2 m from the ball, and for the ball at START whoever's restart it is), against nubot, embedded: the
+    original's code froze such a match (one free kick retaken 30 times); now its robots are cautioned and
+    sent off, no restart is taken again more than three times in a row, and the match reaches its end."""
+    team = ros.launch_team("NuBot", "original:=true")
+    try:
+        p = ros.simatch(
+            "run", "msl_5v5", "--ros1", "cyan", "--json", "--quiet",
+            "--set", "match.half_duration=90", "--set", "match.half_time=5", name="match",
+        )  # fmt: skip
+        out = result_of(p, timeout=1500)
+    finally:
+        ros.stop(team)
+    r, events = out["result"], out["events"]
+    assert r["ended"] and out["sim_seconds"] >= 185.0
+    retaken = [e for e in events if e["type"] == "set_piece_distance" and "taken again" in e["detail"]]
+    cautions = [e for e in events if e["type"] == "yellow_card" and "respecting the distance" in e["detail"]]
+    assert retaken and len(cautions) == len(retaken), [e for e in events if e["type"] != "command"]
+    assert all(e["team"] == "cyan" for e in cautions)
+    assert sum(e["type"] == "ball_in_play" for e in events) >= 3

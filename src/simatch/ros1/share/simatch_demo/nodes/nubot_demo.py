@@ -16,6 +16,10 @@ other robots so as to meet them at no more than 1.2 m/s (MSL's charging rule); a
 restarts it keeps 3.5 m from the ball (the original's 3.2 m with its 20 cm arrival threshold broke the
 3 m rule) and waits until the ball is in play; at its own restarts robot 3 waits 2.5 m beside the ball and the taker
 passes to the nearest team-mate first (NuBot's StaticPass): a goal straight from a restart does not count.
+
+``original=True`` (the launch files' ``original:=true``) keeps the original's own habits at the opponents'
+restarts instead, as its C++ code plays: 3.2 m from the ball's centre, and for the ball at START whoever's
+restart it is (it does not wait for the ball to be in play); the referee cautions it for that.
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ BLOCKED_AHEAD = 120.0  # a robot this close ahead ends the dribble: shoot [cm]
 CAREFUL_NEAR, CAREFUL_SPEED, CAREFUL_DECEL = 70.0, 120.0, 200.0  # near robots: slow enough to stop [cm, cm/s, cm/s2]
 REST_AFTER_KICK = 20  # cycles
 REST_AFTER_PASS = 60  # cycles: the taker leaves the ball to the receiver (a second touch would be a foul)
-KEEP_AWAY, STAND_AT = 300.0, 350.0
+KEEP_AWAY, STAND_AT, ORIGINAL_STAND_AT = 300.0, 350.0, 320.0
 THEIR_SET_PIECE = {1: (-1050.0, 0.0), 2: (-200.0, 100.0), 3: (-200.0, -100.0), 4: (-550.0, 200.0), 5: (-550.0, -200.0)}
 OPPONENT_WAIT = 7.0  # [s]
 AIM_YS = (0.0, -45.0, 45.0, -85.0, 85.0)  # points of the goal mouth (2.4 m wide) the shooter may aim at [cm]
@@ -105,8 +109,12 @@ class Motion:
 class Demo:
     """The decision of one robot (its nubot_control node), one call per world model."""
 
-    def __init__(self, rid: int, goalkeeper: int = 1, half_length: float = 1100.0, half_width: float = 700.0):
+    def __init__(
+        self, rid: int, goalkeeper: int = 1, half_length: float = 1100.0, half_width: float = 700.0, original=False
+    ):
         self.rid = rid
+        self.original = bool(original)
+        self.stand_at = ORIGINAL_STAND_AT if self.original else STAND_AT
         self.goalkeeper = goalkeeper
         self.L2, self.W2 = half_length, half_width
         self.rest = 0
@@ -134,7 +142,7 @@ class Demo:
 
     def _follow_restart(self, mode, ball, now, held: bool) -> None:
         last = self.last_mode
-        if mode == STARTROBOT and 1 <= last <= 12 and last % 2 == 0 and ball is not None:
+        if mode == STARTROBOT and 1 <= last <= 12 and last % 2 == 0 and ball is not None and not self.original:
             self.wait_from = (now, ball.pos.x, ball.pos.y)
         if mode == STARTROBOT and 1 <= last <= 11 and last % 2 == 1 and ball is not None:
             self.pass_from = (ball.pos.x, ball.pos.y)
@@ -178,7 +186,7 @@ class Demo:
             d = math.hypot(tx - bx, ty - by)
             if d < KEEP_AWAY and not in_own_area:
                 d = d or 1.0
-                tx, ty = bx + (tx - bx) / d * STAND_AT, by + (ty - by) / d * STAND_AT
+                tx, ty = bx + (tx - bx) / d * self.stand_at, by + (ty - by) / d * self.stand_at
             target = (tx, ty)
         return self.move(me, target, math.atan2(by - me.pos.y, bx - me.pos.x))
 
