@@ -1,13 +1,14 @@
 """ROS 2 benchmark (``simatch bench --only ros2``; needs the ``ros2`` extra).
 
-* ``ros2_latency_*``: the command latency from ``cmd_vel`` published by an rclpy process to the simulator
-  applying it, with ten robots driven over ROS 2 in real time: ``msl_5v5 --realtime`` served in this process,
-  both teams played through a bridge each (``simatch ros2 --team``), and a probe (`simatch.ros2.probe`, plain
-  rclpy) publishing a new speed for every robot at 40 Hz and noting when (the monotonic clock is one for every
-  process of the machine). A subscription of the server's bus beside the simulator's notes when each new
-  speed is delivered to it (in the gate's order, before the physics step that applies it). p50, p99 and max
-  [ms], and how many of the published commands were applied (later ones replace earlier ones that
-  had not been applied yet: at most one command per robot and control tick is applied).
+* ``ros2_latency_*``: the command latency from ``cmd_vel`` published by an rclpy process to the server's
+  process receiving it as a VelCmd (as the distributed benchmarks measure theirs), with ten robots driven over
+  ROS 2 in real time: ``msl_5v5 --realtime`` served in this process, both teams played through a bridge each
+  (``simatch ros2 --team``), and a probe (`simatch.ros2.probe`, plain rclpy) publishing a new speed for every
+  robot at 40 Hz and noting when (the monotonic clock is one for every process of the machine). p50, p99 and
+  max [ms]. ``ros2_applied_latency_*``: to the simulator applying it instead (a subscription beside the
+  simulator's, delivered in the gate's order before the physics step that applies it: the above and the
+  wait for the next physics step, up to one step of 5 ms in real time); ``ros2_latency_applied``: how many
+  of the published commands were applied (a later one replaces one not applied yet).
 * ``ros2_observer_*``: the real-time factor of an embedded ``msl_5v5`` (as shipped) without and with the
   observer bridge attached (``simatch run --ros2``), and what it costs (``ros2_observer_cost_pct``; goal
   < 10 %), alternated in pairs, after a warm-up past the kick-off; and, since on a shared machine the wall
@@ -117,6 +118,7 @@ def latency(seconds: float) -> dict:
     sim = server.sim
     names = sim.simulator.robot_names
     applied = _note_applied(server, names)
+    arrived = _note_arrived(server, names)
     procs: list[subprocess.Popen] = []
     probe_out = os.path.join(folder.name, "sent.json")
     try:
@@ -143,17 +145,38 @@ def latency(seconds: float) -> dict:
     with open(probe_out) as f:
         sent = json.load(f)
     folder.cleanup()
-    ms = np.array(_latencies(sent, applied, names)) * 1e3
+    ms = np.array(_latencies(sent, arrived, names)) * 1e3
+    applied_ms = np.array(_latencies(sent, applied, names)) * 1e3
     return {
         "ros2_latency_robots": len(names),
         "ros2_latency_published": len(sent),
-        "ros2_latency_applied": int(ms.size),
+        "ros2_latency_applied": int(applied_ms.size),
         "ros2_latency_p50_ms": round(float(np.percentile(ms, 50)), 2) if ms.size else None,
         "ros2_latency_p99_ms": round(float(np.percentile(ms, 99)), 2) if ms.size else None,
         "ros2_latency_max_ms": round(float(ms.max()), 2) if ms.size else None,
+        "ros2_applied_latency_p50_ms": round(float(np.percentile(applied_ms, 50)), 2) if applied_ms.size else None,
+        "ros2_applied_latency_p99_ms": round(float(np.percentile(applied_ms, 99)), 2) if applied_ms.size else None,
         "ros2_realtime_missed": stats.get("missed"),
         "ros2_server_latency_p50_ms": stats.get("latency_p50_ms"),
     }
+
+
+def _note_arrived(server, names: list[str]) -> list[tuple[float, int, float]]:
+    """(when, robot, vx) of every velocity command as it reaches the server's process: the time Zenoh's
+    receiving thread took it in (the definition of the distributed benchmarks' command latency)."""
+    arrived: list[tuple[float, int, float]] = []
+
+    def note(i: int):
+        def on_sample(topic: str, payload: bytes, attachment, arrival: float) -> None:
+            arrived.append((arrival, i, float(msgs.decode(msgs.VelCmd, payload).vx)))
+
+        return on_sample
+
+    for i, name in enumerate(names):
+        team, rid = topics.split_robot_name(name)
+        topic = topics.robot_topic(team, rid, topics.VEL_CMD)
+        server.bus.subscribe_raw(topic, note(i), verify=False, wakes=lambda topic, payload: False)
+    return arrived
 
 
 def _note_applied(server, names: list[str]) -> list[tuple[float, int, float]]:
