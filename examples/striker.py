@@ -456,7 +456,11 @@ class Striker(RobotStrategy):
         d = math.hypot(spot[0] - ball.x, spot[1] - ball.y)
         if d < distance + 0.3:  # (from its place, or from where it is: straight away from the ball)
             ux, uy = (spot[0] - ball.x) / max(d, 1e-6), (spot[1] - ball.y) / max(d, 1e-6)
-            spot = (ball.x + ux * (distance + 0.6), ball.y + uy * (distance + 0.6))
+            spot = self.inside((ball.x + ux * (distance + 0.6), ball.y + uy * (distance + 0.6)))
+            if math.hypot(spot[0] - ball.x, spot[1] - ball.y) < distance + 0.3:
+                # the field ends before the circle does (a ball near a corner): round the ball, towards the middle
+                n = max(math.hypot(ball.x, ball.y), 1e-6)
+                spot = self.inside((ball.x - ball.x / n * (distance + 0.6), ball.y - ball.y / n * (distance + 0.6)))
         return self.go(world, spot, Role.PASSIVE, Action.POSITIONED, face=(ball.x, ball.y), clear=distance + 0.3)
 
     def receiving_spot(self, world) -> tuple[float, float]:
