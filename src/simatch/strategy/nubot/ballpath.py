@@ -17,6 +17,7 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import Float, Matrix, kernel
 from ...exactmath import remainder
 
 TWO_PI = 2.0 * math.pi
@@ -264,7 +265,26 @@ def team_intercepts(
     return out
 
 
-@numba.njit(cache=True)
+@kernel(
+    x=Float,
+    y=Float,
+    speed=Float,
+    ux=Float,
+    uy=Float,
+    land_t=Float,
+    stop_t=Float,
+    decel=Float,
+    xlim=Float,
+    ylim=Float,
+    us=Matrix,
+    opps=Matrix,
+    bx=Float,
+    by=Float,
+    turn=Float,
+    vmax=Float,
+    acc=Float,
+    out=Matrix,
+)
 def _team_intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, us, opps, bx, by, turn, vmax, acc, out):
     """`team_intercepts` compiled: `_team_rows`, then `_intercepts` of them into ``out``."""
     px, py, vx, vy, extra = _team_rows(us, opps, bx, by, turn)

@@ -19,26 +19,17 @@ import math
 import numba
 import numpy as np
 
-from ...compiled import entry
+from ...compiled import Array, Bool, Float, Matrix, Vector, bind, kernel
 from ...exactmath import hypot
 from ..roles import ROLES
+from . import positions
 from .ballpath import BallPath, _team_intercepts
 from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
 from .params import NubotParams
-from .positions import (
-    Areas,
-    _midfield_point,
-    _outlet_point,
-    _passive_point,
-    _score_spots,
-    midfield_point,
-    outlet_point,
-    passive_point,
-    score_spots,
-)
-from .setpieces import SLOT_GAP, formation, kickoff_side, spread
+from .positions import Areas, PitchType, _score_spots, as_called, inside_field
+from .setpieces import SLOT_GAP, formation, kickoff_side, spread_point
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
@@ -68,7 +59,6 @@ _SETUP, _OUR_RESTART = PHASES.SETUP, PHASES.OUR_RESTART
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
-_NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
 #: the set pieces whose formation depends on the ball's place alone (their kick-off, the penalties, the
 #: dropped ball); our kick-off's also on the side of the pass (`kickoff_side` of the opponents)
 _OUR_KICKOFF = 1
@@ -252,38 +242,25 @@ def _assign(robots, slots, cx, cy, cr):
     return best
 
 
-def assist_spots(
-    cx: np.ndarray,
-    cy: np.ndarray,
-    bx: float,
-    by: float,
-    opps: list,
-    L2: float,
-    prev: tuple[float, float] | None,
-    n: int,
-) -> list[tuple[float, float]]:
-    """Up to ``n`` receiving spots for the assistants: the best scored of the candidates (`score_spots`
-    from 3 to 8.5 m of the ball at (bx, by), near ``prev``, the assistant's place), at least 3 m apart,
-    taken among the twelve best. The plain version of `_assist_choice` (and its fallback)."""
-    ox = np.array([o[0] for o in opps])
-    oy = np.array([o[1] for o in opps])
-    score = score_spots(cx, cy, bx, by, ox, oy, L2, 3.0, 8.5, prev)
-    out = []
-    for k in np.argsort(-score)[:12].tolist():
-        x, y = float(cx[k]), float(cy[k])
-        if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
-            out.append((x, y))
-            if len(out) == n:
-                break
-    return out
-
-
-@numba.njit(cache=True)
-def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
-    """`assist_spots` compiled, over the opponents' (M, 4) array, ``prev`` as (nx, ny) (NaN: none): writes
-    the spots into the first rows of ``out`` ((n, 2)) and returns how many, or -1 when two of the thirteen
-    best scores are equal or a score is NaN (NumPy's and numba's sorts may order equals differently: the
-    caller then takes the plain way, whose order is the one the game always had)."""
+@kernel(
+    cx=Vector,
+    cy=Vector,
+    bx=Float,
+    by=Float,
+    opps=Matrix,
+    L2=Float,
+    dmin=Float,
+    dmax=Float,
+    nx=Float,
+    ny=Float,
+    out=Matrix,
+)
+def assist_spots(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
+    """Up to ``len(out)`` receiving spots for the assistants: the best scored of the candidates (cx, cy)
+    (`score_spots` from ``dmin`` to ``dmax`` of the ball at (bx, by), near (nx, ny), the assistant's place,
+    NaN: none), at least 3 m apart, taken among the twelve best (of equal scores, the first candidate).
+    ``opps``: the opponents' (M, 4) rows. Writes the spots into the first rows of ``out`` and returns how
+    many."""
     m = cx.shape[0]
     score = np.empty(m)
     _score_spots(
@@ -300,29 +277,17 @@ def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
         ny,
         score,
     )
-    for i in range(m):
-        if score[i] != score[i]:
-            return -1
-    # the thirteen best in the order of np.argsort(-score) (the highest first), chosen one by one instead of
-    # sorting them all: the same order whenever it counts (two equal scores among them: -1 below either way)
-    sel = min(13, m)
-    order = np.empty(sel, np.int64)
+    n = out.shape[0]
+    k = 0
     taken = np.zeros(m, np.bool_)
-    for i in range(sel):
+    for _ in range(min(12, m)):
+        # the best candidate not looked at yet (a NaN score only when nothing else is left)
         best = -1
         for j in range(m):
             if not taken[j] and (best < 0 or score[j] > score[best]):
                 best = j
         taken[best] = True
-        order[i] = best
-    top = min(12, m)
-    for i in range(min(top, m - 1)):
-        if score[order[i]] == score[order[i + 1]]:
-            return -1
-    n = out.shape[0]
-    k = 0
-    for i in range(top):
-        x, y = cx[order[i]], cy[order[i]]
+        x, y = cx[best], cy[best]
         free = True
         for j in range(k):
             if not hypot(x - out[j, 0], y - out[j, 1]) > 3.0:
@@ -337,52 +302,36 @@ def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
     return k
 
 
+@kernel(
+    table=Matrix,
+    rest=Array(np.int64, 1),
+    attacking=Bool,
+    assist=Matrix,
+    passive_x=Float,
+    passive_y=Float,
+    midfield_x=Float,
+    midfield_y=Float,
+    bx=Float,
+    by=Float,
+    pitch=PitchType,
+    hysteresis=Float,
+    out=Matrix,
+)
 def open_slots(
-    areas: Areas, rest: list, attacking: bool, assist: list, opps: list, bx: float, by: float, hysteresis: float
-) -> list[tuple[int, int, float, float]]:
-    """Open play's positional roles of the robots ``rest`` (neither the active one nor the goalkeeper), the
-    ball expected at (bx, by): the roles' points (the assistants' at ``assist``, the receiving spots, or
-    the outlet point when we defend), kept inside the field, spread apart, and given to the robots by
-    `assign`. Returns (robot id, role, x, y) of each robot that gets one. The plain version of
-    `_open_slots`, which `Analyst._play` calls."""
-    n_assist = 2 if len(rest) >= 4 else 1
-    order = (
-        [ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD]
-        if attacking
-        else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT]
-    )
-    if n_assist == 2:
-        order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
-    slots: list[tuple] = []
-    used = 0
-    for role in order[: len(rest)]:
-        if role == ROLES.ASSISTANT:
-            x, y = assist[min(used, len(assist) - 1)]
-            used += 1
-        elif role == ROLES.PASSIVE:
-            x, y = passive_point(areas, bx, by, attacking)
-        else:
-            x, y = midfield_point(areas, bx, by, attacking, opps)
-        x, y = areas.inside_field(x, y, SLOT_INSIDE)
-        slots.append((role, x, y, bx, by))
-    slots = spread(slots, bx, by)
-    return [(rid, slots[i][0], slots[i][1], slots[i][2]) for rid, i in assign(rest, slots, hysteresis).items()]
-
-
-@numba.njit(cache=True)
-def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis, out):
-    """`open_slots` compiled, over the team view's table ((K, 8): x, y, vx, vy, id, yaw, announced role,
-    role time): ``rest`` has bit j set for each of the ``n`` robots at row j; ``assist`` (k, 2) the
-    receiving spots when ``attacking``. Writes, for the i-th of those robots (in row order) that gets a
-    slot, the slot's index, role, x and y into ``out[i]``; returns how many got one."""
-    L2, W2 = geo[0], geo[1]
+    table, rest, attacking, assist, passive_x, passive_y, midfield_x, midfield_y, bx, by, pitch, hysteresis, out
+):
+    """Open play's positional roles of the robots at rows ``rest`` of the team view's table ((K, 8): x, y,
+    vx, vy, id, yaw, announced role, role time), neither the active one nor the goalkeeper, the ball
+    expected at (bx, by). The roles' points: the assistants' at ``assist`` ((k, 2): the receiving spots, or
+    the outlet point when we defend), the passive defender's and the midfielder's as given; kept inside the
+    field, spread apart, and given to the robots by `_assign`. Writes, for the i-th robot of ``rest`` that
+    gets a slot, the slot's index, role, x and y into ``out[i]``; returns how many got one."""
+    n = rest.shape[0]
     robots = np.empty((n, 4))
-    i = 0
-    for j in range(table.shape[0]):
-        if (rest >> j) & 1:
-            robots[i, 0], robots[i, 1], robots[i, 2] = table[j, 0], table[j, 1], table[j, 6]
-            robots[i, 3] = hysteresis + (NEW_ROLE_HOLD if table[j, 7] < MIN_ROLE_TIME else 0.0)
-            i += 1
+    for i in range(n):
+        j = rest[i]
+        robots[i, 0], robots[i, 1], robots[i, 2] = table[j, 0], table[j, 1], table[j, 6]
+        robots[i, 3] = hysteresis + (NEW_ROLE_HOLD if table[j, 7] < MIN_ROLE_TIME else 0.0)
     order = np.empty(4, np.int64)
     if n >= 4:  # two assistants
         order[0], order[1], order[2], order[3] = _ASSISTANT, _ASSISTANT, _PASSIVE, _MIDFIELD
@@ -391,45 +340,20 @@ def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis
     else:
         order[0], order[1], order[2] = _PASSIVE, _MIDFIELD, _ASSISTANT
     m = min(4 if n >= 4 else 3, n)
-    slots = np.empty((m, 3))  # x, y, role (the kernel's rows), spread as they come
+    slots = np.empty((m, 3))  # x, y, role (the rows `_assign` takes), spread as they come
     used = 0
     for s in range(m):
         role = order[s]
         if role == _ASSISTANT:
-            if attacking:
-                a = min(used, assist.shape[0] - 1)
-                x, y = assist[a, 0], assist[a, 1]
-            else:
-                x, y = _outlet_point(bx, by)
+            a = min(used, assist.shape[0] - 1)
+            x, y = assist[a, 0], assist[a, 1]
             used += 1
         elif role == _PASSIVE:
-            x, y = _passive_point(bx, by, attacking, geo)
+            x, y = passive_x, passive_y
         else:
-            x, y = _midfield_point(bx, by, attacking, opps, geo)
-        # Areas.inside_field
-        lo, hi = -L2 + SLOT_INSIDE, L2 - SLOT_INSIDE
-        x = lo if x < lo else hi if x > hi else x
-        lo, hi = -W2 + SLOT_INSIDE, W2 - SLOT_INSIDE
-        y = lo if y < lo else hi if y > hi else y
-        # spread: a slot too close to an earlier one slides sideways, across the direction of the ball
-        for _ in range(3):
-            clash = -1
-            for e in range(s):
-                if hypot(x - slots[e, 0], y - slots[e, 1]) < SLOT_GAP:
-                    clash = e
-                    break
-            if clash < 0:
-                break
-            cx, cy = slots[clash, 0], slots[clash, 1]
-            dx, dy = x - bx, y - by
-            d = hypot(dx, dy)
-            ux, uy = (1.0, 0.0) if d < 1e-12 else (dx / d, dy / d)
-            nx, ny = -uy, ux
-            if (x - cx) * nx + (y - cy) * ny < 0.0:
-                nx, ny = -nx, -ny
-            if abs(y + ny * SLOT_GAP) > 6.0:
-                nx, ny = -nx, -ny
-            x, y = cx + nx * SLOT_GAP, cy + ny * SLOT_GAP
+            x, y = midfield_x, midfield_y
+        x, y = inside_field(pitch, x, y, SLOT_INSIDE)
+        x, y = spread_point(slots[:s], x, y, bx, by, SLOT_GAP)
         slots[s, 0], slots[s, 1], slots[s, 2] = x, y, role
     best = _assign(robots, slots, 0.0, 0.0, -1.0)
     k = min(n, m)
@@ -448,18 +372,14 @@ class Analyst:
         self.spots = spots
         self.xlim = areas.L2 + 1.3
         self.ylim = areas.W2 + 1.3
-        self.geo = areas.geo
+        self.pitch = areas.pitch
         # the last set-piece formation computed, with `_formation_key` of its inputs: while a kick-off, a
         # penalty or a dropped ball is set up and taken, the ball stays put and the formation is the same
         self._formation_key: tuple | None = None
         self._formation: list[tuple] = []
-        # the picture's kernels as compiled for the types of their arguments, called without numba's
-        # dispatcher typing them at every call (as Motion's `go`): every array they get is made by this
-        # package (float64, C-contiguous: the team view's table, the opponents' rows, the spots, fresh outputs)
-        table, rows, pairs = np.zeros((1, 8)), np.zeros((1, 4)), np.zeros((1, 2))
-        self._intercepts = entry(_team_intercepts, *(0.0,) * 10, table, rows, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros((1, 3)))
-        self._assist = entry(_assist_choice, *spots, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0, 0.0, pairs)
-        self._slots = entry(_open_slots, table, 0, 0, True, pairs, rows, 0.0, 0.0, self.geo, 0.0, rows)
+        self._intercepts = bind(_team_intercepts)
+        self._assist = bind(assist_spots)
+        self._slots = bind(open_slots)
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -629,60 +549,53 @@ class Analyst:
                 if m.id == pic.receiver:
                     receiver = m
                     break
-        rows = 0
-        for m in rest:
-            rows |= 1 << m.row
-        if rows >> 62 == 0:  # (the rows fit the kernel's bits: always but in teams of more than 62)
-            assist = self._assist_array(obs, pic, 2 if len(rest) >= 4 else 1) if pic.attacking else _NO_SPOTS
-            out = np.empty((len(rest), 4))
-            k = self._slots(
-                obs.mate_array,
-                rows,
-                len(rest),
-                pic.attacking,
-                assist,
-                obs.opp_array,
-                bx,
-                by,
-                self.geo,
-                p.role_hysteresis,
-                out,
-            )
-            res = out.tolist()
-            for i in range(k):
-                _, role, x, y = res[i]
-                rid = rest[i].id
-                pic.roles[rid] = _ROLE_OF[int(role)]
-                pic.slots[rid] = (x, y, bx, by)
+        # the roles' points, each looked up in `positions` now (a replacement there is the one followed)
+        pitch, attacking = self.pitch, pic.attacking
+        if attacking:
+            assist = self._assist_array(obs, 2 if len(rest) >= 4 else 1)
         else:
-            n_assist = 2 if len(rest) >= 4 else 1
-            assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-            for rid, role, x, y in open_slots(areas, rest, pic.attacking, assist, obs.opps, bx, by, p.role_hysteresis):
-                pic.roles[rid] = role
-                pic.slots[rid] = (x, y, bx, by)
+            assist = np.array((as_called(positions.outlet_point)(pitch, bx, by),))
+        passive_x, passive_y = as_called(positions.passive_point)(pitch, bx, by, attacking)
+        midfield_x, midfield_y = as_called(positions.midfield_point)(pitch, bx, by, attacking, obs.opp_array)
+        out = np.empty((len(rest), 4))
+        k = self._slots(
+            obs.mate_array,
+            np.array([m.row for m in rest], dtype=np.int64),
+            attacking,
+            assist,
+            passive_x,
+            passive_y,
+            midfield_x,
+            midfield_y,
+            bx,
+            by,
+            pitch,
+            p.role_hysteresis,
+            out,
+        )
+        res = out.tolist()
+        for i in range(k):
+            _, role, x, y = res[i]
+            rid = rest[i].id
+            pic.roles[rid] = _ROLE_OF[int(role)]
+            pic.slots[rid] = (x, y, bx, by)
         if receiver is not None and receiver.id in pic.slots:
             # the announced receiver keeps its role and waits at the catch point, facing the passer
             info = pic.pass_info
             pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
 
-    def _assist_array(self, obs: Observation, pic: Picture, n: int) -> np.ndarray:
-        """`_assist_spots` as a (k, 2) array (the kernel's rows themselves when it could choose)."""
+    def _assist_array(self, obs: Observation, n: int) -> np.ndarray:
+        """Up to ``n`` receiving spots for the assistants (`assist_spots`), as a (k, 2) array, near where the
+        first assistant stands."""
         cx, cy = self.spots
-        prev = None  # (the first assistant's place; a plain loop: a generator is a function object per call)
-        nx = ny = math.nan
+        nx = ny = math.nan  # (the first assistant's place)
         for m in obs.mates:
             if m.role == _ASSISTANT_ROLE:
-                nx, ny = prev = (m.x, m.y)
+                nx, ny = m.x, m.y
                 break
         out = np.empty((n, 2))
         k = self._assist(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
-        if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
-            spots = assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
-            return np.array(spots, dtype=float).reshape(-1, 2)
         return out[:k]
-
-    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
-        return [(x, y) for x, y in self._assist_array(obs, pic, n).tolist()]
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
