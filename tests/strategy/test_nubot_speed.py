@@ -291,75 +291,10 @@ def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bi
     assert shared > 1000 and differ > 1000
 
 
-def _packed_go_case(rng, motion, mates, opps):
-    face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else math.nan
-    fence = (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else (math.nan,) * 3
-    me = mates[rng.randrange(len(mates))]
-    return (
-        me[0],
-        me[1],
-        rng.uniform(-4.0, 4.0),
-        rng.uniform(-3, 3),
-        rng.uniform(-3, 3),
-        int(me[4]),
-        rng.uniform(-13.0, 13.0),
-        rng.uniform(-9.0, 9.0),
-        face,
-        rng.uniform(0.5, 4.0),
-        rng.uniform(1.0, 6.0),
-        rng.random() < 0.8,
-        rng.choice([0.0, motion.ball_clearance, 0.9]),
-        rng.choice([0.0, 0.0, rng.uniform(0.0, 2.0)]),
-        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
-        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
-        rng.uniform(1.0, 4.0),
-        rng.random() < 0.7,
-        rng.random() < 0.3,
-        *fence,
-        rng.choice([math.nan, -0.15, rng.uniform(-3.0, 3.0)]),
-        rng.uniform(-11, 11),
-        rng.uniform(-7, 7),
-        rng.choice([-1, 0, 1]),
-    )
-
-
-def test_motion_go_in_one_array_equals_the_kernel_of_every_argument():
-    """`Motion.go` calls `_go_packed` (its numbers in one array, without the dispatcher): the same results,
-    avoidance side and float32 row as `_go` given each number as an argument, on random situations."""
-    import struct
-
-    from simatch.strategy.nubot import motion as motion_mod
-    from simatch.strategy.nubot.params import NubotParams, plain
-
-    field = FieldGeometry()
-    params = plain(NubotParams())
-    areas = Areas(field, params.robot_radius + 0.15)
-    mo = motion_mod.Motion(params, 0.025, field, areas)
-    rng = random.Random(17)
-    box_sets = [motion_mod._NO_BOXES, areas.box_array(areas.forbidden(False)), areas.box_array(areas.forbidden(True))]
-    for _ in range(4000):
-        mates = np.array(
-            [
-                (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1, 0.0, 2.0, 1.0)
-                for k in range(rng.randint(1, 5))
-            ]
-        )
-        opps = np.array(
-            [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(5)]
-        )[: rng.randint(0, 5)].copy()
-        boxes = rng.choice(box_sets)
-        a = _packed_go_case(rng, mo, mates.tolist(), opps)
-        row = np.zeros(5, dtype=np.float32)
-        want = motion_mod._go(*a[:19], boxes, *a[19:23], opps, mates, *a[23:], mo.consts, row)
-        struct.pack_into(f"{len(a)}d", mo._args_buf, motion_mod._ARGS_AT, *a)
-        got = mo._go(mo.args, boxes, opps, mates, mo.row)
-        assert struct.pack("6d", *got) == struct.pack("6d", *want) and got[3] == want[3], a
-        assert mo.row.tobytes() == row.tobytes()
-
-
 def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
-    """`TeamView.get` writes its Mate records' slots and its table in one pass: the same fields as
-    `Mate(info, ...)` gives and the table np.array makes of them, for every robot of a running match."""
+    """`TeamView.get` writes its Mate records' slots and its table in one pass: each record holds its robot's
+    RobotInfo and StrategyInfo fields, and the table np.array makes of them, for every robot of a running
+    match."""
     from simatch.strategy.nubot.observation import Mate, TeamView
 
     with simatch.Simulation("msl_5v5", seed=1) as sim:
@@ -371,14 +306,14 @@ def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
                 expect = []
                 for k, r in enumerate(world.vision.robots):
                     s = world.strategies.get(r.id)
-                    if s is None:
-                        m = Mate(r, r.id == world.goalkeeper)
-                    else:
+                    role, action, pi, att, rt = -1, -1, None, -1, 1e9
+                    if s is not None:
                         user = s.user.tolist()
                         att, rt = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
                         pi = s.pass_cmd if s.pass_cmd.is_valid else None
-                        m = Mate(r, r.id == world.goalkeeper, s.role, s.action, pi, att, rt)
-                    m.row = k
+                        role, action = s.role, s.action
+                    info = (r.id, r.x, r.y, r.yaw, r.vx, r.vy, r.w, r.holding_ball, r.valid, r.stuck)
+                    m = Mate(*info, role, action, pi, r.id == world.goalkeeper, att, rt, k)
                     expect.append(m)
                     assert by_id[r.id] is mates[k]
                 for got, want in zip(mates, expect, strict=True):

@@ -51,43 +51,42 @@ class Mate:
 
     def __init__(
         self,
-        info,
-        is_goalie: bool,
-        role: int = -1,
-        action: int = -1,
-        pass_info=None,
-        attacking: int = -1,
-        role_time: float = 1e9,
+        id,
+        x,
+        y,
+        yaw,
+        vx,
+        vy,
+        w,
+        holding,
+        valid,
+        stuck,
+        role,
+        action,
+        pass_info,
+        is_goalie,
+        attacking,
+        role_time,
+        row,
     ):
-        self.id = info.id
-        self.x, self.y, self.yaw = info.x, info.y, info.yaw
-        self.vx, self.vy, self.w = info.vx, info.vy, info.w
-        self.holding = info.holding_ball
-        self.valid = info.valid
-        self.stuck = info.stuck
-        self.role = role  # as the robot announced it last (StrategyInfo), -1 if unknown
-        self.action = action
-        self.pass_info = pass_info
-        self.is_goalie = is_goalie
-        self.attacking = attacking  # whether its team picture said "we attack" last tick (1/0), -1 if unknown
-        self.role_time = role_time  # how long it has had its announced role [s]
-        self.row = -1  # its row in its TeamView's table
+        # (the slots' values in slot order, as `TeamView.get` finds them in the robot's RobotInfo and its
+        # StrategyInfo; ``role``: as the robot announced it last, -1 if unknown; ``attacking``: whether its
+        # team picture said "we attack" last tick (1/0), -1 if unknown; ``role_time``: how long it has had its
+        # announced role [s]; ``row``: its row in its TeamView's table)
+        self.id = id
+        self.x, self.y, self.yaw = x, y, yaw
+        self.vx, self.vy, self.w = vx, vy, w
+        self.holding, self.valid, self.stuck = holding, valid, stuck
+        self.role, self.action, self.pass_info = role, action, pass_info
+        self.is_goalie, self.attacking, self.role_time, self.row = is_goalie, attacking, role_time, row
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
 
 
-def _make_mate_py(rid, x, y, yaw, vx, vy, w, holding, valid, stuck, role, action, pass_info, is_goalie, att, rt, row):
-    """A `Mate` of its slots' values (in slot order), without its class call: where the C helper is not built."""
-    m = _new(Mate)
-    m.id, m.x, m.y, m.yaw, m.vx, m.vy, m.w = rid, x, y, yaw, vx, vy, w
-    m.holding, m.valid, m.stuck, m.role, m.action, m.pass_info = holding, valid, stuck, role, action, pass_info
-    m.is_goalie, m.attacking, m.role_time, m.row = is_goalie, att, rt, row
-    return m
-
-
-#: `Mate` of its slots' values in slot order (the C helper's one call instead of a frame and 17 writes)
-_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or _make_mate_py
+#: `Mate` of its slots' values in slot order: the C helper's maker where it is built (one call, no Python
+#: ``__init__`` frame), else the class itself
+_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or Mate
 
 
 class TeamView:

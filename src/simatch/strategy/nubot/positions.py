@@ -28,18 +28,21 @@ class Box(NamedTuple):
 
 
 class Pitch(NamedTuple):
-    """The fixed numbers the role points read, in the team frame: the field's half length and half width,
-    and the boxes a field robot keeps out of (our penalty area, theirs, their goal area)."""
+    """The fixed numbers of the field the kernels read, in the team frame: the field's half length and half
+    width, the penalty areas' depth and half width (their lines), and the boxes a field robot keeps out of
+    (our penalty area, theirs, their goal area; widened by the margin of `Areas`)."""
 
     half_length: float
     half_width: float
+    penalty_depth: float
+    penalty_half_width: float
     own_penalty: Box
     opp_penalty: Box
     opp_goal: Box
 
 
 #: the numba type of a `Pitch`, for the kernels' declarations
-PitchType = numba.typeof(Pitch(0.0, 0.0, Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0)))
+PitchType = numba.typeof(Pitch(0.0, 0.0, 0.0, 0.0, Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0)))
 
 
 class Areas:
@@ -57,7 +60,7 @@ class Areas:
         self.own_pa = Box(-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
         self.opp_pa = Box(L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
         self.opp_ga = Box(L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
-        self.pitch = Pitch(L2, self.W2, self.own_pa, self.opp_pa, self.opp_ga)
+        self.pitch = Pitch(L2, self.W2, self.pa_depth, self.pa_half, self.own_pa, self.opp_pa, self.opp_ga)
         self._with_opp_area = (self.own_pa, self.opp_ga)
         self._without_opp_area = (self.own_pa, self.opp_pa)
         # the same boxes as (K, 3) arrays, for the compiled route (see box_array)

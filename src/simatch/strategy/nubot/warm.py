@@ -13,7 +13,7 @@ import numpy as np
 from ...compiled import bind
 from ...field import FieldGeometry
 from . import positions
-from .active import _DIRECTIONS, _dribble_choice
+from .active import _DIRECTIONS, dribble_choice
 from .avoidance import no_charging, sub_target
 from .ballpath import BallPath, intercepts, team_intercepts
 from .evaluate import lane_clear, position_value, shot_window
@@ -47,9 +47,9 @@ def load_kernels() -> None:
     shot_window(8.0, 0.5, opps, 11.0, 1.2, 10.0, 0.22)
     lane_clear(0.0, 0.0, 4.0, 1.0, opps, 3.0, 0.0)
     position_value(3.0, 1.0, opps, 11.0)
-    zones = np.array((11.0, 7.0, 2.25, 3.25, 9.2, 2.0))
-    _dribble_choice(
-        8.0, 0.5, 0.3, 1.0, 7.5, 0.0, 2.85, opps, zones, False, True, 7.0, 1.2, 10.0, 1.0, 0.0, False, *_DIRECTIONS[0]
+    pitch = Areas(FieldGeometry(), 0.4).pitch
+    bind(dribble_choice)(
+        8.0, 0.5, 0.3, 1.0, 7.5, 0.0, 2.85, opps, pitch, False, True, 7.0, 1.2, 10.0, 1.0, 0.0, False, *_DIRECTIONS[0]
     )
     robots = [_Robot(2, 0.0, 0.0), _Robot(3, 1.0, 1.0)]
     slots = [(1, 2.0, 0.0, 0.0, 0.0), (2, -2.0, 1.0, 0.0, 0.0)]
@@ -57,7 +57,6 @@ def load_kernels() -> None:
     assign(robots, slots, 0.5, around=(0.0, 0.0, 1.0))
     # open play's slots, attacking (the receiving spots) and defending (the outlet point)
     table = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 1e9), (-2.0, 1.0, 0.0, 0.0, 2.0, 0.0, -1.0, 0.1)])
-    pitch = Areas(FieldGeometry(), 0.4).pitch
     rest = np.array([0, 1], dtype=np.int64)
     for attacking in (True, False):
         passive = as_called(positions.passive_point)(pitch, 0.5, 0.2, attacking)
