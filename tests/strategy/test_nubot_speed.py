@@ -141,71 +141,22 @@ def test_a_robot_alone_decides_as_in_its_team():
     assert team_digest == lone_digest
 
 
-def test_a_rounded_move_sends_the_messages_of_the_same_command():
-    """RobotNode.publish_move builds, from a RoundedMove's numbers, the very messages (byte for byte)
-    that publish builds from the Command it stands for."""
-    from simatch import msgs
-    from simatch.strategy.base import Command, PassIntent, RoundedMove
-
-    with simatch.Simulation("msl_5v5", seed=1) as sim:
-        sim.run(seconds=0.5, until_done=False)
-        node = sim.robot_nodes[next(iter(sim.robot_nodes))]
-        got = []
-        subs = [
-            sim.bus.subscribe(p.topic, p.msgtype, got.append) for p in (node.pub_vel, node.pub_action, node.pub_info)
-        ]
-        rng = random.Random(5)
-        special = [0.0, -0.0, 1e-42, -3.0e38, 1.0 / 3.0, 7.000000476837158]
-        for k in range(3000):
-            vx, vy, w, x, y = (rng.choice(special) if rng.random() < 0.1 else rng.uniform(-8.0, 8.0) for _ in range(5))
-            role, action = rng.randrange(11), rng.randrange(22)
-            user = (float(rng.random() < 0.5), rng.uniform(0.0, 60.0)) if k % 7 else ()
-            intent = PassIntent(3, x, y, vy, vx, kicked=k % 2 == 0) if k % 5 == 0 else None
-            cmd = Command(vx=vx, vy=vy, w=w, role=role, action=action, intent=(x, y), user=user)
-            cmd.pass_intent = intent
-            node.publish(0.025 * k, k, cmd, vx, vy, w)
-            plain = [msgs.encode(m) for m in got]
-            got.clear()
-            move = RoundedMove(*msgs.f32s(vx, vy, w), role, action, msgs.f32s(x, y), user)
-            move.pass_intent = intent
-            node.publish_move(0.025 * k, k, move)
-            assert [msgs.encode(m) for m in got] == plain, (vx, vy, w, x, y, role, action, user)
-            got.clear()
-        for s in subs:
-            s.close()
-
-
-def test_the_motion_row_holds_the_command_rounded_as_the_messages_round_it():
-    """Motion.go's kernel writes the body velocity and the target asked for, rounded to float32, into the
-    motion's row: the numbers msgs.f32s gives of what it returns."""
-    from simatch import msgs
+def test_a_move_is_the_command_of_its_fields():
+    """`Command.move` makes the Command the dataclass makes of the same fields (every other one at its
+    default), and `Motion.move` is the last `go` as such a command, its target as the intent."""
+    from simatch.strategy.base import Command
     from simatch.strategy.nubot.observation import Observation, TeamView
 
+    move = Command.move(1.5, -0.25, 0.3, 3, 2, (4.0, 1.0), (1.0, 0.5))
+    assert type(move) is Command
+    assert move == Command(vx=1.5, vy=-0.25, w=0.3, role=3, action=2, intent=(4.0, 1.0), user=(1.0, 0.5))
     with simatch.Simulation("msl_5v5", seed=1) as sim:
-        sim.run(seconds=3.0, until_done=False)
-        rng = random.Random(9)
-        for node in sim.robot_nodes.values():
-            robot = node.strategy
-            obs = Observation(node.world, TeamView())
-            motion, areas = robot.motion, robot.areas
-            for _ in range(400):
-                tx, ty = rng.uniform(-13.0, 13.0), rng.uniform(-9.0, 9.0)
-                face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else None
-                fence = (obs.bx, obs.by, rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else None
-                boxes = areas.forbidden(rng.random() < 0.5) if rng.random() < 0.7 else ()
-                vx, vy, w = motion.go(
-                    obs,
-                    tx,
-                    ty,
-                    face,
-                    rng.uniform(0.5, 4.0),
-                    rng.uniform(1.0, 6.0),
-                    avoid=rng.random() < 0.8,
-                    ball_obstacle=rng.random() < 0.5,
-                    boxes=boxes,
-                    fence=fence,
-                )
-                assert motion.row.tolist() == list(msgs.f32s(vx, vy, w, tx, ty))
+        sim.run(seconds=1.0, until_done=False)
+        node = sim.robot_nodes["cyan/3"]
+        robot = node.strategy
+        obs = Observation(node.world, TeamView())
+        vx, vy, w = robot.motion.go(obs, 2.0, -1.0, 0.5, 2.0, 3.0)
+        assert robot.motion.move(3, 4) == Command(vx=vx, vy=vy, w=w, role=3, action=4, intent=(2.0, -1.0))
 
 
 def test_assign_in_one_array_equals_the_rows_then_the_kernel():

@@ -20,7 +20,7 @@ import numpy as np
 
 from ...compiled import Array, Matrix, bind, kernel
 from ...exactmath import hypot, pymax, pymin, remainder
-from ..base import RoundedMove
+from ..base import Command
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
 from .observation import Observation
@@ -59,10 +59,8 @@ class Motion:
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
         self._two_turn_acc = 2.0 * params.turn_acceleration
-        # the last command's numbers at the messages' float32 precision (body vx, vy, w, then the target
-        # asked for): `steer` writes them, a robot taking its place reads them with tolist (no message holds
-        # this array) into a RoundedMove
-        self.row = np.zeros(5, dtype=np.float32)
+        # the last `go`'s command: body vx, vy, w and the target asked for (see `move`)
+        self.command = (0.0, 0.0, 0.0, 0.0, 0.0)
         # what `steer` reads: the fixed numbers, written here, then each call's, written by `go` in one struct
         # call through a float64 view of the same memory (never leaves this robot's Motion)
         self.args = np.zeros(1, dtype=STEER_ARGS)
@@ -157,29 +155,20 @@ class Motion:
             obs.by,
             self.side,
         )
-        vx, vy, w, side, wx, wy = self._steer(self.args, box_array, obs.opp_array, obs.mate_array, self.row)
+        vx, vy, w, side, wx, wy = self._steer(self.args, box_array, obs.opp_array, obs.mate_array)
         self.side = side
         self.last = (wx, wy, w)
+        self.command = (vx, vy, w, tx, ty)
         return (vx, vy, w)
 
-    def move(self, role: int, action: int) -> RoundedMove:
-        """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
-        all rounded as the messages take them (from `row`)."""
-        vx, vy, w, ix, iy = self.row.tolist()
-        return rounded_move(vx, vy, w, role, action, (ix, iy), ())
+    def move(self, role: int, action: int) -> Command:
+        """The last `go` as a command: its body velocity, with the target it was asked for as the intent."""
+        vx, vy, w, tx, ty = self.command
+        return _move(vx, vy, w, role, action, (tx, ty))
 
 
 _NO_BOXES = np.zeros((0, 3))
-_new = object.__new__
-
-
-def rounded_move(vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple) -> RoundedMove:
-    """``RoundedMove(vx, vy, w, role, action, intent, user)``: the same object, its attributes written here (a
-    class call with a Python ``__init__`` costs CPython 3.11 several times what a function's call does)."""
-    move = _new(RoundedMove)
-    move.vx, move.vy, move.w = vx, vy, w
-    move.role, move.action, move.intent, move.user = role, action, intent, user
-    return move
+_move = Command.move
 
 
 #: `steer`'s numbers: a robot's fixed ones (STEER_FIXED), then those of a call (STEER_CALL, as `Motion.go` gets
@@ -254,19 +243,16 @@ def keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     return vx, vy
 
 
-@kernel(args=Array(STEER_ARGS, 1), boxes=Matrix, opps=Matrix, mates=Matrix, row=Array(np.float32, 1))
-def steer(args, boxes, opps, mates, row):
+@kernel(args=Array(STEER_ARGS, 1), boxes=Matrix, opps=Matrix, mates=Matrix)
+def steer(args, boxes, opps, mates):
     """`Motion.go`'s command: (body vx, vy, w, avoidance side, team-frame vx, vy) of the call in ``args[0]``
     (STEER_ARGS; ``face``, ``fence_*`` and ``max_x`` NaN where `go` takes None), ``boxes`` (K, 3) the areas to
-    go round, ``opps`` and ``mates`` the observation's opponents and team table. Writes the body vx, vy, w and
-    the target (tx, ty) as asked, rounded to float32 as the messages round them, into ``row`` (5,)."""
+    go round, ``opps`` and ``mates`` the observation's opponents and team table."""
     a = args[0]
     mx, my, yaw, me_id = a.x, a.y, a.yaw, a.id
     tx, ty, face, vmax, wmax = a.tx, a.ty, a.face, a.vmax, a.wmax
     end_speed, brake, side = a.end_speed, a.brake, int(a.side)
     fence_x, fence_y, fence_r, max_x = a.fence_x, a.fence_y, a.fence_r, a.max_x
-    row[3] = tx
-    row[4] = ty
     xlim, ylim = a.xlim, a.ylim
     tx = pymin(pymax(tx, -xlim), xlim)
     ty = pymin(pymax(ty, -ylim), ylim)
@@ -314,7 +300,4 @@ def steer(args, boxes, opps, mates, row):
     h = yaw + 0.5 * w * a.period
     c, s = math.cos(h), math.sin(h)
     bvx, bvy = c * vx + s * vy, -s * vx + c * vy
-    row[0] = bvx
-    row[1] = bvy
-    row[2] = w
     return bvx, bvy, w, side, vx, vy
