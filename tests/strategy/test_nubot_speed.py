@@ -10,7 +10,7 @@ import numpy as np
 
 import simatch
 from simatch.field import FieldGeometry
-from simatch.strategy.nubot import ballpath, observation, picture, positions
+from simatch.strategy.nubot import assignment, ballpath, observation, picture, positions
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
@@ -53,9 +53,9 @@ def _kernels():
         "intercepts": ballpath._intercepts,
         "team_intercepts": ballpath._team_intercepts,
         "score_spots": positions._score_spots,
-        "assist_spots": picture.assist_spots,
-        "assign": picture._assign_flat,
-        "open_slots": picture.open_slots,
+        "assist_spots": assignment.assist_spots,
+        "assign": assignment._assign_flat,
+        "open_slots": assignment.open_slots,
         "passive_point": positions.passive_point,
         "midfield_point": positions.midfield_point,
         "outlet_point": positions.outlet_point,
@@ -182,15 +182,20 @@ def test_assign_in_one_array_equals_the_rows_then_the_kernel():
         kept = slots[:n]
         rows = _array(
             [
-                (r.x, r.y, r.role, hysteresis + (picture.NEW_ROLE_HOLD if r.role_time < picture.MIN_ROLE_TIME else 0.0))
+                (
+                    r.x,
+                    r.y,
+                    r.role,
+                    hysteresis + (assignment.NEW_ROLE_HOLD if r.role_time < assignment.MIN_ROLE_TIME else 0.0),
+                )
                 for r in robots
             ],
             4,
         )
         cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-        best = picture._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
+        best = assignment._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
         want = {robots[i].id: int(best[i]) for i in range(min(n, len(kept)))}
-        assert picture.assign(robots, slots, hysteresis, around) == want
+        assert assignment.assign(robots, slots, hysteresis, around) == want
 
 
 def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bit():
@@ -365,7 +370,7 @@ def test_assistant_spots_are_the_best_scored_at_least_3_m_apart():
             if all(math.hypot(cx[k] - x, cy[k] - y) > 3.0 for x, y in want) and len(want) < n:
                 want.append((cx[k], cy[k]))
         out = np.empty((n, 2))
-        got = picture.assist_spots(cx, cy, bx, by, opps, areas.L2, 3.0, 8.5, nx, ny, out)
+        got = assignment.assist_spots(cx, cy, bx, by, opps, areas.L2, 3.0, 8.5, nx, ny, out)
         assert out[:got].tolist() == [list(w) for w in want]
 
 
@@ -388,19 +393,21 @@ def test_open_play_slots_are_the_roles_points_inside_the_field_and_apart():
         bx, by = rng.uniform(-10, 10), rng.uniform(-6, 6)
         assist = np.array([(rng.uniform(-10, 10), rng.uniform(-6, 6)) for _ in range(2)])
         out = np.empty((len(rest), 4))
-        got = picture.open_slots(table, rest, attacking, assist, -6.0, 1.0, -3.0, -2.0, bx, by, areas.pitch, 0.5, out)
+        got = assignment.open_slots(
+            table, rest, attacking, assist, -6.0, 1.0, -3.0, -2.0, bx, by, areas.pitch, 0.5, out
+        )
         assert got == min(len(rest), 4)
         slots = out[:got].tolist()
         assert len({int(s[0]) for s in slots}) == got
         roles = sorted(int(s[1]) for s in slots)
         n = len(rest)
         if n >= 4:
-            want = [picture._ASSISTANT, picture._ASSISTANT, picture._PASSIVE, picture._MIDFIELD]
+            want = [assignment.ASSISTANT, assignment.ASSISTANT, assignment.PASSIVE, assignment.MIDFIELD]
         else:
-            order = [picture._ASSISTANT, picture._PASSIVE, picture._MIDFIELD]
+            order = [assignment.ASSISTANT, assignment.PASSIVE, assignment.MIDFIELD]
             if not attacking:
-                order = [picture._PASSIVE, picture._MIDFIELD, picture._ASSISTANT]
+                order = [assignment.PASSIVE, assignment.MIDFIELD, assignment.ASSISTANT]
             want = order[:n]
         assert roles == sorted(want)
         for _, _, x, y in slots:
-            assert abs(x) <= areas.L2 - picture.SLOT_INSIDE + 1.3 and abs(y) <= areas.W2
+            assert abs(x) <= areas.L2 - assignment.SLOT_INSIDE + 1.3 and abs(y) <= areas.W2

@@ -204,8 +204,7 @@ class RobotNode(Node):
         if pack is None:
             pack = _USER_PACK[n] = struct.Struct(f"{n}d").pack
         try:
-            # (read-only, as messages are: the numbers np.array(user, dtype=np.float64) holds, in a quarter fewer
-            # instructions)
+            # (read-only, as messages are: the numbers np.array(user, dtype=np.float64) holds)
             arr = _frombuffer(pack(*user))
         except struct.error:  # (something else than numbers: NumPy's conversion, or its error)
             arr = np.array(user, dtype=np.float64)

@@ -37,7 +37,7 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas, PitchType
 
-# (what `fetch` and `play` read at every tick, as globals: a namespace's attribute costs more)
+# (what `fetch` and `play` read at every tick, as module constants)
 _PLAY = PHASES.PLAY
 _CATCH_BALL, _CATCH_POSITIONED = ACTIONS.CATCH_BALL, ACTIONS.CATCH_POSITIONED
 
@@ -332,7 +332,7 @@ class BallPlayer:
         if lane_clear(obs.bx, obs.by, tx, ty, obs.opp_array, CLEAR_SPEED, 0.0) < 0.0:
             return None  # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
-        # opponents' throw-in (most of these kicks used to go out)
+        # opponents' throw-in
         room = self.room_ahead(obs.bx, obs.by, c, s)
         speed = min(CLEAR_SPEED, math.sqrt(2.0 * max(p.ball_deceleration, 0.05) * room))
         if speed < CLEAR_MIN_SPEED:

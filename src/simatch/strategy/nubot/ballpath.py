@@ -6,8 +6,7 @@ a robot's time to reach each sample (from its current velocity, with limited spe
 computed for all robots at once, and the first sample a robot reaches before the ball is its
 interception point: a robot runs to where the ball will be, not where it is.
 
-The sampling is a compiled kernel (numba, cached on disk, as the simulator's kernels): ten robots times
-forty samples are a few hundred small steps, which cost far more as NumPy calls than as machine code.
+The sampling is a compiled kernel (`_team_intercepts`), run once per team picture for every robot.
 """
 
 from __future__ import annotations

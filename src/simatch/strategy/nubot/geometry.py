@@ -1,7 +1,7 @@
 """Plane geometry on plain floats, in the team frame.
 
-A robot handles a handful of points per decision, where a NumPy call costs more than the arithmetic it
-saves; these helpers keep every per-robot computation in scalar Python.
+A robot handles a handful of points per decision: these helpers work on scalars, from Python (and, the
+ones marked as kernels, from compiled kernels).
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
-# (what `decide` reads at every tick, as globals: a namespace's attribute costs more)
+# (what `decide` reads at every tick, as module constants)
 _PLAY = PHASES.PLAY
 _GOALIE, _CATCH_POSITIONED, _POSITIONED = ROLES.GOALIE, ACTIONS.CATCH_POSITIONED, ACTIONS.POSITIONED
 

@@ -116,14 +116,8 @@ class Motion:
             if lim > 0.0 and lim < wmax:
                 wmax = lim
         box_array = self.areas.box_array(boxes) if boxes else _NO_BOXES
-        if ball_obstacle is True:
-            ball = self.ball_clearance
-        else:
-            ball = float(ball_obstacle or 0.0)
-        if fence is None:
-            fx = fy = fr = math.nan
-        else:
-            fx, fy, fr = fence
+        ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
+        fx, fy, fr = _NO_FENCE if fence is None else fence
         # the call's fields of `args` (STEER_CALL's order), written in one call
         _PACK_CALL(
             self._call_buf,
@@ -168,6 +162,7 @@ class Motion:
 
 
 _NO_BOXES = np.zeros((0, 3))
+_NO_FENCE = (math.nan, math.nan, math.nan)
 _move = Command.move
 
 

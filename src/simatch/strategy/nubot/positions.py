@@ -299,8 +299,8 @@ def score_spots(
 
 @numba.njit(cache=True)
 def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
-    """score_spots, compiled: a hundred candidates times five opponents are tiny loops, costly as NumPy
-    calls (about a microsecond each) and cheap as machine code."""
+    """`score_spots` into ``out``: the kernel the receiving spots' choices (`assignment.assist_spots`) call;
+    (nx, ny) NaN: no place to stay near."""
     for i in range(cx.shape[0]):
         x, y = cx[i], cy[i]
         score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)

@@ -37,7 +37,7 @@ from .warm import load_kernels
 _move = Command.move
 _cos, _sin = math.cos, math.sin
 
-# what `decide` and `hold_slot` compare at every tick, as globals (a namespace's attribute costs more); the
+# what `decide` and `hold_slot` compare at every tick, as module constants; the
 # game flow's phase is always one of PHASES' members, compared by identity
 _STOP, _PARK, _TEST, _PLAY, _SETUP, _OUR_RESTART = (
     PHASES.STOP,

@@ -129,18 +129,7 @@ def formation(
         slots.append((ROLES.MIDFIELD, x, 4.0, bx, by))
         slots.append((ROLES.ASSISTANT, x, -4.0, bx, by))
     elif kind == M.DROPBALL:
-        d = p.dropball_distance
-        gx, gy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, d)
-        if math.hypot(gx - bx, gy - by) < d - 1e-6 or math.hypot(gx - bx, gy - by) > d + 0.5:
-            ux, uy = unit(-areas.L2 - bx, -by)
-            gx, gy = bx + d * ux, by + d * uy
-        slots.append((ROLES.ACTIVE, gx, gy, bx, by))
-        px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
-        slots.append((ROLES.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
-        ax, ay = as_called(positions.outlet_point)(areas.pitch, bx, by)
-        slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
-        mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
-        slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
+        slots = _dropball(areas, bx, by, p)
     elif kind % 2 == 1:  # our throw-in, goal kick, corner, free kick
         rx, ry = restart_spot(areas, bx, by, opps, spots, p, receiver_near)
         ux, uy = unit(rx - bx, ry - by)
@@ -151,28 +140,61 @@ def formation(
         mx, my = clamp(bx - 3.5, -areas.L2 + 4.0, areas.L2 - 4.5), (by - 3.0 if by > 0 else by + 3.0)
         slots.append((ROLES.MIDFIELD, mx, my, bx, by))
     else:  # their throw-in, goal kick, corner, free kick
-        r = p.opponent_distance + 0.1
-        wx, wy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, r)
-        slots.append((ROLES.ACTIVE, wx, wy, bx, by))
-        px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
-        slots.append((ROLES.PASSIVE, px, py, bx, by))
-        # markers on the opponents most likely to receive: away from the ball, nearest to our goal
-        free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
-        free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
-        zones = [
-            (clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
-            as_called(positions.outlet_point)(areas.pitch, bx, by),
-        ]
-        for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
-            if k < len(free):
-                o = free[k]
-                ux, uy = unit(-areas.L2 - o[0], -o[1])
-                vx, vy = unit(bx - o[0], by - o[1])
-                wx, wy = unit(ux + vx, uy + vy)
-                ox, oy = o[0] + 0.9 * wx, o[1] + 0.9 * wy
-            else:
-                ox, oy = zones[k]
-            slots.append((role, ox, oy, bx, by))
+        slots = _their_restart(areas, bx, by, opps, p)
+    return _made_legal(kind, slots, areas, bx, by, p)
+
+
+def _dropball(areas: Areas, bx: float, by: float, p: NubotParams) -> list[tuple]:
+    """A dropped ball: our active robot on the goal side of the ball, the others at their defensive points,
+    everyone ``dropball_distance`` (and the others 0.6 m more) away."""
+    slots: list[tuple] = []
+    d = p.dropball_distance
+    gx, gy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, d)
+    if math.hypot(gx - bx, gy - by) < d - 1e-6 or math.hypot(gx - bx, gy - by) > d + 0.5:
+        ux, uy = unit(-areas.L2 - bx, -by)
+        gx, gy = bx + d * ux, by + d * uy
+    slots.append((ROLES.ACTIVE, gx, gy, bx, by))
+    px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
+    slots.append((ROLES.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
+    ax, ay = as_called(positions.outlet_point)(areas.pitch, bx, by)
+    slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
+    mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
+    slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
+    return slots
+
+
+def _their_restart(areas: Areas, bx: float, by: float, opps: list, p: NubotParams) -> list[tuple]:
+    """Their throw-in, goal kick, corner or free kick: a wall between the ball and our goal, the passive
+    defender, and markers on the opponents most likely to receive (or zones, without them)."""
+    slots: list[tuple] = []
+    r = p.opponent_distance + 0.1
+    wx, wy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, r)
+    slots.append((ROLES.ACTIVE, wx, wy, bx, by))
+    px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
+    slots.append((ROLES.PASSIVE, px, py, bx, by))
+    # markers on the opponents most likely to receive: away from the ball, nearest to our goal
+    free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
+    free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
+    zones = [
+        (clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
+        as_called(positions.outlet_point)(areas.pitch, bx, by),
+    ]
+    for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
+        if k < len(free):
+            o = free[k]
+            ux, uy = unit(-areas.L2 - o[0], -o[1])
+            vx, vy = unit(bx - o[0], by - o[1])
+            wx, wy = unit(ux + vx, uy + vy)
+            ox, oy = o[0] + 0.9 * wx, o[1] + 0.9 * wy
+        else:
+            ox, oy = zones[k]
+        slots.append((role, ox, oy, bx, by))
+    return slots
+
+
+def _made_legal(kind: int, slots: list[tuple], areas: Areas, bx: float, by: float, p: NubotParams) -> list[tuple]:
+    """The slots made to respect the distances and areas of set piece ``kind`` and spread apart (a slot
+    spread moved, or that clashes with one before it, made legal again keeping clear of those)."""
     slots = [_legal(kind, s, areas, bx, by, p) for s in slots]
     out: list[tuple] = []
     for s, moved in zip(spread(slots, bx, by), slots):

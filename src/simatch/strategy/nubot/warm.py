@@ -14,10 +14,10 @@ from ...compiled import bind
 from ...field import FieldGeometry
 from . import positions
 from .active import _DIRECTIONS, dribble_choice
+from .assignment import assign, assist_spots, open_slots
 from .avoidance import no_charging, sub_target
 from .ballpath import BallPath, intercepts, team_intercepts
 from .evaluate import lane_clear, position_value, shot_window
-from .picture import assign, assist_spots, open_slots
 from .positions import Areas, as_called, score_spots
 
 
