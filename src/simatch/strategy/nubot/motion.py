@@ -18,7 +18,7 @@ import struct
 
 import numpy as np
 
-from ...compiled import Array, Matrix, bind, kernel
+from ...compiled import Array, Float, Matrix, bind, kernel
 from ...exactmath import hypot, pymax, pymin, remainder
 from ..base import Command
 from .avoidance import no_charging, sub_target
@@ -76,6 +76,7 @@ class Motion:
         fixed["goal_half"] = areas.goal_half if areas is not None else 0.5 * field.goal_width
         self._call_buf = memoryview(self.args.view(np.float64))
         self._steer = bind(steer)
+        self._to_body = bind(to_body)
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -155,6 +156,15 @@ class Motion:
         self.command = (vx, vy, w, tx, ty)
         return (vx, vy, w)
 
+    def turn_rate(self, err: float, wmax: float) -> float:
+        """The turn rate for heading error ``err`` (`turn_rate`)."""
+        return turn_rate(err, wmax, self._two_turn_acc)
+
+    def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:
+        """Team-frame velocity to the body frame (`to_body`)."""
+        bx, by = self._to_body(yaw, vx, vy, w, self.period)
+        return bx, by, w
+
     def move(self, role: int, action: int) -> Command:
         """The last `go` as a command: its body velocity, with the target it was asked for as the intent."""
         vx, vy, w, tx, ty = self.command
@@ -211,6 +221,24 @@ STEER_CALL = (
 STEER_ARGS = np.dtype([(name, np.float64) for name in STEER_FIXED + STEER_CALL])
 _PACK_CALL = struct.Struct(f"{len(STEER_CALL)}d").pack_into
 _CALL_AT = STEER_ARGS.fields[STEER_CALL[0]][1]  # (in bytes)
+
+
+@kernel
+def turn_rate(err, wmax, two_turn_acc):
+    """The turn rate for heading error ``err``: as fast as the robot can still brake (turning acceleration
+    ``two_turn_acc`` / 2) to face the heading, within ``wmax``, proportional (HEADING_GAIN) near it."""
+    aerr = abs(err)
+    w = pymin(pymin(wmax, math.sqrt(two_turn_acc * aerr)), HEADING_GAIN * aerr)
+    return w if err >= 0.0 else -w
+
+
+@kernel(yaw=Float, vx=Float, vy=Float, w=Float, period=Float)
+def to_body(yaw, vx, vy, w, period):
+    """Team-frame velocity (vx, vy) of a robot at heading ``yaw`` turning at ``w`` in the body frame, at the
+    heading it will have half a control period on: a robot that turns while it drives keeps its course."""
+    h = yaw + 0.5 * w * period
+    c, s = math.cos(h), math.sin(h)
+    return c * vx + s * vy, -s * vx + c * vy
 
 
 @kernel
@@ -277,14 +305,7 @@ def steer(args, boxes, opps, mates):
         vx, vy = keep_out_of_circle(mx, my, vx, vy, fence_x, fence_y, fence_r)
     if max_x == max_x:
         vx = pymin(vx, 2.0 * (max_x - mx))
-    if face != face:  # NaN: no heading wanted
-        w = 0.0
-    else:
-        err = remainder(face - yaw, TWO_PI)
-        aerr = abs(err)
-        w = pymin(pymin(wmax, math.sqrt(a.two_turn_acc * aerr)), HEADING_GAIN * aerr)
-        if not err >= 0.0:
-            w = -w
+    w = 0.0 if face != face else turn_rate(remainder(face - yaw, TWO_PI), wmax, a.two_turn_acc)  # NaN: no heading
     speed = hypot(vx, vy)
     if speed * abs(w) > SPIN_COUPLING:
         if a.turn_first != 0.0:
@@ -292,7 +313,5 @@ def steer(args, boxes, opps, mates):
             vx, vy = vx * k, vy * k
         else:
             w = math.copysign(SPIN_COUPLING / speed, w)
-    h = yaw + 0.5 * w * a.period
-    c, s = math.cos(h), math.sin(h)
-    bvx, bvy = c * vx + s * vy, -s * vx + c * vy
+    bvx, bvy = to_body(yaw, vx, vy, w, a.period)
     return bvx, bvy, w, side, vx, vy

@@ -35,7 +35,6 @@ from .testmodes import TestModes
 from .warm import load_kernels
 
 _move = Command.move
-_cos, _sin = math.cos, math.sin
 
 # what `decide` and `hold_slot` compare at every tick, as module constants; the
 # game flow's phase is always one of PHASES' members, compared by identity
@@ -212,10 +211,7 @@ class NubotRobot(RobotStrategy):
         dist = v.obstacles.distance
         if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
-        # (Motion.body, inline: the course in the body frame half a period on)
-        h = me.yaw + 0.5 * w * self.motion.period
-        c, s = _cos(h), _sin(h)
-        bx, by, w_body = c * vx + s * vy, -s * vx + c * vy, w
+        bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
         return _move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
