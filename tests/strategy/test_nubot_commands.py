@@ -110,3 +110,24 @@ def test_roles_are_stable_in_play():
     assert sum(flickers.values()) <= len(history) - 2, flickers
     assert changes < 60 * 10 / 3, changes  # on average a role lasts several seconds
     sim.close()
+
+
+def test_circle_test_runs_round_the_point():
+    """The coach's CIRCLE_TEST: the robot named drives round point A at the radius to point B, without
+    a strategy error."""
+    sim = scenario()
+    bench_all_but(sim, ["cyan/3"])
+    sim.set_model_state("cyan/3", x=2.0, y=0.0, yaw=0.0)
+    sim.step()
+    sim.coaches["cyan"].send(
+        M.TEST, test_mode=int(T.CIRCLE_TEST), id_a=3, point_a_x=0.0, point_a_y=0.0, point_b_x=2.0, point_b_y=0.0
+    )
+    angles = []
+    for _ in range(16):
+        sim.run(seconds=0.5)
+        st = sim.model_states()["cyan/3"]
+        assert abs(math.hypot(st.x, st.y) - 2.0) < 0.5
+        angles.append(math.atan2(st.y, st.x))
+    assert sim.robot_nodes["cyan/3"].errors == 0
+    assert max(angles) - min(angles) > 1.0  # it went round
+    sim.close()

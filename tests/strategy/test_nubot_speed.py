@@ -1,6 +1,6 @@
-"""The speed work on nubot keeps what robots decide: the helpers rewritten for speed against the plain
-versions they replace, the opponents' array shared within a team, and the kernels the benchmark loads
-before timing."""
+"""What nubot's compiled parts promise: the routes round the areas, the assistants' spots, the interceptions
+in one kernel, the opponents' array shared within a team only when it is the same, a robot alone deciding
+as in its team, and the kernels the benchmark loads before timing."""
 
 import math
 import random
@@ -10,8 +10,7 @@ import numpy as np
 
 import simatch
 from simatch.field import FieldGeometry
-from simatch.strategy.nubot import ballpath, observation, picture, positions
-from simatch.strategy.nubot.avoidance import GROUP_GAP, MAX_TURN, SIDE_HYSTERESIS, TWO_PI, _wrap
+from simatch.strategy.nubot import assignment, ballpath, observation, picture, positions
 from simatch.strategy.nubot.geometry import segment_hits_box
 from simatch.strategy.nubot.observation import _array
 from simatch.strategy.nubot.positions import Areas
@@ -54,9 +53,12 @@ def _kernels():
         "intercepts": ballpath._intercepts,
         "team_intercepts": ballpath._team_intercepts,
         "score_spots": positions._score_spots,
-        "assist_choice": picture._assist_choice,
-        "assign": picture._assign_flat,
-        "open_slots": picture._open_slots,
+        "assist_spots": assignment.assist_spots,
+        "assign": assignment._assign_flat,
+        "open_slots": assignment.open_slots,
+        "passive_point": positions.passive_point,
+        "midfield_point": positions.midfield_point,
+        "outlet_point": positions.outlet_point,
     }
 
 
@@ -107,73 +109,6 @@ def test_team_intercepts_in_one_kernel_equal_the_rows_then_the_intercepts():
         assert fused.tobytes() == plain.tobytes()
 
 
-def test_assistant_spots_compiled_equal_the_plain_choice():
-    """The assistants' spots chosen in one kernel equal the plain choice (NumPy's argsort, Python's hypot) on
-    random situations; where equal scores make the order of equals matter the kernel says so (-1) and the
-    team takes the plain way."""
-    areas = Areas(FieldGeometry(), 0.4)
-    cx, cy = positions.spot_grid(areas)
-    rng = random.Random(11)
-    ties = 0
-    for case in range(4000):
-        opps = [[rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0] for _ in range(rng.randint(0, 5))]
-        if case % 10 == 0:  # symmetric situations, where scores come out equal
-            opps, bx, by = [], rng.choice([0.0, 2.0, -4.0]), 0.0
-        else:
-            bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
-        prev = None if rng.random() < 0.3 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
-        n = rng.choice([1, 2, 12])  # (12: the order of all twelve best counts)
-        plain = picture.assist_spots(cx, cy, bx, by, opps, areas.L2, prev, n)
-        nx, ny = prev if prev is not None else (math.nan, math.nan)
-        out = np.empty((n, 2))
-        arr = np.array(opps, dtype=float).reshape(-1, 4)
-        k = picture._assist_choice(cx, cy, bx, by, arr, areas.L2, 3.0, 8.5, nx, ny, out)
-        if k < 0:
-            ties += 1
-            continue
-        assert [(x, y) for x, y in out[:k].tolist()] == plain
-    assert 0 < ties < 1000
-
-
-def _plain_opponents(ox, oy, ovx, ovy, mates):
-    """The rule of `observation._opponents`, plainly: exact positions first, by distance under noise."""
-    rows = [(float(x), float(y), float(vx), float(vy)) for x, y, vx, vy in zip(ox, oy, ovx, ovy)]
-    exact = [r for r in rows if not any(m[0] == r[0] and m[1] == r[1] for m in mates)]
-    if len(rows) - len(exact) >= len(mates) - 1:
-        return exact
-    near = observation._SAME_ROBOT
-    return [r for r in exact if all(abs(m[0] - r[0]) >= near or abs(m[1] - r[1]) >= near for m in mates)]
-
-
-def test_opponents_are_told_from_team_mates_as_the_plain_rule_says():
-    rng = random.Random(2)
-    for _ in range(3000):
-        mates = [(rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0, k + 1) for k in range(rng.randint(1, 5))]
-        others = [(rng.uniform(-11, 11), rng.uniform(-7, 7)) for _ in range(rng.randint(0, 5))]
-        seen = [(x, y) for x, y, *_ in mates[1:]] + others
-        if rng.random() < 0.5:  # noisy perception: team-mates a few centimetres off
-            seen = [(x + rng.uniform(-0.05, 0.05), y + rng.uniform(-0.05, 0.05)) for x, y in seen]
-        rng.shuffle(seen)
-        f32 = np.float32
-        ox = np.array([x for x, _ in seen], dtype=f32)
-        oy = np.array([y for _, y in seen], dtype=f32)
-        ovx = np.array([rng.uniform(-3, 3) for _ in seen], dtype=f32)
-        ovy = np.array([rng.uniform(-3, 3) for _ in seen], dtype=f32)
-        m = np.array(mates, dtype=float).reshape(-1, 5)
-        m[:, :2] = m[:, :2].astype(f32)  # as the team list's float32 numbers
-        out = np.full((len(seen), 4), np.nan)
-        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
-        if rng.random() < 0.2:  # the ball at a robot
-            bx, by = float(m[0, 0]), float(m[0, 1])
-        k, near, near_d, opp_d = observation._opponents(ox, oy, ovx, ovy, m, out, bx, by)
-        opps = _plain_opponents(ox, oy, ovx, ovy, m.tolist())
-        assert out[:k].tolist() == [list(r) for r in opps]
-        # the nearest team-mate (the first of equals) and opponent, by Python's own hypot
-        dists = [math.hypot(x - bx, y - by) for x, y in m[:, :2].tolist()]
-        assert (near, near_d) == min(enumerate(dists), key=lambda e: e[1])
-        assert opp_d == min((math.hypot(x - bx, y - by) for x, y, _, _ in opps), default=math.inf)
-
-
 def test_load_kernels_loads_what_open_play_calls():
     """After `load_kernels`, a match into open play needs no kernel signature it has not loaded yet (the
     benchmark relies on this: nothing compiles or loads while it measures)."""
@@ -206,71 +141,22 @@ def test_a_robot_alone_decides_as_in_its_team():
     assert team_digest == lone_digest
 
 
-def test_a_rounded_move_sends_the_messages_of_the_same_command():
-    """RobotNode.publish_move builds, from a RoundedMove's numbers, the very messages (byte for byte)
-    that publish builds from the Command it stands for."""
-    from simatch import msgs
-    from simatch.strategy.base import Command, PassIntent, RoundedMove
-
-    with simatch.Simulation("msl_5v5", seed=1) as sim:
-        sim.run(seconds=0.5, until_done=False)
-        node = sim.robot_nodes[next(iter(sim.robot_nodes))]
-        got = []
-        subs = [
-            sim.bus.subscribe(p.topic, p.msgtype, got.append) for p in (node.pub_vel, node.pub_action, node.pub_info)
-        ]
-        rng = random.Random(5)
-        special = [0.0, -0.0, 1e-42, -3.0e38, 1.0 / 3.0, 7.000000476837158]
-        for k in range(3000):
-            vx, vy, w, x, y = (rng.choice(special) if rng.random() < 0.1 else rng.uniform(-8.0, 8.0) for _ in range(5))
-            role, action = rng.randrange(11), rng.randrange(22)
-            user = (float(rng.random() < 0.5), rng.uniform(0.0, 60.0)) if k % 7 else ()
-            intent = PassIntent(3, x, y, vy, vx, kicked=k % 2 == 0) if k % 5 == 0 else None
-            cmd = Command(vx=vx, vy=vy, w=w, role=role, action=action, intent=(x, y), user=user)
-            cmd.pass_intent = intent
-            node.publish(0.025 * k, k, cmd, vx, vy, w)
-            plain = [msgs.encode(m) for m in got]
-            got.clear()
-            move = RoundedMove(*msgs.f32s(vx, vy, w), role, action, msgs.f32s(x, y), user)
-            move.pass_intent = intent
-            node.publish_move(0.025 * k, k, move)
-            assert [msgs.encode(m) for m in got] == plain, (vx, vy, w, x, y, role, action, user)
-            got.clear()
-        for s in subs:
-            s.close()
-
-
-def test_the_motion_row_holds_the_command_rounded_as_the_messages_round_it():
-    """Motion.go's kernel writes the body velocity and the target asked for, rounded to float32, into the
-    motion's row: the numbers msgs.f32s gives of what it returns."""
-    from simatch import msgs
+def test_a_move_is_the_command_of_its_fields():
+    """`Command.move` makes the Command the dataclass makes of the same fields (every other one at its
+    default), and `Motion.move` is the last `go` as such a command, its target as the intent."""
+    from simatch.strategy.base import Command
     from simatch.strategy.nubot.observation import Observation, TeamView
 
+    move = Command.move(1.5, -0.25, 0.3, 3, 2, (4.0, 1.0), (1.0, 0.5))
+    assert type(move) is Command
+    assert move == Command(vx=1.5, vy=-0.25, w=0.3, role=3, action=2, intent=(4.0, 1.0), user=(1.0, 0.5))
     with simatch.Simulation("msl_5v5", seed=1) as sim:
-        sim.run(seconds=3.0, until_done=False)
-        rng = random.Random(9)
-        for node in sim.robot_nodes.values():
-            robot = node.strategy
-            obs = Observation(node.world, TeamView())
-            motion, areas = robot.motion, robot.areas
-            for _ in range(400):
-                tx, ty = rng.uniform(-13.0, 13.0), rng.uniform(-9.0, 9.0)
-                face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else None
-                fence = (obs.bx, obs.by, rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else None
-                boxes = areas.forbidden(rng.random() < 0.5) if rng.random() < 0.7 else ()
-                vx, vy, w = motion.go(
-                    obs,
-                    tx,
-                    ty,
-                    face,
-                    rng.uniform(0.5, 4.0),
-                    rng.uniform(1.0, 6.0),
-                    avoid=rng.random() < 0.8,
-                    ball_obstacle=rng.random() < 0.5,
-                    boxes=boxes,
-                    fence=fence,
-                )
-                assert motion.row.tolist() == list(msgs.f32s(vx, vy, w, tx, ty))
+        sim.run(seconds=1.0, until_done=False)
+        node = sim.robot_nodes["cyan/3"]
+        robot = node.strategy
+        obs = Observation(node.world, TeamView())
+        vx, vy, w = robot.motion.go(obs, 2.0, -1.0, 0.5, 2.0, 3.0)
+        assert robot.motion.move(3, 4) == Command(vx=vx, vy=vy, w=w, role=3, action=4, intent=(2.0, -1.0))
 
 
 def test_assign_in_one_array_equals_the_rows_then_the_kernel():
@@ -296,69 +182,20 @@ def test_assign_in_one_array_equals_the_rows_then_the_kernel():
         kept = slots[:n]
         rows = _array(
             [
-                (r.x, r.y, r.role, hysteresis + (picture.NEW_ROLE_HOLD if r.role_time < picture.MIN_ROLE_TIME else 0.0))
+                (
+                    r.x,
+                    r.y,
+                    r.role,
+                    hysteresis + (assignment.NEW_ROLE_HOLD if r.role_time < assignment.MIN_ROLE_TIME else 0.0),
+                )
                 for r in robots
             ],
             4,
         )
         cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-        best = picture._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
+        best = assignment._assign(rows, _array([(s[1], s[2], s[0]) for s in kept], 3), cx, cy, cr)
         want = {robots[i].id: int(best[i]) for i in range(min(n, len(kept)))}
-        assert picture.assign(robots, slots, hysteresis, around) == want
-
-
-def test_open_play_slots_compiled_equal_the_plain_way():
-    """`_open_slots` (the roles' points, kept inside the field, spread, assigned: one kernel over the team
-    view's table) gives the robots the roles and places `open_slots` gives them, bit for bit, on random
-    teams, balls, opponents and receiving spots (near the goal's middle, on top of each other, far apart)."""
-
-    class _Robot:
-        def __init__(self, rid, x, y, role, role_time, row):
-            self.id, self.x, self.y, self.role, self.role_time, self.row = rid, x, y, role, role_time, row
-
-    areas = Areas(FieldGeometry(), 0.4)
-    rng = random.Random(21)
-    for _ in range(6000):
-        team = [
-            _Robot(
-                k + 1,
-                rng.uniform(-12, 12),
-                rng.uniform(-8, 8),
-                rng.choice([-1, 1, 2, 3, 4]),
-                rng.choice([1e9, rng.uniform(0.0, 1.2)]),
-                k,
-            )
-            for k in range(rng.randint(1, 7))
-        ]
-        rest = [r for r in team if rng.random() < 0.8] or team[:1]
-        table = np.array([(r.x, r.y, 0.0, 0.0, r.id, 0.0, r.role, r.role_time) for r in team])
-        attacking = rng.random() < 0.5
-        bx, by = rng.uniform(-12.5, 12.5), rng.uniform(-8.5, 8.5)
-        if rng.random() < 0.1:
-            bx, by = -areas.L2 + rng.choice([0.0, 1e-7]), 0.0  # at our goal's middle
-        opps = np.array(
-            [(rng.uniform(-12, 12), rng.uniform(-8, 8), 0.0, 0.0) for _ in range(rng.randint(0, 6))]
-        ).reshape(-1, 4)
-        spots = [(rng.uniform(-10, 10), rng.uniform(-6, 6)) for _ in range(rng.randint(1, 2))]
-        if rng.random() < 0.3:
-            spots = [(bx + rng.uniform(-0.5, 0.5), by)] * len(spots)  # slots on top of each other: spread
-        hysteresis = rng.choice([0.5, 1.0])
-        plain = picture.open_slots(
-            areas,
-            rest,
-            attacking,
-            spots if attacking else [positions.outlet_point(areas, bx, by)],
-            opps.tolist(),
-            bx,
-            by,
-            hysteresis,
-        )
-        bits = sum(1 << r.row for r in rest)
-        out = np.empty((len(rest), 4))
-        assist = np.array(spots) if attacking else picture._NO_SPOTS
-        k = picture._open_slots(table, bits, len(rest), attacking, assist, opps, bx, by, areas.geo, hysteresis, out)
-        compiled = [(rest[i].id, int(role), x, y) for i, (_, role, x, y) in enumerate(out[:k].tolist())]
-        assert repr(compiled) == repr([(rid, int(role), x, y) for rid, role, x, y in plain])
+        assert assignment.assign(robots, slots, hysteresis, around) == want
 
 
 def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bit():
@@ -410,185 +247,10 @@ def test_a_team_mate_shares_the_opponents_only_when_they_are_the_same_bit_for_bi
     assert shared > 1000 and differ > 1000
 
 
-def _packed_go_case(rng, motion, mates, opps):
-    face = rng.uniform(-4.0, 4.0) if rng.random() < 0.8 else math.nan
-    fence = (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(0.5, 3.0)) if rng.random() < 0.3 else (math.nan,) * 3
-    me = mates[rng.randrange(len(mates))]
-    return (
-        me[0],
-        me[1],
-        rng.uniform(-4.0, 4.0),
-        rng.uniform(-3, 3),
-        rng.uniform(-3, 3),
-        int(me[4]),
-        rng.uniform(-13.0, 13.0),
-        rng.uniform(-9.0, 9.0),
-        face,
-        rng.uniform(0.5, 4.0),
-        rng.uniform(1.0, 6.0),
-        rng.random() < 0.8,
-        rng.choice([0.0, motion.ball_clearance, 0.9]),
-        rng.choice([0.0, 0.0, rng.uniform(0.0, 2.0)]),
-        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
-        rng.choice([0.0, rng.uniform(-1.0, 1.0)]),
-        rng.uniform(1.0, 4.0),
-        rng.random() < 0.7,
-        rng.random() < 0.3,
-        *fence,
-        rng.choice([math.nan, -0.15, rng.uniform(-3.0, 3.0)]),
-        rng.uniform(-11, 11),
-        rng.uniform(-7, 7),
-        rng.choice([-1, 0, 1]),
-    )
-
-
-def test_motion_go_in_one_array_equals_the_kernel_of_every_argument():
-    """`Motion.go` calls `_go_packed` (its numbers in one array, without the dispatcher): the same results,
-    avoidance side and float32 row as `_go` given each number as an argument, on random situations."""
-    import struct
-
-    from simatch.strategy.nubot import motion as motion_mod
-    from simatch.strategy.nubot.params import NubotParams, plain
-
-    field = FieldGeometry()
-    params = plain(NubotParams())
-    areas = Areas(field, params.robot_radius + 0.15)
-    mo = motion_mod.Motion(params, 0.025, field, areas)
-    rng = random.Random(17)
-    box_sets = [motion_mod._NO_BOXES, areas.box_array(areas.forbidden(False)), areas.box_array(areas.forbidden(True))]
-    for _ in range(4000):
-        mates = np.array(
-            [
-                (rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1, 0.0, 2.0, 1.0)
-                for k in range(rng.randint(1, 5))
-            ]
-        )
-        opps = np.array(
-            [(rng.uniform(-11, 11), rng.uniform(-7, 7), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(5)]
-        )[: rng.randint(0, 5)].copy()
-        boxes = rng.choice(box_sets)
-        a = _packed_go_case(rng, mo, mates.tolist(), opps)
-        row = np.zeros(5, dtype=np.float32)
-        want = motion_mod._go(*a[:19], boxes, *a[19:23], opps, mates, *a[23:], mo.consts, row)
-        struct.pack_into(f"{len(a)}d", mo._args_buf, motion_mod._ARGS_AT, *a)
-        got = mo._go(mo.args, boxes, opps, mates, mo.row)
-        assert struct.pack("6d", *got) == struct.pack("6d", *want) and got[3] == want[3], a
-        assert mo.row.tobytes() == row.tobytes()
-
-
-def _plain_sub_target(px, py, tx, ty, opps, mates, me_id, ball_x, ball_y, ball_clear, clear, look, prefer_side):
-    """The rule of avoidance.sub_target in plain Python over lists (the same float operations; ``** 2`` as the
-    product numba makes of it): the reference its compiled storage is held to."""
-    length = math.sqrt((tx - px) * (tx - px) + (ty - py) * (ty - py))
-    if length < 1e-6:
-        return tx, ty, 0
-    ux, uy = (tx - px) / length, (ty - py) / length
-    obst = [(o[0] + look * o[2], o[1] + look * o[3], clear) for o in opps.tolist()]
-    obst += [(m[0] + look * m[2], m[1] + look * m[3], clear) for m in mates.tolist() if m[4] != me_id]
-    if ball_clear > 0.0:
-        obst.append((ball_x, ball_y, ball_clear))
-    seen = {}  # index -> (a, b, d) of the obstacles near the way
-    first, first_a = -1, 1e18
-    for k, (x, y, c) in enumerate(obst):
-        rx, ry = x - px, y - py
-        d = math.sqrt(rx * rx + ry * ry)
-        if d > length + c or math.sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty)) < c:
-            continue
-        a, b = rx * ux + ry * uy, ry * ux - rx * uy
-        seen[k] = (a, b, d)
-        if ((0.0 < a < length and abs(b) < c) or (d < c and a > 0.0)) and a < first_a:
-            first, first_a = k, a
-    if first < 0:
-        return tx, ty, 0
-    group = {first}
-    while True:
-        more = [
-            k
-            for k in sorted(seen)
-            if k not in group
-            and any(
-                (obst[k][0] - obst[g][0]) * (obst[k][0] - obst[g][0])
-                + (obst[k][1] - obst[g][1]) * (obst[k][1] - obst[g][1])
-                < GROUP_GAP * GROUP_GAP
-                for g in group
-            )
-        ]
-        if not more:
-            break
-        group.update(more)  # (a pass of the kernel may take several at once: the same group in the end)
-    bounds, reach, nearest, nearest_d = [], 0.0, first, 1e18
-    for k in sorted(group):
-        a, b, d = seen[k]
-        c = obst[k][2]
-        phi = math.atan2(b, a)
-        delta = 0.5 * math.pi if d <= c else math.asin(c / d)
-        bounds.append((phi - delta, phi + delta))
-        if a > 0.0 and d > reach:
-            reach = d
-        if d < nearest_d:
-            nearest, nearest_d = k, d
-    best, best_cost = None, 1e18
-    for lo, hi in bounds:
-        for angle in (_wrap(lo - 1e-3), _wrap(hi + 1e-3)):
-            if abs(angle) > MAX_TURN or any(
-                lo2 < angle < hi2 or lo2 < angle - TWO_PI < hi2 or lo2 < angle + TWO_PI < hi2 for lo2, hi2 in bounds
-            ):
-                continue
-            cost = abs(angle) - (SIDE_HYSTERESIS if prefer_side != 0 and (angle > 0.0) == (prefer_side > 0) else 0.0)
-            if cost < best_cost:
-                best, best_cost = angle, cost
-    if best is None:
-        best = -MAX_TURN if seen[nearest][1] > 0.0 else MAX_TURN
-    reach = max(min(reach if reach > 0.0 else length, length), 0.5)
-    c, s = math.cos(best), math.sin(best)
-    return px + reach * (c * ux - s * uy), py + reach * (s * ux + c * uy), 1 if best > 0.0 else -1
-
-
-def test_sub_target_with_its_scratch_in_one_array_equals_the_one_before():
-    """sub_target keeps its per-obstacle numbers in the rows of one array (one allocation instead of ten): the
-    same points and sides as its rule in plain Python, bit for bit, on random crowds (clusters, the ball, the
-    robot itself)."""
-    import struct
-
-    from simatch.strategy.nubot.avoidance import sub_target
-
-    rng = random.Random(23)
-    for _ in range(20_000):
-        px, py = rng.uniform(-11, 11), rng.uniform(-7, 7)
-        tx, ty = px + rng.uniform(-6, 6), py + rng.uniform(-6, 6)
-
-        def near(px=px, py=py, tx=tx, ty=ty):
-            return px + (tx - px) * rng.random() + rng.uniform(-1, 1), py + (ty - py) * rng.random() + rng.uniform(
-                -1, 1
-            )
-
-        opps = np.array([(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2)) for _ in range(rng.randint(0, 6))]).reshape(
-            -1, 4
-        )
-        mates = np.array(
-            [(*near(), rng.uniform(-2, 2), rng.uniform(-2, 2), k + 1) for k in range(rng.randint(0, 5))]
-        ).reshape(-1, 5)
-        args = (
-            px,
-            py,
-            tx,
-            ty,
-            opps,
-            mates,
-            rng.randint(1, 5),
-            *near(),
-            rng.choice([0.0, 0.45]),
-            1.1,
-            0.3,
-            rng.choice([-1, 0, 1]),
-        )
-        got, want = sub_target(*args), _plain_sub_target(*args)
-        assert struct.pack("2d", *got[:2]) == struct.pack("2d", *want[:2]) and got[2] == want[2], args
-
-
 def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
-    """`TeamView.get` writes its Mate records' slots and its table in one pass: the same fields as
-    `Mate(info, ...)` gives and the table np.array makes of them, for every robot of a running match."""
+    """`TeamView.get` writes its Mate records' slots and its table in one pass: each record holds its robot's
+    RobotInfo and StrategyInfo fields, and the table np.array makes of them, for every robot of a running
+    match."""
     from simatch.strategy.nubot.observation import Mate, TeamView
 
     with simatch.Simulation("msl_5v5", seed=1) as sim:
@@ -600,14 +262,14 @@ def test_the_team_table_and_records_are_those_of_the_records_made_one_by_one():
                 expect = []
                 for k, r in enumerate(world.vision.robots):
                     s = world.strategies.get(r.id)
-                    if s is None:
-                        m = Mate(r, r.id == world.goalkeeper)
-                    else:
+                    role, action, pi, att, rt = -1, -1, None, -1, 1e9
+                    if s is not None:
                         user = s.user.tolist()
                         att, rt = (int(user[0]), user[1]) if len(user) >= 2 else (-1, 1e9)
                         pi = s.pass_cmd if s.pass_cmd.is_valid else None
-                        m = Mate(r, r.id == world.goalkeeper, s.role, s.action, pi, att, rt)
-                    m.row = k
+                        role, action = s.role, s.action
+                    info = (r.id, r.x, r.y, r.yaw, r.vx, r.vy, r.w, r.holding_ball, r.valid, r.stuck)
+                    m = Mate(*info, role, action, pi, r.id == world.goalkeeper, att, rt, k)
                     expect.append(m)
                     assert by_id[r.id] is mates[k]
                 for got, want in zip(mates, expect, strict=True):
@@ -688,196 +350,64 @@ def test_a_kept_formation_is_the_one_its_key_says():
             assert picture._formation_key(kind, bx, -by, a) != key
 
 
-def test_the_ball_path_with_inline_min_and_max_is_the_one_before():
-    """`BallPath`'s stop point and `at` take Python's min and max inline: the same numbers, bit for bit, as
-    the calls they replace, on random paths (flying, rolling, at rest, against the boards) and times."""
-
-    def hexes(*vs):
-        return tuple(v.hex() for v in vs)
-
-    rng = random.Random(8)
-    for _ in range(20_000):
-        path = _random_path(rng)
-        if path.speed >= 0.05:
-            roll_t = path.speed / path.decel
-            s_stop = path.speed * path.land_t + path.speed * roll_t - 0.5 * path.decel * roll_t * roll_t
-            want = (
-                min(max(path.x + path.ux * s_stop, -path.xlim), path.xlim),
-                min(max(path.y + path.uy * s_stop, -path.ylim), path.ylim),
-            )
-            assert hexes(path.stop_x, path.stop_y) == hexes(*want)
-        t = rng.choice([0.0, 0.4, path.land_t, path.stop_t, rng.uniform(0.0, 5.0)])
-        if path.speed < 0.05 or t <= 0.0:
-            want = (path.x, path.y)
-        elif t >= path.stop_t:
-            want = (path.stop_x, path.stop_y)
-        else:
-            tr = max(0.0, t - path.land_t)
-            s = path.speed * (min(t, path.land_t) + tr) - 0.5 * path.decel * tr * tr
-            want = (
-                min(max(path.x + path.ux * s, -path.xlim), path.xlim),
-                min(max(path.y + path.uy * s, -path.ylim), path.ylim),
-            )
-        assert hexes(*path.at(t)) == hexes(*want)
-
-
-def _score_spots_before(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
-    """`positions._score_spots` as it was before it took square roots only where they count."""
-    for i in range(cx.shape[0]):
-        x, y = cx[i], cy[i]
-        score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)
-        if abs(y) < 3.0:
-            score += 0.4 * min(x, 2.0)
-        dball = math.sqrt((x - bx) ** 2 + (y - by) ** 2)
-        score -= 3.0 * max(0.0, dmin - dball) + 1.0 * max(0.0, dball - dmax)
-        sx, sy = x - bx, y - by
-        ll = sx * sx + sy * sy + 1e-9
-        lane = 1e9
-        for k in range(ox.shape[0]):
-            dopp = math.sqrt((x - ox[k]) ** 2 + (y - oy[k]) ** 2)
-            score -= 2.0 * max(0.0, 2.5 - dopp)
-            t = min(max(((ox[k] - bx) * sx + (oy[k] - by) * sy) / ll, 0.0), 1.0)
-            lane = min(lane, math.sqrt((bx + t * sx - ox[k]) ** 2 + (by + t * sy - oy[k]) ** 2))
-        if ox.shape[0] > 0:
-            if lane < 0.85:
-                score -= 4.0
-            score -= 1.5 * max(0.0, 1.4 - lane)
-        if nx == nx:
-            score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
-        out[i] = score
-
-
-def test_spot_scores_with_fewer_square_roots_equal_the_ones_before():
-    """`_score_spots` takes an opponent's distance only within 2.5 m and one square root of the nearest
-    lane: the same scores, bit for bit, as before (compiled both), on random spots, balls and opponents
-    (opponents exactly 2.5 m from a spot, on a spot, on the ball, NaN, none)."""
-    import numba
-
-    before = numba.njit(_score_spots_before)
-    areas = Areas(FieldGeometry(), 0.55)
+def test_assistant_spots_are_the_best_scored_at_least_3_m_apart():
+    """`assist_spots` takes, among the twelve best scored candidates (the first of equal scores first), each
+    one at least 3 m from those taken before it, best first, up to the number asked for."""
+    areas = Areas(FieldGeometry(), 0.4)
     cx, cy = positions.spot_grid(areas)
-    rng = random.Random(25)
-    for _ in range(3000):
-        bx, by = rng.uniform(-11, 11), rng.uniform(-7, 7)
-        opps = []
-        for _ in range(rng.randint(0, 6)):
-            kind = rng.random()
-            if kind < 0.15:  # exactly 2.5 m from a spot (or as near as floats get)
-                k = rng.randrange(len(cx))
-                a = rng.choice([0.0, 0.5 * math.pi, rng.uniform(0, 2 * math.pi)])
-                opps.append((cx[k] + 2.5 * math.cos(a), cy[k] + 2.5 * math.sin(a)))
-            elif kind < 0.25:
-                k = rng.randrange(len(cx))
-                opps.append((cx[k], cy[k]))
-            elif kind < 0.3:
-                opps.append((bx, by))
-            elif kind < 0.33:
-                opps.append((math.nan, rng.uniform(-7, 7)))
-            else:
-                opps.append((rng.uniform(-11, 11), rng.uniform(-7, 7)))
-        ox = np.array([o[0] for o in opps], dtype=float)
-        oy = np.array([o[1] for o in opps], dtype=float)
-        nx, ny = (rng.uniform(-11, 11), rng.uniform(-7, 7)) if rng.random() < 0.7 else (math.nan, math.nan)
-        dmin, dmax = rng.choice([(3.0, 8.5), (2.5, 6.5)])
-        want, got = np.empty(len(cx)), np.empty(len(cx))
-        before(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, want)
-        positions._score_spots(cx, cy, bx, by, ox, oy, areas.L2, dmin, dmax, nx, ny, got)
-        assert want.tobytes() == got.tobytes()
+    rng = random.Random(11)
+    for case in range(500):
+        opps = np.array([[rng.uniform(-11, 11), rng.uniform(-7, 7), 0.0, 0.0] for _ in range(rng.randint(0, 5))])
+        opps = opps.reshape(-1, 4)
+        bx, by = (0.0, 0.0) if case % 10 == 0 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
+        nx, ny = (math.nan, math.nan) if rng.random() < 0.3 else (rng.uniform(-11, 11), rng.uniform(-7, 7))
+        n = rng.choice([1, 2, 12])
+        score = np.empty(len(cx))
+        positions._score_spots(cx, cy, bx, by, opps[:, 0].copy(), opps[:, 1].copy(), areas.L2, 3.0, 8.5, nx, ny, score)
+        best = sorted(range(len(cx)), key=lambda k: (-score[k], k))[:12]
+        want = []
+        for k in best:
+            if all(math.hypot(cx[k] - x, cy[k] - y) > 3.0 for x, y in want) and len(want) < n:
+                want.append((cx[k], cy[k]))
+        out = np.empty((n, 2))
+        got = assignment.assist_spots(cx, cy, bx, by, opps, areas.L2, 3.0, 8.5, nx, ny, out)
+        assert out[:got].tolist() == [list(w) for w in want]
 
 
-def _intercepts_before(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, vx, vy, extra, vmax, acc, out):
-    """`ballpath._intercepts` as it was before it sampled the path once and passed over samples out of reach."""
-    for r in range(px.shape[0]):
-        for k in range(ballpath.SAMPLES):
-            t = k * ballpath.STEP
-            if speed < 0.05:
-                bx, by = x, y
-            else:
-                tt = min(t, stop_t)
-                tr = max(0.0, tt - land_t)
-                s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
-                bx = min(max(x + ux * s, -xlim), xlim)
-                by = min(max(y + uy * s, -ylim), ylim)
-            dx, dy = bx - px[r], by - py[r]
-            d = math.sqrt(dx * dx + dy * dy) + 1e-9
-            vpar = (vx[r] * dx + vy[r] * dy) / d
-            vperp = math.sqrt(max(0.0, vx[r] * vx[r] + vy[r] * vy[r] - vpar * vpar))
-            v0 = min(max(vpar, -vmax), vmax)
-            t_stop = 0.0
-            if v0 < 0.0:
-                t_stop = -v0 / acc
-                d += v0 * v0 / (2.0 * acc)
-                v0 = 0.0
-            d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
-            if d <= d_acc:
-                reach = (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
-            else:
-                reach = (vmax - v0) / acc + (d - d_acc) / vmax
-            reach += t_stop + 0.5 * vperp / acc + ballpath.CATCH_MARGIN + extra[r]
-            if reach <= t or k == ballpath.SAMPLES - 1:
-                out[r, 0] = max(t, reach)
-                out[r, 1] = bx
-                out[r, 2] = by
-                break
-
-
-def test_intercepts_sampled_once_and_passing_over_samples_out_of_reach_equal_the_ones_before():
-    """`_intercepts` samples the ball's path once for all robots and passes over the samples a robot cannot
-    reach in time at top speed: the same interceptions, bit for bit, as before (compiled both), on random
-    paths and robots (near the ball, fast, extra delays below zero, a robot that reaches a sample just in
-    time, none that can, a NaN, odd speed limits)."""
-    import numba
-
-    before = numba.njit(_intercepts_before)
-    rng = random.Random(40)
-    for _ in range(6000):
-        path = _random_path(rng)
-        n = rng.randint(1, 10)
-        px = np.array([rng.choice([path.x + rng.uniform(-0.5, 0.5), rng.uniform(-12, 12)]) for _ in range(n)])
-        py = np.array([rng.choice([path.y + rng.uniform(-0.5, 0.5), rng.uniform(-8, 8)]) for _ in range(n)])
-        vx = np.array([rng.choice([0.0, rng.uniform(-4, 4)]) for _ in range(n)])
-        vy = np.array([rng.choice([0.0, rng.uniform(-4, 4)]) for _ in range(n)])
-        extra = np.array([rng.choice([0.0, rng.uniform(0.0, 2.0), rng.uniform(-1.0, 0.0)]) for _ in range(n)])
-        if rng.random() < 0.05:
-            px[0] = math.nan
-        vmax = rng.choice([rng.uniform(1.0, 4.0), rng.uniform(1.0, 4.0), 0.0, 1e-3, 50.0])
-        acc = rng.choice([rng.uniform(1.0, 3.0), rng.uniform(1.0, 3.0), 0.0, 1e-3, 50.0])
-        want, got = np.full((n, 3), 7.0), np.full((n, 3), 7.0)
-        outcomes = []
-        for kernel, out in ((before, want), (ballpath._intercepts, got)):
-            try:
-                kernel(*path.kernel_args(), px, py, vx, vy, extra, vmax, acc, out)
-                outcomes.append(None)
-            except ZeroDivisionError:  # (no speed or no acceleration: numba raises as Python would)
-                outcomes.append(ZeroDivisionError)
-        assert outcomes[0] is outcomes[1]
-        assert want.tobytes() == got.tobytes()
-
-
-def test_time_to_cover_and_pass_speed_with_inline_min_and_max_are_the_ones_before():
-    """`time_to_cover` and `pass_speed` take Python's min and max of two inline: the same numbers, bit for
-    bit (NaN and the limits themselves included)."""
-    from simatch.strategy.nubot.evaluate import pass_speed
-    from simatch.strategy.nubot.geometry import time_to_cover
-
-    def ttc_before(d, v0, vmax, acc):
-        v0 = min(max(v0, 0.0), vmax)
-        d_acc = (vmax * vmax - v0 * v0) / (2.0 * acc)
-        if d <= d_acc:
-            return (math.sqrt(v0 * v0 + 2.0 * acc * d) - v0) / acc
-        return (vmax - v0) / acc + (d - d_acc) / vmax
-
-    def same(a, b):
-        return (math.isnan(a) and math.isnan(b)) or a.hex() == b.hex()
-
-    rng = random.Random(31)
-    for _ in range(20_000):
-        vmax = rng.choice([3.0, rng.uniform(0.5, 4.0)])
-        v0 = rng.choice([0.0, -0.0, vmax, math.nan, rng.uniform(-5.0, 5.0)])
-        d, acc = rng.choice([0.0, rng.uniform(0.0, 20.0)]), rng.uniform(0.5, 3.0)
-        assert same(time_to_cover(d, v0, vmax, acc), ttc_before(d, v0, vmax, acc))
-        lo, hi = rng.choice([(1.6, 7.5), (1.8, 4.0)])
-        dist = rng.choice([0.0, rng.uniform(0.0, 30.0), math.nan])
-        arrival, decel = rng.choice([lo, rng.uniform(0.0, 3.0)]), rng.uniform(0.2, 0.8)
-        want = min(hi, max(lo, math.sqrt(arrival * arrival + 2.0 * decel * dist)))
-        assert same(pass_speed(dist, arrival, decel, lo, hi), want)
+def test_open_play_slots_are_the_roles_points_inside_the_field_and_apart():
+    """`open_slots` gives each robot of the rest one of the roles of its size (two assistants from four
+    robots on), at the roles' points kept inside the field and at least SLOT_GAP apart (unless three slides
+    could not part them), no two robots the same slot."""
+    areas = Areas(FieldGeometry(), 0.4)
+    rng = random.Random(21)
+    for _ in range(500):
+        k = rng.randint(1, 6)
+        table = np.array(
+            [
+                (rng.uniform(-12, 12), rng.uniform(-8, 8), 0.0, 0.0, j + 1, 0.0, rng.choice([-1, 2, 3, 4]), 1e9)
+                for j in range(k)
+            ]
+        )
+        rest = np.array(sorted(rng.sample(range(k), rng.randint(1, k))), dtype=np.int64)
+        attacking = rng.random() < 0.5
+        bx, by = rng.uniform(-10, 10), rng.uniform(-6, 6)
+        assist = np.array([(rng.uniform(-10, 10), rng.uniform(-6, 6)) for _ in range(2)])
+        out = np.empty((len(rest), 4))
+        got = assignment.open_slots(
+            table, rest, attacking, assist, -6.0, 1.0, -3.0, -2.0, bx, by, areas.pitch, 0.5, out
+        )
+        assert got == min(len(rest), 4)
+        slots = out[:got].tolist()
+        assert len({int(s[0]) for s in slots}) == got
+        roles = sorted(int(s[1]) for s in slots)
+        n = len(rest)
+        if n >= 4:
+            want = [assignment.ASSISTANT, assignment.ASSISTANT, assignment.PASSIVE, assignment.MIDFIELD]
+        else:
+            order = [assignment.ASSISTANT, assignment.PASSIVE, assignment.MIDFIELD]
+            if not attacking:
+                order = [assignment.PASSIVE, assignment.MIDFIELD, assignment.ASSISTANT]
+            want = order[:n]
+        assert roles == sorted(want)
+        for _, _, x, y in slots:
+            assert abs(x) <= areas.L2 - assignment.SLOT_INSIDE + 1.3 and abs(y) <= areas.W2

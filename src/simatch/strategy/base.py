@@ -29,6 +29,8 @@ from ..robots import model_class
 from .roles import Action, Role
 from .worldmodel import WorldModel
 
+_new = object.__new__
+
 
 @dataclass
 class PassIntent:
@@ -76,26 +78,31 @@ class Command:
     altitude: float | None = None
     max_vz: float = 1.0
 
+    # (every field has a plain default: the dataclass keeps it as a class attribute, which `move` relies on)
+
     @classmethod
     def stop(cls, **info: Any) -> Command:
         return cls(**info)
 
-
-class RoundedMove(Command):
-    """A velocity command whose numbers are already at the messages' float32 precision: what a robot
-    taking its place sends (body-frame ``vx``, ``vy``, ``w``, rounded to float32; ``intent``, its target,
-    likewise), with the dribbler off, no kick, no target pose and the default limits. `RobotNode` builds its
-    three messages from these numbers as they are, without rounding them again or looking at the fields
-    a move leaves at their defaults; the messages are the ones the same `Command` would give (tests hold
-    them equal).
-
-    Made whole at once and not changed afterwards except for what the robot tells its team
-    (``pass_intent``, ``user``): a command that needs any other field is an ordinary `Command`."""
-
-    def __init__(self, vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple = ()):
-        # (every other field keeps Command's default, a class attribute of the dataclass)
-        self.vx, self.vy, self.w = vx, vy, w
-        self.role, self.action, self.intent, self.user = role, action, intent, user
+    @classmethod
+    def move(
+        cls,
+        vx: float,
+        vy: float,
+        w: float,
+        role: int,
+        action: int,
+        intent: tuple[float, float] | None,
+        user: tuple = (),
+    ) -> Command:
+        """``Command(vx=vx, vy=vy, w=w, role=role, action=action, intent=intent, user=user)``: a body-frame
+        velocity with what the robot tells its team, every other field at its default. Made without the
+        dataclass's ``__init__`` (which writes every field), for strategies that move every robot at every
+        control tick."""
+        move = _new(cls)
+        move.vx, move.vy, move.w = vx, vy, w
+        move.role, move.action, move.intent, move.user = role, action, intent, user
+        return move
 
 
 @dataclass

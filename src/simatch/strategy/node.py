@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
-from .base import Command, RobotStrategy, RoundedMove
+from .base import Command, RobotStrategy
 from .hwcontroller import climb_towards, velocity_towards
 from .worldmodel import WorldModel
 
@@ -41,8 +41,6 @@ _LOB, _GROUND = msgs.ActionCmd.KICK_LOB, msgs.ActionCmd.KICK_GROUND
 #: the "no pass" entry shared by every StrategyInfo without a pass (messages are read-only)
 _NO_PASS = msgs.new(msgs.PassCommands)
 _f32s = msgs.f32s
-#: a Command's default limits at float32 precision (a RoundedMove keeps them)
-_MAX_VEL, _MAX_W = _f32s(Command.max_vel, Command.max_w)
 
 
 class RobotNode(Node):
@@ -80,18 +78,13 @@ class RobotNode(Node):
             return
         try:
             cmd = self.strategy.decide(world)
-            move = type(cmd) is RoundedMove  # a move whose numbers are already the messages' (see RoundedMove)
-            if not move:
-                if not isinstance(cmd, Command):
-                    raise TypeError(f"decide() returned {type(cmd).__name__}, not a Command")
-                vx, vy, w = self._velocity(cmd)
+            if not isinstance(cmd, Command):
+                raise TypeError(f"decide() returned {type(cmd).__name__}, not a Command")
+            vx, vy, w = self._velocity(cmd)
         except Exception as exc:  # a strategy bug must not stop the match: this robot stands still
             self._error(now, exc)
-            move, cmd, (vx, vy, w) = False, Command(), (0.0, 0.0, 0.0)
-        if move:
-            self.publish_move(now, world.tick, cmd)
-        else:
-            self.publish(now, world.tick, cmd, vx, vy, w)
+            cmd, (vx, vy, w) = Command(), (0.0, 0.0, 0.0)
+        self.publish(now, world.tick, cmd, vx, vy, w)
 
     def _velocity(self, cmd: Command) -> tuple[float, float, float]:
         if cmd.target is None and cmd.target_ori is None:
@@ -147,20 +140,6 @@ class RobotNode(Node):
             )
         )
         if info:
-            self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
-
-    def publish_move(self, now: float, tick: int, cmd: RoundedMove) -> None:
-        """`publish` of a `RoundedMove`: the same three messages, from numbers already rounded, with the
-        fields a move leaves at Command's defaults written as the constants they round to."""
-        vx, vy, w = cmd.vx, cmd.vy, cmd.w
-        self.pub_vel.put(_VelCmd(now, tick, vx, vy, w, 0.0))
-        self.pub_action.put(
-            _ActionCmd(
-                now, tick, _NO_ACTION, _NO_ACTION, 0, 0.0, 0.0, 0.0, 0.0, 0.0, _MAX_VEL, _MAX_W, False, 0.0, _GROUND
-            )
-        )
-        if self.pub_info.active:
-            ix, iy = cmd.intent
             self.pub_info.put(self.strategy_info(now, tick, cmd, ix, iy))
 
     def _climb(self, cmd: Command) -> float:
@@ -225,8 +204,7 @@ class RobotNode(Node):
         if pack is None:
             pack = _USER_PACK[n] = struct.Struct(f"{n}d").pack
         try:
-            # (read-only, as messages are: the numbers np.array(user, dtype=np.float64) holds, in a quarter fewer
-            # instructions)
+            # (read-only, as messages are: the numbers np.array(user, dtype=np.float64) holds)
             arr = _frombuffer(pack(*user))
         except struct.error:  # (something else than numbers: NumPy's conversion, or its error)
             arr = np.array(user, dtype=np.float64)

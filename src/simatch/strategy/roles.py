@@ -120,8 +120,8 @@ def action_words(value: int) -> str:
 
 def members(enum_cls: type[enum.Enum]) -> types.SimpleNamespace:
     """The members of an Enum class as plain attributes (``members(Role).ACTIVE is Role.ACTIVE``), for code
-    that runs for every robot and tick: on Python 3.11 every attribute lookup on an Enum class takes the
-    metaclass's slow path (it defines ``__getattr__``) and costs about eight times a plain attribute."""
+    that runs for every robot and tick (an Enum class's attributes are looked up through its metaclass's
+    ``__getattr__``)."""
     return types.SimpleNamespace(**enum_cls.__members__)
 
 

@@ -90,7 +90,7 @@ class WorldModel:
         found = self._strategies
         if found is None:
             found = self._strategies = {}
-            for s in self.team_strategy.strategies:  # (a loop: a comprehension costs a function and a frame)
+            for s in self.team_strategy.strategies:
                 found[s.agent_id] = s
         return found
 

@@ -7,8 +7,8 @@ inside; a target inside flees from the chasers standing on the net, that is towa
 a U whose ends rest on that wall; where ``r`` is large the net is one or more arcs between walls (the
 walls close the fence); in the open it is a closed ring.
 
-The curve is handled exactly (four sides and four quarter circles, by arc length), so a chaser's decision
-costs a few tens of microseconds. Pure geometry, in any frame (the strategies use their team frame).
+The curve is handled exactly (four sides and four quarter circles, by arc length). Pure geometry, in any
+frame (the strategies use their team frame).
 """
 
 from __future__ import annotations

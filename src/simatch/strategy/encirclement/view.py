@@ -1,5 +1,5 @@
-"""What a robot sees of the others, read straight from its perception in plain Python: with a dozen
-robots in sight this is cheaper than array code, and every robot does it every control period."""
+"""What a robot sees of the others, read straight from its perception in plain Python (a dozen robots in
+sight, every control period)."""
 
 from __future__ import annotations
 

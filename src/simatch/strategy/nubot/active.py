@@ -22,10 +22,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from ...compiled import entry
+from ...compiled import Bool, Float, Matrix, bind, kernel
 from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
@@ -36,9 +35,9 @@ from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
-from .positions import Areas
+from .positions import Areas, PitchType
 
-# (what `fetch` and `play` read at every tick, as globals: a namespace's attribute costs more)
+# (what `fetch` and `play` read at every tick, as module constants)
 _PLAY = PHASES.PLAY
 _CATCH_BALL, _CATCH_POSITIONED = ACTIONS.CATCH_BALL, ACTIONS.CATCH_POSITIONED
 
@@ -90,15 +89,11 @@ class BallPlayer:
         self.announce_until = -1.0
         self.pa_since: float | None = None  # when I entered the opponents' penalty area
         self.dribble_dir: tuple[float, float] | None = None
-        # the judges `passes` calls for every candidate, as compiled for the types it hands them (floats and
-        # the observation's opponents: float64, C-contiguous), without numba's dispatcher typing them each time
-        rows = np.zeros((1, 4))
-        self._lane_clear = entry(lane_clear, 0.0, 0.0, 0.0, 0.0, rows, 0.0, 0.0)
-        self._position_value = entry(position_value, 0.0, 0.0, rows, 0.0)
-        self._shot_window = entry(shot_window, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0)
-        # what `_dribble_choice` reads of the field: half length and width, our penalty area's depth and
-        # half width, the opponents' (widened) goal area's near edge and half width
-        self.zones = np.array((areas.L2, areas.W2, areas.pa_depth, areas.pa_half, areas.opp_ga[0], areas.opp_ga[2]))
+        # the judges `passes` calls for every candidate, and the dribble's choice
+        self._lane_clear = bind(lane_clear)
+        self._position_value = bind(position_value)
+        self._shot_window = bind(shot_window)
+        self._dribble_choice = bind(dribble_choice)
 
     # --- bookkeeping every tick --------------------------------------------------------------------------
     def track(self, obs: Observation) -> None:
@@ -337,7 +332,7 @@ class BallPlayer:
         if lane_clear(obs.bx, obs.by, tx, ty, obs.opp_array, CLEAR_SPEED, 0.0) < 0.0:
             return None  # straight into an opponent: the ball would only bounce back (dribble away)
         # no harder than the ball can roll and stay on the field: a clearance over a line is the
-        # opponents' throw-in (most of these kicks used to go out)
+        # opponents' throw-in
         room = self.room_ahead(obs.bx, obs.by, c, s)
         speed = min(CLEAR_SPEED, math.sqrt(2.0 * max(p.ball_deceleration, 0.05) * room))
         if speed < CLEAR_MIN_SPEED:
@@ -369,12 +364,12 @@ class BallPlayer:
     def dribble_target(self, obs: Observation, left: float, can_score: bool = False):
         """("dribble", x, y): the best point within reach of the ball, inside the dribble circle; near the
         opponents' goal, one from which more of the goal is open. (The sixteen directions are scored by the
-        compiled `_dribble_choice`.)"""
+        kernel `dribble_choice`.)"""
         me, areas, p = obs.me, self.areas, self.p
         cx, cy = self.dribble_from or (me.x, me.y)
         others_in_area = any(areas.in_opp_penalty_area(m.x, m.y) for m in obs.mates if m is not me)
         dx, dy = self.dribble_dir if self.dribble_dir is not None else (math.nan, math.nan)
-        found, tx, ty, ux, uy = _dribble_choice(
+        found, tx, ty, ux, uy = self._dribble_choice(
             me.x,
             me.y,
             me.yaw,
@@ -383,7 +378,7 @@ class BallPlayer:
             cy,
             max(0.0, p.dribble_limit - 0.15),
             obs.opp_array,
-            self.zones,
+            areas.pitch,
             others_in_area or not self.may_enter_opp_area(obs),
             can_score,
             p.shoot_range,
@@ -483,8 +478,28 @@ class BallPlayer:
         return cmd
 
 
-@numba.njit(cache=True)
-def _dribble_choice(
+@kernel(
+    x=Float,
+    y=Float,
+    yaw=Float,
+    step=Float,
+    cx=Float,
+    cy=Float,
+    radius=Float,
+    opps=Matrix,
+    pitch=PitchType,
+    keep_out_of_area=Bool,
+    can_score=Bool,
+    shoot_range=Float,
+    goal_half=Float,
+    shot_speed=Float,
+    lean_x=Float,
+    lean_y=Float,
+    backed=Bool,
+    dir_x=Float,
+    dir_y=Float,
+)
+def dribble_choice(
     x,
     y,
     yaw,
@@ -493,7 +508,7 @@ def _dribble_choice(
     cy,
     radius,
     opps,
-    zones,
+    pitch,
     keep_out_of_area,
     can_score,
     shoot_range,
@@ -505,10 +520,13 @@ def _dribble_choice(
     dir_x,
     dir_y,
 ):
-    """`BallPlayer.dribble_target`'s scoring of the sixteen directions, compiled: (found, x, y, ux, uy) of
-    the best point (the first of equals). ``dir_x`` is NaN with no dribbling direction yet; ``backed``: the
-    robot went backwards nearly as far as it may."""
-    L2, W2, pa_depth, pa_half, ga_x0, ga_half = zones[0], zones[1], zones[2], zones[3], zones[4], zones[5]
+    """`BallPlayer.dribble_target`'s scoring of the sixteen directions: (found, x, y, ux, uy) of the best
+    point (the first of equals) a step ``step`` from (x, y), within ``radius`` of where the dribble began
+    (cx, cy). ``dir_x`` is NaN with no dribbling direction yet; ``backed``: the robot went backwards nearly as
+    far as it may."""
+    L2, W2 = pitch.half_length, pitch.half_width
+    pa_depth, pa_half = pitch.penalty_depth, pitch.penalty_half_width
+    ga_x0, ga_half = pitch.opp_goal.x0, pitch.opp_goal.half_width
     best_s = -math.inf
     found = False
     bx = by = bux = buy = 0.0

@@ -6,8 +6,7 @@ a robot's time to reach each sample (from its current velocity, with limited spe
 computed for all robots at once, and the first sample a robot reaches before the ball is its
 interception point: a robot runs to where the ball will be, not where it is.
 
-The sampling is a compiled kernel (numba, cached on disk, as the simulator's kernels): ten robots times
-forty samples are a few hundred small steps, which cost far more as NumPy calls than as machine code.
+The sampling is a compiled kernel (`_team_intercepts`), run once per team picture for every robot.
 """
 
 from __future__ import annotations
@@ -17,6 +16,7 @@ import math
 import numba
 import numpy as np
 
+from ...compiled import Float, Matrix, kernel
 from ...exactmath import remainder
 
 TWO_PI = 2.0 * math.pi
@@ -264,7 +264,26 @@ def team_intercepts(
     return out
 
 
-@numba.njit(cache=True)
+@kernel(
+    x=Float,
+    y=Float,
+    speed=Float,
+    ux=Float,
+    uy=Float,
+    land_t=Float,
+    stop_t=Float,
+    decel=Float,
+    xlim=Float,
+    ylim=Float,
+    us=Matrix,
+    opps=Matrix,
+    bx=Float,
+    by=Float,
+    turn=Float,
+    vmax=Float,
+    acc=Float,
+    out=Matrix,
+)
 def _team_intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, us, opps, bx, by, turn, vmax, acc, out):
     """`team_intercepts` compiled: `_team_rows`, then `_intercepts` of them into ``out``."""
     px, py, vx, vy, extra = _team_rows(us, opps, bx, by, turn)

@@ -3,21 +3,18 @@
 Opponents block what they can reach before the ball gets there: each one's shadow is widened by how far it
 can move (from rest, at the assumed acceleration) while the ball travels to it.
 
-The judges are compiled kernels (numba, cached on disk): the robot with the ball scores sixteen dribbling
-directions and every pass each control tick, a few hundred small loops over the opponents. ``opps`` is
-the observation's (M, 4) array of x, y, vx, vy (`Observation.opp_array`). The float operations are those
-of the Python they replaced, with CPython's hypot (simatch.exactmath), so a run is the same bit for bit.
-Their arguments have no defaults: a kernel called from Python with a default left out takes numba's slow
-path (tens of microseconds) at every call.
+The judges are compiled kernels: the robot with the ball scores sixteen dribbling directions and every pass
+each control tick, a few hundred small loops over the opponents. ``opps`` is the observation's (M, 4) array
+of x, y, vx, vy (`Observation.opp_array`).
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ...compiled import Float, Matrix, kernel
 from ...exactmath import hypot, pymax, pymin
 
 BALL_RADIUS = 0.11
@@ -33,12 +30,12 @@ POST_MARGIN = 0.22
 PRESSURE_RADIUS = 2.2
 
 
-@numba.njit(cache=True)
+@kernel
 def reach(t: float) -> float:
     return pymin(MAX_REACH, 0.5 * REACT_ACC * t * t)
 
 
-@numba.njit(cache=True)
+@kernel(bx=Float, by=Float, opps=Matrix, goal_x=Float, goal_half=Float, speed=Float, post_margin=Float)
 def shot_window(
     bx: float, by: float, opps: np.ndarray, goal_x: float, goal_half: float, speed: float, post_margin: float
 ) -> tuple[float, float]:
@@ -98,7 +95,7 @@ def shot_window(
     return by + math.tan(aim) * dx, f1 - f0
 
 
-@numba.njit(cache=True)
+@kernel(bx=Float, by=Float, cx=Float, cy=Float, opps=Matrix, speed=Float, exclude_near_end=Float)
 def lane_clear(
     bx: float, by: float, cx: float, cy: float, opps: np.ndarray, speed: float, exclude_near_end: float
 ) -> float:
@@ -129,7 +126,7 @@ def lane_clear(
     return worst
 
 
-@numba.njit(cache=True)
+@kernel
 def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     """How crowded a point is: the sum of how far each opponent is inside ``radius`` of it."""
     total = 0.0
@@ -140,7 +137,7 @@ def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     return total
 
 
-@numba.njit(cache=True)
+@kernel(x=Float, y=Float, opps=Matrix, goal_x=Float)
 def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float:
     """How good a place is to have the ball: near the opponents' goal, in the middle, with room."""
     return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)

@@ -1,7 +1,7 @@
 """Plane geometry on plain floats, in the team frame.
 
-A robot handles a handful of points per decision, where a NumPy call costs more than the arithmetic it
-saves; these helpers keep every per-robot computation in scalar Python.
+A robot handles a handful of points per decision: these helpers work on scalars, from Python (and, the
+ones marked as kernels, from compiled kernels).
 """
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ import math
 
 import numba
 
+from ...compiled import kernel
 from ...exactmath import pymax, pymin
 
 TWO_PI = 2.0 * math.pi
@@ -21,13 +22,12 @@ def wrap(a: float) -> float:
 
 
 def clamp(v: float, lo: float, hi: float) -> float:
+    """``v`` limited to [lo, hi]."""
     return lo if v < lo else hi if v > hi else v
 
 
-@numba.njit(cache=True)
-def _clamp(v: float, lo: float, hi: float) -> float:
-    """`clamp`, for compiled callers."""
-    return lo if v < lo else hi if v > hi else v
+#: `clamp` compiled (the same source), for kernels
+_clamp = kernel(clamp)
 
 
 def dist(ax: float, ay: float, bx: float, by: float) -> float:

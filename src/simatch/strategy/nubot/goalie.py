@@ -22,13 +22,13 @@ from .active import BallPlayer
 from .ballpath import GRAVITY
 from .gameflow import PHASES, GameFlow
 from .geometry import clamp
-from .motion import Motion, rounded_move
+from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
 from .picture import Picture
 from .positions import Areas
 
-# (what `decide` reads at every tick, as globals: a namespace's attribute costs more)
+# (what `decide` reads at every tick, as module constants)
 _PLAY = PHASES.PLAY
 _GOALIE, _CATCH_POSITIONED, _POSITIONED = ROLES.GOALIE, ACTIONS.CATCH_POSITIONED, ACTIONS.POSITIONED
 
@@ -89,9 +89,7 @@ class Goalkeeper:
         vmax = self.p.max_speed + (1.0 if urgent else 0.0)
         motion = self.motion
         motion.go(obs, target[0], target[1], face, vmax, self.p.max_turn, avoid=False, brake=6.0 if urgent else None)
-        # the command's numbers (and the target as its intent), rounded as the messages take them
-        vx, vy, w, ix, iy = motion.row.tolist()
-        return rounded_move(vx, vy, w, _GOALIE, _CATCH_POSITIONED if urgent else _POSITIONED, (ix, iy), ())
+        return motion.move(_GOALIE, _CATCH_POSITIONED if urgent else _POSITIONED)
 
     # --- where to stand ------------------------------------------------------------------------------------
     def block_point(self, obs: Observation) -> tuple[tuple[float, float], bool]:

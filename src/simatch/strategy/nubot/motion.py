@@ -16,12 +16,11 @@ from __future__ import annotations
 import math
 import struct
 
-import numba
 import numpy as np
 
-from ...compiled import entry
+from ...compiled import Array, Float, Matrix, bind, kernel
 from ...exactmath import hypot, pymax, pymin, remainder
-from ..base import RoundedMove
+from ..base import Command
 from .avoidance import no_charging, sub_target
 from .geometry import TWO_PI
 from .observation import Observation
@@ -60,34 +59,24 @@ class Motion:
         self.xlim = field.half_length + 0.9
         self.ylim = field.half_width + 0.9
         self._two_turn_acc = 2.0 * params.turn_acceleration
-        # the last command's numbers at the messages' float32 precision (body vx, vy, w, then the target
-        # asked for): `_go` writes them, a robot taking its place reads them with tolist (no message holds
-        # this array) into a RoundedMove
-        self.row = np.zeros(5, dtype=np.float32)
-        ar = areas
-        # the fixed numbers `_go` reads (see _C_*)
-        self.consts = np.array(
-            (
-                self.xlim,
-                self.ylim,
-                self.clearance,
-                self.ball_clearance,
-                self.touch,
-                params.contact_speed,
-                self._two_turn_acc,
-                period,
-                ar.L2 if ar is not None else field.half_length,
-                ar.goal_half if ar is not None else 0.5 * field.goal_width,
-            )
+        # the last `go`'s command: body vx, vy, w and the target asked for (see `move`)
+        self.command = (0.0, 0.0, 0.0, 0.0, 0.0)
+        # what `steer` reads: the fixed numbers, written here, then each call's, written by `go` in one struct
+        # call through a float64 view of the same memory (never leaves this robot's Motion)
+        self.args = np.zeros(1, dtype=STEER_ARGS)
+        fixed = self.args[0]
+        fixed["xlim"], fixed["ylim"] = self.xlim, self.ylim
+        fixed["clearance"], fixed["ball_clearance"], fixed["touch"] = self.clearance, self.ball_clearance, self.touch
+        fixed["contact_speed"], fixed["two_turn_acc"], fixed["period"] = (
+            params.contact_speed,
+            self._two_turn_acc,
+            period,
         )
-        # the fixed numbers, then `go`'s numbers of the call, for the kernel (`_go_packed`): those of each
-        # call written (in one struct call) after the fixed ones at each call; never leaves this robot's Motion
-        self.args = np.concatenate((self.consts, np.zeros(_N_ARGS)))
-        self._args_buf = memoryview(self.args)
-        # the compiled `_go_packed` for its argument types (float64 arrays: the boxes and the observation's
-        # opponents and team table, C-contiguous, as `Areas.box_array` and `Observation` make them), called
-        # without numba's dispatcher typing its arguments at every call
-        self._go = entry(_go_packed, self.args, _NO_BOXES, _NO_BOXES, _NO_BOXES, self.row)
+        fixed["half_length"] = areas.L2 if areas is not None else field.half_length
+        fixed["goal_half"] = areas.goal_half if areas is not None else 0.5 * field.goal_width
+        self._call_buf = memoryview(self.args.view(np.float64))
+        self._steer = bind(steer)
+        self._to_body = bind(to_body)
 
     # -----------------------------------------------------------------------------------------------------
     def go(
@@ -116,8 +105,7 @@ class Motion:
         circle the robot must not enter (a restart's ball), whatever avoiding others asks; ``max_x`` a
         line it must not cross (the half-way line at a kick-off).
 
-        The work is one compiled kernel (`_go`): the same float operations as the Python it replaced, with
-        CPython's own hypot and remainder (simatch.exactmath), so the run is the same bit for bit."""
+        The work is one compiled kernel, `steer`."""
         me = obs.me
         c = obs.coach
         if c is not None:  # the speed limits the coach allows (CoachInfo max_vel / max_w)
@@ -129,19 +117,12 @@ class Motion:
             if lim > 0.0 and lim < wmax:
                 wmax = lim
         box_array = self.areas.box_array(boxes) if boxes else _NO_BOXES
-        if ball_obstacle is True:
-            ball = self.ball_clearance
-        else:
-            ball = float(ball_obstacle or 0.0)
-        if fence is None:
-            fx = fy = fr = math.nan
-        else:
-            fx, fy, fr = fence
-        # the kernel's numbers in one float64 array: one argument instead of twenty-seven, written in one call
-        # (a kernel call costs some 200 instructions per argument, an array ~1 k)
-        _PACK_ARGS(
-            self._args_buf,
-            _ARGS_AT,
+        ball = self.ball_clearance if ball_obstacle is True else float(ball_obstacle or 0.0)
+        fx, fy, fr = _NO_FENCE if fence is None else fence
+        # the call's fields of `args` (STEER_CALL's order), written in one call
+        _PACK_CALL(
+            self._call_buf,
+            _CALL_AT,
             me.x,
             me.y,
             me.yaw,
@@ -169,64 +150,101 @@ class Motion:
             obs.by,
             self.side,
         )
-        vx, vy, w, side, wx, wy = self._go(self.args, box_array, obs.opp_array, obs.mate_array, self.row)
+        vx, vy, w, side, wx, wy = self._steer(self.args, box_array, obs.opp_array, obs.mate_array)
         self.side = side
         self.last = (wx, wy, w)
+        self.command = (vx, vy, w, tx, ty)
         return (vx, vy, w)
 
-    def move(self, role: int, action: int) -> RoundedMove:
-        """The last `go` as a command: its body velocity, with the target it was asked for as the intent,
-        all rounded as the messages take them (from `row`)."""
-        vx, vy, w, ix, iy = self.row.tolist()
-        return rounded_move(vx, vy, w, role, action, (ix, iy), ())
-
     def turn_rate(self, err: float, wmax: float) -> float:
-        a = abs(err)
-        w = min(wmax, math.sqrt(self._two_turn_acc * a), HEADING_GAIN * a)
-        return w if err >= 0.0 else -w
-
-    @staticmethod
-    def keep_out_of_circle(
-        x: float, y: float, vx: float, vy: float, cx: float, cy: float, r: float
-    ) -> tuple[float, float]:
-        """The velocity with its part towards the circle's centre capped so that the robot stops at the
-        circle (and leaves it at once if it is inside)."""
-        return _keep_out_of_circle(x, y, vx, vy, cx, cy, r)
+        """The turn rate for heading error ``err`` (`turn_rate`)."""
+        return turn_rate(err, wmax, self._two_turn_acc)
 
     def body(self, yaw: float, vx: float, vy: float, w: float) -> tuple[float, float, float]:
-        """Team-frame velocity to the body frame, at the heading the robot will have half a period on."""
-        h = yaw + 0.5 * w * self.period
-        c, s = math.cos(h), math.sin(h)
-        return (c * vx + s * vy, -s * vx + c * vy, w)
+        """Team-frame velocity to the body frame (`to_body`)."""
+        bx, by = self._to_body(yaw, vx, vy, w, self.period)
+        return bx, by, w
+
+    def move(self, role: int, action: int) -> Command:
+        """The last `go` as a command: its body velocity, with the target it was asked for as the intent."""
+        vx, vy, w, tx, ty = self.command
+        return _move(vx, vy, w, role, action, (tx, ty))
 
 
 _NO_BOXES = np.zeros((0, 3))
-_new = object.__new__
+_NO_FENCE = (math.nan, math.nan, math.nan)
+_move = Command.move
 
 
-def rounded_move(vx: float, vy: float, w: float, role: int, action: int, intent: tuple, user: tuple) -> RoundedMove:
-    """``RoundedMove(vx, vy, w, role, action, intent, user)``: the same object, its attributes written here (a
-    class call with a Python ``__init__`` costs CPython 3.11 several times what a function's call does)."""
-    move = _new(RoundedMove)
-    move.vx, move.vy, move.w = vx, vy, w
-    move.role, move.action, move.intent, move.user = role, action, intent, user
-    return move
-
-
-# Motion.args: Motion.consts (_C_*), then `_go`'s numbers of a call in the order of its arguments (the
-# flags as 0.0/1.0, the robot's id and the avoidance side, -1, 0 or +1, as floats: exact)
-_N_ARGS = 26
-_PACK_ARGS = struct.Struct(f"{_N_ARGS}d").pack_into
-_ARGS_AT = 10 * 8  # (bytes: after the ten fixed numbers)
-# the indices of Motion.consts
-_C_XLIM, _C_YLIM, _C_CLEAR, _C_BALL_CLEAR, _C_TOUCH, _C_CONTACT, _C_TWO_TURN_ACC, _C_PERIOD, _C_L2, _C_GOAL_HALF = (
-    range(10)
+#: `steer`'s numbers: a robot's fixed ones (STEER_FIXED), then those of a call (STEER_CALL, as `Motion.go` gets
+#: them; the flags as 0.0/1.0, the robot's id and the avoidance side, -1, 0 or +1, as floats: exact)
+STEER_FIXED = (
+    "xlim",
+    "ylim",
+    "clearance",
+    "ball_clearance",
+    "touch",
+    "contact_speed",
+    "two_turn_acc",
+    "period",
+    "half_length",
+    "goal_half",
 )
+STEER_CALL = (
+    "x",
+    "y",
+    "yaw",
+    "vx",
+    "vy",
+    "id",
+    "tx",
+    "ty",
+    "face",
+    "vmax",
+    "wmax",
+    "avoid",
+    "ball",
+    "end_speed",
+    "feed_x",
+    "feed_y",
+    "brake",
+    "gentle",
+    "turn_first",
+    "fence_x",
+    "fence_y",
+    "fence_r",
+    "max_x",
+    "bx",
+    "by",
+    "side",
+)
+STEER_ARGS = np.dtype([(name, np.float64) for name in STEER_FIXED + STEER_CALL])
+_PACK_CALL = struct.Struct(f"{len(STEER_CALL)}d").pack_into
+_CALL_AT = STEER_ARGS.fields[STEER_CALL[0]][1]  # (in bytes)
 
 
-@numba.njit(cache=True)
-def _keep_out_of_circle(x, y, vx, vy, cx, cy, r):
-    """`Motion.keep_out_of_circle`, compiled."""
+@kernel
+def turn_rate(err, wmax, two_turn_acc):
+    """The turn rate for heading error ``err``: as fast as the robot can still brake (turning acceleration
+    ``two_turn_acc`` / 2) to face the heading, within ``wmax``, proportional (HEADING_GAIN) near it."""
+    aerr = abs(err)
+    w = pymin(pymin(wmax, math.sqrt(two_turn_acc * aerr)), HEADING_GAIN * aerr)
+    return w if err >= 0.0 else -w
+
+
+@kernel(yaw=Float, vx=Float, vy=Float, w=Float, period=Float)
+def to_body(yaw, vx, vy, w, period):
+    """Team-frame velocity (vx, vy) of a robot at heading ``yaw`` turning at ``w`` in the body frame, at the
+    heading it will have half a control period on: a robot that turns while it drives keeps its course."""
+    h = yaw + 0.5 * w * period
+    c, s = math.cos(h), math.sin(h)
+    return c * vx + s * vy, -s * vx + c * vy
+
+
+@kernel
+def keep_out_of_circle(x, y, vx, vy, cx, cy, r):
+    """The velocity (vx, vy) of a robot at (x, y) with its part towards the centre of the circle (cx, cy, r)
+    capped so that the robot stops at the circle (and leaves it at once if it is inside)."""
     dx, dy = cx - x, cy - y
     d = hypot(dx, dy)
     if d > r + FENCE_RANGE or d < 1e-6:
@@ -248,46 +266,17 @@ def _keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     return vx, vy
 
 
-@numba.njit(cache=True)
-def _go(
-    mx,
-    my,
-    yaw,
-    mvx,
-    mvy,
-    me_id,
-    tx,
-    ty,
-    face,
-    vmax,
-    wmax,
-    avoid,
-    ball,
-    end_speed,
-    feed_x,
-    feed_y,
-    brake,
-    gentle,
-    turn_first,
-    boxes,
-    fence_x,
-    fence_y,
-    fence_r,
-    max_x,
-    opps,
-    mates,
-    bx,
-    by,
-    side,
-    consts,
-    row,
-):
-    """Motion.go, compiled: (body vx, vy, w, avoidance side, team-frame vx, vy). ``face``, ``fence_*`` and
-    ``max_x`` are NaN where the Python takes None. Writes the body vx, vy, w and the target (tx, ty) as
-    asked, rounded to float32 as the messages round them, into ``row`` (5,)."""
-    row[3] = tx
-    row[4] = ty
-    xlim, ylim = consts[_C_XLIM], consts[_C_YLIM]
+@kernel(args=Array(STEER_ARGS, 1), boxes=Matrix, opps=Matrix, mates=Matrix)
+def steer(args, boxes, opps, mates):
+    """`Motion.go`'s command: (body vx, vy, w, avoidance side, team-frame vx, vy) of the call in ``args[0]``
+    (STEER_ARGS; ``face``, ``fence_*`` and ``max_x`` NaN where `go` takes None), ``boxes`` (K, 3) the areas to
+    go round, ``opps`` and ``mates`` the observation's opponents and team table."""
+    a = args[0]
+    mx, my, yaw, me_id = a.x, a.y, a.yaw, a.id
+    tx, ty, face, vmax, wmax = a.tx, a.ty, a.face, a.vmax, a.wmax
+    end_speed, brake, side = a.end_speed, a.brake, int(a.side)
+    fence_x, fence_y, fence_r, max_x = a.fence_x, a.fence_y, a.fence_r, a.max_x
+    xlim, ylim = a.xlim, a.ylim
     tx = pymin(pymax(tx, -xlim), xlim)
     ty = pymin(pymax(ty, -ylim), ylim)
     d = hypot(tx - mx, ty - my)
@@ -295,87 +284,34 @@ def _go(
     if d > 0.01 or end_speed > 0.0:
         sx, sy = tx, ty
         if boxes.shape[0] > 0:
-            sx, sy = route(mx, my, tx, ty, boxes, consts[_C_L2], consts[_C_GOAL_HALF])
-        if avoid:
+            sx, sy = route(mx, my, tx, ty, boxes, a.half_length, a.goal_half)
+        if a.avoid != 0.0:
             sx, sy, side = sub_target(
-                mx, my, sx, sy, opps, mates, me_id, bx, by, ball, consts[_C_CLEAR], LOOK_AHEAD, side
+                mx, my, sx, sy, opps, mates, me_id, a.bx, a.by, a.ball, a.clearance, LOOK_AHEAD, side
             )
         speed = pymin(pymin(vmax, math.sqrt(end_speed * end_speed + 2.0 * brake * d)), POSITION_GAIN * d + end_speed)
         ex, ey = sx - mx, sy - my
         e = hypot(ex, ey)
         if e > 1e-9:
             vx, vy = ex / e * speed, ey / e * speed
-    vx += feed_x
-    vy += feed_y
+    vx += a.feed_x
+    vy += a.feed_y
     n = hypot(vx, vy)
     if n > vmax:
         vx, vy = vx / n * vmax, vy / n * vmax
-    if gentle:
-        vx, vy = no_charging(mx, my, mvx, mvy, vx, vy, opps, consts[_C_TOUCH], consts[_C_CONTACT], CHARGE_BRAKING)
+    if a.gentle != 0.0:
+        vx, vy = no_charging(mx, my, a.vx, a.vy, vx, vy, opps, a.touch, a.contact_speed, CHARGE_BRAKING)
     if fence_r == fence_r:  # not NaN: a fence
-        vx, vy = _keep_out_of_circle(mx, my, vx, vy, fence_x, fence_y, fence_r)
+        vx, vy = keep_out_of_circle(mx, my, vx, vy, fence_x, fence_y, fence_r)
     if max_x == max_x:
         vx = pymin(vx, 2.0 * (max_x - mx))
-    if face != face:  # NaN: no heading wanted
-        w = 0.0
-    else:
-        err = remainder(face - yaw, TWO_PI)
-        aerr = abs(err)
-        w = pymin(pymin(wmax, math.sqrt(consts[_C_TWO_TURN_ACC] * aerr)), HEADING_GAIN * aerr)
-        if not err >= 0.0:
-            w = -w
+    w = 0.0 if face != face else turn_rate(remainder(face - yaw, TWO_PI), wmax, a.two_turn_acc)  # NaN: no heading
     speed = hypot(vx, vy)
     if speed * abs(w) > SPIN_COUPLING:
-        if turn_first:
+        if a.turn_first != 0.0:
             k = SPIN_COUPLING / (speed * abs(w))
             vx, vy = vx * k, vy * k
         else:
             w = math.copysign(SPIN_COUPLING / speed, w)
-    h = yaw + 0.5 * w * consts[_C_PERIOD]
-    c, s = math.cos(h), math.sin(h)
-    bvx, bvy = c * vx + s * vy, -s * vx + c * vy
-    row[0] = bvx
-    row[1] = bvy
-    row[2] = w
+    bvx, bvy = to_body(yaw, vx, vy, w, a.period)
     return bvx, bvy, w, side, vx, vy
-
-
-@numba.njit(cache=True)
-def _go_packed(args, boxes, opps, mates, row):
-    """`_go` with its numbers in one float64 array ``args`` (Motion.args: the ten fixed numbers `_go` reads as
-    ``consts``, then the call's in `_go`'s order of arguments, the robot's id, the flags and the avoidance
-    side as floats), for a call of five arguments instead of thirty-one."""
-    a = 10
-    return _go(
-        args[a],
-        args[a + 1],
-        args[a + 2],
-        args[a + 3],
-        args[a + 4],
-        args[a + 5],
-        args[a + 6],
-        args[a + 7],
-        args[a + 8],
-        args[a + 9],
-        args[a + 10],
-        args[a + 11] != 0.0,
-        args[a + 12],
-        args[a + 13],
-        args[a + 14],
-        args[a + 15],
-        args[a + 16],
-        args[a + 17] != 0.0,
-        args[a + 18] != 0.0,
-        boxes,
-        args[a + 19],
-        args[a + 20],
-        args[a + 21],
-        args[a + 22],
-        opps,
-        mates,
-        args[a + 23],
-        args[a + 24],
-        int(args[a + 25]),
-        args,
-        row,
-    )

@@ -21,7 +21,7 @@ from ..worldmodel import WorldModel
 #: an obstacle this close to a teammate is that teammate [m]
 _SAME_ROBOT = 0.1
 #: a team-mate's row of its team's table written in place (eight float64, native), through a memoryview of
-#: the table (taken once per table: its buffer is cheaper to take than a NumPy array's, at each row)
+#: the table (taken once per table)
 _pack_row = struct.Struct("8d").pack_into
 _new = object.__new__
 
@@ -51,43 +51,42 @@ class Mate:
 
     def __init__(
         self,
-        info,
-        is_goalie: bool,
-        role: int = -1,
-        action: int = -1,
-        pass_info=None,
-        attacking: int = -1,
-        role_time: float = 1e9,
+        id,
+        x,
+        y,
+        yaw,
+        vx,
+        vy,
+        w,
+        holding,
+        valid,
+        stuck,
+        role,
+        action,
+        pass_info,
+        is_goalie,
+        attacking,
+        role_time,
+        row,
     ):
-        self.id = info.id
-        self.x, self.y, self.yaw = info.x, info.y, info.yaw
-        self.vx, self.vy, self.w = info.vx, info.vy, info.w
-        self.holding = info.holding_ball
-        self.valid = info.valid
-        self.stuck = info.stuck
-        self.role = role  # as the robot announced it last (StrategyInfo), -1 if unknown
-        self.action = action
-        self.pass_info = pass_info
-        self.is_goalie = is_goalie
-        self.attacking = attacking  # whether its team picture said "we attack" last tick (1/0), -1 if unknown
-        self.role_time = role_time  # how long it has had its announced role [s]
-        self.row = -1  # its row in its TeamView's table
+        # (the slots' values in slot order, as `TeamView.get` finds them in the robot's RobotInfo and its
+        # StrategyInfo; ``role``: as the robot announced it last, -1 if unknown; ``attacking``: whether its
+        # team picture said "we attack" last tick (1/0), -1 if unknown; ``role_time``: how long it has had its
+        # announced role [s]; ``row``: its row in its TeamView's table)
+        self.id = id
+        self.x, self.y, self.yaw = x, y, yaw
+        self.vx, self.vy, self.w = vx, vy, w
+        self.holding, self.valid, self.stuck = holding, valid, stuck
+        self.role, self.action, self.pass_info = role, action, pass_info
+        self.is_goalie, self.attacking, self.role_time, self.row = is_goalie, attacking, role_time, row
 
     def key(self) -> tuple:
         return (self.id, self.x, self.y, self.yaw, self.vx, self.vy, self.holding, self.valid, self.role)
 
 
-def _make_mate_py(rid, x, y, yaw, vx, vy, w, holding, valid, stuck, role, action, pass_info, is_goalie, att, rt, row):
-    """A `Mate` of its slots' values (in slot order), without its class call: where the C helper is not built."""
-    m = _new(Mate)
-    m.id, m.x, m.y, m.yaw, m.vx, m.vy, m.w = rid, x, y, yaw, vx, vy, w
-    m.holding, m.valid, m.stuck, m.role, m.action, m.pass_info = holding, valid, stuck, role, action, pass_info
-    m.is_goalie, m.attacking, m.role_time, m.row = is_goalie, att, rt, row
-    return m
-
-
-#: `Mate` of its slots' values in slot order (the C helper's one call instead of a frame and 17 writes)
-_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or _make_mate_py
+#: `Mate` of its slots' values in slot order: the C helper's maker where it is built (one call, no Python
+#: ``__init__`` frame), else the class itself
+_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or Mate
 
 
 class TeamView:
@@ -296,24 +295,7 @@ def observe(world: WorldModel, view: TeamView) -> Observation:
         else:
             bx, by, bz, bvx, bvy, bvz = b.x, b.y, b.z, b.vx, b.vy, b.vz
             age = b.age
-    o = v.obstacles
-    if view.opp_tick == tick:
-        # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are shared
-        # (one kernel call that compares instead of filling, no array or rows made)
-        arr = view.opp_array
-        if view.opp_table is table and bx == view.opp_bx and by == view.opp_by:
-            # the ball where that team-mate saw it (the same numbers; a NaN never is): the team-mate nearest to
-            # it and the nearest opponent (when the rows are the same) are the ones it found
-            k = _same_rows(o.x, o.y, o.vx, o.vy, table, arr)
-            near, near_d, opp_d = view.opp_near
-        else:
-            k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
-        if k >= 0:
-            rows = view.opps
-        else:
-            arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
-    else:
-        arr, rows, near, near_d, opp_d = _own_opponents(o, table, bx, by, view, tick)
+    arr, rows, near, near_d, opp_d = _opponents_seen(v.obstacles, table, bx, by, view, tick)
     c = world.coach
     if c is None:
         mode = mtype = 0
@@ -348,13 +330,32 @@ def observe(world: WorldModel, view: TeamView) -> Observation:
     )
 
 
+def _opponents_seen(o, table: np.ndarray, bx: float, by: float, view: TeamView, tick: int) -> tuple:
+    """The opponents among the obstacles ``o``: their array and rows, the team-mate nearest to the ball, its
+    distance, the nearest opponent's distance (`_opponents`). Shared with a team-mate's observation of the
+    same tick when the rows are the same bit for bit (`_same_opponents`), found afresh otherwise."""
+    if view.opp_tick == tick:
+        # a team-mate's observation of this tick found its opponents: the same rows (bit for bit) are shared
+        # (one kernel call that compares instead of filling, no array or rows made)
+        arr = view.opp_array
+        if view.opp_table is table and bx == view.opp_bx and by == view.opp_by:
+            # the ball where that team-mate saw it (the same numbers; a NaN never is): the team-mate nearest to
+            # it and the nearest opponent (when the rows are the same) are the ones it found
+            k = _same_rows(o.x, o.y, o.vx, o.vy, table, arr)
+            near, near_d, opp_d = view.opp_near
+        else:
+            k, near, near_d, opp_d = _same_opponents(o.x, o.y, o.vx, o.vy, table, arr, bx, by)
+        if k >= 0:
+            return arr, view.opps, near, near_d, opp_d
+    return _own_opponents(o, table, bx, by, view, tick)
+
+
 def _own_opponents(o, table: np.ndarray, bx: float, by: float, view: TeamView, tick: int) -> tuple:
     """The opponents among the obstacles ``o`` (of a robot whose team's table is ``table``, the ball at ``bx``,
     ``by``), found afresh and kept in ``view`` for team-mates: their array and rows, the team-mate nearest to
     the ball, its distance, the nearest opponent's distance (`_opponents`)."""
     ox = o.x
-    # (the kernel fills an array made here and says how many rows: an array made inside a kernel costs numba
-    # more to hand back than this one does to make)
+    # (the kernel fills an array made here, room for every obstacle, and says how many rows it wrote)
     buf = np.empty((len(ox), 4))
     k, near, near_d, opp_d = _opponents(ox, o.y, o.vx, o.vy, table, buf, bx, by)
     arr = buf[:k]
@@ -366,14 +367,13 @@ def _own_opponents(o, table: np.ndarray, bx: float, by: float, view: TeamView, t
 
 def _array(rows: list[tuple], width: int) -> np.ndarray:
     """(len(rows), width) float array of equal-length tuples of numbers: the values of
-    ``np.array(rows, dtype=float)``, built faster for a handful of rows. (Shared between the robots of a
+    ``np.array(rows, dtype=float)``. (Shared between the robots of a
     team in one process: read it, never write it.)"""
     return np.fromiter(chain.from_iterable(rows), float, width * len(rows)).reshape(-1, width)
 
 
 # _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``, as every kernel of
-# simatch: docs/performance.md's rules): they run for about a microsecond, and a kernel that lets the GIL go costs
-# its call some 0.7 k instructions to take it back (the runs are single-threaded: nothing else would run meanwhile).
+# simatch, docs/performance.md's rules): they run for about a microsecond, in single-threaded runs.
 @numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not

@@ -83,6 +83,6 @@ class NubotParams(BaseModel):
 
 
 def plain(params: NubotParams) -> SimpleNamespace:
-    """The parameters' values as plain attributes (read them, never write them): the strategy reads them
-    for every robot and tick, and a pydantic model's attribute costs about four times a plain one."""
+    """The parameters' values as plain attributes (read them, never write them), for the code that reads
+    them for every robot and tick."""
     return SimpleNamespace(**{name: getattr(params, name) for name in type(params).model_fields})

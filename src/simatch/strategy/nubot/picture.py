@@ -16,40 +16,25 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from ...compiled import entry
-from ...exactmath import hypot
+from ...compiled import bind
 from ..roles import ROLES
+from . import positions
+from .assignment import assign, assist_spots, open_slots
 from .ballpath import BallPath, _team_intercepts
 from .gameflow import PHASES, GameFlow
 from .observation import Observation
 from .observation import _array as _rows
 from .params import NubotParams
-from .positions import (
-    Areas,
-    _midfield_point,
-    _outlet_point,
-    _passive_point,
-    _score_spots,
-    midfield_point,
-    outlet_point,
-    passive_point,
-    score_spots,
-)
-from .setpieces import SLOT_GAP, formation, kickoff_side, spread
+from .positions import Areas, as_called
+from .setpieces import formation, kickoff_side
 
 BALL_RADIUS = 0.11
 #: an opponent whose centre is this close to the ball controls it [m]
 OPP_CONTROL = 0.45
 #: a robot that has just become the active one stays so at least this long (unless another holds the ball) [s]
 MIN_ACTIVE_TIME = 0.6
-#: a robot that took its role less than MIN_ROLE_TIME ago keeps it unless another way saves NEW_ROLE_HOLD more
-MIN_ROLE_TIME = 0.6
-NEW_ROLE_HOLD = 3.0
-#: the points of positional roles stay this far inside the lines [m]
-SLOT_INSIDE = 0.5
 #: we keep attacking (defending) until the opponents (we) reach the ball this much sooner [s]
 ATTACK_HYSTERESIS = 0.4
 #: set-piece slots change hands easily while robots run to them, and never once START is given [m]
@@ -61,14 +46,12 @@ PASS_HEADING = 0.6
 PASS_KEPT = 0.3
 
 
-# the positional roles as numbers, for the compiled slots (and back: the Role members by value)
-_ASSISTANT, _PASSIVE, _MIDFIELD = int(ROLES.ASSISTANT), int(ROLES.PASSIVE), int(ROLES.MIDFIELD)
+# the positional roles' Role members by their numbers (the slots' kernel gives numbers)
 _ASSISTANT_ROLE, _ACTIVE_ROLE, _GOALIE = ROLES.ASSISTANT, ROLES.ACTIVE, ROLES.GOALIE
 _SETUP, _OUR_RESTART = PHASES.SETUP, PHASES.OUR_RESTART
 _ROLE_OF = {int(r): r for r in (ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD)}
 #: the phases of a set piece (set up or not taken yet), as one tuple made once
 _SET_PIECE_PHASES = (PHASES.SETUP, PHASES.OUR_RESTART, PHASES.OPP_RESTART)
-_NO_SPOTS = np.zeros((0, 2))  # (what the kernel reads when we defend: nothing; never written)
 #: the set pieces whose formation depends on the ball's place alone (their kick-off, the penalties, the
 #: dropped ball); our kick-off's also on the side of the pass (`kickoff_side` of the opponents)
 _OUR_KICKOFF = 1
@@ -150,8 +133,8 @@ class TeamMemo:
 
 
 def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
-    # (GameFlow.key()'s numbers inline, the phase as its member: the members are distinct, so equal members
-    # are equal phases, compared by identity first)
+    # (GameFlow.key()'s numbers, the phase as its member: the members are distinct, so equal members are
+    # equal phases)
     return (
         obs.bx,
         obs.by,
@@ -169,276 +152,6 @@ def _rest_key(obs: Observation, flow: GameFlow) -> tuple:
     )
 
 
-def assign(
-    robots: list, slots: list[tuple], hysteresis: float, around: tuple[float, float, float] | None = None
-) -> dict[int, int]:
-    """Robot id -> slot index, minimising the total distance, each robot's announced role earning
-    ``hysteresis`` metres when it keeps it. Slots beyond the number of robots stay empty (they are listed
-    by priority). ``around`` = (x, y, r): a circle robots must go round (a set piece's ball), whose detour
-    counts too."""
-    n = len(robots)
-    if n == 0:
-        return {}
-    slots = slots[:n] if len(slots) >= n else slots
-    if not slots:
-        return {}
-    # a robot that took its role only a moment ago holds on to it harder (roles last a while); the robots'
-    # rows (x, y, announced role, hysteresis) and the slots' (x, y, role) in one array, for one kernel call
-    flat = []
-    for m in robots:
-        flat += (m.x, m.y, m.role, hysteresis + (NEW_ROLE_HOLD if m.role_time < MIN_ROLE_TIME else 0.0))
-    for sl in slots:
-        flat += (sl[1], sl[2], sl[0])
-    cx, cy, cr = around if around is not None else (0.0, 0.0, -1.0)
-    best = _assign_flat(np.array(flat, dtype=float), n, len(slots), cx, cy, cr).tolist()
-    return {robots[i].id: best[i] for i in range(min(n, len(slots)))}
-
-
-@numba.njit(cache=True)
-def _assign_flat(flat, n, m, cx, cy, cr):
-    """`_assign` of the robots' (n, 4) and the slots' (m, 3) rows, given one after the other in ``flat``."""
-    return _assign(flat[: 4 * n].reshape((n, 4)), flat[4 * n : 4 * n + 3 * m].reshape((m, 3)), cx, cy, cr)
-
-
-@numba.njit(cache=True)
-def _assign(robots, slots, cx, cy, cr):
-    """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
-    slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""
-    n, m = robots.shape[0], slots.shape[0]
-    k = min(n, m)
-    cost = np.empty((n, m))
-    for i in range(n):
-        for j in range(m):
-            dx, dy = slots[j, 0] - robots[i, 0], slots[j, 1] - robots[i, 1]
-            d = math.sqrt(dx * dx + dy * dy)
-            if cr > 0.0:
-                ll = dx * dx + dy * dy
-                t = 0.0
-                if ll > 1e-12:
-                    t = min(max(((cx - robots[i, 0]) * dx + (cy - robots[i, 1]) * dy) / ll, 0.0), 1.0)
-                gap = math.sqrt((robots[i, 0] + t * dx - cx) ** 2 + (robots[i, 1] + t * dy - cy) ** 2)
-                d += 2.0 * max(0.0, cr - gap)
-            if robots[i, 2] == slots[j, 2]:
-                d -= robots[i, 3]  # the robot's hysteresis for keeping its role
-            cost[i, j] = d
-    best = np.zeros(k, dtype=np.int64)
-    perm = np.zeros(k, dtype=np.int64)
-    used = np.zeros(m, dtype=np.bool_)
-    best_c = 1e18
-    # depth-first over the slots in increasing order: permutations come in lexicographic order
-    depth = 0
-    perm[0] = -1
-    acc = np.zeros(k + 1)
-    while depth >= 0:
-        j = perm[depth] + 1
-        if perm[depth] >= 0:
-            used[perm[depth]] = False
-        while j < m and used[j]:
-            j += 1
-        if j >= m:
-            perm[depth] = -1
-            depth -= 1
-            continue
-        perm[depth] = j
-        used[j] = True
-        acc[depth + 1] = acc[depth] + cost[depth, j]
-        if depth == k - 1:
-            if acc[k] < best_c - 1e-9:
-                best_c = acc[k]
-                best[:] = perm
-        else:
-            depth += 1
-            perm[depth] = -1
-    return best
-
-
-def assist_spots(
-    cx: np.ndarray,
-    cy: np.ndarray,
-    bx: float,
-    by: float,
-    opps: list,
-    L2: float,
-    prev: tuple[float, float] | None,
-    n: int,
-) -> list[tuple[float, float]]:
-    """Up to ``n`` receiving spots for the assistants: the best scored of the candidates (`score_spots`
-    from 3 to 8.5 m of the ball at (bx, by), near ``prev``, the assistant's place), at least 3 m apart,
-    taken among the twelve best. The plain version of `_assist_choice` (and its fallback)."""
-    ox = np.array([o[0] for o in opps])
-    oy = np.array([o[1] for o in opps])
-    score = score_spots(cx, cy, bx, by, ox, oy, L2, 3.0, 8.5, prev)
-    out = []
-    for k in np.argsort(-score)[:12].tolist():
-        x, y = float(cx[k]), float(cy[k])
-        if all(math.hypot(x - a, y - b) > 3.0 for a, b in out):
-            out.append((x, y))
-            if len(out) == n:
-                break
-    return out
-
-
-@numba.njit(cache=True)
-def _assist_choice(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
-    """`assist_spots` compiled, over the opponents' (M, 4) array, ``prev`` as (nx, ny) (NaN: none): writes
-    the spots into the first rows of ``out`` ((n, 2)) and returns how many, or -1 when two of the thirteen
-    best scores are equal or a score is NaN (NumPy's and numba's sorts may order equals differently: the
-    caller then takes the plain way, whose order is the one the game always had)."""
-    m = cx.shape[0]
-    score = np.empty(m)
-    _score_spots(
-        cx,
-        cy,
-        bx,
-        by,
-        np.ascontiguousarray(opps[:, 0]),
-        np.ascontiguousarray(opps[:, 1]),
-        L2,
-        dmin,
-        dmax,
-        nx,
-        ny,
-        score,
-    )
-    for i in range(m):
-        if score[i] != score[i]:
-            return -1
-    # the thirteen best in the order of np.argsort(-score) (the highest first), chosen one by one instead of
-    # sorting them all: the same order whenever it counts (two equal scores among them: -1 below either way)
-    sel = min(13, m)
-    order = np.empty(sel, np.int64)
-    taken = np.zeros(m, np.bool_)
-    for i in range(sel):
-        best = -1
-        for j in range(m):
-            if not taken[j] and (best < 0 or score[j] > score[best]):
-                best = j
-        taken[best] = True
-        order[i] = best
-    top = min(12, m)
-    for i in range(min(top, m - 1)):
-        if score[order[i]] == score[order[i + 1]]:
-            return -1
-    n = out.shape[0]
-    k = 0
-    for i in range(top):
-        x, y = cx[order[i]], cy[order[i]]
-        free = True
-        for j in range(k):
-            if not hypot(x - out[j, 0], y - out[j, 1]) > 3.0:
-                free = False
-                break
-        if free:
-            out[k, 0] = x
-            out[k, 1] = y
-            k += 1
-            if k == n:
-                break
-    return k
-
-
-def open_slots(
-    areas: Areas, rest: list, attacking: bool, assist: list, opps: list, bx: float, by: float, hysteresis: float
-) -> list[tuple[int, int, float, float]]:
-    """Open play's positional roles of the robots ``rest`` (neither the active one nor the goalkeeper), the
-    ball expected at (bx, by): the roles' points (the assistants' at ``assist``, the receiving spots, or
-    the outlet point when we defend), kept inside the field, spread apart, and given to the robots by
-    `assign`. Returns (robot id, role, x, y) of each robot that gets one. The plain version of
-    `_open_slots`, which `Analyst._play` calls."""
-    n_assist = 2 if len(rest) >= 4 else 1
-    order = (
-        [ROLES.ASSISTANT, ROLES.PASSIVE, ROLES.MIDFIELD]
-        if attacking
-        else [ROLES.PASSIVE, ROLES.MIDFIELD, ROLES.ASSISTANT]
-    )
-    if n_assist == 2:
-        order = [ROLES.ASSISTANT, ROLES.ASSISTANT] + [r for r in order if r != ROLES.ASSISTANT]
-    slots: list[tuple] = []
-    used = 0
-    for role in order[: len(rest)]:
-        if role == ROLES.ASSISTANT:
-            x, y = assist[min(used, len(assist) - 1)]
-            used += 1
-        elif role == ROLES.PASSIVE:
-            x, y = passive_point(areas, bx, by, attacking)
-        else:
-            x, y = midfield_point(areas, bx, by, attacking, opps)
-        x, y = areas.inside_field(x, y, SLOT_INSIDE)
-        slots.append((role, x, y, bx, by))
-    slots = spread(slots, bx, by)
-    return [(rid, slots[i][0], slots[i][1], slots[i][2]) for rid, i in assign(rest, slots, hysteresis).items()]
-
-
-@numba.njit(cache=True)
-def _open_slots(table, rest, n, attacking, assist, opps, bx, by, geo, hysteresis, out):
-    """`open_slots` compiled, over the team view's table ((K, 8): x, y, vx, vy, id, yaw, announced role,
-    role time): ``rest`` has bit j set for each of the ``n`` robots at row j; ``assist`` (k, 2) the
-    receiving spots when ``attacking``. Writes, for the i-th of those robots (in row order) that gets a
-    slot, the slot's index, role, x and y into ``out[i]``; returns how many got one."""
-    L2, W2 = geo[0], geo[1]
-    robots = np.empty((n, 4))
-    i = 0
-    for j in range(table.shape[0]):
-        if (rest >> j) & 1:
-            robots[i, 0], robots[i, 1], robots[i, 2] = table[j, 0], table[j, 1], table[j, 6]
-            robots[i, 3] = hysteresis + (NEW_ROLE_HOLD if table[j, 7] < MIN_ROLE_TIME else 0.0)
-            i += 1
-    order = np.empty(4, np.int64)
-    if n >= 4:  # two assistants
-        order[0], order[1], order[2], order[3] = _ASSISTANT, _ASSISTANT, _PASSIVE, _MIDFIELD
-    elif attacking:
-        order[0], order[1], order[2] = _ASSISTANT, _PASSIVE, _MIDFIELD
-    else:
-        order[0], order[1], order[2] = _PASSIVE, _MIDFIELD, _ASSISTANT
-    m = min(4 if n >= 4 else 3, n)
-    slots = np.empty((m, 3))  # x, y, role (the kernel's rows), spread as they come
-    used = 0
-    for s in range(m):
-        role = order[s]
-        if role == _ASSISTANT:
-            if attacking:
-                a = min(used, assist.shape[0] - 1)
-                x, y = assist[a, 0], assist[a, 1]
-            else:
-                x, y = _outlet_point(bx, by)
-            used += 1
-        elif role == _PASSIVE:
-            x, y = _passive_point(bx, by, attacking, geo)
-        else:
-            x, y = _midfield_point(bx, by, attacking, opps, geo)
-        # Areas.inside_field
-        lo, hi = -L2 + SLOT_INSIDE, L2 - SLOT_INSIDE
-        x = lo if x < lo else hi if x > hi else x
-        lo, hi = -W2 + SLOT_INSIDE, W2 - SLOT_INSIDE
-        y = lo if y < lo else hi if y > hi else y
-        # spread: a slot too close to an earlier one slides sideways, across the direction of the ball
-        for _ in range(3):
-            clash = -1
-            for e in range(s):
-                if hypot(x - slots[e, 0], y - slots[e, 1]) < SLOT_GAP:
-                    clash = e
-                    break
-            if clash < 0:
-                break
-            cx, cy = slots[clash, 0], slots[clash, 1]
-            dx, dy = x - bx, y - by
-            d = hypot(dx, dy)
-            ux, uy = (1.0, 0.0) if d < 1e-12 else (dx / d, dy / d)
-            nx, ny = -uy, ux
-            if (x - cx) * nx + (y - cy) * ny < 0.0:
-                nx, ny = -nx, -ny
-            if abs(y + ny * SLOT_GAP) > 6.0:
-                nx, ny = -nx, -ny
-            x, y = cx + nx * SLOT_GAP, cy + ny * SLOT_GAP
-        slots[s, 0], slots[s, 1], slots[s, 2] = x, y, role
-    best = _assign(robots, slots, 0.0, 0.0, -1.0)
-    k = min(n, m)
-    for i in range(k):
-        j = best[i]
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = j, slots[j, 2], slots[j, 0], slots[j, 1]
-    return k
-
-
 class Analyst:
     """Computes team pictures for one team (field, parameters and the receiving-spot grid are fixed)."""
 
@@ -448,18 +161,14 @@ class Analyst:
         self.spots = spots
         self.xlim = areas.L2 + 1.3
         self.ylim = areas.W2 + 1.3
-        self.geo = areas.geo
+        self.pitch = areas.pitch
         # the last set-piece formation computed, with `_formation_key` of its inputs: while a kick-off, a
         # penalty or a dropped ball is set up and taken, the ball stays put and the formation is the same
         self._formation_key: tuple | None = None
         self._formation: list[tuple] = []
-        # the picture's kernels as compiled for the types of their arguments, called without numba's
-        # dispatcher typing them at every call (as Motion's `go`): every array they get is made by this
-        # package (float64, C-contiguous: the team view's table, the opponents' rows, the spots, fresh outputs)
-        table, rows, pairs = np.zeros((1, 8)), np.zeros((1, 4)), np.zeros((1, 2))
-        self._intercepts = entry(_team_intercepts, *(0.0,) * 10, table, rows, 0.0, 0.0, 0.0, 0.0, 0.0, np.zeros((1, 3)))
-        self._assist = entry(_assist_choice, *spots, 0.0, 0.0, rows, 0.0, 0.0, 0.0, 0.0, 0.0, pairs)
-        self._slots = entry(_open_slots, table, 0, 0, True, pairs, rows, 0.0, 0.0, self.geo, 0.0, rows)
+        self._intercepts = bind(_team_intercepts)
+        self._assist = bind(assist_spots)
+        self._slots = bind(open_slots)
 
     def analyse(self, obs: Observation, flow: GameFlow) -> Picture:
         p = self.p
@@ -552,8 +261,6 @@ class Analyst:
 
     # --- open play --------------------------------------------------------------------------------------
     def _play(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:
-        p, areas = self.p, self.areas
-        # (plain loops: a generator or a comprehension makes a function object at every call)
         field = []
         goalie = None
         for m in mates:
@@ -563,46 +270,65 @@ class Analyst:
                 goalie = m
         holder = obs.by_id.get(pic.holder) if pic.holder else None
         if goalie is not None:
-            pic.roles[goalie.id] = ROLES.GOALIE
-            if holder is goalie:
-                pic.goalie_plays = True
-            elif holder is None:
-                gt, gx, gy = pic.catch[goalie.id]
-                pic.goalie_plays = areas.near_own_penalty_area(gx, gy, -0.1) and areas.near_own_penalty_area(
-                    obs.bx, obs.by, 0.6
-                )
-        active = None
-        if holder is not None and not holder.is_goalie:
-            active = holder
-        elif (
-            pic.receiver
-            and pic.pass_info.is_passout
-            and pic.receiver in obs.by_id
-            and not obs.by_id[pic.receiver].is_goalie
-            and obs.by_id[pic.receiver].valid
-        ):
-            active = obs.by_id[pic.receiver]
-        elif holder is None:
-            best = math.inf
-            taker = flow.taker
-            active_role = ROLES.ACTIVE
-            for m in field:
-                if m.role == active_role and m.role_time < MIN_ACTIVE_TIME and m.id != taker:
-                    best, active = -math.inf, m  # a robot that just took the ball on keeps it a moment
-                    break
-            catch = pic.catch
-            hysteresis = p.active_hysteresis
-            for m in field:
-                if m.id == taker:
-                    continue
-                score = catch[m.id][0] - (hysteresis if m.role == active_role else 0.0)
-                if score < best:
-                    best, active = score, m
+            self._goalie(obs, pic, goalie, holder)
+        active = self._active(obs, flow, pic, field, holder)
         if active is not None:
             pic.active = active.id
             pic.roles[active.id] = ROLES.ACTIVE if pic.receiver != active.id else ROLES.CATCHOFPASS
-        # (min of the catch times as min() takes it: the first, then any smaller one)
-        our_t = math.inf
+        pic.attacking = self._attacking(pic, mates, holder)
+        rest = []
+        for m in field:
+            if m is not active:
+                rest.append(m)
+        if rest:
+            self._positional_slots(obs, pic, rest)
+
+    def _goalie(self, obs: Observation, pic: Picture, goalie, holder) -> None:
+        """The goalkeeper's role, and whether the ball is its to play: it holds it, or it reaches the ball
+        near our penalty area with the ball there too."""
+        areas = self.areas
+        pic.roles[goalie.id] = ROLES.GOALIE
+        if holder is goalie:
+            pic.goalie_plays = True
+        elif holder is None:
+            gt, gx, gy = pic.catch[goalie.id]
+            pic.goalie_plays = areas.near_own_penalty_area(gx, gy, -0.1) and areas.near_own_penalty_area(
+                obs.bx, obs.by, 0.6
+            )
+
+    def _active(self, obs: Observation, flow: GameFlow, pic: Picture, field: list, holder):
+        """The field robot that plays the ball: the one holding it, the receiver of a pass under way, or
+        (nobody holding the ball) the one reaching the ball first, with hysteresis for the robot that plays
+        it already, which keeps it a moment after it took it on; never the taker of the restart just played."""
+        if holder is not None and not holder.is_goalie:
+            return holder
+        receiver = obs.by_id.get(pic.receiver) if pic.receiver else None
+        if receiver is not None and pic.pass_info.is_passout and not receiver.is_goalie and receiver.valid:
+            return receiver
+        if holder is not None:  # (our goalkeeper)
+            return None
+        active = None
+        best = math.inf
+        taker = flow.taker
+        active_role = ROLES.ACTIVE
+        for m in field:
+            if m.role == active_role and m.role_time < MIN_ACTIVE_TIME and m.id != taker:
+                best, active = -math.inf, m
+                break
+        catch = pic.catch
+        hysteresis = self.p.active_hysteresis
+        for m in field:
+            if m.id == taker:
+                continue
+            score = catch[m.id][0] - (hysteresis if m.role == active_role else 0.0)
+            if score < best:
+                best, active = score, m
+        return active
+
+    def _attacking(self, pic: Picture, mates: list, holder) -> bool:
+        """Whether we attack: we hold the ball, or reach it sooner than the opponents (who do not hold it),
+        with hysteresis on what the team said last tick (so formations do not swap back and forth)."""
+        our_t = math.inf  # (the first of the smallest catch times)
         n_said = n_yes = 0
         for k, m in enumerate(mates):
             t = pic.catch[m.id][0]
@@ -612,77 +338,60 @@ class Analyst:
             if said >= 0:
                 n_said += 1
                 n_yes += said
-        # attacking, with hysteresis on what the team said last tick (so formations do not swap back and forth)
         before = 2 * n_yes > n_said if n_said else False
         margin = -ATTACK_HYSTERESIS if before else ATTACK_HYSTERESIS
-        pic.attacking = holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
-        rest = []
-        for m in field:
-            if m is not active:
-                rest.append(m)
-        if not rest:
-            return
-        bx, by = pic.path.at(0.4)
-        receiver = None
-        if pic.receiver and pic.receiver != pic.active and pic.pass_info is not None:
-            for m in rest:
-                if m.id == pic.receiver:
-                    receiver = m
-                    break
-        rows = 0
-        for m in rest:
-            rows |= 1 << m.row
-        if rows >> 62 == 0:  # (the rows fit the kernel's bits: always but in teams of more than 62)
-            assist = self._assist_array(obs, pic, 2 if len(rest) >= 4 else 1) if pic.attacking else _NO_SPOTS
-            out = np.empty((len(rest), 4))
-            k = self._slots(
-                obs.mate_array,
-                rows,
-                len(rest),
-                pic.attacking,
-                assist,
-                obs.opp_array,
-                bx,
-                by,
-                self.geo,
-                p.role_hysteresis,
-                out,
-            )
-            res = out.tolist()
-            for i in range(k):
-                _, role, x, y = res[i]
-                rid = rest[i].id
-                pic.roles[rid] = _ROLE_OF[int(role)]
-                pic.slots[rid] = (x, y, bx, by)
-        else:
-            n_assist = 2 if len(rest) >= 4 else 1
-            assist = self._assist_spots(obs, pic, n_assist) if pic.attacking else [outlet_point(areas, bx, by)]
-            for rid, role, x, y in open_slots(areas, rest, pic.attacking, assist, obs.opps, bx, by, p.role_hysteresis):
-                pic.roles[rid] = role
-                pic.slots[rid] = (x, y, bx, by)
-        if receiver is not None and receiver.id in pic.slots:
-            # the announced receiver keeps its role and waits at the catch point, facing the passer
-            info = pic.pass_info
-            pic.slots[receiver.id] = (info.catch_x, info.catch_y, obs.bx, obs.by)
+        return holder is not None or (not pic.opp_holds and our_t < pic.their_t - margin)
 
-    def _assist_array(self, obs: Observation, pic: Picture, n: int) -> np.ndarray:
-        """`_assist_spots` as a (k, 2) array (the kernel's rows themselves when it could choose)."""
+    def _positional_slots(self, obs: Observation, pic: Picture, rest: list) -> None:
+        """The positional roles and places of the robots ``rest`` (`open_slots`), the ball expected where
+        it will be in 0.4 s; an announced receiver waits at the catch point, facing the passer."""
+        bx, by = pic.path.at(0.4)
+        # the roles' points, each looked up in `positions` now (a replacement there is the one followed)
+        pitch, attacking = self.pitch, pic.attacking
+        if attacking:
+            assist = self._assist_array(obs, 2 if len(rest) >= 4 else 1)
+        else:
+            assist = np.array((as_called(positions.outlet_point)(pitch, bx, by),))
+        passive_x, passive_y = as_called(positions.passive_point)(pitch, bx, by, attacking)
+        midfield_x, midfield_y = as_called(positions.midfield_point)(pitch, bx, by, attacking, obs.opp_array)
+        out = np.empty((len(rest), 4))
+        k = self._slots(
+            obs.mate_array,
+            np.array([m.row for m in rest], dtype=np.int64),
+            attacking,
+            assist,
+            passive_x,
+            passive_y,
+            midfield_x,
+            midfield_y,
+            bx,
+            by,
+            pitch,
+            self.p.role_hysteresis,
+            out,
+        )
+        res = out.tolist()
+        for i in range(k):
+            _, role, x, y = res[i]
+            rid = rest[i].id
+            pic.roles[rid] = _ROLE_OF[int(role)]
+            pic.slots[rid] = (x, y, bx, by)
+        info = pic.pass_info
+        if pic.receiver and pic.receiver != pic.active and info is not None and pic.receiver in pic.slots:
+            pic.slots[pic.receiver] = (info.catch_x, info.catch_y, obs.bx, obs.by)
+
+    def _assist_array(self, obs: Observation, n: int) -> np.ndarray:
+        """Up to ``n`` receiving spots for the assistants (`assist_spots`), as a (k, 2) array, near where the
+        first assistant stands."""
         cx, cy = self.spots
-        prev = None  # (the first assistant's place; a plain loop: a generator is a function object per call)
-        nx = ny = math.nan
+        nx = ny = math.nan  # (the first assistant's place)
         for m in obs.mates:
             if m.role == _ASSISTANT_ROLE:
-                nx, ny = prev = (m.x, m.y)
+                nx, ny = m.x, m.y
                 break
         out = np.empty((n, 2))
         k = self._assist(cx, cy, obs.bx, obs.by, obs.opp_array, self.areas.L2, 3.0, 8.5, nx, ny, out)
-        if k < 0:  # equal scores among the best: NumPy's order of equals decides, as it always did
-            spots = assist_spots(cx, cy, obs.bx, obs.by, obs.opps, self.areas.L2, prev, n)
-            return np.array(spots, dtype=float).reshape(-1, 2)
         return out[:k]
-
-    def _assist_spots(self, obs: Observation, pic: Picture, n: int) -> list[tuple[float, float]]:
-        return [(x, y) for x, y in self._assist_array(obs, pic, n).tolist()]
 
     # --- set pieces ---------------------------------------------------------------------------------------
     def _set_piece(self, obs: Observation, flow: GameFlow, pic: Picture, mates: list) -> None:

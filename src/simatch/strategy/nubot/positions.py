@@ -8,12 +8,41 @@ enters the opponents' penalty area.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
+from ...compiled import Array, Bool, Float, bind, kernel
 from ...exactmath import hypot, pymax, pymin
-from .geometry import _clamp, box_exit, clamp, push_out_of_box, segment_hits_box
+from .geometry import _clamp, box_exit, push_out_of_box, segment_hits_box
+
+
+class Box(NamedTuple):
+    """An area of the field as a field robot must respect it: x from ``x0`` to ``x1``, y within
+    +-``half_width`` (widened by the margin of `Areas`)."""
+
+    x0: float
+    x1: float
+    half_width: float
+
+
+class Pitch(NamedTuple):
+    """The fixed numbers of the field the kernels read, in the team frame: the field's half length and half
+    width, the penalty areas' depth and half width (their lines), and the boxes a field robot keeps out of
+    (our penalty area, theirs, their goal area; widened by the margin of `Areas`)."""
+
+    half_length: float
+    half_width: float
+    penalty_depth: float
+    penalty_half_width: float
+    own_penalty: Box
+    opp_penalty: Box
+    opp_goal: Box
+
+
+#: the numba type of a `Pitch`, for the kernels' declarations
+PitchType = numba.typeof(Pitch(0.0, 0.0, 0.0, 0.0, Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0), Box(0.0, 0.0, 0.0)))
 
 
 class Areas:
@@ -28,17 +57,18 @@ class Areas:
         self.ga_depth = field.goal_area_depth
         self.ga_half = 0.5 * field.goal_area_width
         self.goal_half = 0.5 * field.goal_width
-        self.own_pa = (-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
-        self.opp_pa = (L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
-        self.opp_ga = (L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
+        self.own_pa = Box(-L2 - 5.0, -L2 + self.pa_depth + margin, self.pa_half + margin)
+        self.opp_pa = Box(L2 - self.pa_depth - margin, L2 + 5.0, self.pa_half + margin)
+        self.opp_ga = Box(L2 - self.ga_depth - margin, L2 + 5.0, self.ga_half + margin)
+        self.pitch = Pitch(L2, self.W2, self.pa_depth, self.pa_half, self.own_pa, self.opp_pa, self.opp_ga)
         self._with_opp_area = (self.own_pa, self.opp_ga)
         self._without_opp_area = (self.own_pa, self.opp_pa)
         # the same boxes as (K, 3) arrays, for the compiled route (see box_array)
         self._arrays = {
             id(boxes): np.array(boxes, dtype=np.float64) for boxes in (self._with_opp_area, self._without_opp_area)
         }
-        # what the compiled points read (see _passive_point): L2, W2, our and their penalty areas' boxes
-        self.geo = np.array((L2, self.W2, *self.own_pa, *self.opp_pa))
+        self._keep_out = bind(keep_out)
+        self._inside_field = bind(inside_field)
 
     # exact lines (robot centre over the line counts as inside)
     def in_own_penalty_area(self, x: float, y: float) -> bool:
@@ -54,16 +84,8 @@ class Areas:
         return x <= -self.L2 + self.pa_depth + extra and abs(y) <= self.pa_half + extra
 
     def keep_out(self, x: float, y: float, own_pa: bool = True, opp_pa: bool = True) -> tuple[float, float]:
-        """The point moved out of the areas a field robot may not stand in."""
-        # (push_out_of_box returns a point outside the box unchanged: the test first, inline, saves the call)
-        if own_pa:
-            x0, x1, hw = self.own_pa
-            if x0 < x < x1 and -hw < y < hw:
-                x, y = push_out_of_box(x, y, x0, x1, hw)
-        x0, x1, hw = self.opp_pa if opp_pa else self.opp_ga
-        if x0 < x < x1 and -hw < y < hw:
-            x, y = push_out_of_box(x, y, x0, x1, hw)
-        return x, y
+        """The point moved out of the areas a field robot may not stand in (`keep_out`)."""
+        return self._keep_out(self.pitch, x, y, own_pa, opp_pa)
 
     def forbidden(self, opp_area: bool) -> tuple[tuple[float, float, float], ...]:
         """The boxes (x0, x1, half width) a field robot's path must avoid: our penalty area, the opponents'
@@ -85,11 +107,8 @@ class Areas:
         return route(px, py, tx, ty, self.box_array(boxes), self.L2, self.goal_half)
 
     def inside_field(self, x: float, y: float, margin: float) -> tuple[float, float]:
-        # (clamp, inline)
-        lo, hi = -self.L2 + margin, self.L2 - margin
-        x = lo if x < lo else hi if x > hi else x
-        lo, hi = -self.W2 + margin, self.W2 - margin
-        return x, (lo if y < lo else hi if y > hi else y)
+        """The point moved inside the lines, at least ``margin`` from them (`inside_field`)."""
+        return self._inside_field(self.pitch, x, y, margin)
 
 
 @numba.njit(cache=True)
@@ -121,71 +140,111 @@ def route(px, py, tx, ty, boxes, L2, goal_half):
     return tx, ty
 
 
-def guard_point(areas: Areas, bx: float, by: float, fraction: float, min_s: float, gap: float) -> tuple[float, float]:
+# --- the positional roles' points ------------------------------------------------------------------------
+# Compiled kernels: open play (picture.Analyst) and the set pieces (setpieces.formation) call them from Python,
+# each time through this module (`as_called`), so that a replacement assigned to this module's name (a user's
+# own passive point) is the one both follow.
+
+
+def as_called(point):
+    """What Python calls for the role point ``point`` (a module attribute looked up at the call): a kernel's
+    compiled version for its declared signature (bound once), or ``point`` itself when it is a plain function
+    (a replacement)."""
+    fast = _BOUND.get(point)
+    if fast is None:
+        fast = _BOUND[point] = bind(point) if getattr(point, "declared", ()) else point
+    return fast
+
+
+_BOUND: dict = {}
+
+
+@kernel(pitch=PitchType, x=Float, y=Float, own_pa=Bool, opp_pa=Bool)
+def keep_out(pitch, x, y, own_pa, opp_pa):
+    """The point moved out of the areas a field robot may not stand in: our penalty area (if ``own_pa``),
+    and the opponents' penalty area (if ``opp_pa``) or else their goal area."""
+    if own_pa:
+        x, y = push_out_of_box(x, y, pitch.own_penalty.x0, pitch.own_penalty.x1, pitch.own_penalty.half_width)
+    box = pitch.opp_penalty if opp_pa else pitch.opp_goal
+    return push_out_of_box(x, y, box.x0, box.x1, box.half_width)
+
+
+@kernel(pitch=PitchType, x=Float, y=Float, margin=Float)
+def inside_field(pitch, x, y, margin):
+    """The point moved inside the lines, at least ``margin`` from them."""
+    return (
+        _clamp(x, -pitch.half_length + margin, pitch.half_length - margin),
+        _clamp(y, -pitch.half_width + margin, pitch.half_width - margin),
+    )
+
+
+@kernel(pitch=PitchType, bx=Float, by=Float, fraction=Float, min_s=Float, gap=Float)
+def guard_point(pitch, bx, by, fraction, min_s, gap):
     """A point on the way from the middle of our goal to the ball: ``fraction`` of the way, at least
     ``min_s`` from the goal, at least ``gap`` short of the ball, and outside our penalty area."""
-    gx = -areas.L2
+    gx = -pitch.half_length
     dx, dy = bx - gx, by
-    D = math.hypot(dx, dy)
+    D = hypot(dx, dy)
     if D < 1e-6:
         return gx + min_s, 0.0
     ux, uy = dx / D, dy / D
-    s = max(min_s, fraction * D)
-    s_out = box_exit(0.0, 0.0, ux, uy, -5.0, areas.own_pa[1] - gx, areas.own_pa[2])
-    s = max(s, s_out)
-    s = min(s, max(s_out, D - gap))
+    s = pymax(min_s, fraction * D)
+    s_out = box_exit(0.0, 0.0, ux, uy, -5.0, pitch.own_penalty.x1 - gx, pitch.own_penalty.half_width)
+    s = pymax(s, s_out)
+    s = pymin(s, pymax(s_out, D - gap))
     return gx + ux * s, uy * s
 
 
-def passive_point(areas: Areas, bx: float, by: float, attacking: bool) -> tuple[float, float]:
+@kernel(pitch=PitchType, bx=Float, by=Float, attacking=Bool)
+def passive_point(pitch, bx, by, attacking):
     """The passive defender: between the ball and our goal; a last line further up when we attack."""
     if attacking and bx > -3.0:
-        return clamp(bx - 6.5, -areas.L2 + 4.0, -0.5), 0.35 * by
-    return guard_point(areas, bx, by, 0.45, 3.2, 1.8)
+        return _clamp(bx - 6.5, -pitch.half_length + 4.0, -0.5), 0.35 * by
+    return guard_point(pitch, bx, by, 0.45, 3.2, 1.8)
 
 
-def midfield_point(
-    areas: Areas, bx: float, by: float, attacking: bool, opps: list[tuple[float, float, float, float]]
-) -> tuple[float, float]:
+@kernel(pitch=PitchType, bx=Float, by=Float, attacking=Bool, opps=Array(np.float64, 2, readonly=True))
+def midfield_point(pitch, bx, by, attacking, opps):
     """The midfielder: marks the most dangerous opponent away from the ball (between it and the ball)
-    when we defend; supports the attack from behind the ball, on the inner side, when we attack."""
-    L2, W2 = areas.L2, areas.W2
+    when we defend; supports the attack from behind the ball, on the inner side, when we attack.
+    ``opps``: the opponents' (M, 4+) rows, x and y first."""
+    L2, W2 = pitch.half_length, pitch.half_width
     if attacking:
-        x = clamp(bx - 3.5, -L2 + 4.0, L2 - 4.5)
+        x = _clamp(bx - 3.5, -L2 + 4.0, L2 - 4.5)
         y = by - 3.0 if by > 0.0 else by + 3.0
-        return areas.keep_out(x, clamp(y, -W2 + 1.0, W2 - 1.0))
-    best, best_d = None, math.inf
-    for ox, oy, _, _ in opps:
-        if math.hypot(ox - bx, oy - by) < 2.0 or ox > 3.0:
+        return keep_out(pitch, x, _clamp(y, -W2 + 1.0, W2 - 1.0), True, True)
+    found = False
+    ox = oy = 0.0
+    best_d = math.inf
+    for k in range(opps.shape[0]):
+        px, py = opps[k, 0], opps[k, 1]
+        if hypot(px - bx, py - by) < 2.0 or px > 3.0:
             continue
-        d = math.hypot(ox + L2, oy)
+        d = hypot(px + L2, py)
         if d < best_d:
-            best, best_d = (ox, oy), d
-    if best is None:
-        x, y = clamp(bx - 4.0, -L2 + 4.0, 1.0), -0.4 * by
-        return areas.keep_out(x, y)
-    ox, oy = best
+            found, ox, oy, best_d = True, px, py, d
+    if not found:
+        return keep_out(pitch, _clamp(bx - 4.0, -L2 + 4.0, 1.0), -0.4 * by, True, True)
     # stand on the line from the opponent towards our goal, a little towards the ball: cuts the pass
-    gx = -L2
-    ux, uy = gx - ox, -oy
-    n = math.hypot(ux, uy) or 1.0
+    ux, uy = -L2 - ox, -oy
+    n = _length_or_one(ux, uy)
     vx, vy = bx - ox, by - oy
-    m = math.hypot(vx, vy) or 1.0
+    m = _length_or_one(vx, vy)
     wx, wy = 0.6 * ux / n + 0.4 * vx / m, 0.6 * uy / n + 0.4 * vy / m
-    k = math.hypot(wx, wy) or 1.0
-    return areas.keep_out(ox + 1.0 * wx / k, oy + 1.0 * wy / k)
+    k = _length_or_one(wx, wy)
+    return keep_out(pitch, ox + 1.0 * wx / k, oy + 1.0 * wy / k, True, True)
 
 
-def outlet_point(areas: Areas, bx: float, by: float) -> tuple[float, float]:
+@kernel
+def _length_or_one(x, y):
+    """The length of (x, y), or 1 for (0, 0) (a direction of no length divides nothing)."""
+    n = hypot(x, y)
+    return 1.0 if n == 0.0 else n
+
+
+@kernel(pitch=PitchType, bx=Float, by=Float)
+def outlet_point(pitch, bx, by):
     """The assistant when we defend: a free point up the field, away from the ball's side, ready to break."""
-    x = clamp(bx + 5.0, -2.0, 3.0)
-    y = -3.5 if by > 0.5 else 3.5
-    return x, y
-
-
-@numba.njit(cache=True)
-def _outlet_point(bx, by):
-    """`outlet_point`, for compiled callers."""
     return _clamp(bx + 5.0, -2.0, 3.0), (-3.5 if by > 0.5 else 3.5)
 
 
@@ -240,8 +299,8 @@ def score_spots(
 
 @numba.njit(cache=True)
 def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
-    """score_spots, compiled: a hundred candidates times five opponents are tiny loops, costly as NumPy
-    calls (about a microsecond each) and cheap as machine code."""
+    """`score_spots` into ``out``: the kernel the receiving spots' choices (`assignment.assist_spots`) call;
+    (nx, ny) NaN: no place to stay near."""
     for i in range(cx.shape[0]):
         x, y = cx[i], cy[i]
         score = -0.45 * math.sqrt((L2 - x) ** 2 + y * y)
@@ -270,77 +329,3 @@ def _score_spots(cx, cy, bx, by, ox, oy, L2, dmin, dmax, nx, ny, out):
         if nx == nx:  # not NaN: a place to stay near
             score -= 0.12 * math.sqrt((x - nx) ** 2 + (y - ny) ** 2)
         out[i] = score
-
-
-# --- the positional roles' points, compiled (open play's slots, see picture._open_slots) ------------------
-# `geo`: the fixed numbers they read, from `Areas.geo`: L2, W2, then our penalty area's and the opponents'
-# penalty area's boxes (x0, x1, half width)
-
-
-@numba.njit(cache=True)
-def _keep_out(x, y, geo):
-    """`Areas.keep_out` (both penalty areas)."""
-    x0, x1, hw = geo[2], geo[3], geo[4]
-    if x0 < x < x1 and -hw < y < hw:
-        x, y = push_out_of_box(x, y, x0, x1, hw)
-    x0, x1, hw = geo[5], geo[6], geo[7]
-    if x0 < x < x1 and -hw < y < hw:
-        x, y = push_out_of_box(x, y, x0, x1, hw)
-    return x, y
-
-
-@numba.njit(cache=True)
-def _passive_point(bx, by, attacking, geo):
-    """`passive_point`, compiled (with `guard_point` inline, Python's min and max)."""
-    L2 = geo[0]
-    if attacking and bx > -3.0:
-        return _clamp(bx - 6.5, -L2 + 4.0, -0.5), 0.35 * by
-    fraction, min_s, gap = 0.45, 3.2, 1.8
-    gx = -L2
-    dx, dy = bx - gx, by
-    D = hypot(dx, dy)
-    if D < 1e-6:
-        return gx + min_s, 0.0
-    ux, uy = dx / D, dy / D
-    s = pymax(min_s, fraction * D)
-    s_out = box_exit(0.0, 0.0, ux, uy, -5.0, geo[3] - gx, geo[4])
-    s = pymax(s, s_out)
-    s = pymin(s, pymax(s_out, D - gap))
-    return gx + ux * s, uy * s
-
-
-@numba.njit(cache=True)
-def _midfield_point(bx, by, attacking, opps, geo):
-    """`midfield_point`, compiled, over the opponents' (M, 4) array."""
-    L2, W2 = geo[0], geo[1]
-    if attacking:
-        x = _clamp(bx - 3.5, -L2 + 4.0, L2 - 4.5)
-        y = by - 3.0 if by > 0.0 else by + 3.0
-        return _keep_out(x, _clamp(y, -W2 + 1.0, W2 - 1.0), geo)
-    found = False
-    ox = oy = 0.0
-    best_d = math.inf
-    for k in range(opps.shape[0]):
-        px, py = opps[k, 0], opps[k, 1]
-        if hypot(px - bx, py - by) < 2.0 or px > 3.0:
-            continue
-        d = hypot(px + L2, py)
-        if d < best_d:
-            found, ox, oy, best_d = True, px, py, d
-    if not found:
-        x, y = _clamp(bx - 4.0, -L2 + 4.0, 1.0), -0.4 * by
-        return _keep_out(x, y, geo)
-    gx = -L2
-    ux, uy = gx - ox, -oy
-    n = hypot(ux, uy)
-    if n == 0.0:  # (`or 1.0`)
-        n = 1.0
-    vx, vy = bx - ox, by - oy
-    m = hypot(vx, vy)
-    if m == 0.0:
-        m = 1.0
-    wx, wy = 0.6 * ux / n + 0.4 * vx / m, 0.6 * uy / n + 0.4 * vy / m
-    k = hypot(wx, wy)
-    if k == 0.0:
-        k = 1.0
-    return _keep_out(ox + 1.0 * wx / k, oy + 1.0 * wy / k, geo)

@@ -60,26 +60,7 @@ class RestartTaker:
         if obs.ball_speed > 0.3 and math.hypot(bx - flow.ball0[0], by - flow.ball0[1]) > 0.05:
             # kicked: the taker may not touch the ball again before another robot did; it stays put
             return Command(role=ROLES.PASSOFPASS, action=ACTIONS.NO_ACTION, pass_intent=self.player.pass_intent(obs))
-        receiver = None
-        if flow.kind == MODES.OUR_PENALTY:
-            aim_y, _ = shot_window(bx, by, obs.opp_array, self.L2, self.goal_half, p.shot_speed, POST_MARGIN)
-            ax, ay, speed = self.L2 + 0.3, aim_y, p.shot_speed
-        else:
-            slot = pic.slots.get(me.id)
-            mate = self.receiver(obs, pic, flow)
-            if flow.kind == MODES.OUR_KICKOFF and slot is not None:
-                ax, ay = slot[2], slot[3]  # the point in front of the receiver
-                arrival = KICKOFF_ARRIVAL
-            elif mate is not None:
-                ax, ay = mate.x, mate.y
-                arrival = p.pass_arrival_speed
-            elif slot is not None:
-                ax, ay = slot[2], slot[3]
-                arrival = p.pass_arrival_speed
-            else:
-                ax, ay, arrival = self.L2, 0.0, 3.0
-            receiver = mate
-            speed = pass_speed(math.hypot(ax - bx, ay - by), arrival, p.ball_deceleration)
+        ax, ay, speed, receiver = self.aim(obs, pic, flow)
         ux, uy = unit(ax - bx, ay - by)
         face = math.atan2(uy, ux)
         if receiver is not None and flow.kind != MODES.OUR_KICKOFF:
@@ -140,12 +121,42 @@ class RestartTaker:
             vx=vx, vy=vy, w=w, dribble=False, kick_speed=kick, role=ROLES.ACTIVE, action=action, intent=(lx, ly)
         )
         if receiver is not None:
-            intent = PassIntent(
-                catch_id=receiver.id, pass_x=bx, pass_y=by, catch_x=ax, catch_y=ay, kicked=kick > 0.0, static=True
-            )
-            cmd.pass_intent = intent
-            if kick > 0.0:
-                self.player.announce = intent
-                travel = math.hypot(ax - bx, ay - by) / max(0.5 * (speed + 1.0), 0.5)
-                self.player.announce_until = obs.t + travel + 1.0
+            self._announce(cmd, obs, receiver, ax, ay, speed)
         return cmd
+
+    def aim(self, obs: Observation, pic: Picture, flow: GameFlow):
+        """(x, y, kick speed, receiver) of the kick: at a penalty a shot into the open part of the goal (no
+        receiver); otherwise a pass to the receiver (at a kick-off, to the point in front of it; without
+        one, to the taker's slot's facing point or the opponents' goal)."""
+        p, me = self.p, obs.me
+        bx, by = obs.bx, obs.by
+        if flow.kind == MODES.OUR_PENALTY:
+            aim_y, _ = shot_window(bx, by, obs.opp_array, self.L2, self.goal_half, p.shot_speed, POST_MARGIN)
+            return self.L2 + 0.3, aim_y, p.shot_speed, None
+        slot = pic.slots.get(me.id)
+        mate = self.receiver(obs, pic, flow)
+        if flow.kind == MODES.OUR_KICKOFF and slot is not None:
+            ax, ay = slot[2], slot[3]  # the point in front of the receiver
+            arrival = KICKOFF_ARRIVAL
+        elif mate is not None:
+            ax, ay = mate.x, mate.y
+            arrival = p.pass_arrival_speed
+        elif slot is not None:
+            ax, ay = slot[2], slot[3]
+            arrival = p.pass_arrival_speed
+        else:
+            ax, ay, arrival = self.L2, 0.0, 3.0
+        return ax, ay, pass_speed(math.hypot(ax - bx, ay - by), arrival, p.ball_deceleration), mate
+
+    def _announce(self, cmd: Command, obs: Observation, receiver, ax: float, ay: float, speed: float) -> None:
+        """The pass told to the team with ``cmd``; once kicked, announced until it should have arrived."""
+        bx, by = obs.bx, obs.by
+        kick = cmd.kick_speed
+        intent = PassIntent(
+            catch_id=receiver.id, pass_x=bx, pass_y=by, catch_x=ax, catch_y=ay, kicked=kick > 0.0, static=True
+        )
+        cmd.pass_intent = intent
+        if kick > 0.0:
+            self.player.announce = intent
+            travel = math.hypot(ax - bx, ay - by) / max(0.5 * (speed + 1.0), 0.5)
+            self.player.announce_until = obs.t + travel + 1.0

@@ -16,18 +16,16 @@ picture (roles and points, see picture.py) and acts on the game command:
 from __future__ import annotations
 
 import math
-import struct
 
-from ... import msgs
 from ...msgs.game_commands import is_ours
-from ..base import Command, RobotContext, RobotStrategy, RoundedMove, TeamContext, TeamStrategy
+from ..base import Command, RobotContext, RobotStrategy, TeamContext, TeamStrategy
 from ..roles import ACTIONS, ROLES
 from ..worldmodel import WorldModel
 from .active import BallPlayer
 from .gameflow import MODES, PHASES, GameFlow
 from .geometry import segment_distance, wrap
 from .goalie import Goalkeeper
-from .motion import Motion, rounded_move
+from .motion import Motion
 from .observation import Observation, TeamView, observe
 from .params import NubotParams, plain
 from .picture import Analyst, Picture, TeamMemo
@@ -36,11 +34,9 @@ from .restart import RestartTaker
 from .testmodes import TestModes
 from .warm import load_kernels
 
-_f32s = msgs.f32s
-_F32X3 = struct.Struct("<3f")  # (what msgs.f32s packs three numbers with)
-_cos, _sin = math.cos, math.sin
+_move = Command.move
 
-# what `decide` and `hold_slot` compare at every tick, as globals (a namespace's attribute costs more); the
+# what `decide` and `hold_slot` compare at every tick, as module constants; the
 # game flow's phase is always one of PHASES' members, compared by identity
 _STOP, _PARK, _TEST, _PLAY, _SETUP, _OUR_RESTART = (
     PHASES.STOP,
@@ -215,17 +211,8 @@ class NubotRobot(RobotStrategy):
         dist = v.obstacles.distance
         if len(dist) and min(dist.tolist()) < STEADY_ROBOT_DISTANCE:  # (plain floats: a few, every tick)
             return None
-        # (Motion.body, inline: the course in the body frame half a period on)
-        h = me.yaw + 0.5 * w * self.motion.period
-        c, s = _cos(h), _sin(h)
-        bx, by, w_body = c * vx + s * vy, -s * vx + c * vy, w
-        if type(cmd) is RoundedMove:  # (its intent is rounded already)
-            try:  # (msgs.f32s of three, inline; it takes the numbers out of float32's range)
-                bx, by, w_body = _F32X3.unpack(_F32X3.pack(bx, by, w_body))
-            except (OverflowError, struct.error):
-                bx, by, w_body = _f32s(bx, by, w_body)
-            return rounded_move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
-        return Command(vx=bx, vy=by, w=w_body, role=cmd.role, action=cmd.action, intent=cmd.intent, user=cmd.user)
+        bx, by, w_body = self.motion.body(me.yaw, vx, vy, w)
+        return _move(bx, by, w_body, cmd.role, cmd.action, cmd.intent, cmd.user)
 
     # --- simple movements ---------------------------------------------------------------------------------
     def hold_slot(self, obs: Observation, pic: Picture, role: int) -> Command:
@@ -266,7 +253,7 @@ class NubotRobot(RobotStrategy):
             fence=fence,
             max_x=-KICKOFF_LINE_MARGIN if kickoff and me.x < 0.0 else None,
         )
-        return motion.move(role, _POSITIONED)  # (its numbers rounded as the messages take them)
+        return motion.move(role, _POSITIONED)
 
     def out_of_the_way(self, obs: Observation, x: float, y: float) -> tuple[float, float]:
         """Where to go instead of (x, y) when the ball rolls at this robot (which must not touch it): a

@@ -20,11 +20,14 @@ from functools import lru_cache
 
 import numpy as np
 
+from ...compiled import Float, Matrix, bind, kernel
+from ...exactmath import hypot
 from ..roles import ROLES
+from . import positions
 from .gameflow import MODES
 from .geometry import clamp, unit
 from .params import NubotParams
-from .positions import Areas, guard_point, outlet_point, passive_point, score_spots
+from .positions import Areas, as_called, score_spots
 
 SLOT_GAP = 1.3  # robots' slots at least this far apart [m]
 TAKER_GAP = 0.6  # taker's centre behind the ball's centre while waiting [m]
@@ -126,50 +129,72 @@ def formation(
         slots.append((ROLES.MIDFIELD, x, 4.0, bx, by))
         slots.append((ROLES.ASSISTANT, x, -4.0, bx, by))
     elif kind == M.DROPBALL:
-        d = p.dropball_distance
-        gx, gy = guard_point(areas, bx, by, 1.0, 0.0, d)
-        if math.hypot(gx - bx, gy - by) < d - 1e-6 or math.hypot(gx - bx, gy - by) > d + 0.5:
-            ux, uy = unit(-areas.L2 - bx, -by)
-            gx, gy = bx + d * ux, by + d * uy
-        slots.append((ROLES.ACTIVE, gx, gy, bx, by))
-        px, py = passive_point(areas, bx, by, False)
-        slots.append((ROLES.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
-        ax, ay = outlet_point(areas, bx, by)
-        slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
-        mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
-        slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
+        slots = _dropball(areas, bx, by, p)
     elif kind % 2 == 1:  # our throw-in, goal kick, corner, free kick
         rx, ry = restart_spot(areas, bx, by, opps, spots, p, receiver_near)
         ux, uy = unit(rx - bx, ry - by)
         slots.append((ROLES.ACTIVE, bx - TAKER_GAP * ux, by - TAKER_GAP * uy, rx, ry))
         slots.append((ROLES.ASSISTANT, rx, ry, bx, by))
-        px, py = passive_point(areas, bx, by, bx > 0.0)
+        px, py = as_called(positions.passive_point)(areas.pitch, bx, by, bx > 0.0)
         slots.append((ROLES.PASSIVE, px, py, bx, by))
         mx, my = clamp(bx - 3.5, -areas.L2 + 4.0, areas.L2 - 4.5), (by - 3.0 if by > 0 else by + 3.0)
         slots.append((ROLES.MIDFIELD, mx, my, bx, by))
     else:  # their throw-in, goal kick, corner, free kick
-        r = p.opponent_distance + 0.1
-        wx, wy = guard_point(areas, bx, by, 1.0, 0.0, r)
-        slots.append((ROLES.ACTIVE, wx, wy, bx, by))
-        px, py = passive_point(areas, bx, by, False)
-        slots.append((ROLES.PASSIVE, px, py, bx, by))
-        # markers on the opponents most likely to receive: away from the ball, nearest to our goal
-        free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
-        free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
-        zones = [
-            (clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
-            outlet_point(areas, bx, by),
-        ]
-        for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
-            if k < len(free):
-                o = free[k]
-                ux, uy = unit(-areas.L2 - o[0], -o[1])
-                vx, vy = unit(bx - o[0], by - o[1])
-                wx, wy = unit(ux + vx, uy + vy)
-                ox, oy = o[0] + 0.9 * wx, o[1] + 0.9 * wy
-            else:
-                ox, oy = zones[k]
-            slots.append((role, ox, oy, bx, by))
+        slots = _their_restart(areas, bx, by, opps, p)
+    return _made_legal(kind, slots, areas, bx, by, p)
+
+
+def _dropball(areas: Areas, bx: float, by: float, p: NubotParams) -> list[tuple]:
+    """A dropped ball: our active robot on the goal side of the ball, the others at their defensive points,
+    everyone ``dropball_distance`` (and the others 0.6 m more) away."""
+    slots: list[tuple] = []
+    d = p.dropball_distance
+    gx, gy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, d)
+    if math.hypot(gx - bx, gy - by) < d - 1e-6 or math.hypot(gx - bx, gy - by) > d + 0.5:
+        ux, uy = unit(-areas.L2 - bx, -by)
+        gx, gy = bx + d * ux, by + d * uy
+    slots.append((ROLES.ACTIVE, gx, gy, bx, by))
+    px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
+    slots.append((ROLES.PASSIVE, *push_from(px, py, bx, by, d + 0.6), bx, by))
+    ax, ay = as_called(positions.outlet_point)(areas.pitch, bx, by)
+    slots.append((ROLES.ASSISTANT, *push_from(ax, ay, bx, by, d + 0.6), bx, by))
+    mx, my = clamp(bx - 3.0, -areas.L2 + 4.0, areas.L2 - 4.0), by - 2.5 if by > 0 else by + 2.5
+    slots.append((ROLES.MIDFIELD, *push_from(mx, my, bx, by, d + 0.6), bx, by))
+    return slots
+
+
+def _their_restart(areas: Areas, bx: float, by: float, opps: list, p: NubotParams) -> list[tuple]:
+    """Their throw-in, goal kick, corner or free kick: a wall between the ball and our goal, the passive
+    defender, and markers on the opponents most likely to receive (or zones, without them)."""
+    slots: list[tuple] = []
+    r = p.opponent_distance + 0.1
+    wx, wy = as_called(positions.guard_point)(areas.pitch, bx, by, 1.0, 0.0, r)
+    slots.append((ROLES.ACTIVE, wx, wy, bx, by))
+    px, py = as_called(positions.passive_point)(areas.pitch, bx, by, False)
+    slots.append((ROLES.PASSIVE, px, py, bx, by))
+    # markers on the opponents most likely to receive: away from the ball, nearest to our goal
+    free = [o for o in opps if math.hypot(o[0] - bx, o[1] - by) > r and o[0] < areas.L2 - 1.0]
+    free.sort(key=lambda o: math.hypot(o[0] + areas.L2, o[1]))
+    zones = [
+        (clamp(bx - 4.5, -areas.L2 + 4.0, areas.L2 - 3.0), -2.5 if by > 0 else 2.5),
+        as_called(positions.outlet_point)(areas.pitch, bx, by),
+    ]
+    for k, role in enumerate((ROLES.MIDFIELD, ROLES.ASSISTANT)):
+        if k < len(free):
+            o = free[k]
+            ux, uy = unit(-areas.L2 - o[0], -o[1])
+            vx, vy = unit(bx - o[0], by - o[1])
+            wx, wy = unit(ux + vx, uy + vy)
+            ox, oy = o[0] + 0.9 * wx, o[1] + 0.9 * wy
+        else:
+            ox, oy = zones[k]
+        slots.append((role, ox, oy, bx, by))
+    return slots
+
+
+def _made_legal(kind: int, slots: list[tuple], areas: Areas, bx: float, by: float, p: NubotParams) -> list[tuple]:
+    """The slots made to respect the distances and areas of set piece ``kind`` and spread apart (a slot
+    spread moved, or that clashes with one before it, made legal again keeping clear of those)."""
     slots = [_legal(kind, s, areas, bx, by, p) for s in slots]
     out: list[tuple] = []
     for s, moved in zip(spread(slots, bx, by), slots):
@@ -181,30 +206,45 @@ def formation(
 
 
 def spread(slots: list[tuple], bx: float, by: float, gap: float = SLOT_GAP) -> list[tuple]:
-    """Slots (listed by priority) moved apart so that no two robots are sent to the same place: a slot too
-    close to an earlier one slides sideways, across the direction of the ball."""
+    """Slots (listed by priority) moved apart so that no two robots are sent to the same place
+    (`spread_point`); a slot not moved is the same object (callers can tell)."""
     out: list[tuple] = []
-    for slot in slots:
+    placed = np.empty((len(slots), 2))
+    for i, slot in enumerate(slots):
         role, x, y, fx, fy = slot
-        for o in out:
-            if not math.hypot(x - o[1], y - o[2]) >= gap:
-                break
-        else:
-            out.append(slot)  # unchanged (the same object: callers can tell)
-            continue
-        for _ in range(3):
-            clash = next(((ox, oy) for _, ox, oy, _, _ in out if math.hypot(x - ox, y - oy) < gap), None)
-            if clash is None:
-                break
-            ux, uy = unit(x - bx, y - by)
-            nx, ny = -uy, ux  # across the line to the ball
-            if (x - clash[0]) * nx + (y - clash[1]) * ny < 0.0:
-                nx, ny = -nx, -ny
-            if abs(y + ny * gap) > 6.0:  # do not slide off the field
-                nx, ny = -nx, -ny
-            x, y = clash[0] + nx * gap, clash[1] + ny * gap
-        out.append((role, x, y, fx, fy))
+        sx, sy = _spread_point(placed[:i], x, y, bx, by, gap)
+        out.append(slot if (sx == x and sy == y) else (role, sx, sy, fx, fy))
+        placed[i, 0], placed[i, 1] = sx, sy
     return out
+
+
+@kernel(placed=Matrix, x=Float, y=Float, bx=Float, by=Float, gap=Float)
+def spread_point(placed, x, y, bx, by, gap):
+    """(x, y) moved away from the points ``placed`` ((k, 2+) rows, x and y first) it is nearer than ``gap``
+    to: it slides sideways, across the direction of the ball at (bx, by), to ``gap`` from the first point it
+    is too close to, at most three times."""
+    for _ in range(3):
+        clash = -1
+        for e in range(placed.shape[0]):
+            if hypot(x - placed[e, 0], y - placed[e, 1]) < gap:
+                clash = e
+                break
+        if clash < 0:
+            break
+        cx, cy = placed[clash, 0], placed[clash, 1]
+        dx, dy = x - bx, y - by
+        d = hypot(dx, dy)
+        ux, uy = (1.0, 0.0) if d < 1e-12 else (dx / d, dy / d)
+        nx, ny = -uy, ux  # across the line to the ball
+        if (x - cx) * nx + (y - cy) * ny < 0.0:
+            nx, ny = -nx, -ny
+        if abs(y + ny * gap) > 6.0:  # do not slide off the field
+            nx, ny = -nx, -ny
+        x, y = cx + nx * gap, cy + ny * gap
+    return x, y
+
+
+_spread_point = bind(spread_point)
 
 
 def _legal(

@@ -24,6 +24,7 @@ from ..base import Command
 from ..roles import ACTIONS, ROLES
 from .active import BallPlayer
 from .evaluate import pass_speed
+from .geometry import wrap
 from .motion import Motion
 from .observation import Observation
 from .params import NubotParams
@@ -73,10 +74,7 @@ class TestModes:
             return self.give(obs, pic, a, c.id_b, c.kick_force)
         if mode == TestMode.LOCATION_TEST:
             goal, yaw = (a, c.angle_a) if self.leg == 0 else (b, c.angle_b)
-            if (
-                math.hypot(goal[0] - me.x, goal[1] - me.y) < ARRIVED
-                and abs(math.remainder(yaw - me.yaw, 2 * math.pi)) < ARRIVED_YAW
-            ):
+            if math.hypot(goal[0] - me.x, goal[1] - me.y) < ARRIVED and abs(wrap(yaw - me.yaw)) < ARRIVED_YAW:
                 self.leg = 1 - self.leg
             return self.move(obs, goal, yaw, avoid=True)
         if mode == TestMode.CIRCLE_TEST:
@@ -140,6 +138,6 @@ class TestModes:
         vx = CIRCLE_SPEED * tx + corr * rx / d
         vy = CIRCLE_SPEED * ty + corr * ry / d
         face = math.atan2(ty, tx)
-        w = self.motion.turn_rate(math.remainder(face - me.yaw, 2 * math.pi), self.p.max_turn) + CIRCLE_SPEED / r
+        w = self.motion.turn_rate(wrap(face - me.yaw), self.p.max_turn) + CIRCLE_SPEED / r
         bx, by, w = self.motion.body(me.yaw, vx, vy, w)
         return Command(vx=bx, vy=by, w=w, role=ROLES.NOROLE, action=ACTIONS.CIRCLE_TEST, intent=a)

@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...compiled import bind
 from ...field import FieldGeometry
-from .active import _DIRECTIONS, _dribble_choice
+from . import positions
+from .active import _DIRECTIONS, dribble_choice
+from .assignment import assign, assist_spots, open_slots
 from .avoidance import no_charging, sub_target
 from .ballpath import BallPath, intercepts, team_intercepts
 from .evaluate import lane_clear, position_value, shot_window
-from .geometry import box_exit, push_out_of_box
-from .picture import _NO_SPOTS, _assist_choice, _open_slots, assign
-from .positions import Areas, score_spots
+from .positions import Areas, as_called, score_spots
 
 
 class _Robot:
@@ -41,23 +42,24 @@ def load_kernels() -> None:
     cx, cy = np.linspace(-5.0, 5.0, 4), np.linspace(-3.0, 3.0, 4)
     for near in (None, (1.0, 1.0)):
         score_spots(cx, cy, 0.0, 0.0, np.array([1.0]), np.array([0.5]), 11.0, 3.0, 8.5, near)
-    _assist_choice(cx, cy, 0.0, 0.0, opps, 11.0, 3.0, 8.5, np.nan, np.nan, np.empty((2, 2)))
-    push_out_of_box(0.5, 0.2, -1.0, 1.0, 1.0)  # (Areas.keep_out, from Python)
-    box_exit(0.0, 0.0, 1.0, 0.5, -5.0, 1.0, 1.0)  # (guard_point, from Python)
+    bind(assist_spots)(cx, cy, 0.0, 0.0, opps, 11.0, 3.0, 8.5, np.nan, np.nan, np.empty((2, 2)))
     # the ball player's judges, as it calls them (from Python, and inside the dribble's kernel)
     shot_window(8.0, 0.5, opps, 11.0, 1.2, 10.0, 0.22)
     lane_clear(0.0, 0.0, 4.0, 1.0, opps, 3.0, 0.0)
     position_value(3.0, 1.0, opps, 11.0)
-    zones = np.array((11.0, 7.0, 2.25, 3.25, 9.2, 2.0))
-    _dribble_choice(
-        8.0, 0.5, 0.3, 1.0, 7.5, 0.0, 2.85, opps, zones, False, True, 7.0, 1.2, 10.0, 1.0, 0.0, False, *_DIRECTIONS[0]
+    pitch = Areas(FieldGeometry(), 0.4).pitch
+    bind(dribble_choice)(
+        8.0, 0.5, 0.3, 1.0, 7.5, 0.0, 2.85, opps, pitch, False, True, 7.0, 1.2, 10.0, 1.0, 0.0, False, *_DIRECTIONS[0]
     )
     robots = [_Robot(2, 0.0, 0.0), _Robot(3, 1.0, 1.0)]
     slots = [(1, 2.0, 0.0, 0.0, 0.0), (2, -2.0, 1.0, 0.0, 0.0)]
     assign(robots, slots, 0.5)
     assign(robots, slots, 0.5, around=(0.0, 0.0, 1.0))
-    # open play's slots, attacking (the receiving spots) and defending
+    # open play's slots, attacking (the receiving spots) and defending (the outlet point)
     table = np.array([(0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 1e9), (-2.0, 1.0, 0.0, 0.0, 2.0, 0.0, -1.0, 0.1)])
-    geo = Areas(FieldGeometry(), 0.4).geo
-    for attacking, spots in ((True, np.array([(3.0, 2.0)])), (False, _NO_SPOTS)):
-        _open_slots(table, 3, 2, attacking, spots, opps, 0.5, 0.2, geo, 0.5, np.empty((2, 4)))
+    rest = np.array([0, 1], dtype=np.int64)
+    for attacking in (True, False):
+        passive = as_called(positions.passive_point)(pitch, 0.5, 0.2, attacking)
+        midfield = as_called(positions.midfield_point)(pitch, 0.5, 0.2, attacking, opps)
+        spots = np.array([as_called(positions.outlet_point)(pitch, 0.5, 0.2)])
+        bind(open_slots)(table, rest, attacking, spots, *passive, *midfield, 0.5, 0.2, pitch, 0.5, np.empty((2, 4)))
