@@ -39,14 +39,6 @@ PENDING = {
     "src/simatch/sim/simulator.py",
     "src/simatch/sim/simulator.py::Simulator.__init__",
     "src/simatch/sim/world.py::build_world",
-    "src/simatch/strategy/nubot/avoidance.py::sub_target",
-    "src/simatch/strategy/nubot/motion.py::Motion.go",
-    "src/simatch/strategy/nubot/motion.py::_go",
-    "src/simatch/strategy/nubot/observation.py::observe",
-    "src/simatch/strategy/nubot/picture.py",
-    "src/simatch/strategy/nubot/picture.py::Analyst._play",
-    "src/simatch/strategy/nubot/restart.py::RestartTaker.take",
-    "src/simatch/strategy/nubot/setpieces.py::formation",
 }
 
 
