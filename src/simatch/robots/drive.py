@@ -12,9 +12,9 @@ of motion is kept:
 
 The drive plans once per control period (and when a command arrives): the per-step change is constant
 within that window, so the physics engine integrates the ramp itself (integrator actuators whose set
-point is clamped at the target, see `Simulator`) and Python is not involved at every physics step.
-From rest, or whenever no wheel reverses, this is exactly the per-step rule `ramp_step`; when a wheel
-passes through zero inside a window, the window keeps the slower, speeding-up bound (never faster).
+point is clamped at the target, see `simatch.robots.body`). From rest, or whenever no wheel reverses, this
+is exactly the per-step rule above; when a wheel passes through zero inside a window, the window keeps the
+slower, speeding-up bound (never faster).
 
 The body velocity set point is v = M+ U (M+ the pseudo-inverse). Robots with fewer wheels are padded
 with zero rows, so one (N, W) array serves every model.
@@ -33,17 +33,6 @@ _TINY = 1e-300
 TWIST = struct.Struct("=3d")
 _Tensor = Array(np.float64, 3)
 _Flags = Array(np.bool_, 1)
-
-
-def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np.ndarray:
-    """The per-step rule: rim speeds after one physics step (``up``/``down``: per-step bounds)."""
-    dU = U_target - U
-    adU = np.abs(dU)
-    if adU.max() == 0.0:
-        return U_target.copy()
-    bound = np.where(U * dU >= 0.0, up, down)
-    frac = min(1.0, float(np.min(bound / np.maximum(adU, _TINY))))
-    return U + frac * dU
 
 
 @kernel(

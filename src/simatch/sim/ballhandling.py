@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 
 from ..compiled import bind
-from .kernels import catch_candidate, equality_force, keep_ball, roll_held_ball
+from .kernels import catch_candidate, keep_ball, roll_held_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -276,10 +276,6 @@ class BallHandling:
             self.release("grip_exceeded", value=force, limit=self.grip, step=step)
         elif status == 2:
             self.release("pulled_away", step=step)
-
-    def _grip_force(self, eq: int) -> float:
-        d = self.d
-        return equality_force(d.efc_type, d.efc_id, d.efc_force, d.nefc, eq, self._eq_rows_type)
 
     def release(self, why: str, value: float = 0.0, limit: float = 0.0, step: int | None = None) -> None:
         i = self.holder

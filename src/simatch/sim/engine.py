@@ -35,7 +35,7 @@ class EngineViews:
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, index, ng: int):
         self.qpos, self.qvel = data.qpos, data.qvel
-        #: the same memory as memoryviews, whose items are plain floats (a physics step reads a few)
+        #: the same memory as memoryviews, whose items are plain floats (for single numbers)
         self.qpos_flat, self.qvel_flat = memoryview(self.qpos), memoryview(self.qvel)
         self.geom_xpos = data.geom_xpos
         rq, rv = index.robot_qpos, index.robot_qvel

@@ -29,7 +29,7 @@ from .. import msgs
 from ..compiled import bind
 from .kernels import Noise, perceive
 
-# built positionally (several hundred messages per simulated second; see msgs.positional)
+# the messages' makers by position (see msgs.positional): every robot's messages are made at every tick
 _BallInfo = msgs.positional(msgs.BallInfo, "state x y z vx vy vz angle distance pos_known velocity_known")
 _ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius z")
 _RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds z vz")
@@ -168,8 +168,8 @@ class Perception:
         from the numbers `kernels.sense_ground` wrote: ``own32``, ``balls32``, ``valid``, ``stuck`` (this
         object's) and ``obs`` (n * 6, n - 1), ``wheels`` (n, W), fresh float32 arrays whose rows the messages
         keep."""
-        # (row views taken by an iterator stopped after the last row: iterating an array to its end raises an
-        # IndexError inside NumPy, with a formatted message, at every tick)
+        # the rows by an iterator that stops at the last one (running an array's own iterator to its end makes
+        # NumPy raise and catch an IndexError)
         rows = list(islice(wheels, self.n))
         if self._short_wheels:  # a robot with fewer wheels than the widest: its first ones
             rows = [r[:k] for r, k in zip(rows, self._nw)]

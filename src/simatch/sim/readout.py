@@ -172,28 +172,9 @@ class StateReadout:
     def model_states(self) -> dict[str, ModelStateView]:
         names, pose, twist = self.model_state_arrays()
         out = {}
-        for name, p, t in zip(names, pose.tolist(), twist.tolist()):  # plain floats: a judge reads them often
+        for name, p, t in zip(names, pose.tolist(), twist.tolist()):  # plain floats, as a judge reads them
             out[name] = ModelStateView(name, *p[:3], yaw_of(*p[3:]), *p[3:], *t)
         return out
-
-    def robot_body_velocity(self, R: np.ndarray | None = None) -> np.ndarray:
-        """(N, 3): each robot's velocity in its own body frame (vx forward, vy left, w); for an aerial robot
-        its horizontal velocity in its heading frame."""
-        if R is None:
-            R = self.robot_array()
-        c, s = np.cos(R[:, 2]), np.sin(R[:, 2])
-        out = np.empty((len(R), 3))
-        out[:, 0] = c * R[:, 3] + s * R[:, 4]
-        out[:, 1] = c * R[:, 4] - s * R[:, 3]
-        out[:, 2] = R[:, 5]
-        return out
-
-    def measured_wheel_speeds(self, R: np.ndarray | None = None) -> np.ndarray:
-        """(Ng, W): rim speeds that follow from each ground robot's actual motion (what wheel encoders
-        measure)."""
-        if R is None:
-            R = self.robot_array()
-        return np.einsum("nwk,nk->nw", self.drive.M, self.robot_body_velocity(R[: self.ng]))
 
     def link_state_arrays(self) -> tuple[list[str], np.ndarray, np.ndarray]:
         """Every link: each robot's base and wheels (an aerial robot's base and rotors), and the ball. Same

@@ -1,5 +1,5 @@
 """What each robot can see: sight lines blocked by obstacles, a drone camera's cone, a range (all switchable
-in the scene's ``[perception]``, all off by default: then every robot sees everything, as before).
+in the scene's ``[perception]``, all off by default: then every robot sees everything).
 
 * ``line_of_sight``: a robot sees another robot (or the ball) only if the straight line from its eye to
   the other's top (a drone's centre, the ball's centre) passes through no static obstacle of the world. A
@@ -11,7 +11,7 @@ in the scene's ``[perception]``, all off by default: then every robot sees every
   reach. A drone's reach is its cone.
 
 The test is one compiled call per control period for all robots (segments against boxes and cylinders,
-exact), so hiding things costs microseconds.
+exact).
 """
 
 from __future__ import annotations
@@ -19,8 +19,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+
+from ..compiled import kernel
 
 BOX, CYLINDER = 0, 1
 
@@ -77,7 +78,7 @@ class Sight:
         )
 
 
-@numba.njit(cache=True)
+@kernel
 def _clip(t0, t1, p, d, lo, hi):
     """Narrow [t0, t1] to where p + t d lies in [lo, hi]."""
     if abs(d) < 1e-12:
@@ -91,7 +92,7 @@ def _clip(t0, t1, p, d, lo, hi):
     return max(t0, a), min(t1, b)
 
 
-@numba.njit(cache=True)
+@kernel
 def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     """Whether the segment from (x0, y0, z0) to (x1, y1, z1) passes through any obstacle (solid from the
     floor up to its height)."""
@@ -138,7 +139,7 @@ def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     return False
 
 
-@numba.njit(cache=True)
+@kernel
 def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max_range):
     ex, ey, ez = R[i, 0], R[i, 1], Z[i] + eye[i]
     dx, dy, dz = tx - ex, ty - ey, tz - ez
@@ -153,7 +154,7 @@ def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max
     return True
 
 
-@numba.njit(cache=True)
+@kernel
 def sight_lines(R, Z, ball, others, aerial, eye, top, cone, obstacles, los, footprint, max_range):
     n, m = others.shape
     vis = np.empty((n, m), dtype=np.bool_)

@@ -74,7 +74,7 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
         self.scene = scene
         self.seed = seed
         self.m, self.d, self.ix, self.field = build_world(scene)
-        keep_timers_off()  # MuJoCo's profiling clock: read some twenty times a step, and never by us
+        keep_timers_off()  # MuJoCo's profiling timers: simatch never reads them
         self.dt = float(self.m.opt.timestep)
         self.step_index = 0
         self._init_robots()
@@ -233,7 +233,7 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
-        e = self.engine  # (the ball's height and vertical speed as plain floats, read before and after the step)
+        e = self.engine  # the ball's height and vertical speed, before and after the step: a bounce?
         qpos = e.qpos_flat
         vz = e.qvel_flat[e.ball_vz]
         z = qpos[e.ball_z]
