@@ -33,7 +33,7 @@ import mujoco
 import numpy as np
 
 from ..compiled import Array, Float, Matrix, Vector, bind, kernel
-from .kernels import Indices, rotate, wrap_angle
+from .kernels import Indices, free_body_state, wrap_angle
 
 #: one drone's parameters, a row of the fleet's table: mass [kg], principal inertia [kg m^2], a rotor's
 #: largest thrust [N], rotor drag (horizontal, vertical) [N s/m], the gains of the cascade (position,
@@ -408,15 +408,7 @@ def aerial_poses(qpos, qvel, qadr, vadr):
     pose = np.empty((n, 7))
     twist = np.empty((n, 6))
     for k in range(n):
-        qa = qadr[k]
-        va = vadr[k]
-        for j in range(7):
-            pose[k, j] = qpos[qa + j]
-        for j in range(3):
-            twist[k, j] = qvel[va + j]
-        twist[k, 3], twist[k, 4], twist[k, 5] = rotate(
-            qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], qvel[va + 3], qvel[va + 4], qvel[va + 5]
-        )
+        free_body_state(qpos, qvel, qadr[k], vadr[k], pose[k], twist[k])
     return pose, twist
 
 

@@ -350,18 +350,19 @@ def fill_model_states(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twi
         twist[i, 0] = qvel[robot_v + 3 * i]
         twist[i, 1] = qvel[robot_v + 3 * i + 1]
         twist[i, 5] = qvel[robot_v + 3 * i + 2]
+    free_body_state(qpos, qvel, ball_q, ball_v, pose[n], twist[n])
+
+
+@kernel
+def free_body_state(qpos, qvel, qa, va, pose, twist):
+    """The world-frame state of a body on a free joint (at ``qpos[qa]``, ``qvel[va]``) into ``pose`` (7: x y z
+    qw qx qy qz) and ``twist`` (6: v, w): its angular velocity turned from its own frame to the world's."""
     for k in range(7):
-        pose[n, k] = qpos[ball_q + k]
+        pose[k] = qpos[qa + k]
     for k in range(3):
-        twist[n, k] = qvel[ball_v + k]
-    twist[n, 3], twist[n, 4], twist[n, 5] = rotate(
-        qpos[ball_q + 3],
-        qpos[ball_q + 4],
-        qpos[ball_q + 5],
-        qpos[ball_q + 6],
-        qvel[ball_v + 3],
-        qvel[ball_v + 4],
-        qvel[ball_v + 5],
+        twist[k] = qvel[va + k]
+    twist[3], twist[4], twist[5] = rotate(
+        qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], qvel[va + 3], qvel[va + 4], qvel[va + 5]
     )
 
 

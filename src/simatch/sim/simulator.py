@@ -70,6 +70,9 @@ def _label(geom_name: str) -> str:
 
 
 class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
+    """The world of ``scene`` (its randomness from ``seed``), stepped by `advance`; ``on_event`` is called with
+    every GameEvent as it happens (they are also kept in ``events`` until taken)."""
+
     def __init__(self, scene: Scene, seed: int = 0, on_event: Callable | None = None):
         self.scene = scene
         self.seed = seed
