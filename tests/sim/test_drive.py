@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from simatch.robots.drive import OmniDrive, ramp_step
+from simatch.robots.drive import OmniDrive
 from simatch.robots.omni3 import Omni3
 from simatch.robots.omni4 import Omni4
 from tests.conftest import park_everyone_but
@@ -26,6 +26,19 @@ def test_wheel_matrix_is_the_papers():
     assert np.allclose(A @ [0, 0, 1.0], -d / r)
     w = A @ [1.0, 0, 0]
     assert np.isclose(w[0], w[1]) and np.isclose(w[2], w[3]) and np.isclose(w[0], -w[2])
+
+
+def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np.ndarray:
+    """The drive's per-step rule (`simatch.robots.drive`): rim speeds after one physics step, every wheel moved
+    towards its target by the same fraction of its change, the largest such that no wheel changes by more than
+    ``up`` when it speeds up and ``down`` when it slows down."""
+    dU = U_target - U
+    adU = np.abs(dU)
+    if adU.max() == 0.0:
+        return U_target.copy()
+    bound = np.where(U * dU >= 0.0, up, down)
+    frac = min(1.0, float(np.min(bound / np.maximum(adU, 1e-300))))
+    return U + frac * dU
 
 
 def _drive(model, dt=0.005):

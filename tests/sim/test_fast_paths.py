@@ -140,7 +140,7 @@ def test_ball_touches_equal_the_contact_list_near_and_far_from_the_ball():
             for _ in range(k):
                 run.run(seconds=sim.dt, until_done=False)
                 assert sim.ball_touches() == _touches_from_contacts(sim)
-                if ball_apart(sim._geom_xpos, sim._touch_geoms, sim._touch_bound2, sim.ix.ball_geom):
+                if ball_apart(sim.engine.geom_xpos, sim._touch_geoms, sim._touch_bound2, sim.ix.ball_geom):
                     apart += 1
                 else:
                     near += 1
@@ -196,19 +196,19 @@ def test_perception_fast_path_equals_the_general_way_on_random_worlds():
         n = sim.n
         seen_stuck = seen_invalid = 0
         for case in range(300):
-            q, v = sim._qpos3, sim._qvel3
+            q, v = sim.engine.pose, sim.engine.twist
             q[:, :2] = rng.uniform(-13, 13, (n, 2))
             q[:, 2] = rng.uniform(-20, 20, n)
             v[:] = rng.normal(0, 2, (n, 3)) * (rng.random((n, 3)) < 0.7)
-            b = sim._bq
-            sim._qpos[b : b + 3] = rng.uniform(-10, 10, 3)
-            sim._qvel[sim._bv : sim._bv + 3] = rng.normal(0, 3, 3)
+            b = sim.engine.ball_q
+            sim.engine.qpos[b : b + 3] = rng.uniform(-10, 10, 3)
+            sim.engine.qvel[sim.engine.ball_v : sim.engine.ball_v + 3] = rng.normal(0, 3, 3)
             if case % 5 == 0:  # a robot on the ball, another on top of a third, signed zeros
-                sim._qpos[b : b + 2] = q[0, :2]
+                sim.engine.qpos[b : b + 2] = q[0, :2]
                 q[1, :2] = q[2, :2]
                 q[3] = -0.0
                 v[4] = -0.0
-            sim._act3[:] = rng.normal(0, 1.5, (n, 3))
+            sim.engine.setpoint[:] = rng.normal(0, 1.5, (n, 3))
             sim.enabled[:] = rng.random(n) > 0.1
             sim.ball.holder = int(rng.integers(-1, n))
             for team in ("cyan", "magenta"):
@@ -229,7 +229,7 @@ def test_perception_fast_path_with_robots_of_fewer_wheels_equals_the_general_way
     assert sim._sense_fast and sim.perception._short_wheels
     run.run(seconds=0.3, until_done=False)
     for _ in range(3):
-        sim._qvel3[:] = np.random.default_rng(sim.step_index).normal(0, 1.5, (sim.n, 3))
+        sim.engine.twist[:] = np.random.default_rng(sim.step_index).normal(0, 1.5, (sim.n, 3))
         fast, general, stuck_fast, stuck_general = _both_ways(sim)
         assert fast == general
         run.run(seconds=0.2, until_done=False)
@@ -282,36 +282,28 @@ def test_velocity_commands_are_stored_as_the_rounded_numbers_the_general_way_sto
 # --- the per-step kernels called without numba's dispatcher ----------------------------------------------------
 
 
-def test_kernel_entries_are_the_compiled_versions_the_dispatcher_picks():
-    """`simatch.compiled.entry` gives the very compiled function numba's dispatcher calls for those argument types, and
-    runs nothing; called with arguments of those kinds it returns what the dispatcher's call returns."""
-    import numba
-
-    from simatch.compiled import entry
-    from simatch.sim.kernels import model_poses32
+def test_bound_kernels_compute_what_the_dispatcher_computes():
+    """`simatch.compiled.bind` gives the kernel compiled for its declared signature; called with arguments of
+    those kinds it returns what numba's dispatcher returns."""
+    from simatch.compiled import bind
+    from simatch.sim.kernels import model_states32
 
     rng = np.random.default_rng(5)
     qpos, qvel = rng.normal(size=40), rng.normal(size=40)
-    pose, twist = np.zeros(7 * 4, np.float32), np.zeros(6 * 4, np.float32)
-    fn = entry(model_poses32, qpos, qvel, 0, 0, 3, 9, 9, pose, twist)
-    assert not pose.any() and not twist.any()  # nothing was run
-    sig = tuple(numba.typeof(a) for a in (qpos, qvel, 0, 0, 3, 9, 9, pose, twist))
-    assert fn is model_poses32.overloads[sig].entry_point
+    states32, apart = bind(model_states32), bind(ball_apart)
     for _ in range(20):
         qpos[:], qvel[:] = rng.normal(size=40), rng.normal(size=40)
         a = (np.zeros(28, np.float32), np.zeros(24, np.float32))
         b = (np.zeros(28, np.float32), np.zeros(24, np.float32))
-        model_poses32(qpos, qvel, 0, 0, 3, 9, 9, *a)
-        fn(qpos, qvel, 0, 0, 3, 9, 9, *b)
+        model_states32(qpos, qvel, 0, 0, 3, 9, 9, *a)
+        states32(qpos, qvel, 0, 0, 3, 9, 9, *b)
         assert a[0].tobytes() == b[0].tobytes() and a[1].tobytes() == b[1].tobytes()
         xpos, geoms, bound2 = rng.normal(size=(6, 3)), np.arange(1, 6, dtype=np.int64), rng.uniform(0, 3, 5)
-        apart = entry(ball_apart, xpos, geoms, bound2, 0)
         assert apart(xpos, geoms, bound2, 0) == ball_apart(xpos, geoms, bound2, 0)
-    assert entry(len, [1, 2]) is len  # a plain function (no numba compiler) is itself
 
 
-def test_held_ball_kernels_through_their_entries_play_the_match_the_dispatcher_plays():
-    """The held ball's kernels (keep, roll, catch) bound by `simatch.compiled.entry` at the start give the same steps as
+def test_held_ball_kernels_bound_play_the_match_the_dispatcher_plays():
+    """The held ball's kernels (keep, roll, catch) bound by `simatch.compiled.bind` at the start give the same steps as
     their dispatchers: a stretch with catches, holds and losses of the ball played both ways ends in the same
     state, bit for bit."""
     from simatch.sim import kernels

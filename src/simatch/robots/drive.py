@@ -12,9 +12,9 @@ of motion is kept:
 
 The drive plans once per control period (and when a command arrives): the per-step change is constant
 within that window, so the physics engine integrates the ramp itself (integrator actuators whose set
-point is clamped at the target, see `Simulator`) and Python is not involved at every physics step.
-From rest, or whenever no wheel reverses, this is exactly the per-step rule `ramp_step`; when a wheel
-passes through zero inside a window, the window keeps the slower, speeding-up bound (never faster).
+point is clamped at the target, see `simatch.robots.body`). From rest, or whenever no wheel reverses, this
+is exactly the per-step rule above; when a wheel passes through zero inside a window, the window keeps the
+slower, speeding-up bound (never faster).
 
 The body velocity set point is v = M+ U (M+ the pseudo-inverse). Robots with fewer wheels are padded
 with zero rows, so one (N, W) array serves every model.
@@ -22,26 +22,40 @@ with zero rows, so one (N, W) array serves every model.
 
 from __future__ import annotations
 
-import numba
+import struct
+
 import numpy as np
 
+from ..compiled import Array, Float, Int, Matrix, Vector, kernel
+
 _TINY = 1e-300
+#: a robot's command row (vx, vy, w as float64), written into its memory in one call
+TWIST = struct.Struct("=3d")
+_Tensor = Array(np.float64, 3)
+_Flags = Array(np.bool_, 1)
 
 
-def ramp_step(U: np.ndarray, U_target: np.ndarray, up: float, down: float) -> np.ndarray:
-    """The per-step rule: rim speeds after one physics step (``up``/``down``: per-step bounds)."""
-    dU = U_target - U
-    adU = np.abs(dU)
-    if adU.max() == 0.0:
-        return U_target.copy()
-    bound = np.where(U * dU >= 0.0, up, down)
-    frac = min(1.0, float(np.min(bound / np.maximum(adU, _TINY))))
-    return U + frac * dU
-
-
-@numba.njit(cache=True)
+@kernel(
+    M=_Tensor,
+    P=_Tensor,
+    cmd=Matrix,
+    dirty=_Flags,
+    due=_Flags,
+    U_target=Matrix,
+    up=Vector,
+    down=Vector,
+    max_speed=Vector,
+    act=Matrix,
+    window=Int,
+    actrange=_Tensor,
+    ctrl=Matrix,
+    biasprm=_Tensor,
+    kv=Matrix,
+    ramping=_Flags,
+    dt=Float,
+)
 def plan_drive(
-    M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, bias, kv, ramping, dt
+    M, P, cmd, dirty, due, U_target, up, down, max_speed, act, window, actrange, ctrl, biasprm, kv, ramping, dt
 ):
     """Plan the wheel ramps of the robots marked in ``due`` for the next ``window`` physics steps.
 
@@ -49,7 +63,8 @@ def plan_drive(
     dirty (N,) commands not yet turned into U_target (N, W) rim-speed targets; up/down (N,) per-step
     bounds of speeding up / slowing down; act (N, 3) the servos' current set points.
     Writes, for each due robot: actrange (N, 3, 2) the set point's bounds (it stops at the target),
-    ctrl (N, 3) its rate of change [per s], bias (N, 3) the exact-arc correction force, ramping (N,)."""
+    ctrl (N, 3) its rate of change [per s], the servos' constant bias force biasprm[:, :, 0] (N, 3, P: the
+    model's bias parameters) the exact-arc correction, ramping (N,)."""
     n, W = U_target.shape
     inv_dt = 1.0 / dt
     for i in range(n):
@@ -115,9 +130,9 @@ def plan_drive(
             vm[k] = min(max(mid, lo), hi)
         # exact arcs: turn the set point by half a step's rotation (first order), as a force offset
         theta = vm[2] * 0.5 * dt
-        bias[i, 0] = -kv[i, 0] * theta * vm[1]
-        bias[i, 1] = kv[i, 1] * theta * vm[0]
-        bias[i, 2] = 0.0
+        biasprm[i, 0, 0] = -kv[i, 0] * theta * vm[1]
+        biasprm[i, 1, 0] = kv[i, 1] * theta * vm[0]
+        biasprm[i, 2, 0] = 0.0
 
 
 class OmniDrive:
@@ -143,20 +158,17 @@ class OmniDrive:
         self.dirty = np.zeros(n, dtype=bool)  # a command arrived since the last plan
         self.ramping = np.zeros(n, dtype=bool)  # the last plan did not reach the target
         self.any_dirty = False
-        # flat memoryviews of cmd and dirty (their memory is fixed for the drive's life): `command` writes a
-        # robot's numbers through them, a fraction of what NumPy's item assignment costs (400 a second)
-        self._cmd_flat = memoryview(self.cmd.reshape(-1))  # (C-ordered: a view)
-        self._dirty_flat = memoryview(self.dirty)
+        #: each robot's row of ``cmd`` and the ``dirty`` flags as memoryviews (the same memory, fixed for the
+        #: drive's life), written by plain Python calls: a command is taken at every control tick of every robot
+        self.command_rows = [memoryview(row) for row in self.cmd]
+        self.dirty_flags = memoryview(self.dirty)
+        self.ramping_flags = memoryview(self.ramping)
 
     # --- commands -----------------------------------------------------------------------------------------
     def command(self, i: int, vx: float, vy: float, w: float) -> None:
         """Robot i's body-frame velocity command (assumed finite; the caller validates)."""
-        cmd = self._cmd_flat
-        k = 3 * i
-        cmd[k] = vx
-        cmd[k + 1] = vy
-        cmd[k + 2] = w
-        self._dirty_flat[i] = True
+        TWIST.pack_into(self.command_rows[i], 0, vx, vy, w)
+        self.dirty_flags[i] = True
         self.any_dirty = True
 
     def stop(self, i: int) -> None:
@@ -181,7 +193,7 @@ class OmniDrive:
         kv: np.ndarray,
     ) -> None:
         """Plan the next ``window`` steps of the robots marked in ``due`` whose servo set points are ``act``
-        (N, 3); writes the set points' bounds, rates and bias (see `plan_drive`)."""
+        (N, 3); writes the set points' bounds, rates and bias forces (N, 3) (see `plan_drive`)."""
         plan_drive(
             self.M,
             self.Mpinv,
@@ -196,7 +208,7 @@ class OmniDrive:
             window,
             actrange,
             ctrl,
-            bias,
+            bias.reshape(len(bias), 3, 1),
             kv,
             self.ramping,
             self.dt,

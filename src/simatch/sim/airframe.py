@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from ..robots.body import add_freeze_weld
+
 #: contact of a drone's frame: stiff, and less than critically damped so that a drone that hits a wall
 #: comes off it (returns about a fifth of the impact speed) rather than sticking
 AIRFRAME_SOLREF = [0.01, 0.5]
@@ -98,15 +100,7 @@ def add_airframe(spec: mujoco.MjSpec, entry, contype: int, conaffinity: int) -> 
         act.gainprm[0] = 0.0
         act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
         act.biasprm[0:3] = [0.0, 0.0, -drag]
-    spec.add_equality(
-        name=f"{entry.name}/freeze",
-        type=mujoco.mjtEq.mjEQ_WELD,
-        objtype=mujoco.mjtObj.mjOBJ_BODY,
-        name1=entry.name,
-        name2="world",
-        active=False,
-        solref=[0.02, 1.0],
-    )
+    add_freeze_weld(spec, entry.name, [0.02, 1.0])
 
 
 def aerial_index(model: mujoco.MjModel, data: mujoco.MjData, entries, first: int, gravity: float) -> AerialIndex:

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from ..compiled import entry
-from .kernels import catch_candidate, equality_force, keep_ball, roll_held_ball
+from ..compiled import bind
+from .kernels import catch_candidate, keep_ball, roll_held_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -43,98 +43,70 @@ class KickRequest:
 
 
 class BallHandling:
+    """Every ground robot's dribbler and kicker, and the ball they act on (see the module)."""
+
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, index, robot_models, scene, on_event):
         self.m, self.d, self.ix = model, data, index
         self.n = len(index.robots)
-        dr, kk = scene.dribbler, scene.kicker
+        self.on_event = on_event
         self.ball_r = scene.ball.radius
-        self.hold_dist = dr.distance
-        self.hold_cos = math.cos(math.radians(dr.angle))
-        self.grip = dr.grip_force
-        self.pull_step = dr.pull_speed * model.opt.timestep
-        self.catch_speed = dr.catch_speed
-        self.settle_steps = max(1, round(dr.settle_time / model.opt.timestep))
-        inertia = float(model.body_inertia[index.ball_body, 0])  # a sphere: the same about every axis
-        self.roller_spin = dr.roller_spin
-        self.roller_dw = dr.roller_torque * model.opt.timestep / inertia  # spin change per step at most [rad/s]
-        self.kick_max = kk.max_speed
-        self.lob_max = kk.max_lob_speed
-        self.lob_angle = math.radians(kk.lob_angle)
-        self.recharge_steps = round(kk.recharge / model.opt.timestep)
+        self._dt = model.opt.timestep
+        self._init_dribbler(scene.dribbler, model, index)
+        self._init_kicker(scene.kicker)
         self.mouth = np.array([[rm.mouth_x(self.ball_r), 0.0, 0.0] for rm in robot_models])
-        self.dribble_on = np.zeros(self.n, dtype=bool)
-        self.dribbling = [False] * self.n  # the same as plain bools (read for every command and step)
-        self._dribblers = 0  # how many are on
+        self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
+        self._mouth_xs = self._mouth_x.tolist()
         self.holder = -1
         self.hold_since = 0
-        self.kicks: dict[int, KickRequest] = {}
-        self.ready_at = np.zeros(self.n, dtype=np.int64)
-        self.on_event = on_event
-        self.kicked_by = -1  # robot whose kicker fired during the last step, -1 if none
-        self.kicked_speed = 0.0
-        self.kicked_lob = False
-        self._eq_rows_type = mujoco.mjtConstraint.mjCNSTR_EQUALITY.value
-        self._catch_idle_until = 0  # no catch is possible before this step (see _catch)
-        # the robots whose dribbler is on and that are usable, as `_catch_kernel` takes them (int64), kept while
-        # neither changes (`set_dribbler` forgets them; the usable flags are compared as bytes)
-        self._cand: np.ndarray | None = None
-        self._cand_usable = b""
         # a robot that lost the ball cannot take it again until the ball has left its mouth (or for
         # RECATCH_WAIT seconds): the lost ball is on its way out, not to be caught back at once
         self.lost_by = -1
         self.lost_until = 0
-        self._dt = model.opt.timestep
         self.recatch_steps = round(RECATCH_WAIT / self._dt)
-        # ground robots' joints are consecutive (aerial robots, after them, have no dribbler or kicker)
+        # the engine's arrays the kernels read and write (their memory is fixed for the model's and the data's
+        # life), and where the ground robots' joints (consecutive) and the ball's start
+        self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
+        self._qpos_flat = memoryview(self._qpos)  # items are plain floats
         self._robot_q0 = int(index.robot_qpos[0, 0]) if len(index.robot_qpos) else 0
         self._robot_v0 = int(index.robot_qvel[0, 0]) if len(index.robot_qvel) else 0
-        # the engine's state and the model's constraint data as views taken once (their memory is fixed for
-        # the model's and the data's life; each accessor call makes a new view), and the mouths' offsets
-        # as one contiguous array: what the per-step kernels are given
-        self._qpos, self._qvel, self._eq_data = data.qpos, data.qvel, model.eq_data
-        self._qpos_flat = memoryview(self._qpos)  # (plain floats: a NumPy scalar costs more to make, every step)
-        self._catch_top = self.ball_r + 0.05  # a ball whose centre is higher is in the air: no catch
-        self._mouth_x = np.ascontiguousarray(self.mouth[:, 0])
-        # the per-step kernels without numba's dispatcher (`simatch.compiled.entry`): the same kinds of arguments at
-        # every call (these views, the engine's constraint arrays, plain numbers, the candidates' int64 array)
+        self._ball_q, self._ball_v = int(index.ball_qpos), int(index.ball_qvel)
         self._dribble_eq = [int(e) for e in index.dribble_eq]
-        self._mouth_xs = self._mouth_x.tolist()
-        bq, bv = int(index.ball_qpos), int(index.ball_qvel)
-        self._ball_q, self._ball_v = bq, bv
-        r, q, v = float(self.ball_r), self._qpos, self._qvel
-        self._roll = entry(roll_held_ball, q, v, bq, bv, r, float(self.roller_spin), float(self.roller_dw))
-        self._keep_kernel = entry(
-            keep_ball,
-            self._eq_data,
-            0,
-            q,
-            self._robot_q0,
-            bq,
-            0,
-            0.0,
-            float(self.pull_step),
-            True,
-            data.efc_type,
-            data.efc_id,
-            data.efc_force,
-            0,
-            int(self._eq_rows_type),
-            float(self.grip),
-        )
-        self._catch_kernel = entry(
-            catch_candidate,
-            q,
-            v,
-            self._robot_q0,
-            self._robot_v0,
-            bq,
-            bv,
-            np.zeros(1, dtype=np.int64),
-            float(self.hold_dist),
-            float(self.hold_cos),
-            self._mouth_x,
-            float(self.catch_speed),
-        )
+        self._eq_rows_type = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY.value)
+        self._roll = bind(roll_held_ball)
+        self._keep_kernel = bind(keep_ball)
+        self._catch_kernel = bind(catch_candidate)
+
+    def _init_dribbler(self, dr, model: mujoco.MjModel, index) -> None:
+        dt = model.opt.timestep
+        self.hold_dist = dr.distance
+        self.hold_cos = math.cos(math.radians(dr.angle))
+        self.grip = dr.grip_force
+        self.pull_step = dr.pull_speed * dt
+        self.catch_speed = dr.catch_speed
+        self.settle_steps = max(1, round(dr.settle_time / dt))
+        inertia = float(model.body_inertia[index.ball_body, 0])  # a sphere: the same about every axis
+        self.roller_spin = dr.roller_spin
+        self.roller_dw = dr.roller_torque * dt / inertia  # spin change per step at most [rad/s]
+        self.dribble_on = np.zeros(self.n, dtype=bool)
+        self.dribbling = [False] * self.n  # the same as plain bools (read for every command and step)
+        self._dribblers = 0  # how many are on
+        self._catch_idle_until = 0  # no catch is possible before this step (see _catch)
+        self._catch_top = self.ball_r + 0.05  # a ball whose centre is higher is in the air: no catch
+        # the robots whose dribbler is on and that are usable, as `catch_candidate` takes them (int64), kept
+        # while neither changes (`set_dribbler` forgets them; the usable flags are compared as bytes)
+        self._cand: np.ndarray | None = None
+        self._cand_usable = b""
+
+    def _init_kicker(self, kk) -> None:
+        self.kick_max = kk.max_speed
+        self.lob_max = kk.max_lob_speed
+        self.lob_angle = math.radians(kk.lob_angle)
+        self.recharge_steps = round(kk.recharge / self._dt)
+        self.kicks: dict[int, KickRequest] = {}
+        self.ready_at = np.zeros(self.n, dtype=np.int64)
+        self.kicked_by = -1  # robot whose kicker fired during the last step, -1 if none
+        self.kicked_speed = 0.0
+        self.kicked_lob = False
 
     # --- requests from commands -----------------------------------------------------------------------------
     def set_dribbler(self, i: int, on: bool) -> None:
@@ -235,8 +207,8 @@ class BallHandling:
             return
         usable = enabled.tobytes()
         cand = self._cand
-        if cand is None or usable != self._cand_usable:  # (only when a dribbler or a robot's state changed)
-            self._cand = cand = np.flatnonzero(self.dribble_on & enabled)  # (int64: what `_catch_kernel` takes)
+        if cand is None or usable != self._cand_usable:  # only when a dribbler or a robot's state changed
+            self._cand = cand = np.flatnonzero(self.dribble_on & enabled)
             self._cand_usable = usable
         if self.lost_by >= 0:
             if step < self.lost_until and self.in_mouth(self.lost_by):
@@ -304,10 +276,6 @@ class BallHandling:
             self.release("grip_exceeded", value=force, limit=self.grip, step=step)
         elif status == 2:
             self.release("pulled_away", step=step)
-
-    def _grip_force(self, eq: int) -> float:
-        d = self.d
-        return equality_force(d.efc_type, d.efc_id, d.efc_force, d.nefc, eq, self._eq_rows_type)
 
     def release(self, why: str, value: float = 0.0, limit: float = 0.0, step: int | None = None) -> None:
         i = self.holder

@@ -30,53 +30,55 @@ from __future__ import annotations
 import math
 
 import mujoco
-import numba
 import numpy as np
 
-from .kernels import rotate
+from ..compiled import Array, Float, Matrix, Vector, bind, kernel
+from .kernels import Indices, free_body_state, wrap_angle
 
-# columns of the parameter table (one row per drone)
-(
-    MASS,
-    IXX,
-    IYY,
-    IZZ,
-    FMAX,
-    DRAG_XY,
-    DRAG_Z,
-    K_POS,
-    K_VEL,
-    K_INT,
-    K_ATT,
-    K_RATE,
-    TAN_TILT,
-    LEASH,
-) = range(14)
-N_PARAMS = 14
+#: one drone's parameters, a row of the fleet's table: mass [kg], principal inertia [kg m^2], a rotor's
+#: largest thrust [N], rotor drag (horizontal, vertical) [N s/m], the gains of the cascade (position,
+#: velocity, velocity integral, attitude, rate) and the tangent of the largest tilt, the hold point's leash [m]
+PARAMS = np.dtype(
+    [
+        (name, np.float64)
+        for name in ("mass ixx iyy izz fmax drag_xy drag_z k_pos k_vel k_int k_att k_rate tan_tilt leash".split())
+    ]
+)
 #: the heading set point stays this close to the heading [rad]
 YAW_LEASH = 0.5
 #: the integral of the velocity loop gives at most this acceleration [m/s^2]
 INTEGRAL_LIMIT = 3.0
 
 
-@numba.njit(cache=True)
-def _wrap(a):
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
-
-
-@numba.njit(cache=True)
+@kernel(
+    qpos=Vector,
+    qvel=Vector,
+    ctrl=Vector,
+    qadr=Indices,
+    vadr=Indices,
+    rotor=Array(np.int64, 2),
+    P=Array(PARAMS, 1),
+    mix=Array(np.float64, 3),
+    cmd=Matrix,
+    armed=Array(np.bool_, 1),
+    pref=Matrix,
+    vref=Matrix,
+    yref=Vector,
+    vint=Matrix,
+    dt=Float,
+    g=Float,
+)
 def fly(qpos, qvel, ctrl, qadr, vadr, rotor, P, mix, cmd, armed, pref, vref, yref, vint, dt, g):
     """One physics step of every drone's controller: writes the four rotor thrust commands into ``ctrl``.
 
-    qadr, vadr (A,) free-joint addresses; rotor (A, 4) actuator ids; P (A, N_PARAMS); mix (A, 4, 4) the
+    qadr, vadr (A,) free-joint addresses; rotor (A, 4) actuator ids; P (A,) `PARAMS`; mix (A, 4, 4) the
     mixer's inverse (rotor thrusts from collective thrust and torques); cmd (A, 4) vx, vy (heading frame),
     w, vz; armed (A,) motors on; pref, vref (A, 3), yref (A,), vint (A, 3) the controller's state (updated)."""
-    n = qadr.shape[0]
     R = np.empty((3, 3))
     Rd = np.empty((3, 3))
     wrench = np.empty(4)
     f = np.empty(4)
-    for k in range(n):
+    for k in range(qadr.shape[0]):
         qa = qadr[k]
         va = vadr[k]
         if not armed[k]:
@@ -87,124 +89,150 @@ def fly(qpos, qvel, ctrl, qadr, vadr, rotor, P, mix, cmd, armed, pref, vref, yre
                 vref[k, j] = 0.0
                 vint[k, j] = 0.0
             continue
-        px, py, pz = qpos[qa], qpos[qa + 1], qpos[qa + 2]
-        qw, qx, qy, qz = qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6]
-        # rotation body -> world
-        R[0, 0] = 1.0 - 2.0 * (qy * qy + qz * qz)
-        R[0, 1] = 2.0 * (qx * qy - qw * qz)
-        R[0, 2] = 2.0 * (qx * qz + qw * qy)
-        R[1, 0] = 2.0 * (qx * qy + qw * qz)
-        R[1, 1] = 1.0 - 2.0 * (qx * qx + qz * qz)
-        R[1, 2] = 2.0 * (qy * qz - qw * qx)
-        R[2, 0] = 2.0 * (qx * qz - qw * qy)
-        R[2, 1] = 2.0 * (qy * qz + qw * qx)
-        R[2, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
+        p = P[k]
+        _body_rotation(qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], R)
         yaw = math.atan2(R[1, 0], R[0, 0])
-        m = P[k, MASS]
-        # 1. reference velocity (the command, reached at the velocity loop's own pace), hold point, heading
-        c, s = math.cos(yaw), math.sin(yaw)
-        kv = P[k, K_VEL]
-        blend = min(1.0, kv * dt)
-        tx = c * cmd[k, 0] - s * cmd[k, 1] - vref[k, 0]
-        ty = s * cmd[k, 0] + c * cmd[k, 1] - vref[k, 1]
-        tz = cmd[k, 3] - vref[k, 2]
-        afx, afy, afz = kv * tx, kv * ty, kv * tz  # the reference's acceleration, fed forward
-        vref[k, 0] += blend * tx
-        vref[k, 1] += blend * ty
-        vref[k, 2] += blend * tz
-        vcx, vcy, vcz = vref[k, 0], vref[k, 1], vref[k, 2]
-        pref[k, 0] += vcx * dt
-        pref[k, 1] += vcy * dt
-        pref[k, 2] += vcz * dt
-        dx, dy, dz = pref[k, 0] - px, pref[k, 1] - py, pref[k, 2] - pz
-        d = math.sqrt(dx * dx + dy * dy + dz * dz)
-        leash = P[k, LEASH]
-        if d > leash:
-            sc = leash / d
-            dx, dy, dz = dx * sc, dy * sc, dz * sc
-            pref[k, 0], pref[k, 1], pref[k, 2] = px + dx, py + dy, pz + dz
-        yref[k] += cmd[k, 2] * dt
-        ey = _wrap(yref[k] - yaw)
-        if ey > YAW_LEASH:
-            ey = YAW_LEASH
-        elif ey < -YAW_LEASH:
-            ey = -YAW_LEASH
-        yref[k] = yaw + ey
-        # 2. velocity loop, rotor drag fed forward (drag = R D R^T v)
-        vx, vy, vz = qvel[va], qvel[va + 1], qvel[va + 2]
-        kp = P[k, K_POS]
-        evx = vcx + kp * dx - vx
-        evy = vcy + kp * dy - vy
-        evz = vcz + kp * dz - vz
-        ki = P[k, K_INT]
-        if ki > 0.0:
-            lim = INTEGRAL_LIMIT / ki
-            vint[k, 0] = min(max(vint[k, 0] + evx * dt, -lim), lim)
-            vint[k, 1] = min(max(vint[k, 1] + evy * dt, -lim), lim)
-            vint[k, 2] = min(max(vint[k, 2] + evz * dt, -lim), lim)
-        bx = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
-        by = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
-        bz = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
-        bx *= P[k, DRAG_XY]
-        by *= P[k, DRAG_XY]
-        bz *= P[k, DRAG_Z]
-        ax = afx + kv * evx + ki * vint[k, 0] + (R[0, 0] * bx + R[0, 1] * by + R[0, 2] * bz) / m
-        ay = afy + kv * evy + ki * vint[k, 1] + (R[1, 0] * bx + R[1, 1] * by + R[1, 2] * bz) / m
-        az = afz + kv * evz + ki * vint[k, 2] + (R[2, 0] * bx + R[2, 1] * by + R[2, 2] * bz) / m
-        # 3. wanted force, tilt-limited, and the attitude that points the thrust along it
-        fz = m * (g + az)
-        if fz < 0.2 * m * g:
-            fz = 0.2 * m * g
-        fx, fy = m * ax, m * ay
-        fxy = math.sqrt(fx * fx + fy * fy)
-        cap = fz * P[k, TAN_TILT]
-        if fxy > cap:
-            fx *= cap / fxy
-            fy *= cap / fxy
-        fn = math.sqrt(fx * fx + fy * fy + fz * fz)
-        b3x, b3y, b3z = fx / fn, fy / fn, fz / fn
-        thrust = fx * R[0, 2] + fy * R[1, 2] + fz * R[2, 2]
-        if thrust < 0.0:
-            thrust = 0.0
-        cy, sy = math.cos(yref[k]), math.sin(yref[k])
-        # b2 = b3 x b1c (b1c = heading set point), normalised; b1 = b2 x b3
-        b2x, b2y, b2z = -b3z * sy, b3z * cy, b3x * sy - b3y * cy
-        nb = math.sqrt(b2x * b2x + b2y * b2y + b2z * b2z)
-        b2x, b2y, b2z = b2x / nb, b2y / nb, b2z / nb
-        b1x, b1y, b1z = b2y * b3z - b2z * b3y, b2z * b3x - b2x * b3z, b2x * b3y - b2y * b3x
-        Rd[0, 0], Rd[1, 0], Rd[2, 0] = b1x, b1y, b1z
-        Rd[0, 1], Rd[1, 1], Rd[2, 1] = b2x, b2y, b2z
-        Rd[0, 2], Rd[1, 2], Rd[2, 2] = b3x, b3y, b3z
-        # e_R = vee(Rd^T R - R^T Rd) / 2
-        e = np.zeros(3)
-        for a, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):
-            mij = 0.0
-            mji = 0.0
-            for r in range(3):
-                mij += Rd[r, i] * R[r, j]
-                mji += Rd[r, j] * R[r, i]
-            e[a] = 0.5 * (mij - mji)
-        # 4. wanted body rates (turn rate fed forward: world z in the body frame), and the rate loop
-        katt = P[k, K_ATT]
-        w = cmd[k, 2]
-        wdx = -katt * e[0] + w * R[2, 0]
-        wdy = -katt * e[1] + w * R[2, 1]
-        wdz = -katt * e[2] + w * R[2, 2]
-        ox, oy, oz = qvel[va + 3], qvel[va + 4], qvel[va + 5]
-        ixx, iyy, izz = P[k, IXX], P[k, IYY], P[k, IZZ]
-        kr = P[k, K_RATE]
-        wrench[0] = thrust
-        wrench[1] = ixx * kr * (wdx - ox) + (izz - iyy) * oy * oz
-        wrench[2] = iyy * kr * (wdy - oy) + (ixx - izz) * oz * ox
-        wrench[3] = izz * kr * (wdz - oz) + (iyy - ixx) * ox * oy
-        # 5. mixer with priorities
-        fmax = P[k, FMAX]
-        _mix(mix[k], wrench, f, fmax)
+        afx, afy, afz, dx, dy, dz = _follow_reference(
+            p, cmd[k], pref[k], vref[k], yref, k, qpos[qa], qpos[qa + 1], qpos[qa + 2], yaw, dt
+        )
+        ax, ay, az = _velocity_loop(
+            p, R, qvel[va], qvel[va + 1], qvel[va + 2], vref[k], vint[k], afx, afy, afz, dx, dy, dz, dt
+        )
+        thrust = _attitude_wanted(p, R, ax, ay, az, yref[k], g, Rd)
+        _rate_loop(p, R, Rd, cmd[k, 2], qvel[va + 3], qvel[va + 4], qvel[va + 5], thrust, wrench)
+        _mix(mix[k], wrench, f, p.fmax)
         for j in range(4):
             ctrl[rotor[k, j]] = f[j]
 
 
-@numba.njit(cache=True)
+@kernel
+def _body_rotation(qw, qx, qy, qz, R):
+    """R (3, 3): the rotation body -> world of the unit quaternion (qw, qx, qy, qz)."""
+    R[0, 0] = 1.0 - 2.0 * (qy * qy + qz * qz)
+    R[0, 1] = 2.0 * (qx * qy - qw * qz)
+    R[0, 2] = 2.0 * (qx * qz + qw * qy)
+    R[1, 0] = 2.0 * (qx * qy + qw * qz)
+    R[1, 1] = 1.0 - 2.0 * (qx * qx + qz * qz)
+    R[1, 2] = 2.0 * (qy * qz - qw * qx)
+    R[2, 0] = 2.0 * (qx * qz - qw * qy)
+    R[2, 1] = 2.0 * (qy * qz + qw * qx)
+    R[2, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
+
+
+@kernel
+def _follow_reference(p, cmd, pref, vref, yref, k, px, py, pz, yaw, dt):
+    """1. The reference velocity ``vref`` moves towards the command (turned by the heading) at the velocity
+    loop's own pace and moves the hold point ``pref`` (kept within the leash of the body at px, py, pz); the
+    commanded turn rate moves the heading set point ``yref[k]`` (kept within `YAW_LEASH` of ``yaw``).
+    Returns the reference's acceleration (fed forward) and the pull back onto the hold point."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    kv = p.k_vel
+    blend = min(1.0, kv * dt)
+    tx = c * cmd[0] - s * cmd[1] - vref[0]
+    ty = s * cmd[0] + c * cmd[1] - vref[1]
+    tz = cmd[3] - vref[2]
+    vref[0] += blend * tx
+    vref[1] += blend * ty
+    vref[2] += blend * tz
+    pref[0] += vref[0] * dt
+    pref[1] += vref[1] * dt
+    pref[2] += vref[2] * dt
+    dx, dy, dz = pref[0] - px, pref[1] - py, pref[2] - pz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if d > p.leash:
+        sc = p.leash / d
+        dx, dy, dz = dx * sc, dy * sc, dz * sc
+        pref[0], pref[1], pref[2] = px + dx, py + dy, pz + dz
+    yref[k] += cmd[2] * dt
+    ey = wrap_angle(yref[k] - yaw)
+    if ey > YAW_LEASH:
+        ey = YAW_LEASH
+    elif ey < -YAW_LEASH:
+        ey = -YAW_LEASH
+    yref[k] = yaw + ey
+    return kv * tx, kv * ty, kv * tz, dx, dy, dz
+
+
+@kernel
+def _velocity_loop(p, R, vx, vy, vz, vref, vint, afx, afy, afz, dx, dy, dz, dt):
+    """2. The velocity loop (PI, the pull onto the hold point added to the reference, the integral ``vint``
+    updated and bounded) with the reference's acceleration (afx, afy, afz) and the rotor drag (drag =
+    R D R^T v) fed forward: the wanted acceleration."""
+    kv, kp, ki = p.k_vel, p.k_pos, p.k_int
+    evx = vref[0] + kp * dx - vx
+    evy = vref[1] + kp * dy - vy
+    evz = vref[2] + kp * dz - vz
+    if ki > 0.0:
+        lim = INTEGRAL_LIMIT / ki
+        vint[0] = min(max(vint[0] + evx * dt, -lim), lim)
+        vint[1] = min(max(vint[1] + evy * dt, -lim), lim)
+        vint[2] = min(max(vint[2] + evz * dt, -lim), lim)
+    bx = (R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz) * p.drag_xy
+    by = (R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz) * p.drag_xy
+    bz = (R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz) * p.drag_z
+    m = p.mass
+    ax = afx + kv * evx + ki * vint[0] + (R[0, 0] * bx + R[0, 1] * by + R[0, 2] * bz) / m
+    ay = afy + kv * evy + ki * vint[1] + (R[1, 0] * bx + R[1, 1] * by + R[1, 2] * bz) / m
+    az = afz + kv * evz + ki * vint[2] + (R[2, 0] * bx + R[2, 1] * by + R[2, 2] * bz) / m
+    return ax, ay, az
+
+
+@kernel
+def _attitude_wanted(p, R, ax, ay, az, heading, g, Rd):
+    """3. The wanted force m (a + g z), its tilt limited, gives the collective thrust (its part along the
+    body's z axis, returned) and the wanted attitude ``Rd`` (its z axis along the force, its heading at the
+    set point)."""
+    m = p.mass
+    fz = m * (g + az)
+    if fz < 0.2 * m * g:
+        fz = 0.2 * m * g
+    fx, fy = m * ax, m * ay
+    fxy = math.sqrt(fx * fx + fy * fy)
+    cap = fz * p.tan_tilt
+    if fxy > cap:
+        fx *= cap / fxy
+        fy *= cap / fxy
+    fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+    b3x, b3y, b3z = fx / fn, fy / fn, fz / fn
+    thrust = fx * R[0, 2] + fy * R[1, 2] + fz * R[2, 2]
+    if thrust < 0.0:
+        thrust = 0.0
+    cy, sy = math.cos(heading), math.sin(heading)
+    # b2 = b3 x b1c (b1c = heading set point), normalised; b1 = b2 x b3
+    b2x, b2y, b2z = -b3z * sy, b3z * cy, b3x * sy - b3y * cy
+    nb = math.sqrt(b2x * b2x + b2y * b2y + b2z * b2z)
+    b2x, b2y, b2z = b2x / nb, b2y / nb, b2z / nb
+    Rd[0, 0], Rd[1, 0], Rd[2, 0] = b2y * b3z - b2z * b3y, b2z * b3x - b2x * b3z, b2x * b3y - b2y * b3x
+    Rd[0, 1], Rd[1, 1], Rd[2, 1] = b2x, b2y, b2z
+    Rd[0, 2], Rd[1, 2], Rd[2, 2] = b3x, b3y, b3z
+    return thrust
+
+
+@kernel
+def _rate_loop(p, R, Rd, w, ox, oy, oz, thrust, wrench):
+    """4. The attitude error e_R = vee(Rd^T R - R^T Rd) / 2 (on SO(3)) sets the wanted body rates, the turn
+    rate ``w`` fed forward (world z in the body frame); the rate loop's torques bring the body rates
+    (ox, oy, oz) to them, gyroscopic terms included. Writes ``wrench``: thrust and the three torques."""
+    e = np.zeros(3)
+    for a, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):
+        mij = 0.0
+        mji = 0.0
+        for r in range(3):
+            mij += Rd[r, i] * R[r, j]
+            mji += Rd[r, j] * R[r, i]
+        e[a] = 0.5 * (mij - mji)
+    katt, kr = p.k_att, p.k_rate
+    wdx = -katt * e[0] + w * R[2, 0]
+    wdy = -katt * e[1] + w * R[2, 1]
+    wdz = -katt * e[2] + w * R[2, 2]
+    ixx, iyy, izz = p.ixx, p.iyy, p.izz
+    wrench[0] = thrust
+    wrench[1] = ixx * kr * (wdx - ox) + (izz - iyy) * oy * oz
+    wrench[2] = iyy * kr * (wdy - oy) + (ixx - izz) * oz * ox
+    wrench[3] = izz * kr * (wdz - oz) + (iyy - ixx) * ox * oy
+
+
+@kernel
 def _span(d, yaw, s):
     lo = np.inf
     hi = -np.inf
@@ -215,7 +243,7 @@ def _span(d, yaw, s):
     return hi - lo
 
 
-@numba.njit(cache=True)
+@kernel
 def _mix(M, wrench, f, fmax):
     """Rotor thrusts f (4,) within [0, fmax] for wrench (thrust, tx, ty, tz) through the inverse mixer M:
     exact when it fits; else the roll/pitch torques kept whole (scaled down only if they alone do not
@@ -267,7 +295,8 @@ def mixer_inverse(positions, spin, torque_ratio: float) -> np.ndarray:
     return np.linalg.inv(A)
 
 
-def _yaw_of_quat(qw: float, qx: float, qy: float, qz: float) -> float:
+def yaw_of(qw: float, qx: float, qy: float, qz: float) -> float:
+    """The heading of the attitude (qw, qx, qy, qz): its turn about the vertical."""
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
@@ -282,19 +311,27 @@ class AerialFleet:
         self.n = n
         self.dt = dt
         self.gravity = gravity
-        self.P = np.zeros((n, N_PARAMS))
+        self.P = np.zeros(n, dtype=PARAMS)
         self.mix = np.zeros((n, 4, 4))
         self.limits = np.zeros((n, 4))  # max horizontal speed, max turn rate, max climb, max descent
         for k, model in enumerate(models):
             p = model.params
-            row = self.P[k]
-            row[MASS], row[IXX], row[IYY], row[IZZ] = p.mass, p.ixx, p.iyy, p.izz
-            row[FMAX] = model.max_rotor_thrust
-            row[DRAG_XY], row[DRAG_Z] = p.drag_xy, p.drag_z
-            row[K_POS], row[K_VEL], row[K_INT] = p.position_gain, p.velocity_gain, p.velocity_integral
-            row[K_ATT], row[K_RATE] = p.attitude_gain, p.rate_gain
-            row[TAN_TILT] = math.tan(math.radians(p.max_tilt))
-            row[LEASH] = p.leash
+            self.P[k] = (
+                p.mass,
+                p.ixx,
+                p.iyy,
+                p.izz,
+                model.max_rotor_thrust,
+                p.drag_xy,
+                p.drag_z,
+                p.position_gain,
+                p.velocity_gain,
+                p.velocity_integral,
+                p.attitude_gain,
+                p.rate_gain,
+                math.tan(math.radians(p.max_tilt)),
+                p.leash,
+            )
             self.mix[k] = mixer_inverse(model.rotor_positions(), model.rotor_spin, p.torque_ratio)
             self.limits[k] = (p.max_speed, p.max_yaw_rate, p.max_climb, p.max_descent)
         self.cmd = np.zeros((n, 4))
@@ -303,6 +340,7 @@ class AerialFleet:
         self.vref = np.zeros((n, 3))
         self.yref = np.zeros(n)
         self.vint = np.zeros((n, 3))
+        self._fly = bind(fly)
         for k in range(n):
             self.hold(k)
 
@@ -336,12 +374,13 @@ class AerialFleet:
         a = self.ix.qpos[k]
         self.pref[k] = q[a : a + 3]
         self.vref[k] = self.d.qvel[self.ix.qvel[k] : self.ix.qvel[k] + 3]
-        self.yref[k] = _yaw_of_quat(*q[a + 3 : a + 7])
+        self.yref[k] = yaw_of(*q[a + 3 : a + 7])
         self.vint[k] = 0.0
 
     def step(self, ctrl) -> None:
+        """Every drone's rotor commands for the next physics step, into the engine's ``ctrl``."""
         d, ix = self.d, self.ix
-        fly(
+        self._fly(
             d.qpos,
             d.qvel,
             ctrl,
@@ -361,7 +400,7 @@ class AerialFleet:
         )
 
 
-@numba.njit(cache=True)
+@kernel
 def aerial_poses(qpos, qvel, qadr, vadr):
     """Poses (A, 7: x y z qw qx qy qz) and world-frame twists (A, 6: v, w) of the free-flying bodies (their
     angular velocity turned from the body frame to the world frame)."""
@@ -369,15 +408,7 @@ def aerial_poses(qpos, qvel, qadr, vadr):
     pose = np.empty((n, 7))
     twist = np.empty((n, 6))
     for k in range(n):
-        qa = qadr[k]
-        va = vadr[k]
-        for j in range(7):
-            pose[k, j] = qpos[qa + j]
-        for j in range(3):
-            twist[k, j] = qvel[va + j]
-        twist[k, 3], twist[k, 4], twist[k, 5] = rotate(
-            qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], qvel[va + 3], qvel[va + 4], qvel[va + 5]
-        )
+        free_body_state(qpos, qvel, qadr[k], vadr[k], pose[k], twist[k])
     return pose, twist
 
 
@@ -405,7 +436,7 @@ def rotor_links(model, pose: np.ndarray, twist: np.ndarray) -> list[tuple[np.nda
     return out
 
 
-@numba.njit(cache=True)
+@kernel
 def frame_contacts(pairs, n, owner):
     """(drone, other geom) of every contact among the first ``n`` geom ``pairs`` that involves a drone's frame
     (``owner``: geom id -> drone index, -1 for any other geom); both ways for two drones."""

@@ -1,18 +1,33 @@
-"""Compiled kernels of the simulator's per-control-period work (numba, cached on disk).
+"""The simulator's compiled kernels: the work of every physics step and control tick on the engine's arrays.
 
-Why compiled: these loops touch a few numbers per robot, and numpy's cost per call (about a microsecond
-per operation, some forty operations per plan) was larger than the physics step it prepares. numba
-turns them into one machine-code call of about a microsecond; results are the same IEEE arithmetic,
-so runs stay deterministic.
+They are compiled (`simatch.compiled`) because each touches a few numbers per robot, many times a simulated
+second, where NumPy's per-operation overhead would outweigh the arithmetic. The arithmetic is plain IEEE
+double precision in a fixed order, so runs stay deterministic.
+
+The engine's joints are given by address: ``qpos[robot_q + 3 i]`` .. ``+ 2`` are ground robot i's x, y, yaw
+(``qvel[robot_v + 3 i]`` .. its vx, vy, w), ``qpos[ball_q]`` .. ``+ 6`` the ball's x y z qw qx qy qz and
+``qvel[ball_v]`` .. ``+ 5`` its vx vy vz and spin (in its own frame).
 """
 
 from __future__ import annotations
 
-import numba
+from collections import namedtuple
+
 import numpy as np
+from numba.core import types
+
+from ..compiled import Array, Bool, Float, Int, Matrix, Vector, kernel
+
+#: array kinds the kernels take besides float64 vectors and matrices
+Indices = Array(np.int64, 1)
+Ints32 = Array(np.int32, 1)
+Flags = Array(np.bool_, 1)
+Floats32 = Array(np.float32, 1)
+Matrix32 = Array(np.float32, 2)
+Words = Array(np.uint64, 1)
 
 
-@numba.njit(cache=True)
+@kernel
 def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     """Horizontal magnitude of the force of equality constraint ``eq`` (its first two rows) [N]."""
     fx = 0.0
@@ -29,7 +44,19 @@ def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     return (fx * fx + fy * fy) ** 0.5
 
 
-@numba.njit(cache=True)
+@kernel(
+    qpos=Vector,
+    qvel=Vector,
+    robot_q=Int,
+    robot_v=Int,
+    ball_q=Int,
+    ball_v=Int,
+    candidates=Indices,
+    hold_dist=Float,
+    hold_cos=Float,
+    mouth_x=Vector,
+    catch_speed=Float,
+)
 def catch_candidate(
     qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, mouth_x, catch_speed
 ):
@@ -75,7 +102,23 @@ def catch_candidate(
     return best, best_f, best_l, nearest
 
 
-@numba.njit(cache=True)
+@kernel(
+    eq_data=Matrix,
+    eq=Int,
+    qpos=Vector,
+    robot_q=Int,
+    ball_q=Int,
+    robot=Int,
+    target_x=Float,
+    pull_step=Float,
+    check_grip=Bool,
+    efc_type=Ints32,
+    efc_id=Ints32,
+    efc_force=Vector,
+    nefc=Int,
+    eq_type=Int,
+    grip=Float,
+)
 def keep_ball(
     eq_data,
     eq,
@@ -126,7 +169,7 @@ def keep_ball(
     return 0, force
 
 
-@numba.njit(cache=True)
+@kernel(qpos=Vector, qvel=Vector, ball_q=Int, ball_v=Int, radius=Float, spin=Float, max_dw=Float)
 def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     """One physics step of the dribbler's rollers on a held ball: turn its horizontal spin towards ``spin``
     times rolling with its motion over the floor (w = z x v / r), by at most ``max_dw`` [rad/s] (the rollers'
@@ -165,62 +208,83 @@ def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     qvel[ball_v + 5] = wz + 2.0 * (qw * cz - qx * cy + qy * cx)
 
 
-@numba.njit(cache=True)
-def _wrap(a):
+@kernel
+def wrap_angle(a):
+    """The angle ``a`` wrapped to [-pi, pi)."""
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
-@numba.njit(cache=True)
+@kernel
 def _polar(dx, dy, heading):
     """Bearing from ``heading`` (wrapped) and distance of the offset (dx, dy): how a robot sees a thing."""
-    return _wrap(np.arctan2(dy, dx) - heading), np.hypot(dx, dy)
+    return wrap_angle(np.arctan2(dy, dx) - heading), np.hypot(dx, dy)
 
 
-@numba.njit(cache=True)
-def perceive(R, ball, sign, others, own_noise, ball_noise, obs_noise):
-    """The numbers of every robot's perception, in its team frame (see `perception.Perception.observe`).
+#: the noise added to what each robot perceives (float64): to its own pose (n, 5: x y yaw vx vy), to the
+#: ball it sees (n, 4: x y vx vy) and to each other robot it sees (n, n-1, 4: x y vx vy)
+Noise = namedtuple("Noise", "own ball obstacles")
+NOISE = types.NamedTuple((Matrix, Matrix, Array(np.float64, 3)), Noise)
 
-    R (n, 6) robots' x y yaw vx vy w and ball (6,) x y z vx vy vz, world frame; sign (n,) +1 or -1 per
-    robot's team frame; others (n, n-1) the other robots of each observer; noise added to the observer's own
-    pose (n, 5: x y yaw vx vy), to the ball it sees (n, 4: x y vx vy) and to each obstacle (n, n-1, 4).
-    Returns (own (n, 6): x y yaw vx vy w in the team frame; balls (n, 6): x y vx vy bearing distance;
-    obstacles (6, n, n-1): x y vx vy bearing distance)."""
+#: what the robots' flags are computed from: the base servos' set points (n, 3), the rim-speed matrices
+#: (n, W, 3), each robot's number of wheels, whether it is enabled, since when it is slow (-1: it is not;
+#: updated), how many steps slow make it stuck, and the field's half length and width [m]
+FlagInputs = namedtuple("FlagInputs", "setpoint rim n_wheels enabled slow_since stuck_steps half_length half_width")
+FLAG_INPUTS = types.NamedTuple((Matrix, Array(np.float64, 3), Indices, Flags, Indices, Int, Float, Float), FlagInputs)
+
+#: where the engine keeps the ground robots' planar joints and the ball's free joint (see the module)
+Joints = namedtuple("Joints", "robot_q robot_v ball_q ball_v")
+JOINTS = types.NamedUniTuple(Int, 4, Joints)
+
+
+#: who perceives (each robot's team frame, the other robots it sees, the noise) and what they perceive: the
+#: parameters `perceive` and `sense_ground` share
+_OBSERVERS = dict(sign=Vector, others=Array(np.int64, 2), noise=NOISE)
+_PERCEIVED = dict(own=Matrix32, balls=Matrix32, obs=Matrix32)
+
+
+@kernel(R=Matrix, ball=Vector, **_OBSERVERS, **_PERCEIVED)
+def perceive(R, ball, sign, others, noise, own, balls, obs):
+    """Every robot's perception (the OmniVisionInfo's numbers), in its team frame, with ``noise``.
+
+    R (n, 6) the robots' x y yaw vx vy w and ball (6,) its x y z vx vy vz, world frame; sign (n,) +1 or -1:
+    each robot's team frame (-1: the world turned by pi); others (n, n-1) the other robots of each observer.
+    Writes, each number computed in float64 and rounded once to the arrays' float32: own (n, 6) x y yaw vx vy
+    w; balls (n, 8) x y z vx vy vz bearing distance; obs (6 n, n-1) each observer's six rows x y vx vy
+    bearing distance of the robots it sees. Bearings are from the observer's heading (its kicker axis)."""
     n = R.shape[0]
     m = others.shape[1]
-    own = np.empty((n, 6))
-    balls = np.empty((n, 6))
-    obs = np.empty((6, n, m))
     for i in range(n):
         s = sign[i]
-        px = R[i, 0] + own_noise[i, 0]
-        py = R[i, 1] + own_noise[i, 1]
-        yaw = R[i, 2] + own_noise[i, 2]
+        px = R[i, 0] + noise.own[i, 0]
+        py = R[i, 1] + noise.own[i, 1]
+        yaw = R[i, 2] + noise.own[i, 2]
         own[i, 0] = s * px
         own[i, 1] = s * py
-        own[i, 2] = _wrap(yaw + (0.0 if s > 0 else np.pi))
-        own[i, 3] = s * (R[i, 3] + own_noise[i, 3])
-        own[i, 4] = s * (R[i, 4] + own_noise[i, 4])
+        own[i, 2] = wrap_angle(yaw + (0.0 if s > 0 else np.pi))
+        own[i, 3] = s * (R[i, 3] + noise.own[i, 3])
+        own[i, 4] = s * (R[i, 4] + noise.own[i, 4])
         own[i, 5] = R[i, 5]
-        bx = ball[0] + ball_noise[i, 0]
-        by = ball[1] + ball_noise[i, 1]
+        bx = ball[0] + noise.ball[i, 0]
+        by = ball[1] + noise.ball[i, 1]
         balls[i, 0] = s * bx
         balls[i, 1] = s * by
-        balls[i, 2] = s * (ball[3] + ball_noise[i, 2])
-        balls[i, 3] = s * (ball[4] + ball_noise[i, 3])
-        balls[i, 4], balls[i, 5] = _polar(bx - px, by - py, yaw)
+        balls[i, 2] = ball[2]
+        balls[i, 3] = s * (ball[3] + noise.ball[i, 2])
+        balls[i, 4] = s * (ball[4] + noise.ball[i, 3])
+        balls[i, 5] = ball[5]
+        balls[i, 6], balls[i, 7] = _polar(bx - px, by - py, yaw)
         for k in range(m):
             j = others[i, k]
-            ox = R[j, 0] + obs_noise[i, k, 0]
-            oy = R[j, 1] + obs_noise[i, k, 1]
-            obs[0, i, k] = s * ox
-            obs[1, i, k] = s * oy
-            obs[2, i, k] = s * (R[j, 3] + obs_noise[i, k, 2])
-            obs[3, i, k] = s * (R[j, 4] + obs_noise[i, k, 3])
-            obs[4, i, k], obs[5, i, k] = _polar(ox - px, oy - py, yaw)
-    return own, balls, obs
+            ox = R[j, 0] + noise.obstacles[i, k, 0]
+            oy = R[j, 1] + noise.obstacles[i, k, 1]
+            obs[6 * i, k] = s * ox
+            obs[6 * i + 1, k] = s * oy
+            obs[6 * i + 2, k] = s * (R[j, 3] + noise.obstacles[i, k, 2])
+            obs[6 * i + 3, k] = s * (R[j, 4] + noise.obstacles[i, k, 3])
+            obs[6 * i + 4, k], obs[6 * i + 5, k] = _polar(ox - px, oy - py, yaw)
 
 
-@numba.njit(cache=True)
+@kernel
 def _stuck(i, vx, vy, act, slow_since, step, stuck_steps):
     """Robot i moving at (vx, vy) is stuck: commanded (set point ``act``) > 0.2 m/s but moving at less than
     half of it for ``stuck_steps`` (counted in ``slow_since``, updated)."""
@@ -233,30 +297,29 @@ def _stuck(i, vx, vy, act, slow_since, step, stuck_steps):
     return slow and step - slow_since[i] >= stuck_steps
 
 
-@numba.njit(cache=True)
-def robot_flags(R, act, M, n_wheels, enabled, slow_since, step, stuck_steps, half_length, half_width):
-    """Per robot, from its state R (n, 6) and servo set point act (n, 3): measured rim speeds (n, W) from its
-    actual motion (what encoders measure), 'valid' (on the field within 1 m, enabled) and 'stuck'
-    (commanded > 0.2 m/s but moving at less than half of it for stuck_steps); updates slow_since."""
-    n = R.shape[0]
-    W = M.shape[1]
-    wheels = np.zeros((n, W))
-    valid = np.empty(n, dtype=np.bool_)
-    stuck = np.empty(n, dtype=np.bool_)
-    for i in range(n):
+@kernel(R=Matrix, flags=FLAG_INPUTS, step=Int, wheels=Matrix, valid=Flags, stuck=Flags)
+def robot_flags(R, flags, step, wheels, valid, stuck):
+    """Per ground robot, from its state R (n, 6: x y yaw vx vy w): the rim speeds its actual motion means
+    (what wheel encoders measure; zero beyond its wheels) into ``wheels`` (n, W, of any float type),
+    whether it is on the field within 1 m and enabled (``valid``), and whether it is stuck: commanded
+    > 0.2 m/s but moving at less than half of it for ``flags.stuck_steps`` (updates ``flags.slow_since``)."""
+    rim = flags.rim
+    for i in range(R.shape[0]):
         c = np.cos(R[i, 2])
         s = np.sin(R[i, 2])
         bvx = c * R[i, 3] + s * R[i, 4]
         bvy = c * R[i, 4] - s * R[i, 3]
         w = R[i, 5]
-        for k in range(n_wheels[i]):
-            wheels[i, k] = M[i, k, 0] * bvx + M[i, k, 1] * bvy + M[i, k, 2] * w
-        valid[i] = abs(R[i, 0]) <= half_length + 1.0 and abs(R[i, 1]) <= half_width + 1.0 and enabled[i]
-        stuck[i] = _stuck(i, R[i, 3], R[i, 4], act, slow_since, step, stuck_steps)
-    return wheels, valid, stuck
+        for k in range(rim.shape[1]):
+            on = k < flags.n_wheels[i]
+            wheels[i, k] = (rim[i, k, 0] * bvx + rim[i, k, 1] * bvy + rim[i, k, 2] * w) if on else 0.0
+        valid[i] = (
+            abs(R[i, 0]) <= flags.half_length + 1.0 and abs(R[i, 1]) <= flags.half_width + 1.0 and flags.enabled[i]
+        )
+        stuck[i] = _stuck(i, R[i, 3], R[i, 4], flags.setpoint, flags.slow_since, step, flags.stuck_steps)
 
 
-@numba.njit(cache=True)
+@kernel(xpos=Matrix, geoms=Indices, bound2=Vector, ball=Int)
 def ball_apart(xpos, geoms, bound2, ball):
     """True when none of ``geoms`` (a robot's) can be in contact with geom ``ball``: every geom centre
     (``xpos``, the engine's geom_xpos of the last collision pass) is farther from the ball's than the
@@ -272,30 +335,12 @@ def ball_apart(xpos, geoms, bound2, ball):
     return True
 
 
-@numba.njit(cache=True)
-def model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v):
-    """Poses (n+1, 7: x y z qw qx qy qz) and twists (n+1, 6) of the robots (planar joints from robot_q/
-    robot_v on) and the ball (free joint at ball_q/ball_v, its angular velocity turned to the world frame)."""
-    pose = np.zeros((n + 1, 7))
-    twist = np.zeros((n + 1, 6))
-    _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist)
-    return pose, twist
-
-
-@numba.njit(cache=True)
-def model_poses32(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
-    """`model_poses` written into float32 zeros ``pose`` (7 (n+1),) and ``twist`` (6 (n+1),), flat as the
-    ModelStates message carries them: each number computed in float64 as there, then rounded to float32
-    (what ``astype(float32)`` of `model_poses`' arrays gives). Called every physics step: the arrays come
-    in (allocating and returning arrays costs a compiled function more than its arithmetic here)."""
-    _fill_model_poses(
-        qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose.reshape((n + 1, 7)), twist.reshape((n + 1, 6))
-    )
-
-
-@numba.njit(cache=True)
-def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
-    """The body of `model_poses`, into zeroed arrays of any float type."""
+@kernel
+def fill_model_states(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
+    """The world-frame states of n ground robots and the ball into zeroed ``pose`` (n+1, 7: x y z qw qx qy qz)
+    and ``twist`` (n+1, 6: v, w) of any float type: each number computed in float64, then stored (a float32
+    array rounds it once, as ``astype(float32)`` of the float64 numbers would). A robot stands on the floor,
+    turned by its yaw; the ball's spin is turned from its own frame to the world's."""
     for i in range(n):
         half = 0.5 * qpos[robot_q + 3 * i + 2]
         pose[i, 0] = qpos[robot_q + 3 * i]
@@ -305,23 +350,37 @@ def _fill_model_poses(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twi
         twist[i, 0] = qvel[robot_v + 3 * i]
         twist[i, 1] = qvel[robot_v + 3 * i + 1]
         twist[i, 5] = qvel[robot_v + 3 * i + 2]
+    free_body_state(qpos, qvel, ball_q, ball_v, pose[n], twist[n])
+
+
+@kernel
+def free_body_state(qpos, qvel, qa, va, pose, twist):
+    """The world-frame state of a body on a free joint (at ``qpos[qa]``, ``qvel[va]``) into ``pose`` (7: x y z
+    qw qx qy qz) and ``twist`` (6: v, w): its angular velocity turned from its own frame to the world's."""
     for k in range(7):
-        pose[n, k] = qpos[ball_q + k]
+        pose[k] = qpos[qa + k]
     for k in range(3):
-        twist[n, k] = qvel[ball_v + k]
-    # w_world = R(q) w_local
-    twist[n, 3], twist[n, 4], twist[n, 5] = rotate(
-        qpos[ball_q + 3],
-        qpos[ball_q + 4],
-        qpos[ball_q + 5],
-        qpos[ball_q + 6],
-        qvel[ball_v + 3],
-        qvel[ball_v + 4],
-        qvel[ball_v + 5],
+        twist[k] = qvel[va + k]
+    twist[3], twist[4], twist[5] = rotate(
+        qpos[qa + 3], qpos[qa + 4], qpos[qa + 5], qpos[qa + 6], qvel[va + 3], qvel[va + 4], qvel[va + 5]
     )
 
 
-@numba.njit(cache=True)
+#: the engine's state and where n ground robots' and the ball's joints are in it: the first parameters of
+#: the kernels of the models' states
+_MODEL_STATES = dict(qpos=Vector, qvel=Vector, robot_q=Int, robot_v=Int, n=Int, ball_q=Int, ball_v=Int)
+
+
+@kernel(**_MODEL_STATES, pose=Floats32, twist=Floats32)
+def model_states32(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose, twist):
+    """`fill_model_states` into float32 zeros ``pose`` (7 (n+1),) and ``twist`` (6 (n+1),), flat as the
+    ModelStates message carries them."""
+    fill_model_states(
+        qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, pose.reshape((n + 1, 7)), twist.reshape((n + 1, 6))
+    )
+
+
+@kernel
 def rotate(qw, qx, qy, qz, w0, w1, w2):
     """The vector (w0, w1, w2) turned by the unit quaternion q: v' = v + 2 qw (q x v) + 2 q x (q x v)."""
     cx = qy * w2 - qz * w1
@@ -334,93 +393,32 @@ def rotate(qw, qx, qy, qz, w0, w1, w2):
     )
 
 
-@numba.njit(cache=True)
-def sense_ground(
-    qpos,
-    qvel,
-    robot_q,
-    robot_v,
-    ball_q,
-    ball_v,
-    act,
-    M,
-    n_wheels,
-    enabled,
-    slow_since,
-    step,
-    stuck_steps,
-    half_length,
-    half_width,
-    sign,
-    others,
-    own,
-    balls,
-    valid,
-    stuck,
-    obs,
-    wheels,
-):
-    """`robot_flags` and `perceive` (exact: no noise) in one call, for a world of ground robots alone, straight
-    from the engine's ``qpos``/``qvel`` (robots' planar joints from robot_q/robot_v on, the ball's free joint at
-    ball_q/ball_v) into float32 arrays laid out as the perception messages take them: own (n, 6) x y yaw vx vy
-    w, balls (n, 8) x y z vx vy vz angle distance, obs (n * 6, n - 1) each observer's six rows x y vx vy angle
-    distance, wheels (n, W) measured rim speeds (zeros beyond a robot's wheels); valid and stuck (n,) bool;
-    updates slow_since. Every number is computed in float64 by the same operations as those two kernels and
-    rounded once, as their arrays' ``astype(float32)`` is: the messages are the same bit for bit."""
-    n = sign.shape[0]
-    m = others.shape[1]
-    W = M.shape[1]
-    bx = qpos[ball_q]
-    by = qpos[ball_q + 1]
-    bz = qpos[ball_q + 2]
-    bvx = qvel[ball_v]
-    bvy = qvel[ball_v + 1]
-    bvz = qvel[ball_v + 2]
-    for i in range(n):
-        x = qpos[robot_q + 3 * i]
-        y = qpos[robot_q + 3 * i + 1]
-        yaw = qpos[robot_q + 3 * i + 2]
-        vx = qvel[robot_v + 3 * i]
-        vy = qvel[robot_v + 3 * i + 1]
-        w = qvel[robot_v + 3 * i + 2]
-        # robot_flags
-        c = np.cos(yaw)
-        s_ = np.sin(yaw)
-        fvx = c * vx + s_ * vy
-        fvy = c * vy - s_ * vx
-        for k in range(W):
-            wheels[i, k] = (M[i, k, 0] * fvx + M[i, k, 1] * fvy + M[i, k, 2] * w) if k < n_wheels[i] else 0.0
-        valid[i] = abs(x) <= half_length + 1.0 and abs(y) <= half_width + 1.0 and enabled[i]
-        stuck[i] = _stuck(i, vx, vy, act, slow_since, step, stuck_steps)
-        # perceive, without noise (adding a zero changes no number)
-        s = sign[i]
-        px = x + 0.0
-        py = y + 0.0
-        yw = yaw + 0.0
-        own[i, 0] = s * px
-        own[i, 1] = s * py
-        own[i, 2] = _wrap(yw + (0.0 if s > 0 else np.pi))
-        own[i, 3] = s * (vx + 0.0)
-        own[i, 4] = s * (vy + 0.0)
-        own[i, 5] = w
-        ex = bx + 0.0
-        ey = by + 0.0
-        balls[i, 0] = s * ex
-        balls[i, 1] = s * ey
-        balls[i, 2] = bz
-        balls[i, 3] = s * (bvx + 0.0)
-        balls[i, 4] = s * (bvy + 0.0)
-        balls[i, 5] = bvz
-        balls[i, 6], balls[i, 7] = _polar(ex - px, ey - py, yw)
-        for k in range(m):
-            j = others[i, k]
-            ox = qpos[robot_q + 3 * j] + 0.0
-            oy = qpos[robot_q + 3 * j + 1] + 0.0
-            obs[6 * i, k] = s * ox
-            obs[6 * i + 1, k] = s * oy
-            obs[6 * i + 2, k] = s * (qvel[robot_v + 3 * j] + 0.0)
-            obs[6 * i + 3, k] = s * (qvel[robot_v + 3 * j + 1] + 0.0)
-            obs[6 * i + 4, k], obs[6 * i + 5, k] = _polar(ox - px, oy - py, yw)
+@kernel(
+    qpos=Vector,
+    qvel=Vector,
+    joints=JOINTS,
+    flags=FLAG_INPUTS,
+    step=Int,
+    **_OBSERVERS,
+    R=Matrix,
+    ball=Vector,
+    **_PERCEIVED,
+    wheels=Matrix32,
+    valid=Flags,
+    stuck=Flags,
+)
+def sense_ground(qpos, qvel, joints, flags, step, sign, others, noise, R, ball, own, balls, obs, wheels, valid, stuck):
+    """`robot_flags` and `perceive` of a world of ground robots alone, straight from the engine's ``qpos`` and
+    ``qvel``: the robots' and the ball's states are read into ``R`` (n, 6) and ``ball`` (6,) first."""
+    for i in range(R.shape[0]):
+        for k in range(3):
+            R[i, k] = qpos[joints.robot_q + 3 * i + k]
+            R[i, 3 + k] = qvel[joints.robot_v + 3 * i + k]
+    for k in range(3):
+        ball[k] = qpos[joints.ball_q + k]
+        ball[3 + k] = qvel[joints.ball_v + k]
+    robot_flags(R, flags, step, wheels, valid, stuck)
+    perceive(R, ball, sign, others, noise, own, balls, obs)
 
 
 # --- the exact states' fingerprint ---------------------------------------------------------------------------
@@ -428,9 +426,8 @@ def sense_ground(
 # re-simulation is checked below the float32 the states are recorded in. It needs to tell any difference, not
 # to resist an adversary: per 64-bit word of the states a round like xxHash64's (the word's product xored in,
 # not added), then xxHash64's final mix. Each step is a bijection of the running value, so a difference in one
-# word always changes the result; two differences cancel with a chance of 1 in 2**64. SHA-256 took 0.8 us a
-# tick with the processor's SHA instructions, its hash object and digest as Python objects besides; measured in
-# a running match, the fingerprint cost 1.3-1.7 % of its time (now 0.6 us: one compiled call).
+# word always changes the result; two differences cancel with a chance of 1 in 2**64. It is cheap enough to take
+# at every control tick, where a cryptographic hash would be a visible part of a match's time.
 _P1 = np.uint64(0x9E3779B185EBCA87)
 _P2 = np.uint64(0xC2B2AE3D27D4EB4F)
 _P3 = np.uint64(0x165667B19E3779F9)
@@ -438,7 +435,7 @@ _L31, _R33 = np.uint64(31), np.uint64(33)  # a rotation left by 31 bits
 _S33, _S29, _S32 = np.uint64(33), np.uint64(29), np.uint64(32)
 
 
-@numba.njit(cache=True)
+@kernel
 def mix64(words):
     """The fingerprint of ``words`` (uint64, C-ordered): see above; the same on every machine (integer
     arithmetic modulo 2**64)."""
@@ -454,13 +451,13 @@ def mix64(words):
     return h
 
 
-@numba.njit(cache=True)
+@kernel(**_MODEL_STATES, state=Vector, words=Words)
 def model_fingerprint(qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, state, words):
-    """`mix64` of the exact poses then twists (`model_poses`' numbers), filled into the float64 block ``state``
-    (13 (n+1) zeros, the positions `model_poses` leaves zero never written) whose words ``words`` are (its
-    uint64 view): one compiled call a control tick."""
+    """`mix64` of the exact poses then twists (`fill_model_states`' numbers), filled into the float64 block
+    ``state`` (13 (n+1) zeros, the positions `fill_model_states` leaves zero never written) whose words
+    ``words`` are (its uint64 view)."""
     m = n + 1
-    _fill_model_poses(
+    fill_model_states(
         qpos, qvel, robot_q, robot_v, n, ball_q, ball_v, state[: 7 * m].reshape((m, 7)), state[7 * m :].reshape((m, 6))
     )
     return mix64(words)

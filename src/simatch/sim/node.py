@@ -117,7 +117,7 @@ class SimulatorNode(Node):
     def tick(self, now: float) -> None:
         sim = self.sim
         k = sim.step_index
-        inputs = sim._inputs  # (`Simulator.inputs` without the property's call: read at every step)
+        inputs = sim._inputs  # the log itself, None while off
         if inputs is not None and inputs.kind:  # made between the steps: before this step's states go out
             if self.pub_inputs.active:
                 self.pub_inputs.put(inputs.take(now, k, True))
@@ -132,7 +132,7 @@ class SimulatorNode(Node):
         due = self._due_at[into]
         if due is not None:
             pubs = self.pub_vision
-            for i in due:  # (no generator's frame: `any(pubs[i].active for i in due)`)
+            for i in due:  # perception is made if anybody listens to one of the due robots
                 if pubs[i].active:
                     infos = sim.observations(now, k // cs, None if len(due) == len(pubs) else due)
                     for j in due:
@@ -161,7 +161,7 @@ class SimulatorNode(Node):
                     _BallContacts(
                         now,
                         k,
-                        list(map(names.__getitem__, touching)),  # (no comprehension's frame: every step)
+                        list(map(names.__getitem__, touching)),
                         names[holder] if holder >= 0 else "",
                         names[kicker] if kicker >= 0 else "",
                         ball.kicked_speed if kicker >= 0 else 0.0,
@@ -199,7 +199,7 @@ class PhysicsNode(Node):
 
     def tick(self, now: float) -> None:
         sim = self.sim
-        inputs = sim._inputs  # (`Simulator.inputs` without the property's call: read at every step)
+        inputs = sim._inputs  # the log itself, None while off
         listened = self.pub_inputs.active
         if inputs is not None and inputs.kind:
             if listened:

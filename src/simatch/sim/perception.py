@@ -26,14 +26,14 @@ from itertools import islice, repeat
 import numpy as np
 
 from .. import msgs
-from .kernels import perceive
+from ..compiled import bind
+from .kernels import Noise, perceive
 
-# built positionally (several hundred messages per simulated second; see msgs.positional)
+# the messages' makers by position (see msgs.positional): every robot's messages are made at every tick
 _BallInfo = msgs.positional(msgs.BallInfo, "state x y z vx vy vz angle distance pos_known velocity_known")
 _ObstaclesInfo = msgs.positional(msgs.ObstaclesInfo, "x y vx vy angle distance radius z")
 _RobotInfo = msgs.positional(msgs.RobotInfo, "id x y yaw vx vy w valid stuck holding_ball wheel_speeds z vz")
 _OmniVisionInfo = msgs.positional(msgs.OmniVisionInfo, "stamp tick robot_id ball obstacles robots")
-_EMPTY = np.zeros(0, dtype=np.float32)
 _F32 = np.float32
 
 
@@ -49,11 +49,6 @@ class Snapshot:
     valid: np.ndarray  # (N,) bool
     stuck: np.ndarray  # (N,) bool
     heights: np.ndarray | None = None  # (N, 2): z, vz of each robot's origin (None: all on the ground)
-
-
-def wrap(a):
-    """Angle(s) wrapped to [-pi, pi)."""
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 class Perception:
@@ -82,13 +77,10 @@ class Perception:
         self.history: deque[Snapshot] = deque(maxlen=self.delay_steps + 1)
         n = self.n
         self.others = np.array([[j for j in range(n) if j != i] for i in range(n)], dtype=int).reshape(n, max(n - 1, 0))
-        self._turn = np.where(self.sign > 0, 0.0, np.pi)
         m = max(n - 1, 0)
-        self._no_own_noise, self._no_ball_noise, self._no_obs_noise = (
-            np.zeros((n, 5)),
-            np.zeros((n, 4)),
-            np.zeros((n, m, 4)),
-        )
+        #: exact perception's noise: none
+        self.noise_free = Noise(np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4)))
+        self._perceive = bind(perceive)
         self._orad = (self.radii[self.others] if n > 1 else np.zeros((n, 0))).astype(_F32)
         self._orad.setflags(write=False)  # its rows are in every tick's messages: nobody may change them
         self._orad_rows = list(self._orad)
@@ -99,11 +91,14 @@ class Perception:
         self._oz.setflags(write=False)
         self._oz_rows = list(self._oz)
         self._nw = [int(k) for k in n_wheels]
-        # the exact perception of a world of ground robots (`Simulator.observations`' one compiled call):
-        # the numbers read into Python floats come through these arrays, reused at every tick (no message
-        # holds them); the arrays a message holds (obstacles, wheel speeds) are made fresh at every tick
+        # what `kernels.perceive` writes and the messages read into Python numbers, reused at every tick (no
+        # message holds them; the arrays a message holds, obstacles and wheel speeds, are made fresh at every
+        # tick): each robot's own state and the ball it sees, and, for `kernels.sense_ground`, the robots' and
+        # the ball's world states and the robots' flags
         self.own32 = np.zeros((n, 6), dtype=_F32)
         self.balls32 = np.zeros((n, 8), dtype=_F32)
+        self.R = np.zeros((n, 6))
+        self.ball = np.zeros(6)
         self.valid = np.zeros(n, dtype=bool)
         self.stuck = np.zeros(n, dtype=bool)
         self._team_members = list(self.members.values())
@@ -121,8 +116,7 @@ class Perception:
 
     def set_signs(self, signs: np.ndarray) -> None:
         """Every robot's team frame from now on (+1: the world frame, -1: the world turned by pi)."""
-        self.sign = signs.astype(float)
-        self._turn = np.where(self.sign > 0, 0.0, np.pi)
+        self.sign[:] = signs
 
     @property
     def needs_history(self) -> bool:
@@ -137,129 +131,104 @@ class Perception:
         return self.history[0]
 
     # -----------------------------------------------------------------------------------------------------
-    def observe_exact(self, obs: np.ndarray, wheels: np.ndarray, holder: int, stamp: float, tick: int) -> list:
-        """`observe` of every robot for exact perception (no noise, no dropout, no sight rules, no latency),
-        from the numbers `kernels.sense_ground` wrote: ``own32``, ``balls32``, ``valid``, ``stuck`` (this
-        object's, read into Python values here) and ``obs`` (n * 6, n - 1), ``wheels`` (n, W), fresh float32
-        arrays whose rows the messages keep. The same messages, field for field, as `observe` makes of the
-        same world, with far fewer steps between (tests/sim/test_fast_paths.py holds them equal)."""
-        n, ids = self.n, self._ids
-        # every message by `map` over per-field lists (numbers read in bulk by `tolist`): the makers are called
-        # from C, with no bytecode per message
-        x, y, yaw, vx, vy, w = self.own32.T.tolist()
-        holding = self._nobody.copy()
-        if holder >= 0:
-            holding[holder] = True
-        # (row views taken by an iterator stopped after the last row: iterating an array to its end raises an
-        # IndexError inside NumPy, a formatted message, a few thousand instructions each time)
-        wrows = list(islice(wheels, n))
-        if self._short_wheels:  # a robot with fewer wheels than the widest: its first ones
-            wrows = [r[:k] for r, k in zip(wrows, self._nw)]
-        z = self._ground_z
-        infos = list(
-            map(_RobotInfo, ids, x, y, yaw, vx, vy, w, self.valid.tolist(), self.stuck.tolist(), holding, wrows, z, z)
-        )
-        team_infos = [[infos[i] for i in idx] for idx in self._team_members]
-        rows = iter(obs)  # each robot's six rows, then the obstacles' radii and heights (constant)
-        obstacles = map(_ObstaclesInfo, islice(rows, n), rows, rows, rows, rows, rows, self._orad_rows, self._oz_rows)
-        bx, by, bz, bvx, bvy, bvz, angle, distance = self.balls32.T.tolist()
-        seen = self._seen
-        balls = map(_BallInfo, self._seen_state, bx, by, bz, bvx, bvy, bvz, angle, distance, seen, seen)
-        teams = map(team_infos.__getitem__, self._team_index)
-        return list(map(_OmniVisionInfo, repeat(stamp, n), repeat(tick, n), ids, balls, obstacles, teams))
-
     def observe(self, snap: Snapshot, stamp: float, tick: int, only: list[int] | None = None) -> list:
         """One OmniVisionInfo per robot (in robot order); with ``only``, messages for those robots alone (None
         in the others' places: a real-time server takes each robot's perception at its own step). The noise
         is drawn for every robot either way."""
-        n = self.n
+        n, m = self.n, max(self.n - 1, 0)
+        noise = self.noise_free if self.exact else self._draw_noise()
+        obs = np.empty((6 * n, m), dtype=_F32)  # fresh: the messages keep its rows
+        self._perceive(snap.robots, snap.ball, self.sign, self.others, noise, self.own32, self.balls32, obs)
         spec, rng = self.spec, self.rng
-        m = max(n - 1, 0)
-        own_noise, ball_noise, obs_noise = self._no_own_noise, self._no_ball_noise, self._no_obs_noise
-        if not self.exact:
-            pos, vel, head = spec.position_noise, spec.velocity_noise, spec.heading_noise
-            own_noise = np.zeros((n, 5))
-            ball_noise = np.zeros((n, 4))
-            obs_noise = np.zeros((n, m, 4))
-            if pos > 0:  # own pose (self-localisation), the ball and every obstacle
-                own_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
-                ball_noise[:, :2] = rng.normal(0.0, pos, (n, 2))
-                obs_noise[:, :, :2] = rng.normal(0.0, pos, (n, m, 2))
-            if head > 0:
-                own_noise[:, 2] = rng.normal(0.0, head, n)
-            if vel > 0:
-                own_noise[:, 3:] = rng.normal(0.0, vel, (n, 2))
-                ball_noise[:, 2:] = rng.normal(0.0, vel, (n, 2))
-                obs_noise[:, :, 2:] = rng.normal(0.0, vel, (n, m, 2))
-        own, balls, obs = perceive(snap.robots, snap.ball, self.sign, self.others, own_noise, ball_noise, obs_noise)
-        own, balls, obs = own.astype(_F32), balls.astype(_F32), obs.astype(_F32)  # the messages' precision
-        seen = [True] * n if spec.ball_dropout == 0 else (rng.random(n) >= spec.ball_dropout).tolist()
-        keep = None
-        if spec.obstacle_dropout > 0 and n > 1:
-            keep = rng.random((n, m)) >= spec.obstacle_dropout
+        seen = None if spec.ball_dropout == 0 else (rng.random(n) >= spec.ball_dropout).tolist()
+        keep = rng.random((n, m)) >= spec.obstacle_dropout if spec.obstacle_dropout > 0 and n > 1 else None
         if snap.heights is None:
-            tz = tvz = self._ground_z
+            z = vz = self._ground_z
             oz = self._oz
         else:
             hz = snap.heights.astype(_F32)
-            tz, tvz = hz[:, 0].tolist(), hz[:, 1].tolist()
+            z, vz = hz[:, 0].tolist(), hz[:, 1].tolist()
             oz = hz[:, 0][self.others] if n > 1 else np.zeros((n, 0), dtype=_F32)
         if self.sight is not None:
             Z = snap.heights[:, 0] if snap.heights is not None else np.zeros(n)
             vis, ball_vis = self.sight.visible(snap.robots, Z, snap.ball, self.others)
             keep = vis if keep is None else keep & vis
-            seen = [a and b for a, b in zip(seen, ball_vis.tolist())]
+            seen = ball_vis.tolist() if seen is None else [a and b for a, b in zip(seen, ball_vis.tolist())]
+        wheels = [row[:k] for row, k in zip(snap.wheels.astype(_F32), self._nw)]
+        out = self._messages(
+            obs, wheels, snap.valid.tolist(), snap.stuck.tolist(), snap.holder, z, vz, oz, seen, keep, stamp, tick
+        )
+        if only is not None:
+            wanted = set(only)
+            out = [msg if i in wanted else None for i, msg in enumerate(out)]
+        return out
 
-        # per-robot numbers as Python floats, converted in bulk (building messages from numpy scalars is slow)
-        tx, ty, tyaw, tvx, tvy, tw = own.T.tolist()
-        valid, stuck = snap.valid.tolist(), snap.stuck.tolist()
-        wheels = list(snap.wheels.astype(_F32))
-        ids, nw, holder = self._ids, self._nw, snap.holder
-        team_of = self.team_of
-        wanted = range(n) if only is None else only
-        teams = self.members if only is None else {team_of[i] for i in only}
-        team_infos = {}
-        for team in teams:
-            idx = self.members[team]
-            team_infos[team] = [
-                _RobotInfo(
-                    ids[i],
-                    tx[i],
-                    ty[i],
-                    tyaw[i],
-                    tvx[i],
-                    tvy[i],
-                    tw[i],
-                    valid[i],
-                    stuck[i],
-                    holder == i,
-                    wheels[i][: nw[i]],
-                    tz[i],
-                    tvz[i],
-                )
-                for i in idx
-            ]
-        sx, sy, svx, svy, bang, bdist = balls.T.tolist()
-        bz, bvz = msgs.f32s(snap.ball[2], snap.ball[5])
-        if n > 1:
-            if only is None and keep is None:  # each robot's row of every array
-                rows_z = self._oz_rows if oz is self._oz else list(oz)
-                obstacles = [_ObstaclesInfo(*row) for row in zip(*(list(a) for a in obs), self._orad_rows, rows_z)]
-            else:  # every array's row, of the obstacles each robot keeps, in one indexing per robot
-                stacked = np.concatenate((obs, self._orad[None], oz[None]))
-                obstacles = [None] * n
-                for i in wanted:
-                    k = slice(None) if keep is None else keep[i]
-                    obstacles[i] = _ObstaclesInfo(*stacked[:, i, k])
+    def observe_exact(self, obs: np.ndarray, wheels: np.ndarray, holder: int, stamp: float, tick: int) -> list:
+        """`observe` of every robot for exact perception (no noise, no dropout, no sight rules, no latency),
+        from the numbers `kernels.sense_ground` wrote: ``own32``, ``balls32``, ``valid``, ``stuck`` (this
+        object's) and ``obs`` (n * 6, n - 1), ``wheels`` (n, W), fresh float32 arrays whose rows the messages
+        keep."""
+        # the rows by an iterator that stops at the last one (running an array's own iterator to its end makes
+        # NumPy raise and catch an IndexError)
+        rows = list(islice(wheels, self.n))
+        if self._short_wheels:  # a robot with fewer wheels than the widest: its first ones
+            rows = [r[:k] for r, k in zip(rows, self._nw)]
+        z = self._ground_z
+        return self._messages(
+            obs, rows, self.valid.tolist(), self.stuck.tolist(), holder, z, z, self._oz, None, None, stamp, tick
+        )
+
+    def _messages(self, obs, wheels, valid, stuck, holder, z, vz, oz, seen, keep, stamp, tick) -> list:
+        """Every robot's OmniVisionInfo from what `kernels.perceive` wrote (``own32``, ``balls32``, ``obs``) and
+        the robots' flags: their wheel speeds' rows, valid, stuck, the ball's ``holder``, heights ``z``, ``vz``
+        (n,) and the heights of the robots each sees ``oz`` (n, n-1); ``seen`` (n,) which robots see the
+        ball (None: all) and ``keep`` (n, n-1) which robots each sees (None: all).
+
+        The messages are made by `map` over per-field lists (numbers read in bulk by `tolist`): the message
+        makers are called from C, with no bytecode per message."""
+        n, ids = self.n, self._ids
+        x, y, yaw, vx, vy, w = self.own32.T.tolist()
+        holding = self._nobody.copy()
+        if holder >= 0:
+            holding[holder] = True
+        infos = list(map(_RobotInfo, ids, x, y, yaw, vx, vy, w, valid, stuck, holding, wheels, z, vz))
+        team_infos = [[infos[i] for i in idx] for idx in self._team_members]
+        teams = map(team_infos.__getitem__, self._team_index)
+        if keep is None:  # each robot's six rows, then the radii and heights of the robots it sees
+            rows = iter(obs)
+            oz_rows = self._oz_rows if oz is self._oz else list(oz)
+            obstacles = map(_ObstaclesInfo, islice(rows, n), rows, rows, rows, rows, rows, self._orad_rows, oz_rows)
+        else:  # each robot's rows of the robots it keeps, in one indexing
+            stacked = np.concatenate((obs.reshape(n, 6, n - 1), self._orad[:, None], oz[:, None]), axis=1)
+            obstacles = [_ObstaclesInfo(*stacked[i][:, keep[i]]) for i in range(n)]
+        bx, by, bz, bvx, bvy, bvz, angle, distance = self.balls32.T.tolist()
+        if seen is None:
+            everyone = self._seen
+            balls = map(_BallInfo, self._seen_state, bx, by, bz, bvx, bvy, bvz, angle, distance, everyone, everyone)
         else:
-            obstacles = [_ObstaclesInfo(_EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY)] * n
-        unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
-        out = [None] * n
-        for i in wanted:
-            ball = (
-                _BallInfo(1, sx[i], sy[i], bz, svx[i], svy[i], bvz, bang[i], bdist[i], True, True)
+            unseen = _BallInfo(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
+            balls = [
+                _BallInfo(1, bx[i], by[i], bz[i], bvx[i], bvy[i], bvz[i], angle[i], distance[i], True, True)
                 if seen[i]
                 else unseen
-            )
-            out[i] = _OmniVisionInfo(stamp, tick, ids[i], ball, obstacles[i], team_infos[team_of[i]])
-        return out
+                for i in range(n)
+            ]
+        return list(map(_OmniVisionInfo, repeat(stamp, n), repeat(tick, n), ids, balls, obstacles, teams))
+
+    def _draw_noise(self) -> Noise:
+        """This tick's noise on what each robot perceives, from the scene's standard deviations."""
+        n, m = self.n, max(self.n - 1, 0)
+        spec, rng = self.spec, self.rng
+        pos, vel, head = spec.position_noise, spec.velocity_noise, spec.heading_noise
+        noise = Noise(np.zeros((n, 5)), np.zeros((n, 4)), np.zeros((n, m, 4)))
+        if pos > 0:  # own pose (self-localisation), the ball and every obstacle
+            noise.own[:, :2] = rng.normal(0.0, pos, (n, 2))
+            noise.ball[:, :2] = rng.normal(0.0, pos, (n, 2))
+            noise.obstacles[:, :, :2] = rng.normal(0.0, pos, (n, m, 2))
+        if head > 0:
+            noise.own[:, 2] = rng.normal(0.0, head, n)
+        if vel > 0:
+            noise.own[:, 3:] = rng.normal(0.0, vel, (n, 2))
+            noise.ball[:, 2:] = rng.normal(0.0, vel, (n, 2))
+            noise.obstacles[:, :, 2:] = rng.normal(0.0, vel, (n, m, 2))
+        return noise

@@ -1,5 +1,5 @@
 """What each robot can see: sight lines blocked by obstacles, a drone camera's cone, a range (all switchable
-in the scene's ``[perception]``, all off by default: then every robot sees everything, as before).
+in the scene's ``[perception]``, all off by default: then every robot sees everything).
 
 * ``line_of_sight``: a robot sees another robot (or the ball) only if the straight line from its eye to
   the other's top (a drone's centre, the ball's centre) passes through no static obstacle of the world. A
@@ -11,7 +11,7 @@ in the scene's ``[perception]``, all off by default: then every robot sees every
   reach. A drone's reach is its cone.
 
 The test is one compiled call per control period for all robots (segments against boxes and cylinders,
-exact), so hiding things costs microseconds.
+exact).
 """
 
 from __future__ import annotations
@@ -19,10 +19,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from ..compiled import kernel
+
 BOX, CYLINDER = 0, 1
+#: a static obstacle as the sight lines test it: its shape (`BOX` or `CYLINDER`), centre, heading, half sizes
+#: (a cylinder's radius in ``half_x``) and height, solid from the floor up [m, rad]
+OBSTACLE = np.dtype([(name, np.float64) for name in ("shape", "x", "y", "yaw", "half_x", "half_y", "height")])
 
 
 @dataclass
@@ -31,7 +35,7 @@ class Sight:
     eye: np.ndarray  # (N,) height of the eye above the robot's origin [m]
     top: np.ndarray  # (N,) height of the point others look at above the robot's origin [m]
     cone: np.ndarray  # (N,) tangent of a drone camera's half-angle (0 for ground robots)
-    obstacles: np.ndarray  # (K, 7): shape, x, y, yaw, half_x or radius, half_y, height
+    obstacles: np.ndarray  # (K,) `OBSTACLE` records
     line_of_sight: bool
     footprint: bool
     ground_range: float  # 0: no limit
@@ -55,7 +59,7 @@ class Sight:
             else (BOX, o.x, o.y, o.yaw, o.half_x, o.half_y, o.height)
             for o in field.obstacles
         ]
-        obstacles = np.array(rows, dtype=float).reshape(-1, 7)
+        obstacles = np.array(rows, dtype=OBSTACLE)
         return cls(aerial, heights, heights, cone, obstacles, los, footprint, float(spec.ground_range or 0.0))
 
     def visible(self, R: np.ndarray, Z: np.ndarray, ball: np.ndarray, others: np.ndarray):
@@ -77,7 +81,7 @@ class Sight:
         )
 
 
-@numba.njit(cache=True)
+@kernel
 def _clip(t0, t1, p, d, lo, hi):
     """Narrow [t0, t1] to where p + t d lies in [lo, hi]."""
     if abs(d) < 1e-12:
@@ -91,16 +95,17 @@ def _clip(t0, t1, p, d, lo, hi):
     return max(t0, a), min(t1, b)
 
 
-@numba.njit(cache=True)
+@kernel
 def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     """Whether the segment from (x0, y0, z0) to (x1, y1, z1) passes through any obstacle (solid from the
     floor up to its height)."""
     dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
     L2 = dx * dx + dy * dy
     for k in range(obstacles.shape[0]):
-        shape, cx, cy, yaw, a, b, h = obstacles[k]
+        o = obstacles[k]
+        cx, cy, a, b = o.x, o.y, o.half_x, o.half_y
         # quick rejection: the segment's horizontal distance from the centre against the bounding circle
-        reach = a if shape == CYLINDER else math.sqrt(a * a + b * b)
+        reach = a if o.shape == CYLINDER else math.sqrt(a * a + b * b)
         if L2 > 0.0:
             t = min(max(((cx - x0) * dx + (cy - y0) * dy) / L2, 0.0), 1.0)
         else:
@@ -108,11 +113,11 @@ def blocked(x0, y0, z0, x1, y1, z1, obstacles):
         ex, ey = x0 + t * dx - cx, y0 + t * dy - cy
         if ex * ex + ey * ey > reach * reach:
             continue
-        t0, t1 = _clip(0.0, 1.0, z0, dz, 0.0, h)
+        t0, t1 = _clip(0.0, 1.0, z0, dz, 0.0, o.height)
         if t0 >= t1:
             continue
         px, py = x0 - cx, y0 - cy
-        if shape == CYLINDER:
+        if o.shape == CYLINDER:
             # |p + t d|^2 <= r^2 (horizontal)
             qa = L2
             qb = 2.0 * (px * dx + py * dy)
@@ -128,7 +133,7 @@ def blocked(x0, y0, z0, x1, y1, z1, obstacles):
                 t0 = max(t0, (-qb - sq) / (2.0 * qa))
                 t1 = min(t1, (-qb + sq) / (2.0 * qa))
         else:
-            c, s = math.cos(yaw), math.sin(yaw)
+            c, s = math.cos(o.yaw), math.sin(o.yaw)
             lx, ly = c * px + s * py, -s * px + c * py
             ldx, ldy = c * dx + s * dy, -s * dx + c * dy
             t0, t1 = _clip(t0, t1, lx, ldx, -a, a)
@@ -138,7 +143,7 @@ def blocked(x0, y0, z0, x1, y1, z1, obstacles):
     return False
 
 
-@numba.njit(cache=True)
+@kernel
 def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max_range):
     ex, ey, ez = R[i, 0], R[i, 1], Z[i] + eye[i]
     dx, dy, dz = tx - ex, ty - ey, tz - ez
@@ -153,7 +158,7 @@ def _sees(i, tx, ty, tz, R, Z, aerial, eye, cone, obstacles, los, footprint, max
     return True
 
 
-@numba.njit(cache=True)
+@kernel
 def sight_lines(R, Z, ball, others, aerial, eye, top, cone, obstacles, los, footprint, max_range):
     n, m = others.shape
     vis = np.empty((n, m), dtype=np.bool_)

@@ -2,11 +2,10 @@
 
 MuJoCo times the phases of every step (``MjData.timer``: position, velocity, collision, constraint
 solver ...) with the clock it gets from the global callback ``mjcb_time``, or from the system clock
-when none is installed: some twenty clock reads per physics step. simatch never reads those timers,
-and the reads cost about 3 % of the physics step of the shipped 5v5 world (physics alone,
-``simatch bench --only physics``, CPU time: 195-203 against 202-207 with a clock that returns 0).
-`keep_timers_off` installs such a clock, a native function (a numba C callback), so MuJoCo calls it
-without the interpreter; its timers then read 0 and their counts still count.
+when none is installed, some twenty times per physics step. simatch never reads those timers, so it
+does not pay for the clock: `keep_timers_off` installs a clock that returns 0, a native function (a numba
+C callback) that MuJoCo calls without the interpreter; the timers then read 0 and their counts still
+count.
 
 The callback is MuJoCo's and global: it holds for every model of the process. So it is installed
 only where nobody else has installed one (a program that embeds simatch and sets its own clock keeps

@@ -23,7 +23,8 @@ import numpy as np
 
 from ..config.schema import Scene
 from ..field import FieldGeometry, Obstacle
-from ..robots import HULL_HEIGHT, RobotModel, model_class
+from ..robots import RobotModel, model_class
+from ..robots.body import add_freeze_weld, add_ground_robot
 from .airframe import AerialIndex, add_airframe, aerial_index
 
 FLOOR, HULL, BALL, MOUTH, STATIC, AIR = 1, 2, 4, 8, 16, 32
@@ -90,43 +91,20 @@ def add_obstacle(static_body, static_geom, ob: Obstacle) -> str:
     return ob.name
 
 
-def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex, FieldGeometry]:
-    spec = mujoco.MjSpec()
-    spec.modelname = scene.name
-    opt = spec.option
-    opt.timestep = scene.physics.timestep
-    opt.gravity = [0.0, 0.0, -scene.physics.gravity]
-    opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
-    # elliptic friction cones: with pyramidal ones the rolling-friction rows of the ball's floor contact
-    # make a rolling ball hop and slip (measured); elliptic cones roll it cleanly
-    opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    opt.iterations = scene.physics.solver_iterations
-    opt.tolerance = scene.physics.solver_tolerance
-    # measured on the msl_5v5 benchmark, same trajectories either way: the mid-phase tree only costs time
-    # with a handful of primitives per body, and no joint has damping for Euler to treat implicitly
-    opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_MIDPHASE | mujoco.mjtDisableBit.mjDSBL_EULERDAMP
-    geo = scene.world.geometry()
-    wb = spec.worldbody
+class StaticParts:
+    """The world's static parts (boards, goals, obstacles, a ceiling): each a body of its own, so that the
+    broad phase pairs a robot or the ball only with the parts near it (geoms of the world body share one huge
+    bounding box). Every geom added is kept in ``geoms``."""
 
-    half_x = geo.half_length + geo.margin
-    half_y = geo.half_width + geo.margin
-    floor = wb.add_geom(
-        name="floor",
-        type=mujoco.mjtGeom.mjGEOM_PLANE,
-        size=[half_x + 2.0, half_y + 2.0, 0.1],
-        contype=FLOOR,
-        conaffinity=0,
-        condim=3,
-    )
+    def __init__(self, spec: mujoco.MjSpec):
+        self.worldbody = spec.worldbody
+        self.geoms: list = []
 
-    statics: list = []
+    def body(self, name: str):
+        return self.worldbody.add_body(name=name)
 
-    # Every board and goal is a static body of its own: the broad phase then pairs a robot or the ball
-    # only with the static parts near it (geoms of the world body share one huge bounding box).
-    def static_body(name: str):
-        return wb.add_body(name=name)
-
-    def static_box(body, name: str, center, half_sizes, damped: bool = False, kind=mujoco.mjtGeom.mjGEOM_BOX):
+    def box(self, body, name: str, center, half_sizes, damped: bool = False, kind=mujoco.mjtGeom.mjGEOM_BOX):
+        """A static geom (a box unless ``kind`` says otherwise); ``damped``: a net that swallows the ball."""
         g = body.add_geom(
             name=name,
             type=kind,
@@ -145,66 +123,133 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
             g.friction = [0.0, 0.005, 0.0001]
         else:
             g.solref = BALL_BODY_SOLREF
-        statics.append(g)
+        self.geoms.append(g)
         return g
 
+
+def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex, FieldGeometry]:
+    """The MuJoCo model and data of ``scene``, where its parts lie (`WorldIndex`), and its field."""
+    spec = _new_spec(scene)
+    geo = scene.world.geometry()
+    add_floor(spec, geo)
+    statics = StaticParts(spec)
     if geo.walls:
-        t, h = 0.05, geo.wall_height
-        for name, center, size in (
-            ("board_+x", (half_x + t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
-            ("board_-x", (-half_x - t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
-            ("board_+y", (0, half_y + t, h / 2), (half_x, t, h / 2)),
-            ("board_-y", (0, -half_y - t, h / 2), (half_x, t, h / 2)),
-        ):
-            static_box(static_body(name), name, center, size)
-
+        add_boards(statics, geo)
     if geo.goals:
-        p, gw, gh, gd = geo.goal_post_size, geo.goal_width, geo.goal_height, geo.goal_depth
-        net = 0.01
         for side, tag in ((-1, "cyan"), (1, "magenta")):
-            body = static_body(f"goal_{tag}")
-            x_line = side * geo.half_length
-            x_post = x_line + side * p / 2
-            for sy, ytag in ((1, "left"), (-1, "right")):
-                static_box(
-                    body,
-                    f"goal_{tag}_post_{ytag}",
-                    (x_post, sy * (gw / 2 + p / 2), (gh + p) / 2),
-                    (p / 2, p / 2, (gh + p) / 2),
-                )
-                static_box(
-                    body,
-                    f"goal_{tag}_net_{ytag}",
-                    (x_line + side * gd / 2, sy * (gw / 2 + p + net), gh / 2),
-                    (gd / 2, net, gh / 2),
-                    damped=True,
-                )
-            static_box(body, f"goal_{tag}_crossbar", (x_post, 0.0, gh + p / 2), (p / 2, gw / 2 + p, p / 2))
-            static_box(
-                body,
-                f"goal_{tag}_net_back",
-                (x_line + side * (gd + net), 0.0, gh / 2),
-                (net, gw / 2 + p, gh / 2),
-                damped=True,
-            )
-            static_box(
-                body,
-                f"goal_{tag}_net_top",
-                (x_line + side * gd / 2, 0.0, gh + net),
-                (gd / 2, gw / 2 + p, net),
-                damped=True,
-            )
-
-    obstacle_names = [add_obstacle(static_body, static_box, ob) for ob in geo.obstacles]
+            add_goal(statics, geo, side, tag)
+    obstacle_names = [add_obstacle(statics.body, statics.box, ob) for ob in geo.obstacles]
     if geo.ceiling is not None:
-        slab = 0.05
-        static_box(static_body("ceiling"), "ceiling", (0.0, 0.0, geo.ceiling + slab), (half_x, half_y, slab))
+        add_ceiling(statics, geo)
+    add_ball(spec, scene)
+    ground, flying = robot_entries(scene)
+    for entry in ground:
+        add_robot(spec, entry, scene)
+    for entry in flying:
+        add_airframe(spec, entry, AIR, FLOOR | HULL | BALL | STATIC | AIR)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    index = world_index(model, data, ground, flying, statics.geoms, obstacle_names, scene.physics.gravity)
+    for i, r in enumerate(ground):
+        data.qpos[index.robot_qpos[i]] = r.start
+    mujoco.mj_forward(model, data)
+    return model, data, index, geo
 
-    # --- ball -----------------------------------------------------------------------------------------------
+
+def _new_spec(scene: Scene) -> mujoco.MjSpec:
+    """An empty world with the scene's physics options."""
+    spec = mujoco.MjSpec()
+    spec.modelname = scene.name
+    opt = spec.option
+    opt.timestep = scene.physics.timestep
+    opt.gravity = [0.0, 0.0, -scene.physics.gravity]
+    opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    # elliptic friction cones: with pyramidal ones the rolling-friction rows of the ball's floor contact
+    # make a rolling ball hop and slip; elliptic cones roll it cleanly
+    opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    opt.iterations = scene.physics.solver_iterations
+    opt.tolerance = scene.physics.solver_tolerance
+    # the mid-phase tree pays off only with many primitives per body (ours have a handful), and no joint has
+    # damping for Euler to treat implicitly: both off, with the same trajectories
+    opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_MIDPHASE | mujoco.mjtDisableBit.mjDSBL_EULERDAMP
+    return spec
+
+
+def _half_extent(geo: FieldGeometry) -> tuple[float, float]:
+    """Half the length and width of the world inside the boards (the field and its margin) [m]."""
+    return geo.half_length + geo.margin, geo.half_width + geo.margin
+
+
+def add_floor(spec: mujoco.MjSpec, geo: FieldGeometry) -> None:
+    """The ground plane, two metres beyond the boards; only the ball touches it (robots are planar)."""
+    half_x, half_y = _half_extent(geo)
+    spec.worldbody.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[half_x + 2.0, half_y + 2.0, 0.1],
+        contype=FLOOR,
+        conaffinity=0,
+        condim=3,
+    )
+
+
+def add_boards(statics: StaticParts, geo: FieldGeometry) -> None:
+    """Four boards around the field and its margin."""
+    half_x, half_y = _half_extent(geo)
+    t, h = 0.05, geo.wall_height
+    for name, center, size in (
+        ("board_+x", (half_x + t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
+        ("board_-x", (-half_x - t, 0, h / 2), (t, half_y + 2 * t, h / 2)),
+        ("board_+y", (0, half_y + t, h / 2), (half_x, t, h / 2)),
+        ("board_-y", (0, -half_y - t, h / 2), (half_x, t, h / 2)),
+    ):
+        statics.box(statics.body(name), name, center, size)
+
+
+def add_goal(statics: StaticParts, geo: FieldGeometry, side: int, tag: str) -> None:
+    """The goal behind the line at x = ``side`` * half length: two posts and a crossbar that stop the ball,
+    and a net (sides, back, top) that swallows it."""
+    p, gw, gh, gd = geo.goal_post_size, geo.goal_width, geo.goal_height, geo.goal_depth
+    net = 0.01
+    body = statics.body(f"goal_{tag}")
+    x_line = side * geo.half_length
+    x_post = x_line + side * p / 2
+    for sy, ytag in ((1, "left"), (-1, "right")):
+        statics.box(
+            body,
+            f"goal_{tag}_post_{ytag}",
+            (x_post, sy * (gw / 2 + p / 2), (gh + p) / 2),
+            (p / 2, p / 2, (gh + p) / 2),
+        )
+        statics.box(
+            body,
+            f"goal_{tag}_net_{ytag}",
+            (x_line + side * gd / 2, sy * (gw / 2 + p + net), gh / 2),
+            (gd / 2, net, gh / 2),
+            damped=True,
+        )
+    statics.box(body, f"goal_{tag}_crossbar", (x_post, 0.0, gh + p / 2), (p / 2, gw / 2 + p, p / 2))
+    statics.box(
+        body, f"goal_{tag}_net_back", (x_line + side * (gd + net), 0.0, gh / 2), (net, gw / 2 + p, gh / 2), damped=True
+    )
+    statics.box(
+        body, f"goal_{tag}_net_top", (x_line + side * gd / 2, 0.0, gh + net), (gd / 2, gw / 2 + p, net), damped=True
+    )
+
+
+def add_ceiling(statics: StaticParts, geo: FieldGeometry) -> None:
+    """A slab over the whole world at the ceiling's height (drones fly below it)."""
+    half_x, half_y = _half_extent(geo)
+    slab = 0.05
+    statics.box(statics.body("ceiling"), "ceiling", (0.0, 0.0, geo.ceiling + slab), (half_x, half_y, slab))
+
+
+def add_ball(spec: mujoco.MjSpec, scene: Scene) -> None:
+    """The ball (a hollow sphere on a free joint) at its start, and its contact with the floor."""
     b = scene.ball
-    ball = wb.add_body(name=BALL_NAME, pos=[b.position[0], b.position[1], b.radius])
+    ball = spec.worldbody.add_body(name=BALL_NAME, pos=[b.position[0], b.position[1], b.radius])
     ball.add_freejoint(name="ball")
-    ball_geom = ball.add_geom(
+    ball.add_geom(
         name="ball",
         type=mujoco.mjtGeom.mjGEOM_SPHERE,
         size=[b.radius, 0, 0],
@@ -225,106 +270,48 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     # step size); the simulator applies the ball's restitution at each impact (see Simulator._bounce).
     ball_floor.solref = [2.0 * scene.physics.timestep, 1.0]
     ball_floor.solimp = [0.95, 0.99, 0.001, 0.5, 2.0]
-    # a softer friction constraint (rolling resistance included) keeps a fast-rolling ball on the floor:
-    # measured deceleration within 4 % of the setting from 0.1 to 2.5 m/s^2
+    # a softer friction constraint (rolling resistance included) keeps a fast-rolling ball on the floor: its
+    # deceleration stays within a few per cent of the setting from 0.1 to 2.5 m/s^2
     ball_floor.solreffriction = [0.1, 1.0]
 
-    # --- robots -----------------------------------------------------------------------------------------
+
+def robot_entries(scene: Scene) -> tuple[list[RobotEntry], list[RobotEntry]]:
+    """The scene's robots with their models, ground robots and aerial ones, each in the scene's order."""
     robots: list[RobotEntry] = []
     for team, tspec in scene.teams.items():
         for m in tspec.members():
             cls = model_class(m.model)
             robots.append(RobotEntry(f"{team}/{m.id}", team, m.id, cls(m.model_params), tuple(m.start)))
-    flying = [r for r in robots if r.model.aerial]
-    robots = [r for r in robots if not r.model.aerial]  # ground robots first: their joints are consecutive
+    return [r for r in robots if not r.model.aerial], [r for r in robots if r.model.aerial]
 
-    for entry in robots:
-        model = entry.model
-        p = model.params
-        body = wb.add_body(name=entry.name, pos=[0.0, 0.0, 0.0])
-        body.add_joint(name=f"{entry.name}/x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
-        body.add_joint(name=f"{entry.name}/y", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
-        body.add_joint(name=f"{entry.name}/yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
-        body.mass = model.mass
-        body.inertia = list(model.inertia())
-        body.ipos = [0.0, 0.0, p.height / 2]
-        body.explicitinertial = True
-        body.add_geom(
-            name=f"{entry.name}/hull",
-            type=mujoco.mjtGeom.mjGEOM_SPHERE,
-            pos=[0, 0, HULL_HEIGHT],
-            size=[p.radius, 0, 0],
-            contype=HULL,
-            conaffinity=HULL | STATIC,
-            condim=1,
-            mass=0,
-        )
-        cx, cr = model.ball_collider(b.radius)
-        body.add_geom(
-            name=f"{entry.name}/mouth",
-            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-            fromto=[cx, 0, b.radius, cx, 0, max(p.height - cr, b.radius + 1e-3)],
-            size=[cr, 0, 0],
-            contype=MOUTH,
-            conaffinity=0,
-            condim=3,
-            friction=[0.3, 0.005, 0.0001],
-            mass=0,
-            solref=BALL_BODY_SOLREF,
-        )
-        body.add_site(name=f"{entry.name}/base", pos=[0, 0, 0])
-        # The base's velocity servo, one per body axis (x, y, turn), acting in the robot frame through a
-        # site: force = kv (act - v) + bias, bounded by the traction limit. With the default response time
-        # of one physics step it is deadbeat: the base moves at its set point unless traction limits it.
-        # The set point is the actuator's activation, integrated by the engine from ctrl (its rate of
-        # change) and clamped at the target (actrange), so a planned wheel ramp runs without Python; the
-        # bias carries a small correction for exact arcs (see Simulator._plan_drive).
-        tau = p.response_time or scene.physics.timestep
-        for k, gear in enumerate(([1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 0, 0, 0, 1])):
-            act = spec.add_actuator(
-                name=f"{entry.name}/servo_{'xyw'[k]}",
-                trntype=mujoco.mjtTrn.mjTRN_SITE,
-                target=f"{entry.name}/base",
-                gear=gear,
-            )
-            inertia = model.mass if k < 2 else model.inertia()[2]
-            kv = inertia / tau
-            act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
-            act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-            act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-            act.gainprm[0] = kv
-            act.biasprm[0:3] = [0.0, 0.0, -kv]
-            act.actearly = True
-            act.actlimited = True
-            act.actrange = [-1.0, 1.0]  # set at run time by every plan
-            act.forcelimited = True
-            limit = p.max_force if k < 2 else p.max_torque
-            act.forcerange = [-limit, limit]
-        spec.add_equality(
-            name=f"{entry.name}/dribble",
-            type=mujoco.mjtEq.mjEQ_CONNECT,
-            objtype=mujoco.mjtObj.mjOBJ_BODY,
-            name1=entry.name,
-            name2=BALL_NAME,
-            active=False,
-            solref=[0.02, 1.0],
-        )
-        spec.add_equality(
-            name=f"{entry.name}/freeze",
-            type=mujoco.mjtEq.mjEQ_WELD,
-            objtype=mujoco.mjtObj.mjOBJ_BODY,
-            name1=entry.name,
-            name2="world",
-            active=False,
-            solref=[2.0 * scene.physics.timestep, 1.0],
-        )  # as stiff as the step allows
-    for entry in flying:
-        add_airframe(spec, entry, AIR, FLOOR | HULL | BALL | STATIC | AIR)
-    ground = robots
-    robots = ground + flying
 
-    model = spec.compile()
-    data = mujoco.MjData(model)
+def add_robot(spec: mujoco.MjSpec, entry: RobotEntry, scene: Scene) -> None:
+    """A ground robot's body (`simatch.robots.body`) and the simulator's two constraints on it, both off at
+    the start: the dribbler's hold on the ball and the weld that freezes it where it stands."""
+    add_ground_robot(
+        spec,
+        entry.name,
+        entry.model,
+        ball_radius=scene.ball.radius,
+        timestep=scene.physics.timestep,
+        hull=(HULL, HULL | STATIC),
+        mouth=(MOUTH, 0),
+        mouth_solref=BALL_BODY_SOLREF,
+    )
+    spec.add_equality(
+        name=f"{entry.name}/dribble",
+        type=mujoco.mjtEq.mjEQ_CONNECT,
+        objtype=mujoco.mjtObj.mjOBJ_BODY,
+        name1=entry.name,
+        name2=BALL_NAME,
+        active=False,
+        solref=[0.02, 1.0],
+    )
+    add_freeze_weld(spec, entry.name, [2.0 * scene.physics.timestep, 1.0])  # as stiff as the step allows
+
+
+def world_index(model, data, ground: list, flying: list, statics: list, obstacles: list, gravity: float) -> WorldIndex:
+    """Where every part of the compiled world lies (robots: ground ones, then aerial ones)."""
 
     def jq(name: str) -> int:
         return int(model.jnt_qposadr[model.joint(name).id])
@@ -332,22 +319,18 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
     def jv(name: str) -> int:
         return int(model.jnt_dofadr[model.joint(name).id])
 
+    def per_ground(address) -> np.ndarray:  # (Ng, 3): one address per planar joint or servo axis
+        return np.array([[address(r.name, k) for k in range(3)] for r in ground], dtype=int).reshape(-1, 3)
+
+    robots = ground + flying
+    servo = [model.actuator(f"{r.name}/servo_{a}").id for r in ground for a in "xyw"]
     index = WorldIndex(
         robots=robots,
         robot_body=np.array([model.body(r.name).id for r in robots], dtype=int),
-        robot_qpos=np.array([[jq(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in ground], dtype=int).reshape(
-            -1, 3
-        ),
-        robot_qvel=np.array([[jv(f"{r.name}/{j}") for j in ("x", "y", "yaw")] for r in ground], dtype=int).reshape(
-            -1, 3
-        ),
-        robot_ctrl=np.array(
-            [[model.actuator(f"{r.name}/servo_{a}").id for a in "xyw"] for r in ground], dtype=int
-        ).reshape(-1, 3),
-        robot_act=np.array(
-            [[model.actuator_actadr[model.actuator(f"{r.name}/servo_{a}").id] for a in "xyw"] for r in ground],
-            dtype=int,
-        ).reshape(-1, 3),
+        robot_qpos=per_ground(lambda name, k: jq(f"{name}/{('x', 'y', 'yaw')[k]}")),
+        robot_qvel=per_ground(lambda name, k: jv(f"{name}/{('x', 'y', 'yaw')[k]}")),
+        robot_ctrl=np.array(servo, dtype=int).reshape(-1, 3),
+        robot_act=np.array([model.actuator_actadr[a] for a in servo], dtype=int).reshape(-1, 3),
         robot_hull_geom=np.array([model.geom(f"{r.name}/hull").id for r in robots], dtype=int),
         robot_mouth_geom=np.array([model.geom(f"{r.name}/mouth").id for r in ground], dtype=int),
         dribble_eq=np.array([model.equality(f"{r.name}/dribble").id for r in ground] + [-1] * len(flying), dtype=int),
@@ -357,15 +340,11 @@ def build_world(scene: Scene) -> tuple[mujoco.MjModel, mujoco.MjData, WorldIndex
         ball_qvel=jv("ball"),
         ball_geom=model.geom("ball").id,
         static_geoms=np.array([model.geom(s.name).id for s in statics], dtype=int),
-        aerial=aerial_index(model, data, flying, len(ground), scene.physics.gravity) if flying else None,
-        obstacle_geoms=np.array([model.geom(name).id for name in obstacle_names], dtype=int),
+        aerial=aerial_index(model, data, flying, len(ground), gravity) if flying else None,
+        obstacle_geoms=np.array([model.geom(name).id for name in obstacles], dtype=int),
     )
-    for i, r in enumerate(robots):
+    for i in range(len(robots)):
         index.robot_of_geom[int(index.robot_hull_geom[i])] = i
         if i < len(ground):
             index.robot_of_geom[int(index.robot_mouth_geom[i])] = i
-            x, y, yaw = r.start
-            data.qpos[index.robot_qpos[i]] = (x, y, yaw)
-    mujoco.mj_forward(model, data)
-    del floor, ball_geom
-    return model, data, index, geo
+    return index
