@@ -25,7 +25,6 @@ import math
 import numpy as np
 
 from ...compiled import Bool, Float, Matrix, bind, kernel
-from ...exactmath import hypot, pymax, pymin
 from ..base import Command, PassIntent
 from ..roles import ACTIONS, ROLES
 from .evaluate import POST_MARGIN, lane_clear, pass_speed, position_value, shot_window
@@ -535,7 +534,7 @@ def dribble_choice(
         ux, uy = _DIRECTIONS[k, 0], _DIRECTIONS[k, 1]
         tx, ty = x + step * ux, y + step * uy
         dx, dy = tx - cx, ty - cy
-        r = hypot(dx, dy)
+        r = math.hypot(dx, dy)
         if r > radius:
             tx, ty = cx + dx / r * radius, cy + dy / r * radius
         if abs(tx) > L2 - 0.8 or abs(ty) > W2 - 0.8:
@@ -546,15 +545,15 @@ def dribble_choice(
         if (tx >= L2 - pa_depth and abs(ty) <= pa_half) and keep_out_of_area:
             continue
         score = position_value(tx, ty, opps, L2)
-        score += 0.35 * pymin(lane_clear(x, y, tx, ty, opps, 1.5, 0.0), 0.5)
+        score += 0.35 * min(lane_clear(x, y, tx, ty, opps, 1.5, 0.0), 0.5)
         if can_score and tx > 0.0 and L2 - tx < shoot_range:
-            score += OPEN_GOAL_VALUE * pymin(shot_window(tx, ty, opps, L2, goal_half, shot_speed, POST_MARGIN)[1], 0.15)
+            score += OPEN_GOAL_VALUE * min(shot_window(tx, ty, opps, L2, goal_half, shot_speed, POST_MARGIN)[1], 0.15)
         # away from opponents closing in: keep the body between them and the ball
         for j in range(opps.shape[0]):
             rx, ry = opps[j, 0] - x, opps[j, 1] - y
-            d = hypot(rx, ry)
+            d = math.hypot(rx, ry)
             if d < ESCAPE_RANGE:
-                score -= 2.0 * pymax(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
+                score -= 2.0 * max(0.0, (ux * rx + uy * ry) / d + 0.3) * (ESCAPE_RANGE - d) / ESCAPE_RANGE
         turn = 1.0 - (ux * c + uy * s)
         score -= 0.25 * turn
         score += LEAN * (ux * lean_x + uy * lean_y)

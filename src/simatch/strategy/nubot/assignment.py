@@ -14,7 +14,6 @@ import numba
 import numpy as np
 
 from ...compiled import Array, Bool, Float, Matrix, Vector, kernel
-from ...exactmath import hypot
 from ..roles import ROLES
 from .positions import PitchType, _score_spots, inside_field
 from .setpieces import SLOT_GAP, spread_point
@@ -159,7 +158,7 @@ def assist_spots(cx, cy, bx, by, opps, L2, dmin, dmax, nx, ny, out):
         x, y = cx[best], cy[best]
         free = True
         for j in range(k):
-            if not hypot(x - out[j, 0], y - out[j, 1]) > 3.0:
+            if not math.hypot(x - out[j, 0], y - out[j, 1]) > 3.0:
                 free = False
                 break
         if free:

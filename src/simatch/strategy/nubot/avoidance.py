@@ -21,18 +21,13 @@ import numba
 import numpy as np
 
 from ...compiled import kernel
+from .geometry import TWO_PI, _wrap
 
 #: two obstacles whose centres are closer than this form one group: a robot cannot pass between them [m]
 GROUP_GAP = 1.15
 #: how much smaller (in radians) the other side's turn must be before the robot switches sides
 SIDE_HYSTERESIS = 0.25
 MAX_TURN = 0.6 * math.pi
-TWO_PI = 2.0 * math.pi
-
-
-@numba.njit(cache=True)
-def _wrap(a):
-    return (a + math.pi) % TWO_PI - math.pi
 
 
 @kernel

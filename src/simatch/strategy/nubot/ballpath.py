@@ -17,9 +17,7 @@ import numba
 import numpy as np
 
 from ...compiled import Float, Matrix, kernel
-from ...exactmath import remainder
-
-TWO_PI = 2.0 * math.pi
+from .geometry import _wrap
 
 GRAVITY = 9.8
 STEP = 0.1
@@ -228,7 +226,7 @@ def _team_rows(us, opps, bx, by, turn):
     extra = np.empty(n + m)
     for k in range(n):
         px[k], py[k], vx[k], vy[k] = us[k, 0], us[k, 1], us[k, 2], us[k, 3]
-        extra[k] = turn * abs(remainder(math.atan2(by - us[k, 1], bx - us[k, 0]) - us[k, 5], TWO_PI))
+        extra[k] = turn * abs(_wrap(math.atan2(by - us[k, 1], bx - us[k, 0]) - us[k, 5]))
     for k in range(m):
         px[n + k], py[n + k], vx[n + k], vy[n + k] = opps[k, 0], opps[k, 1], opps[k, 2], opps[k, 3]
         extra[n + k] = 0.0

@@ -15,7 +15,6 @@ import math
 import numpy as np
 
 from ...compiled import Float, Matrix, kernel
-from ...exactmath import hypot, pymax, pymin
 
 BALL_RADIUS = 0.11
 ROBOT_RADIUS = 0.25
@@ -32,7 +31,7 @@ PRESSURE_RADIUS = 2.2
 
 @kernel
 def reach(t: float) -> float:
-    return pymin(MAX_REACH, 0.5 * REACT_ACC * t * t)
+    return min(MAX_REACH, 0.5 * REACT_ACC * t * t)
 
 
 @kernel(bx=Float, by=Float, opps=Matrix, goal_x=Float, goal_half=Float, speed=Float, post_margin=Float)
@@ -60,11 +59,11 @@ def shot_window(
         rx, ry = opps[k, 0] - bx, opps[k, 1] - by
         if rx < -0.2:
             continue
-        d = hypot(rx, ry)
+        d = math.hypot(rx, ry)
         if d < 1e-6:
             continue
-        r = ROBOT_RADIUS + BALL_RADIUS + reach(pymax(0.0, d / speed - SHOT_REACTION))
-        half = math.asin(pymin(1.0, r / d))
+        r = ROBOT_RADIUS + BALL_RADIUS + reach(max(0.0, d / speed - SHOT_REACTION))
+        half = math.asin(min(1.0, r / d))
         c = math.atan2(ry, rx)
         a0, a1 = c - half, c + half
         m = 0
@@ -102,25 +101,25 @@ def lane_clear(
     """Smallest margin (m) by which opponents miss the ball on its way from B to C at ``speed`` (negative
     when one can get in the way). Opponents that can reach the lane while the ball passes count."""
     worst = math.inf
-    length = hypot(cx - bx, cy - by)
+    length = math.hypot(cx - bx, cy - by)
     # (segment_distance and reach inline, the same float operations)
     dx, dy = cx - bx, cy - by
     ll = dx * dx + dy * dy
-    v = pymax(speed, 0.5)
+    v = max(speed, 0.5)
     body = ROBOT_RADIUS + BALL_RADIUS
     for k in range(opps.shape[0]):
         ox, oy = opps[k, 0], opps[k, 1]
         if ll < 1e-12:
-            d, s = hypot(ox - bx, oy - by), 0.0
+            d, s = math.hypot(ox - bx, oy - by), 0.0
         else:
             s = ((ox - bx) * dx + (oy - by) * dy) / ll
             s = 0.0 if s < 0.0 else 1.0 if s > 1.0 else s
-            d = hypot(ox - bx - s * dx, oy - by - s * dy)
+            d = math.hypot(ox - bx - s * dx, oy - by - s * dy)
         along = s * length
         if exclude_near_end != 0.0 and (1.0 - s) * length < exclude_near_end and d > 0.6:
             continue
         t = along / v
-        margin = d - (body + pymin(MAX_REACH, 0.5 * REACT_ACC * t * t))
+        margin = d - (body + min(MAX_REACH, 0.5 * REACT_ACC * t * t))
         if margin < worst:
             worst = margin
     return worst
@@ -131,7 +130,7 @@ def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
     """How crowded a point is: the sum of how far each opponent is inside ``radius`` of it."""
     total = 0.0
     for k in range(opps.shape[0]):
-        d = hypot(opps[k, 0] - x, opps[k, 1] - y)
+        d = math.hypot(opps[k, 0] - x, opps[k, 1] - y)
         if d < radius:
             total += radius - d
     return total
@@ -140,7 +139,7 @@ def pressure(x: float, y: float, opps: np.ndarray, radius: float) -> float:
 @kernel(x=Float, y=Float, opps=Matrix, goal_x=Float)
 def position_value(x: float, y: float, opps: np.ndarray, goal_x: float) -> float:
     """How good a place is to have the ball: near the opponents' goal, in the middle, with room."""
-    return -0.45 * hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)
+    return -0.45 * math.hypot(goal_x - x, y) - 0.8 * pressure(x, y, opps, PRESSURE_RADIUS)
 
 
 def pass_speed(distance: float, arrival: float, decel: float, lo: float = 1.6, hi: float = 7.5) -> float:

@@ -11,14 +11,17 @@ import math
 import numba
 
 from ...compiled import kernel
-from ...exactmath import pymax, pymin
 
 TWO_PI = 2.0 * math.pi
 
 
 def wrap(a: float) -> float:
-    """An angle in [-pi, pi]."""
-    return math.remainder(a, TWO_PI)
+    """The angle ``a`` in [-pi, pi)."""
+    return (a + math.pi) % TWO_PI - math.pi
+
+
+#: `wrap` compiled (the same source), for kernels
+_wrap = kernel(wrap)
 
 
 def clamp(v: float, lo: float, hi: float) -> float:
@@ -59,14 +62,14 @@ def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, h
     callers; Python's min and max, as they take them.)"""
     s = math.inf
     if ux > 1e-12:
-        s = pymin(s, (x1 - ox) / ux)
+        s = min(s, (x1 - ox) / ux)
     elif ux < -1e-12:
-        s = pymin(s, (x0 - ox) / ux)
+        s = min(s, (x0 - ox) / ux)
     if uy > 1e-12:
-        s = pymin(s, (half_w - oy) / uy)
+        s = min(s, (half_w - oy) / uy)
     elif uy < -1e-12:
-        s = pymin(s, (-half_w - oy) / uy)
-    return pymax(0.0, s)
+        s = min(s, (-half_w - oy) / uy)
+    return max(0.0, s)
 
 
 @numba.njit(cache=True)
@@ -124,9 +127,9 @@ def segment_hits_box(ax: float, ay: float, bx: float, by: float, x0: float, x1: 
             continue
         r = q / p
         if p < 0.0:
-            t0 = pymax(t0, r)
+            t0 = max(t0, r)
         else:
-            t1 = pymin(t1, r)
+            t1 = min(t1, r)
         if t0 >= t1:
             return False
     return True

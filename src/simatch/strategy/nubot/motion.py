@@ -19,10 +19,9 @@ import struct
 import numpy as np
 
 from ...compiled import Array, Float, Matrix, bind, kernel
-from ...exactmath import hypot, pymax, pymin, remainder
 from ..base import Command
 from .avoidance import no_charging, sub_target
-from .geometry import TWO_PI
+from .geometry import _wrap
 from .observation import Observation
 from .params import NubotParams
 from .positions import route
@@ -228,7 +227,7 @@ def turn_rate(err, wmax, two_turn_acc):
     """The turn rate for heading error ``err``: as fast as the robot can still brake (turning acceleration
     ``two_turn_acc`` / 2) to face the heading, within ``wmax``, proportional (HEADING_GAIN) near it."""
     aerr = abs(err)
-    w = pymin(pymin(wmax, math.sqrt(two_turn_acc * aerr)), HEADING_GAIN * aerr)
+    w = min(min(wmax, math.sqrt(two_turn_acc * aerr)), HEADING_GAIN * aerr)
     return w if err >= 0.0 else -w
 
 
@@ -246,7 +245,7 @@ def keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     """The velocity (vx, vy) of a robot at (x, y) with its part towards the centre of the circle (cx, cy, r)
     capped so that the robot stops at the circle (and leaves it at once if it is inside)."""
     dx, dy = cx - x, cy - y
-    d = hypot(dx, dy)
+    d = math.hypot(dx, dy)
     if d > r + FENCE_RANGE or d < 1e-6:
         return vx, vy
     nx, ny = dx / d, dy / d
@@ -255,11 +254,11 @@ def keep_out_of_circle(x, y, vx, vy, cx, cy, r):
     if gap > 0.0:
         # slow down in time: the drive brakes at about FENCE_BRAKING, a robot running in fast would
         # otherwise overrun the circle (a taker brushing the ball, a defender inside the 3 m)
-        allowed = pymin(math.sqrt(2.0 * FENCE_BRAKING * gap), POSITION_GAIN * gap)
+        allowed = min(math.sqrt(2.0 * FENCE_BRAKING * gap), POSITION_GAIN * gap)
     else:
         # inside: move out, at 1 m/s at least, along the way out the target chose (straight away from
         # a ball near a line would drive into the boards)
-        allowed = pymax(2.0 * gap, -1.0)
+        allowed = max(2.0 * gap, -1.0)
     if inward > allowed:
         vx -= (inward - allowed) * nx
         vy -= (inward - allowed) * ny
@@ -277,9 +276,9 @@ def steer(args, boxes, opps, mates):
     end_speed, brake, side = a.end_speed, a.brake, int(a.side)
     fence_x, fence_y, fence_r, max_x = a.fence_x, a.fence_y, a.fence_r, a.max_x
     xlim, ylim = a.xlim, a.ylim
-    tx = pymin(pymax(tx, -xlim), xlim)
-    ty = pymin(pymax(ty, -ylim), ylim)
-    d = hypot(tx - mx, ty - my)
+    tx = min(max(tx, -xlim), xlim)
+    ty = min(max(ty, -ylim), ylim)
+    d = math.hypot(tx - mx, ty - my)
     vx = vy = 0.0
     if d > 0.01 or end_speed > 0.0:
         sx, sy = tx, ty
@@ -289,14 +288,14 @@ def steer(args, boxes, opps, mates):
             sx, sy, side = sub_target(
                 mx, my, sx, sy, opps, mates, me_id, a.bx, a.by, a.ball, a.clearance, LOOK_AHEAD, side
             )
-        speed = pymin(pymin(vmax, math.sqrt(end_speed * end_speed + 2.0 * brake * d)), POSITION_GAIN * d + end_speed)
+        speed = min(min(vmax, math.sqrt(end_speed * end_speed + 2.0 * brake * d)), POSITION_GAIN * d + end_speed)
         ex, ey = sx - mx, sy - my
-        e = hypot(ex, ey)
+        e = math.hypot(ex, ey)
         if e > 1e-9:
             vx, vy = ex / e * speed, ey / e * speed
     vx += a.feed_x
     vy += a.feed_y
-    n = hypot(vx, vy)
+    n = math.hypot(vx, vy)
     if n > vmax:
         vx, vy = vx / n * vmax, vy / n * vmax
     if a.gentle != 0.0:
@@ -304,9 +303,9 @@ def steer(args, boxes, opps, mates):
     if fence_r == fence_r:  # not NaN: a fence
         vx, vy = keep_out_of_circle(mx, my, vx, vy, fence_x, fence_y, fence_r)
     if max_x == max_x:
-        vx = pymin(vx, 2.0 * (max_x - mx))
-    w = 0.0 if face != face else turn_rate(remainder(face - yaw, TWO_PI), wmax, a.two_turn_acc)  # NaN: no heading
-    speed = hypot(vx, vy)
+        vx = min(vx, 2.0 * (max_x - mx))
+    w = 0.0 if face != face else turn_rate(_wrap(face - yaw), wmax, a.two_turn_acc)  # NaN: no heading
+    speed = math.hypot(vx, vy)
     if speed * abs(w) > SPIN_COUPLING:
         if a.turn_first != 0.0:
             k = SPIN_COUPLING / (speed * abs(w))

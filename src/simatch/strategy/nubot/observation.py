@@ -15,7 +15,6 @@ import numba
 import numpy as np
 
 from ... import msgs
-from ...exactmath import hypot
 from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
@@ -383,7 +382,7 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
 
     Returns how many, with what the game flow and the team picture ask of the ball at (bx, by) every
     tick: the row of the team-mate nearest to it (the first of equals; -1 without team-mates) and its
-    distance, and the distance of the nearest opponent (inf without opponents), all by CPython's hypot."""
+    distance, and the distance of the nearest opponent (inf without opponents)."""
     noisy = _noisy(ox, oy, mates)
     r = 0
     opp_d = math.inf
@@ -393,7 +392,7 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
             out[r, 1] = oy[k]
             out[r, 2] = ovx[k]
             out[r, 3] = ovy[k]
-            d = hypot(out[r, 0] - bx, out[r, 1] - by)
+            d = math.hypot(out[r, 0] - bx, out[r, 1] - by)
             if d < opp_d:
                 opp_d = d
             r += 1
@@ -439,10 +438,10 @@ def _opponent(x, y, mates, noisy):
 @numba.njit(cache=True)
 def _nearest_mate(mates, bx, by):
     """The row of the team-mate nearest to (bx, by) (the first of equals; -1 without team-mates) and its
-    distance, by CPython's hypot."""
+    distance."""
     near, near_d = -1, math.inf
     for j in range(mates.shape[0]):
-        d = hypot(mates[j, 0] - bx, mates[j, 1] - by)
+        d = math.hypot(mates[j, 0] - bx, mates[j, 1] - by)
         if j == 0 or d < near_d:
             near, near_d = j, d
     return near, near_d
@@ -487,7 +486,7 @@ def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
     r = _same_rows(ox, oy, ovx, ovy, mates, prev)
     opp_d = math.inf
     for j in range(r):
-        d = hypot(prev[j, 0] - bx, prev[j, 1] - by)
+        d = math.hypot(prev[j, 0] - bx, prev[j, 1] - by)
         if d < opp_d:
             opp_d = d
     near, near_d = _nearest_mate(mates, bx, by)

@@ -14,7 +14,6 @@ import numba
 import numpy as np
 
 from ...compiled import Array, Bool, Float, bind, kernel
-from ...exactmath import hypot, pymax, pymin
 from .geometry import _clamp, box_exit, push_out_of_box, segment_hits_box
 
 
@@ -134,8 +133,8 @@ def route(px, py, tx, ty, boxes, L2, goal_half):
             # the nearer of the corners on the field side (the first of equals)
             cx = x1 + 0.15 if x1 < 0.0 else x0 - 0.15
             ya, yb = hw + 0.15, -hw - 0.15
-            da = hypot(cx - px, ya - py) + hypot(tx - cx, ty - ya)
-            db = hypot(cx - px, yb - py) + hypot(tx - cx, ty - yb)
+            da = math.hypot(cx - px, ya - py) + math.hypot(tx - cx, ty - ya)
+            db = math.hypot(cx - px, yb - py) + math.hypot(tx - cx, ty - yb)
             return (cx, yb) if db < da else (cx, ya)
     return tx, ty
 
@@ -184,14 +183,14 @@ def guard_point(pitch, bx, by, fraction, min_s, gap):
     ``min_s`` from the goal, at least ``gap`` short of the ball, and outside our penalty area."""
     gx = -pitch.half_length
     dx, dy = bx - gx, by
-    D = hypot(dx, dy)
+    D = math.hypot(dx, dy)
     if D < 1e-6:
         return gx + min_s, 0.0
     ux, uy = dx / D, dy / D
-    s = pymax(min_s, fraction * D)
+    s = max(min_s, fraction * D)
     s_out = box_exit(0.0, 0.0, ux, uy, -5.0, pitch.own_penalty.x1 - gx, pitch.own_penalty.half_width)
-    s = pymax(s, s_out)
-    s = pymin(s, pymax(s_out, D - gap))
+    s = max(s, s_out)
+    s = min(s, max(s_out, D - gap))
     return gx + ux * s, uy * s
 
 
@@ -218,9 +217,9 @@ def midfield_point(pitch, bx, by, attacking, opps):
     best_d = math.inf
     for k in range(opps.shape[0]):
         px, py = opps[k, 0], opps[k, 1]
-        if hypot(px - bx, py - by) < 2.0 or px > 3.0:
+        if math.hypot(px - bx, py - by) < 2.0 or px > 3.0:
             continue
-        d = hypot(px + L2, py)
+        d = math.hypot(px + L2, py)
         if d < best_d:
             found, ox, oy, best_d = True, px, py, d
     if not found:
@@ -238,7 +237,7 @@ def midfield_point(pitch, bx, by, attacking, opps):
 @kernel
 def _length_or_one(x, y):
     """The length of (x, y), or 1 for (0, 0) (a direction of no length divides nothing)."""
-    n = hypot(x, y)
+    n = math.hypot(x, y)
     return 1.0 if n == 0.0 else n
 
 

@@ -21,7 +21,6 @@ from functools import lru_cache
 import numpy as np
 
 from ...compiled import Float, Matrix, bind, kernel
-from ...exactmath import hypot
 from ..roles import ROLES
 from . import positions
 from .gameflow import MODES
@@ -226,14 +225,14 @@ def spread_point(placed, x, y, bx, by, gap):
     for _ in range(3):
         clash = -1
         for e in range(placed.shape[0]):
-            if hypot(x - placed[e, 0], y - placed[e, 1]) < gap:
+            if math.hypot(x - placed[e, 0], y - placed[e, 1]) < gap:
                 clash = e
                 break
         if clash < 0:
             break
         cx, cy = placed[clash, 0], placed[clash, 1]
         dx, dy = x - bx, y - by
-        d = hypot(dx, dy)
+        d = math.hypot(dx, dy)
         ux, uy = (1.0, 0.0) if d < 1e-12 else (dx / d, dy / d)
         nx, ny = -uy, ux  # across the line to the ball
         if (x - cx) * nx + (y - cy) * ny < 0.0:
