@@ -28,19 +28,6 @@ MAX_FUNCTION_LINES = 80
 #: what a long function's docstring or first comment says, followed by the reason it reads best whole
 LONG_BECAUSE = "Long because:"
 
-#: modules ("path") and functions ("path::Class.function") over the limits in files that other branches of
-#: issue 36 are splitting now; the lead empties this as those branches merge (an entry that no longer
-#: offends fails `test_no_module_is_too_long` / `test_no_function_is_too_long` until it is taken out)
-PENDING = {
-    "src/simatch/sim/ballhandling.py::BallHandling.__init__",
-    "src/simatch/sim/flight.py::fly",
-    "src/simatch/sim/kernels.py::sense_ground",
-    "src/simatch/sim/perception.py::Perception.observe",
-    "src/simatch/sim/simulator.py",
-    "src/simatch/sim/simulator.py::Simulator.__init__",
-    "src/simatch/sim/world.py::build_world",
-}
-
 
 def _tool(name: str) -> str:
     path = Path(sys.executable).parent / name
@@ -130,22 +117,16 @@ def _sources():
 
 def test_no_module_is_too_long():
     long = {path: len(text.splitlines()) for path, text in _sources() if len(text.splitlines()) > MAX_MODULE_LINES}
-    new = {path: n for path, n in long.items() if path not in PENDING}
-    assert not new, f"modules over {MAX_MODULE_LINES} lines (split them along their seams): {new}"
-    done = {p for p in PENDING if "::" not in p} - set(long)
-    assert not done, f"no longer over {MAX_MODULE_LINES} lines: take them out of PENDING: {sorted(done)}"
+    assert not long, f"modules over {MAX_MODULE_LINES} lines (split them along their seams): {long}"
 
 
 def test_no_function_is_too_long():
     long: dict[str, int] = {}
     for path, text in _sources():
         long.update(_too_long_functions(path, text))
-    new = {name: n for name, n in long.items() if name not in PENDING}
-    assert not new, (
-        f"functions over {MAX_FUNCTION_LINES} lines (split them, or say at their top {LONG_BECAUSE!r} and why): {new}"
+    assert not long, (
+        f"functions over {MAX_FUNCTION_LINES} lines (split them, or say at their top {LONG_BECAUSE!r} and why): {long}"
     )
-    done = {p for p in PENDING if "::" in p} - set(long)
-    assert not done, f"no longer too long: take them out of PENDING: {sorted(done)}"
 
 
 def test_a_long_function_must_say_why():
