@@ -222,11 +222,3 @@ class _UserWideLocator(_PackageStamp, caching.UserWideCacheLocator):
 
 if _InTreeLocator not in caching.CacheImpl._locator_classes:
     caching.CacheImpl._locator_classes[:0] = [_InTreeLocator, _UserWideLocator]
-
-
-def entry(kernel_, *sample):
-    """Deprecated: the compiled version of ``kernel_`` for the types of ``sample``; use :func:`bind`."""
-    compile_for = getattr(kernel_, "compile", None)
-    if compile_for is None:
-        return kernel_
-    return compile_for(tuple(numba.typeof(a) for a in sample))

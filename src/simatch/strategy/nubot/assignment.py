@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ...compiled import Array, Bool, Float, Matrix, Vector, kernel
@@ -52,13 +51,13 @@ def assign(
     return {robots[i].id: best[i] for i in range(min(n, len(slots)))}
 
 
-@numba.njit(cache=True)
+@kernel
 def _assign_flat(flat, n, m, cx, cy, cr):
     """`_assign` of the robots' (n, 4) and the slots' (m, 3) rows, given one after the other in ``flat``."""
     return _assign(flat[: 4 * n].reshape((n, 4)), flat[4 * n : 4 * n + 3 * m].reshape((m, 3)), cx, cy, cr)
 
 
-@numba.njit(cache=True)
+@kernel
 def _assign(robots, slots, cx, cy, cr):
     """The assignment of `assign`, compiled: every way of giving k = min(robots, slots) robots distinct
     slots, in lexicographic order (the first best one wins, so the result is the same everywhere)."""

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ...compiled import kernel
@@ -175,7 +174,7 @@ def _way_round(obstacles, cnt, first, prefer_side):
     return best, reach
 
 
-@numba.njit(cache=True)
+@kernel
 def no_charging(x, y, vx_now, vy_now, vx, vy, opps, touch, contact_speed, braking):
     """The velocity (vx, vy) with its part towards every opponent capped so that the robot could still slow
     to ``contact_speed`` before touching it (an opponent coming towards it shortens the way). A robot

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ...compiled import Float, Matrix, kernel
@@ -128,7 +127,7 @@ class BallPath:
         return max(0.0, self.speed - self.decel * (t - self.land_t))
 
 
-@numba.njit(cache=True)
+@kernel
 def _intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, vx, vy, extra, vmax, acc, out):
     """For each robot r: out[r] = (time, x, y) of the first sampled point of the ball's path it reaches no
     later than the ball, or of the last sample if it reaches none. Reach time: from velocity (vx, vy),
@@ -214,7 +213,7 @@ def intercepts(
     return out
 
 
-@numba.njit(cache=True)
+@kernel
 def _team_rows(us, opps, bx, by, turn):
     """The rows of `team_intercepts`: x, y, vx, vy and the extra delay of each robot, ours first (the time
     to turn to face the ball at (bx, by): ``turn`` seconds per radian), then theirs (none)."""

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import math
 
-import numba
-
 from ...compiled import kernel
 
 TWO_PI = 2.0 * math.pi
@@ -55,7 +53,7 @@ def segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: 
     return math.hypot(px - ax - s * dx, py - ay - s * dy), s
 
 
-@numba.njit(cache=True)
+@kernel
 def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, half_w: float) -> float:
     """Along the ray O + s u from a point O inside the box [x0, x1] x [-half_w, half_w], the s at which
     the ray leaves the box (inf if it never does). (Compiled, for the compiled points as for Python's
@@ -72,7 +70,7 @@ def box_exit(ox: float, oy: float, ux: float, uy: float, x0: float, x1: float, h
     return max(0.0, s)
 
 
-@numba.njit(cache=True)
+@kernel
 def push_out_of_box(x: float, y: float, x0: float, x1: float, half_w: float) -> tuple[float, float]:
     """The nearest point outside the box [x0, x1] x [-half_w, half_w] (the point itself if outside).
     (Compiled, for the compiled motion; on equal distances the faces are taken as ``min`` of the tuples
@@ -106,7 +104,7 @@ def time_to_cover(d: float, v0: float, vmax: float, acc: float) -> float:
     return (vmax - v0) / acc + (d - d_acc) / vmax
 
 
-@numba.njit(cache=True)
+@kernel
 def segment_hits_box(ax: float, ay: float, bx: float, by: float, x0: float, x1: float, half_w: float) -> bool:
     """Whether the segment AB passes through the open box [x0, x1] x [-half_w, half_w] (Liang-Barsky).
     (Compiled, for the compiled motion.)"""

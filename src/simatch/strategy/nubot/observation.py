@@ -11,10 +11,10 @@ import math
 import struct
 from itertools import chain
 
-import numba
 import numpy as np
 
 from ... import msgs
+from ...compiled import kernel
 from ..worldmodel import WorldModel
 
 #: an obstacle this close to a teammate is that teammate [m]
@@ -373,7 +373,7 @@ def _array(rows: list[tuple], width: int) -> np.ndarray:
 
 # _GIL_NOTE: the kernels a robot calls from Python at every tick keep the GIL (no ``nogil``, as every kernel of
 # simatch, docs/performance.md's rules): they run for about a microsecond, in single-threaded runs.
-@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
+@kernel  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     """Writes x, y, vx, vy (float64) of the obstacles (float32 arrays of an ObstaclesInfo) that are not
     team-mates (``mates``, the TeamView's array: x, y in its first columns) into the first rows of ``out``
@@ -400,7 +400,7 @@ def _opponents(ox, oy, ovx, ovy, mates, out, bx, by):
     return r, near, near_d, opp_d
 
 
-@numba.njit(cache=True)
+@kernel
 def _noisy(ox, oy, mates):
     """Whether some team-mates are not exactly where the team list puts them among the obstacles (float32 x,
     y; ``mates``: x, y in the first columns): fewer obstacles are exactly at a team-mate than there are
@@ -414,7 +414,7 @@ def _noisy(ox, oy, mates):
     return at_mates < k_mates - 1
 
 
-@numba.njit(cache=True)
+@kernel
 def _at_mate(x, y, mates):
     for j in range(mates.shape[0]):
         if mates[j, 0] == x and mates[j, 1] == y:
@@ -422,7 +422,7 @@ def _at_mate(x, y, mates):
     return False
 
 
-@numba.njit(cache=True)
+@kernel
 def _opponent(x, y, mates, noisy):
     """Whether the obstacle at (x, y) is an opponent: not exactly at a team-mate, nor, when ``noisy``
     (`_noisy`), within _SAME_ROBOT of one (in both coordinates)."""
@@ -435,7 +435,7 @@ def _opponent(x, y, mates, noisy):
     return True
 
 
-@numba.njit(cache=True)
+@kernel
 def _nearest_mate(mates, bx, by):
     """The row of the team-mate nearest to (bx, by) (the first of equals; -1 without team-mates) and its
     distance."""
@@ -447,13 +447,13 @@ def _nearest_mate(mates, bx, by):
     return near, near_d
 
 
-@numba.njit(cache=True)
+@kernel
 def _same(a, b):
     """``a`` and ``b`` are the same float64 bit for bit (a NaN never is; -0.0 is not 0.0)."""
     return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
-@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
+@kernel  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _same_rows(ox, oy, ovx, ovy, mates, prev):
     """The number of rows of ``prev`` (a team-mate's opponents at the same tick) if the opponents among these
     obstacles (`_opponents`' rule) are exactly ``prev``'s rows (bit for bit, in order; nothing written), else
@@ -477,7 +477,7 @@ def _same_rows(ox, oy, ovx, ovy, mates, prev):
     return r if r == m else -1
 
 
-@numba.njit(cache=True)  # (called from Python: holding the GIL, see _GIL_NOTE)
+@kernel  # (called from Python: holding the GIL, see _GIL_NOTE)
 def _same_opponents(ox, oy, ovx, ovy, mates, prev, bx, by):
     """`_opponents` when the rows are expected to be ``prev`` (a team-mate's opponents at the same tick): the
     number of rows if the opponents among these obstacles are exactly ``prev``'s rows (`_same_rows`), else -1;
