@@ -38,8 +38,8 @@ from .. import msgs, version
 from ..bus import topics
 from ..config.loader import LoadedScene
 from ..msgs.cdr import Codec
+from . import environment, layout, rosbag2
 from . import foxglove_msgs as fg
-from . import layout, rosbag2
 from .messagelog import CLOCK_STEP, CLOCK_TICK, fill_poses, new_log
 from .scene3d import FIELD_TOPIC, GAME_RATE, GAME_TOPIC, GRID, TURN_GRID, SceneBuilder
 from .writer import McapWriter, WriterError
@@ -90,6 +90,7 @@ def _run_metadata(
         "fingerprint": _fingerprint_kind(),
         "command_line": json.dumps(list(command_line) if command_line is not None else sys.argv),
         "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "environment": json.dumps(environment.describe()),
     }
 
 

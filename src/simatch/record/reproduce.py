@@ -42,6 +42,7 @@ import numpy as np
 from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
+from . import environment
 from .reader import Recording, RecordingError
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
@@ -93,6 +94,8 @@ class Verdict:
     complete: bool = True  # the whole run was recorded and compared (file intact, finalised)
     mode: str = "strategies"  # how it was re-simulated: "inputs" (the world from its recorded inputs) or "strategies"
     inputs: int = 0  # world inputs carried out again (mode "inputs")
+    #: what differs between the recording's environment and this one (`environment.differences`)
+    environment: list[str] = field(default_factory=list)
 
     def describe(self) -> str:
         if self.identical:
@@ -109,6 +112,8 @@ class Verdict:
                 head += "; the recording is incomplete, so only what it holds was checked"
         else:
             head = f"NOT reproduced: {self.first_difference.describe()}" if self.first_difference else "NOT reproduced"
+            if self.environment:
+                head += f"; made in another environment: {', '.join(self.environment)}"
         return "\n".join([head] + [f"note: {p}" for p in self.problems])
 
     def as_dict(self) -> dict:
@@ -121,6 +126,7 @@ class Verdict:
             "operator_commands": self.operator_commands,
             "complete": self.complete,
             "problems": self.problems,
+            "environment": self.environment,
             "first_difference": None,
         }
         if self.first_difference:
@@ -196,10 +202,16 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
     if mode != "strategies" and has_inputs:
         verdict = _verify_inputs(rec, scene, kind, progress)
         verdict.problems = problems + verdict.problems
-        return verdict
-    if mode == "auto":
-        problems.append("the recording holds no world inputs: re-simulated from its strategies")
-    return _verify_strategies(rec, scene, kind, problems, progress)
+    else:
+        if mode == "auto":
+            problems.append("the recording holds no world inputs: re-simulated from its strategies")
+        verdict = _verify_strategies(rec, scene, kind, problems, progress)
+    then = environment.recorded(meta)
+    if then is not None:
+        verdict.environment = environment.differences(then)
+    elif not verdict.identical:
+        verdict.environment = ["the recording does not say what made it (made before simatch kept that)"]
+    return verdict
 
 
 def _fingerprint_kind(rec: Recording) -> str:
