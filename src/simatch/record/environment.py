@@ -23,7 +23,8 @@ VECTOR_FLAGS = ("sse4_2", "avx", "avx2", "fma", "avx512f", "avx512dq", "avx512bw
 #: the packages whose versions can change a run's results
 PACKAGES = ("simatch", "mujoco-core", "numpy", "numba", "llvmlite")
 #: the order in which differences are named: what changes results first
-ORDER = ("cpu_flags", "python", "mujoco-core", "numpy", "numba", "llvmlite", "libc", "machine", "cpu", "simatch", "commit")
+ORDER = ("cpu_flags", "python", "mujoco-core", "numpy", "numba", "llvmlite", "libc", "machine", "cpu")
+ORDER += ("simatch", "commit")
 
 
 def _package(name: str) -> str:
