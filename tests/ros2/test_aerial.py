@@ -22,7 +22,7 @@ VX, VZ = 0.5, 1.0  # [m/s] forward and upward
 #: ground robots), and the single drone of quadrotor_flight with its flight-test judge off (ROS flies it)
 SCENES = {
     "aerial_encirclement": (10, ["--set", "teams.magenta.strategy=none"]),
-    "quadrotor_flight": (1, ["--set", "judge={kind=\"none\"}"]),
+    "quadrotor_flight": (1, ["--set", 'judge={kind="none"}']),
 }
 
 
