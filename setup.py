@@ -3,12 +3,11 @@
 * ``simatch.msgs._cdr_accel`` (required): the CDR codec (msgs/_cdr_accel.c) and, compiled with it because it
   calls the encoder directly, the recorder's message log (record/_messagelog.c); they share msgs/_cdr_accel.h.
 * ``simatch.sim._inputs`` (required): the simulator's input taps (sim/_inputs.c).
-* ``simatch.msgs._positional`` (optional): positional construction of messages; where it cannot be compiled,
-  messages are built by their classes (the same messages).
+* ``simatch.msgs._positional`` (required): positional construction of messages and of the strategies'
+  slotted records, their slots filled in C.
 
-Each build carries the digest of the sources it was made from (``SOURCE_DIGEST``): an optional extension that
-fails to compile only warns and leaves the last build in place, so tests/msgs/test_extensions.py checks that the
-extensions in use are those of the sources in the tree.
+Each build carries the digest of the sources it was made from (``SOURCE_DIGEST``), so tests/msgs/test_extensions.py
+checks that the extensions in use are those of the sources in the tree.
 """
 
 import hashlib
@@ -27,18 +26,16 @@ def source_digest(paths: list[str]) -> str:
     return digest.hexdigest()[:16]
 
 
-def extension(name: str, sources: list[str], headers: list[str] = (), *, optional: bool = False) -> Extension:
+def extension(name: str, sources: list[str], headers: list[str] = ()) -> Extension:
     sources, headers = [SRC + s for s in sources], [SRC + h for h in headers]
     digest = source_digest(sources + headers)
-    return Extension(
-        name, sources, depends=headers, optional=optional, define_macros=[("SIMATCH_SOURCE_DIGEST", f'"{digest}"')]
-    )
+    return Extension(name, sources, depends=headers, define_macros=[("SIMATCH_SOURCE_DIGEST", f'"{digest}"')])
 
 
 setup(
     ext_modules=[
         extension("simatch.msgs._cdr_accel", ["msgs/_cdr_accel.c", "record/_messagelog.c"], ["msgs/_cdr_accel.h"]),
         extension("simatch.sim._inputs", ["sim/_inputs.c"]),
-        extension("simatch.msgs._positional", ["msgs/_positional.c"], optional=True),
+        extension("simatch.msgs._positional", ["msgs/_positional.c"]),
     ]
 )

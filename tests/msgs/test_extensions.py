@@ -1,9 +1,8 @@
 """The C extensions in use are built from the sources in the tree.
 
-Where an optional one fails to compile, pip only warns, and an editable install keeps the last build (and a
-required one may simply not have been rebuilt since its sources changed), so a change to the C sources could
-go unnoticed while every test runs the old build. Each build carries the digest of the sources it was made
-from (setup.py); where a C compiler is at hand (the development and CI machines), they must match."""
+An editable install keeps the last build where an extension has not been rebuilt since its sources changed,
+so a change to the C sources could go unnoticed while every test runs the old build. Each build carries the
+digest of the sources it was made from (setup.py); they must match."""
 
 from __future__ import annotations
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import struct
 import sys
 from collections.abc import Callable
@@ -246,18 +245,17 @@ def positional(msgtype: Any, order: str) -> Callable[..., Any]:
     a ``.msg`` file into a clear error instead of fields silently swapped; fields appended later with a
     default value in the ``.msg`` (VelCmd's ``vz``) may be left out of ``order``: they take their default.
 
-    Where the C helper is built (`simatch.msgs._positional`, next to the CDR encoder) the constructor is
-    its ``Maker``: the same instance of the same class as the class's own ``__init__`` makes, its slots
-    filled in C without a Python frame (a few times cheaper); elsewhere, or with ``SIMATCH_POSITIONAL_PURE``
-    set, the class itself. Called with anything but ``order``'s arguments (keywords, more or fewer
-    arguments) the Maker hands the call to the class, which raises its usual error."""
+    The constructor is the C helper's ``Maker`` (`simatch.msgs._positional`): the same instance of the same
+    class as the class's own ``__init__`` makes, its slots filled in C without a Python frame. Called with
+    anything but ``order``'s arguments (keywords, more or fewer arguments) the Maker hands the call to the
+    class, which raises its usual error."""
     want, have = tuple(order.split()), fields(msgtype)
     cls = typestore.types[msgtype_name(msgtype)]
     rest = have[len(want) :]
     defaulted = cls.__dataclass_fields__
     if want != have[: len(want)] or any(defaulted[f].default is dataclasses.MISSING for f in rest):
         raise TypeError(f"{msgtype_name(msgtype)} has fields ({', '.join(have)}), not ({', '.join(want)})")
-    if _maker is None or cls not in _SLOTTED or hasattr(cls, "__post_init__"):
+    if cls not in _SLOTTED or hasattr(cls, "__post_init__"):
         return cls
     # every field: the ones a call gives (at least ``order``'s), then the defaults of those it may leave out
     first_default = next((k for k, f in enumerate(have) if defaulted[f].default is not dataclasses.MISSING), len(have))
@@ -267,27 +265,19 @@ def positional(msgtype: Any, order: str) -> Callable[..., Any]:
     return _maker(cls, have, tuple(defaulted[f].default for f in have[required:]))
 
 
-def slot_maker(cls: type, names: tuple[str, ...]) -> Callable[..., Any] | None:
+def slot_maker(cls: type, names: tuple[str, ...]) -> Callable[..., Any]:
     """A constructor of ``cls`` instances from positional arguments, one for each slot of ``names`` (in that
     order), filled without running the class's ``__init__``: the C helper's ``Maker`` (see `positional`), for a
     class of the strategies' own built per robot and tick (every slot of ``names`` an object slot of the class
     itself, no instance dict, object's own ``__new__``; TypeError otherwise). Called with exactly
-    ``len(names)`` positional arguments. None where the C helper is not built (or `POSITIONAL_PURE_ENV` is set):
-    the caller then fills the slots itself."""
-    if _maker is None:
-        return None
+    ``len(names)`` positional arguments."""
     return _maker(cls, tuple(names), ())
 
 
-#: set (to anything but "" or "0") to build messages by their classes even where the C helper is built
-POSITIONAL_PURE_ENV = "SIMATCH_POSITIONAL_PURE"
-
-try:  # the C helper (setup.py builds it where a compiler is at hand)
-    if os.environ.get(POSITIONAL_PURE_ENV, "") not in ("", "0"):
-        raise ImportError(f"{POSITIONAL_PURE_ENV} is set")
+try:
     from ._positional import maker as _maker
-except ImportError:  # a machine without a C compiler: the classes themselves
-    _maker = None
+except ImportError as _exc:
+    raise unbuilt("simatch.msgs._positional", _exc) from None
 
 
 _FLOAT32 = [struct.Struct(f"<{n}f") for n in range(17)]

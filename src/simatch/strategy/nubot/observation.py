@@ -22,7 +22,6 @@ _SAME_ROBOT = 0.1
 #: a team-mate's row of its team's table written in place (eight float64, native), through a memoryview of
 #: the table (taken once per table)
 _pack_row = struct.Struct("8d").pack_into
-_new = object.__new__
 
 
 class Mate:
@@ -85,7 +84,7 @@ class Mate:
 
 #: `Mate` of its slots' values in slot order: the C helper's maker where it is built (one call, no Python
 #: ``__init__`` frame), else the class itself
-_make_mate = msgs.slot_maker(Mate, Mate.__slots__) or Mate
+_make_mate = msgs.slot_maker(Mate, Mate.__slots__)
 
 
 class TeamView:
@@ -243,17 +242,8 @@ class Observation:
         return [m for m in self.mates if m.valid and not m.is_goalie]
 
 
-def _make_observation_py(*values) -> Observation:
-    """An `Observation` of its slots' values (in slot order), without its class call: where the C helper is not
-    built."""
-    made = _new(Observation)
-    for name, value in zip(Observation.__slots__, values, strict=True):
-        setattr(made, name, value)
-    return made
-
-
 #: `Observation` of its slots' values, in slot order (the C helper's one call)
-_make_observation = msgs.slot_maker(Observation, Observation.__slots__) or _make_observation_py
+_make_observation = msgs.slot_maker(Observation, Observation.__slots__)
 
 
 def observe(world: WorldModel, view: TeamView) -> Observation:
