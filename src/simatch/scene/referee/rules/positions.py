@@ -18,6 +18,10 @@ _BEFORE_PLAY = (Phase.PREPARE, Phase.TAKING)  # (made once, read at every tick w
 class PositionRule(Rule):
     phases = frozenset({Phase.TAKING})
     kinds: frozenset[str] = frozenset()
+    #: a robot whose infringement makes the restart be taken again is cautioned (FIFA Law 12: failing to
+    #: respect the required distance at a restart; not a robot on the wrong side of the line at a kick-off).
+    #: A dropped ball is in play at START: its distance is only logged
+    cautions = False
 
     def __init__(self, match):
         super().__init__(match)
@@ -87,7 +91,7 @@ class PositionRule(Rule):
             else:
                 then = f"the {self.what()} is taken again"
                 restart = r
-                if self.p.caution_distance_at_restarts:
+                if self.cautions and self.p.caution_distance_at_restarts:
                     # FIFA Law 12 (kept by MSL): failing to respect the required distance at a restart is
                     # cautioned; without it a team could stop the match by encroaching at every restart
                     card = "yellow"

@@ -15,6 +15,7 @@ from .positions import PositionRule
 
 class SetPieceDistanceRule(PositionRule):
     name = "set_piece_distance"
+    cautions = True
     kinds = frozenset({"kickoff", "free_kick", "throw_in", "goal_kick", "corner_kick", "penalty"})
 
     def offenders(self):
