@@ -105,10 +105,13 @@ class RosRobotNode(Node):
         def send() -> None:
             vel, now = bridge.graph.take_velocity(self.ports.command, bridge.command_timeout)
             if vel is not None:
-                vx, vy, w, vz = _f32s(*vel)
-                self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w, vz=vz))
+                self._send_velocity(now, vel)
 
         proc.between_ticks(send)
+
+    def _send_velocity(self, now: float, vel: tuple) -> None:
+        vx, vy, w, vz = _f32s(*vel)
+        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w, vz=vz))
 
     def tick(self, now: float) -> None:
         bridge, graph, slot = self.bridge, self.bridge.graph, self.ports.command
@@ -117,8 +120,7 @@ class RosRobotNode(Node):
         self.seen = slot.version
         if vel is None:  # no command: nothing is sent, the simulator's watchdog stops the robot
             return
-        vx, vy, w, vz = _f32s(*vel)
-        self.pub_vel.put(msgs.VelCmd(stamp=now, tick=self.tick_no, vx=vx, vy=vy, w=w, vz=vz))
+        self._send_velocity(now, vel)
         self.pub_action.put(
             msgs.new(
                 msgs.ActionCmd,

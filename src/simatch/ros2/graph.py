@@ -315,25 +315,27 @@ class RosGraph:
         with self._cond:
             return self._cond.wait_for(lambda: all(s.version > v for s, v in slots), timeout)
 
+    @staticmethod
+    def _velocity(slot: CommandSlot, now: float, timeout: float):
+        """(vx, vy, w, vz) to send at ``now``, marked sent; None when none came within ``timeout`` simulated
+        seconds (the simulator's watchdog then stops the robot) or the last one was refused already. Under the
+        graph's lock."""
+        if slot.vel_at is None or now - slot.vel_at > timeout or (slot.vel_bad and slot.vel_sent):
+            return None
+        slot.vel_sent = True
+        return (slot.vx, slot.vy, slot.w, slot.vz)
+
     def take_velocity(self, slot: CommandSlot, timeout: float):
-        """The velocity to send now, between ticks: (vx, vy, w, vz) or None, as `take` decides it at the
-        bridge's newest simulated time (the kick request stays for the tick)."""
+        """(velocity or None, the bridge's newest simulated time): the velocity to send now, between ticks
+        (the kick request stays for the tick)."""
         with self._cond:
-            now = self.now
-            if slot.vel_at is None or now - slot.vel_at > timeout or (slot.vel_bad and slot.vel_sent):
-                return None, now
-            slot.vel_sent = True
-            return (slot.vx, slot.vy, slot.w, slot.vz), now
+            return self._velocity(slot, self.now, timeout), self.now
 
     def take(self, slot: CommandSlot, now: float, timeout: float):
-        """The command to send at simulated time ``now``: ((vx, vy, w, vz) or None, dribble, kick, lob), the kick
-        request consumed. No velocity when none came within ``timeout`` simulated seconds (the simulator's
-        watchdog then stops the robot) or when the last one was refused already."""
+        """The command to send at simulated time ``now``: (velocity or None, see `_velocity`; dribble, kick,
+        lob), the kick request consumed."""
         with self._cond:
-            vel = None
-            if slot.vel_at is not None and now - slot.vel_at <= timeout and not (slot.vel_bad and slot.vel_sent):
-                vel = (slot.vx, slot.vy, slot.w, slot.vz)
-                slot.vel_sent = True
+            vel = self._velocity(slot, now, timeout)
             kick, lob = slot.kick, slot.lob
             slot.kick = 0.0
             return vel, slot.dribble, kick, lob
