@@ -27,6 +27,7 @@ import struct
 import numpy as np
 
 from ..compiled import Array, Float, Int, Matrix, Vector, kernel
+from . import exact
 
 _TINY = 1e-300
 #: a robot's command row (vx, vy, w as float64), written into its memory in one call
@@ -148,7 +149,7 @@ class OmniDrive:
         self.Mpinv = np.zeros((n, 3, W))
         for i, m in enumerate(rim_matrices):
             self.M[i, : m.shape[0]] = m
-            self.Mpinv[i, :, : m.shape[0]] = np.linalg.pinv(m)
+            self.Mpinv[i, :, : m.shape[0]] = exact.pseudo_inverse(m)
         self.max_speed = np.broadcast_to(np.asarray(max_speed, dtype=float), (n,)).copy()
         self.up = np.ascontiguousarray(np.broadcast_to(np.asarray(max_accel, dtype=float), (n,)) * dt)
         self.down = np.ascontiguousarray(np.broadcast_to(np.asarray(max_decel, dtype=float), (n,)) * dt)

@@ -33,6 +33,7 @@ import mujoco
 import numpy as np
 
 from ..compiled import Array, Float, Matrix, Vector, bind, kernel
+from ..robots import exact
 from .kernels import Indices, free_body_state, wrap_angle
 
 #: one drone's parameters, a row of the fleet's table: mass [kg], principal inertia [kg m^2], a rotor's
@@ -292,7 +293,7 @@ def mixer_inverse(positions, spin, torque_ratio: float) -> np.ndarray:
             [-s * torque_ratio for s in spin],
         ]
     )
-    return np.linalg.inv(A)
+    return exact.inverse(A)
 
 
 def yaw_of(qw: float, qx: float, qy: float, qz: float) -> float:
@@ -416,8 +417,7 @@ def planar(pose: np.ndarray, twist: np.ndarray) -> np.ndarray:
     """(A, 6) x y yaw vx vy w (world frame, w about z) of free bodies, as every robot's planar state."""
     out = np.empty((len(pose), 6))
     out[:, 0:2] = pose[:, 0:2]
-    qw, qx, qy, qz = pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]
-    out[:, 2] = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    out[:, 2] = [yaw_of(*q) for q in pose[:, 3:7].tolist()]  # the C library's atan2, not NumPy's (by CPU)
     out[:, 3:5] = twist[:, 0:2]
     out[:, 5] = twist[:, 5]
     return out
@@ -425,13 +425,12 @@ def planar(pose: np.ndarray, twist: np.ndarray) -> np.ndarray:
 
 def rotor_links(model, pose: np.ndarray, twist: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """(pose, twist) of each rotor hub of an aerial robot whose body has ``pose`` and world ``twist``."""
-    R = np.empty(9)
-    mujoco.mju_quat2Mat(R, np.ascontiguousarray(pose[3:7]))
-    R = R.reshape(3, 3)
+    quat = np.ascontiguousarray(pose[3:7])
     w = twist[3:6]
     out = []
     for rx, ry in model.rotor_positions():
-        r = R @ np.array((rx, ry, 0.0))
+        r = np.empty(3)
+        mujoco.mju_rotVecQuat(r, np.array((rx, ry, 0.0)), quat)  # not `@`: BLAS's kernels depend on the CPU
         out.append((np.concatenate((pose[:3] + r, pose[3:7])), np.concatenate((twist[:3] + np.cross(w, r), w))))
     return out
 

@@ -90,7 +90,7 @@ class WorldServices:
             quat = np.array(
                 [s.get("qw", q[b + 3]), s.get("qx", q[b + 4]), s.get("qy", q[b + 5]), s.get("qz", q[b + 6])]
             )
-            norm = np.linalg.norm(quat)
+            norm = math.sqrt(sum(float(c) * float(c) for c in quat))  # not np.linalg.norm: BLAS by CPU
             if norm < 1e-9:
                 raise CommandError(f"set_model_state({name!r}): the quaternion has zero length")
             q[b + 3 : b + 7] = quat / norm

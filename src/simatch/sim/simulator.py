@@ -262,7 +262,8 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
             if last is None or step - last > apart:
                 i = self.ng + k
                 detail = f"{self.robot_names[i]} hit {self._geom_label[g]}"
-                speed = math.sqrt(float(self._frame_vel[3 * k : 3 * k + 3] @ self._frame_vel[3 * k : 3 * k + 3]))
+                vx, vy, vz = self._frame_vel[3 * k : 3 * k + 3].tolist()
+                speed = math.sqrt(vx * vx + vy * vy + vz * vz)
                 self.event("collision", i, value=round(speed, 4), detail=detail)
 
     def _bounce(self, z0: float, vz0: float) -> None:

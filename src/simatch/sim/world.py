@@ -16,6 +16,7 @@ Collision groups (contype/conaffinity bits) keep every contact pair meaningful a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import mujoco
@@ -87,7 +88,7 @@ def add_obstacle(static_body, static_geom, ob: Obstacle) -> str:
         )
     else:
         g = static_geom(body, ob.name, (ob.x, ob.y, ob.height / 2), (ob.half_x, ob.half_y, ob.height / 2))
-        g.quat = [np.cos(ob.yaw / 2), 0.0, 0.0, np.sin(ob.yaw / 2)]
+        g.quat = [math.cos(ob.yaw / 2), 0.0, 0.0, math.sin(ob.yaw / 2)]
     return ob.name
 
 
