@@ -1,4 +1,4 @@
-"""The world's numbers do not depend on the CPU's vector extensions (docs/reliability.md, "Across machines").
+"""A match's numbers do not depend on the CPU's vector extensions (docs/reliability.md, "Across machines").
 
 What the world computes goes through numba's kernels (no fast-math, no contraction: the same instructions'
 results on every x86-64), MuJoCo (built for AVX, with no dispatch by CPU) and the C library's math. What
@@ -30,6 +30,8 @@ WORLD = [
     *sorted((SRC / "worlds").glob("*.py")),
     SRC / "field.py",
 ]
+#: the modules that decide what enters it in a match (the teams, the referee and the judges, the coaches)
+DECIDERS = [*sorted((SRC / "strategy").rglob("*.py")), *sorted((SRC / "scene").rglob("*.py"))]
 
 
 def _dispatched_math() -> set[str]:
@@ -130,12 +132,13 @@ def _numpy_calls(tree: ast.AST, names: set[str]) -> list[str]:
     return found
 
 
-def test_the_world_calls_nothing_that_depends_on_the_cpu():
+@pytest.mark.parametrize("part, paths", [("world", WORLD), ("deciders", DECIDERS)])
+def test_nothing_depends_on_the_cpu(part, paths):
     names = _dispatched_math()
     assert {"sin", "cos", "arctan2"} <= names, f"NumPy's dispatch table is not what this test reads: {names}"
     offending = {}
-    for path in WORLD:
+    for path in paths:
         calls = _numpy_calls(ast.parse(path.read_text()), names)
         if calls:
             offending[str(path.relative_to(SRC))] = calls
-    assert not offending, f"CPU-dependent NumPy in the world's Python (use math or a kernel): {offending}"
+    assert not offending, f"CPU-dependent NumPy in the {part}' code (use math or a kernel): {offending}"

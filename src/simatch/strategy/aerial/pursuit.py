@@ -190,7 +190,8 @@ class Evader3D(_Flyer):
         # the room a course leaves to the nearest pursuer where it is now: a pursuer turns after me, so its
         # own course says little of where it will be
         hunters = np.stack((o.x, o.y, o.z), axis=1).astype(float)
-        room = np.linalg.norm(ahead[:, None, :] - hunters[None, :, :], axis=2).min(axis=1)
+        gap = ahead[:, None, :] - hunters[None, :, :]
+        room = np.sqrt((gap * gap).sum(axis=2)).min(axis=1)
         score = room - self._cramped(ahead) + p.openness * self._free_run(pos)
         score += self.ctx.rng.normal(0.0, p.randomness, len(ahead))
         best = v[int(np.argmax(score))]
