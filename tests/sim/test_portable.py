@@ -141,4 +141,4 @@ def test_nothing_depends_on_the_cpu(part, paths):
         calls = _numpy_calls(ast.parse(path.read_text()), names)
         if calls:
             offending[str(path.relative_to(SRC))] = calls
-    assert not offending, f"CPU-dependent NumPy in the {part}' code (use math or a kernel): {offending}"
+    assert not offending, f"CPU-dependent NumPy in the Python of the {part} (use math or a kernel): {offending}"
