@@ -2,7 +2,7 @@
 why it cannot.
 
 Zenoh answers a refused credential and a server that is not there with the same error ("unable to connect"),
-so a process with a wrong key used to wait out its whole ``--wait`` and then say neither. Here the two are
+so a process that only retried would wait out its whole ``--wait`` with a wrong key and then say neither. The two are
 told apart by looking at the transport itself: when something accepts a TCP connection at the server's
 address but Zenoh's handshake still fails, the server is up and refuses this credential (usrpwd
 authentication fails in the handshake), which waiting will not change: that is said at once, in one line.
