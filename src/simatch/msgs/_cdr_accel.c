@@ -767,9 +767,9 @@ static PyObject *encode(PyObject *self, PyObject *args) {
 /* --- Decoding ------------------------------------------------------------------------------------------------
  *
  * `decode(compiled decoder program, payload)`: the message a little-endian CDR payload (header included) holds,
- * read as the generated Python decoders (`simatch.msgs.cdr_decoders`) read it (the tests and the fuzzing targets
- * hold the two to the same verdict on every input): primitive sequences become read-only numpy arrays viewing the payload, a
- * string must end with its NUL and be UTF-8, every length is checked against what is left before it is used,
+ * read as rosbags' own deserializer reads it (the tests and the fuzzing targets hold the two to the same message
+ * and the same verdict on every input): primitive sequences become read-only numpy arrays viewing the payload,
+ * a string must end with its NUL and be UTF-8, every length is checked against what is left before it is used,
  * and whatever does not fit raises `MessageError` (from `setup_decoding`), never anything else. The program is
  * the encoder's with each message's class: (class, ((kind, field, argument), ...)), a nested message's
  * argument being its own (class, ops).
@@ -859,7 +859,7 @@ static PyObject *read_string(In *in) {
 /* one empty read-only array per kind, shared by every empty sequence decoded (nothing in it to change) */
 static PyObject *empty_arrays[16];
 
-/* read-only numpy array of `n` elements viewing the payload, as the Python decoder makes it */
+/* read-only numpy array of `n` elements viewing the payload (as rosbags makes it) */
 static PyObject *read_array(In *in, const Op *op, Py_ssize_t n) {
     int size = size_of(op->elem);
     if (n)
