@@ -1,7 +1,8 @@
 """The C extensions of simatch; everything else is in pyproject.toml.
 
-* ``simatch.msgs._cdr_accel`` (required): the CDR codec (msgs/_cdr_accel.c) and, compiled with it because it
-  calls the encoder directly, the recorder's message log (record/_messagelog.c); they share msgs/_cdr_accel.h.
+* ``simatch.msgs._cdr_accel`` (required): the CDR codec (msgs/_cdr_*.c, one unit per layer) and, compiled with it
+  because it calls the encoder directly, the recorder's message log (record/_messagelog*.c); they share
+  msgs/_cdr_accel.h (the log's units also record/_messagelog.h).
 * ``simatch.sim._inputs`` (required): the simulator's input taps (sim/_inputs.c).
 * ``simatch.msgs._positional`` (required): positional construction of messages and of the strategies'
   slotted records, their slots filled in C.
@@ -32,9 +33,21 @@ def extension(name: str, sources: list[str], headers: list[str] = ()) -> Extensi
     return Extension(name, sources, depends=headers, define_macros=[("SIMATCH_SOURCE_DIGEST", f'"{digest}"')])
 
 
+#: the units of simatch.msgs._cdr_accel: the CDR codec's layers, then the recorder's message log's
+CDR_ACCEL = [
+    "msgs/_cdr_accel.c",
+    "msgs/_cdr_program.c",
+    "msgs/_cdr_encode.c",
+    "msgs/_cdr_memo.c",
+    "msgs/_cdr_decode.c",
+    "record/_messagelog.c",
+    "record/_messagelog_poses.c",
+    "record/_messagelog_chunks.c",
+]
+
 setup(
     ext_modules=[
-        extension("simatch.msgs._cdr_accel", ["msgs/_cdr_accel.c", "record/_messagelog.c"], ["msgs/_cdr_accel.h"]),
+        extension("simatch.msgs._cdr_accel", CDR_ACCEL, ["msgs/_cdr_accel.h", "record/_messagelog.h"]),
         extension("simatch.sim._inputs", ["sim/_inputs.c"]),
         extension("simatch.msgs._positional", ["msgs/_positional.c"]),
     ]

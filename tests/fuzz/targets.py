@@ -16,9 +16,10 @@ microseconds. `COUNTS` counts the inputs each target tried.
 
 Targets:
 
-* ``cdr``: every simatch message type's CDR decoder, the C codec against the generated Python decoders, on valid
-  messages, on valid messages cut, bit-flipped, with lengths overwritten, and on plain bytes: both give the
-  same verdict (the same message, or both `MessageError`), and a decoded message encodes again;
+* ``cdr``: every simatch message type's CDR decoder, the C codec against rosbags' own deserializer (the
+  reference), on valid messages, on valid messages cut, bit-flipped, with lengths overwritten, and on plain
+  bytes: both give the same verdict (the same message, or both refuse it: the C codec with `MessageError`
+  alone), and a decoded message encodes again;
 * ``bundle``: the distributed protocol's bundles (`simatch.bus.bundle`) and JSON payloads
   (`simatch.distributed.protocol`), the signatures of samples (`credentials`) and the server's fair-play
   verdict on any sample (`fairplay`), and a scene offer as a server would send it;
@@ -204,8 +205,8 @@ def _codecs():
     from simatch.msgs.cdr import Codec
 
     c = Codec(msgs.typestore)
-    py = Codec(msgs.typestore, accelerate=False)
-    return c, py
+    rosbags = Codec(msgs.typestore, accelerate=False)  # (decodes with rosbags' deserializer)
+    return c, rosbags
 
 
 def _verdict(codec, typename, data):
@@ -230,18 +231,20 @@ def cdr_inputs(draw):
 
 def target_cdr(case):
     typename, seed_data, seed = case
-    c, py = _codecs()
+    c, rosbags = _codecs()
     types = [typename] + random.Random(seed).sample(TYPES, 2)  # the same bytes read as other types too
     for data in variants(seed_data, seed, 300):
         for name in types:
             COUNTS["cdr"] += 1
-            a, b = _verdict(c, name, data), _verdict(py, name, data)
+            a, b = _verdict(c, name, data), _verdict(rosbags, name, data)
             assert (a is None) == (b is None), (
-                f"C {'refused' if a is None else 'accepted'} and Python did not: {name} {data!r}"
+                f"C {'refused' if a is None else 'accepted'} and rosbags did not: {name} {data!r}"
             )
             if a is not None:
-                assert py.encode(a, name) == py.encode(b, name), f"C and Python decode {name} differently: {data!r}"
-                assert msgs.encode(a) == py.encode(a, name)
+                assert rosbags.encode(a, name) == rosbags.encode(b, name), (
+                    f"C and rosbags decode {name} differently: {data!r}"
+                )
+                assert msgs.encode(a) == rosbags.encode(a, name)
 
 
 # --- distributed protocol --------------------------------------------------------------------------------------

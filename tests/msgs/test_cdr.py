@@ -108,24 +108,25 @@ def test_the_c_codec_refuses_a_numpy_layout_other_than_its_own():
 
 
 @pytest.mark.parametrize("store, name", STORES, ids=[n for _, n in STORES])
-def test_the_c_decoder_reads_what_the_python_decoder_reads(store, name):
-    """The same message (type, every field bit for bit, read-only arrays of the wire's dtype), and on broken
-    payloads the same verdict: both read it, or both raise MessageError."""
+def test_the_c_decoder_reads_what_rosbags_reads(store, name):
+    """The C decoder against rosbags' own deserializer (``accelerate=False``): the same message (type, every
+    field bit for bit, read-only arrays of the wire's dtype), and on broken payloads the same verdict: both
+    read it, or both refuse it (MessageError)."""
     rng = np.random.default_rng(zlib.crc32(name.encode()) + 1)
-    c, py = Codec(store), Codec(store, accelerate=False)
+    c, ref = Codec(store), Codec(store, accelerate=False)
     for _ in range(20):
         data = _rosbags(store, random_message(store, name, rng))
-        a, b = c.decode(name, data), py.decode(name, data)
+        a, b = c.decode(name, data), ref.decode(name, data)
         assert type(a) is type(b) and _rosbags(store, a) == _rosbags(store, b) == data
         _same_arrays(a, b)
     junk = bytearray(data)
     for cut in range(len(data) + 2):
-        _same_verdict(c, py, name, bytes(junk[:cut]))
+        _same_verdict(c, ref, name, bytes(junk[:cut]))
     for _ in range(300):
         i = int(rng.integers(4, len(junk))) if len(junk) > 4 else 0
         junk[i] = int(rng.integers(0, 256))
-        _same_verdict(c, py, name, bytes(junk))
-    _same_verdict(c, py, name, data + bytes(8))  # bytes too many
+        _same_verdict(c, ref, name, bytes(junk))
+    _same_verdict(c, ref, name, data + bytes(8))  # bytes too many
 
 
 def _same_arrays(a, b) -> None:

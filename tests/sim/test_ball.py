@@ -120,6 +120,40 @@ def test_kicker_fires_only_with_the_ball_in_the_mouth(field_sim):
     assert math.hypot(ball(sim).vx, ball(sim).vy) < 1e-6
 
 
+def test_the_kicker_and_the_dribbler_share_one_mouth(field_sim):
+    """Where the kicker sees the ball in a robot's mouth (`BallHandling.in_mouth`) is where the dribbler's
+    catch takes it (`catch_candidate`, with no limit on the ball's speed), ball placed all around the robot."""
+    from simatch.sim.kernels import catch_candidate
+
+    sim = field_sim()
+    park_everyone_but(sim, ["cyan/2"])
+    sim.set_model_state("cyan/2", x=-5.0, y=1.0, yaw=0.7)
+    ball_handling, i = sim.simulator.ball, sim.simulator.index_of("cyan/2")
+    rng = np.random.default_rng(11)
+    inside = 0
+    for _ in range(400):
+        d, a = rng.uniform(0.0, 0.6), rng.uniform(-math.pi, math.pi)
+        sim.set_model_state("ball", x=-5.0 + d * math.cos(a), y=1.0 + d * math.sin(a), z=R + rng.choice([0.0, 0.1]))
+        bh = ball_handling
+        caught = catch_candidate(
+            bh._qpos,
+            bh._qvel,
+            bh._robot_q0,
+            bh._robot_v0,
+            bh._ball_q,
+            bh._ball_v,
+            np.array([i]),
+            bh.hold_dist,
+            bh.hold_cos,
+            bh._catch_top,
+            bh._mouth_x,
+            math.inf,
+        )[0]
+        assert bh.in_mouth(i) == (caught == i)
+        inside += caught == i
+    assert 0 < inside < 400
+
+
 def _hold(sim, robot):
     """Put the ball in ``robot``'s mouth with the dribbler on and let it take the ball."""
     st = sim.model_states()[robot]

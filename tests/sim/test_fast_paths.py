@@ -303,19 +303,21 @@ def test_bound_kernels_compute_what_the_dispatcher_computes():
 
 
 def test_held_ball_kernels_bound_play_the_match_the_dispatcher_plays():
-    """The held ball's kernels (keep, roll, catch) bound by `simatch.compiled.bind` at the start give the same steps as
-    their dispatchers: a stretch with catches, holds and losses of the ball played both ways ends in the same
-    state, bit for bit."""
+    """The held ball's kernels (keep, roll, catch, the mouth's) bound by `simatch.compiled.bind` at the start
+    give the same steps as their dispatchers: a stretch with catches, holds and losses of the ball played both
+    ways ends in the same state, bit for bit."""
     from simatch.sim import kernels
 
     def play(dispatch: bool) -> str:
         with simatch.Simulation("msl_5v5", seed=3) as run:
             ball = run.simulator.ball
             if dispatch:
-                ball._keep_kernel, ball._roll, ball._catch_kernel = (
+                ball._keep_kernel, ball._roll, ball._catch_kernel, ball._in_mouth, ball._mouth_vel = (
                     kernels.keep_ball,
                     kernels.roll_held_ball,
                     kernels.catch_candidate,
+                    kernels.in_mouth,
+                    kernels.mouth_velocity,
                 )
             run.run(seconds=12.0, until_done=False)
             assert run.simulator.mechanics["dribble_start"] > 0  # the ball was caught (and held) in the stretch

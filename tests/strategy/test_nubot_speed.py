@@ -109,6 +109,22 @@ def test_team_intercepts_in_one_kernel_equal_the_rows_then_the_intercepts():
         assert fused.tobytes() == plain.tobytes()
 
 
+def test_the_intercepts_sample_the_path_where_ball_at_puts_the_ball():
+    """Every interception point is a sample of the ball's path as `BallPath.at` (`ball_at`) gives it, bit
+    for bit: at its sample time when the robot gets there in time, else at the last sample (4 s)."""
+    rng = random.Random(7)
+    times = [k * ballpath.STEP for k in range(ballpath.SAMPLES)]
+    for _ in range(500):
+        path = _random_path(rng)
+        n = rng.randint(1, 6)
+        px, py = np.array([rng.uniform(-12, 12) for _ in range(n)]), np.array([rng.uniform(-8, 8) for _ in range(n)])
+        v = np.array([rng.uniform(-3, 3) for _ in range(n)])
+        out = ballpath.intercepts(path, px, py, v, v[::-1].copy(), rng.uniform(1.0, 4.0), rng.uniform(1.0, 3.0))
+        for t, x, y in out:
+            at = times[-1] if t not in times else t
+            assert (x, y) == path.at(at), (t, at)
+
+
 def test_load_kernels_loads_what_open_play_calls():
     """After `load_kernels`, a match into open play needs no kernel signature it has not loaded yet (the
     benchmark relies on this: nothing compiles or loads while it measures)."""

@@ -20,7 +20,6 @@ gives the same run every time. ``help`` lists the commands.
 from __future__ import annotations
 
 import argparse
-import json
 import queue
 import sys
 import textwrap
@@ -34,7 +33,7 @@ from ..config.loader import load_scene
 from ..config.schema import JudgeSpec
 from ..msgs import game_commands as commands
 from . import UsageError
-from .run import SCENE_HELP, overrides_of, print_summary
+from .run import SCENE_HELP, overrides_of, print_result
 
 HELP = """\
 commands (one per line; '#' starts a comment):
@@ -309,10 +308,7 @@ def main(args) -> int:
         else:
             _scripted(sim, console, source, args, echo)
         out = sim.result()
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print_summary(out)
+    print_result(out, args.json)
     return 0
 
 

@@ -8,7 +8,7 @@ import os
 import sys
 
 from . import UsageError
-from .server import add_join_options
+from .server import add_join_options, play_on_server
 
 
 def add_parser(sub) -> None:
@@ -73,9 +73,6 @@ def main(args) -> int:
         raise UsageError("ros1: give the TEAM whose robots ROS plays (or --print-env)")
     if args.ros_master:
         os.environ["ROS_MASTER_URI"] = args.ros_master
-    from ..distributed import interrupt_on_term
-    from ..distributed.client import ClientError
-    from ..distributed.credentials import CredentialError
     from ..ros1.client import BridgeProcess
 
     proc = BridgeProcess(
@@ -89,14 +86,9 @@ def main(args) -> int:
         clock=not args.no_clock,
         strategy_relay=not args.no_strategy_relay,
     )
-    with interrupt_on_term(proc.stop_soon):
-        try:
-            reason = proc.run()
-        except (ClientError, CredentialError, ValueError) as exc:
-            raise UsageError(str(exc)) from None
-        except KeyboardInterrupt:
-            proc.say(f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
-            return 130
+    reason = play_on_server(proc)
+    if reason is None:
+        return 130
     bridge = proc.bridge
     stats = bridge.stats.as_dict() if bridge is not None else {}
     proc.say(

@@ -169,6 +169,15 @@ def _readable(value: Any) -> Any:
     return value
 
 
+def print_result(out: dict, as_json: bool, events: int | None = 30) -> None:
+    """A run's result (`Simulation.result`) on stdout: exactly one JSON object (``--json``), or `print_summary`
+    with the last ``events`` events."""
+    if as_json:
+        print(json.dumps(out))
+    else:
+        print_summary(out, limit=events)
+
+
 def print_summary(out: dict, file=sys.stdout, limit: int | None = 30) -> None:
     """The run for people: the last ``limit`` events (None: all), then what ran, how fast and the result — last,
     so that the final screen of a terminal shows the result however long the event log is."""
@@ -210,8 +219,5 @@ def main(args) -> int:
         finally:
             progress.close()
         out = sim.result()
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print_summary(out, limit=args.events)
+    print_result(out, args.json, args.events)
     return 0

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from ..config.loader import load_scene
 from . import UsageError
-from .run import add_run_options, overrides_of, print_summary
+from .run import add_run_options, overrides_of, print_result
 
 CHUNK = 0.05  # [s] simulated between two looks at the open pages
 MCAP_MAGIC = b"\x89MCAP"
@@ -112,10 +112,7 @@ def serve_scene(args) -> int:
         except KeyboardInterrupt:
             print("simatch: stopped", file=sys.stderr)
         out = sim.result()
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print_summary(out, limit=args.events)
+    print_result(out, args.json, args.events)
     return 0
 
 

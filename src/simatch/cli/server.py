@@ -8,14 +8,13 @@ mode the same ``state_digest`` for the same scene and seed.
 from __future__ import annotations
 
 import contextlib
-import json
 import signal
 import sys
 
 from ..bus.zenoh_bus import DEFAULT_ENDPOINT
 from ..config.loader import load_scene
 from . import UsageError
-from .run import Progress, add_run_options, extensions, match_status, overrides_of, print_summary, run_duration
+from .run import Progress, add_run_options, extensions, match_status, overrides_of, print_result, run_duration
 
 
 def add_network_options(p, run_help: str) -> None:
@@ -36,6 +35,24 @@ def add_join_options(p) -> None:
         help=f"the server's Zenoh endpoint (default {DEFAULT_ENDPOINT})",
     )
     add_network_options(p, "the run to join")
+
+
+def play_on_server(proc) -> str | None:
+    """Run ``proc``, a process that joined a server's run (a team's, a ROS bridge's), until the server ends the
+    run: the reason it gave; None when interrupted (said: the process left the run). A join the server refuses
+    (a bad credential, an unknown run or team) is a usage error."""
+    from ..distributed import interrupt_on_term
+    from ..distributed.client import ClientError
+    from ..distributed.credentials import CredentialError
+
+    with interrupt_on_term(proc.stop_soon):
+        try:
+            return proc.run()
+        except (ClientError, CredentialError, ValueError) as exc:
+            raise UsageError(str(exc)) from None
+        except KeyboardInterrupt:
+            proc.say(f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
+            return None
 
 
 def add_parser(sub) -> None:
@@ -133,9 +150,6 @@ def main(args) -> int:
             server.finish("interrupted" if interrupted else "finished")
             out = server.result()
             stats = server.stats()
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print_summary(out, limit=args.events)
+    print_result(out, args.json, args.events)
     print("simatch server: " + ", ".join(f"{k} {v}" for k, v in stats.items()), file=sys.stderr)
     return 130 if interrupted else 0

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from ..config.loader import parse_override
-from . import UsageError
-from .server import add_join_options
+from .server import add_join_options, play_on_server
 
 
 def add_client_options(p) -> None:
@@ -45,9 +44,7 @@ def add_parser(sub) -> None:
 
 
 def main(args, robots: list[int] | None = None) -> int:
-    from ..distributed import interrupt_on_term
-    from ..distributed.client import ClientError, TeamProcess
-    from ..distributed.credentials import CredentialError
+    from ..distributed.client import TeamProcess
 
     params = dict(parse_override(p) for p in args.param)
     proc = TeamProcess(
@@ -60,14 +57,9 @@ def main(args, robots: list[int] | None = None) -> int:
         params=params,
         wait=args.wait,
     )
-    with interrupt_on_term(proc.stop_soon):
-        try:
-            reason = proc.run()
-        except (ClientError, CredentialError, ValueError) as exc:
-            raise UsageError(str(exc)) from None
-        except KeyboardInterrupt:
-            proc.say(f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
-            return 130
+    reason = play_on_server(proc)
+    if reason is None:
+        return 130
     stats = proc.stats
     proc.say(
         f"{proc.what}: the server ended the run ({reason}) after {proc.ticks} ticks"

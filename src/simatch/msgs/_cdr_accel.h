@@ -1,6 +1,8 @@
-/* What the C CDR encoder (`_cdr_accel.c`, next to `simatch.msgs.cdr`) shares with the recorder's message log
- * (`simatch/record/_messagelog.c`): both are compiled into the one extension `simatch.msgs._cdr_accel`, so
- * that the log encodes each message into its chunk buffer by a direct call of the encoder.
+/* What the units of the extension `simatch.msgs._cdr_accel` share: the CDR codec's (next to
+ * `simatch.msgs.cdr`: `_cdr_accel.c` the module and numpy's layout, `_cdr_program.c` the compiled programs,
+ * `_cdr_encode.c` the encoder, `_cdr_memo.c` its memo, `_cdr_decode.c` the decoder) and the recorder's message
+ * log (`simatch/record/_messagelog*.c`), compiled into the same extension so that the log encodes each message
+ * into its chunk buffer by a direct call of the encoder.
  *
  * The encoder writes into `out` (a growable buffer, or memory lent by the log), aligning each field to its
  * size counted from `body`, the offset where the current CDR body starts. A caller that encodes somewhere
@@ -27,6 +29,43 @@ enum {
     K_BOOL = 1, K_I8, K_U8, K_I16, K_U16, K_I32, K_U32, K_I64, K_U64, K_F32, K_F64,
     K_STR = 20, K_MSG, K_PSEQ, K_SSEQ, K_MSEQ
 };
+
+/* numpy arrays without numpy's headers: the leading fields of numpy's array object, whose layout is part of
+ * numpy's ABI (extensions built against old headers run with new numpy). The layout is declared, and checked
+ * against numpy, by `simatch.msgs.cdr` (`NUMPY_ARRAY`, `NUMPY_DTYPE`); `setup` receives those offsets and
+ * refuses to start if they are not those of the structs below. */
+typedef struct {
+    PyObject_HEAD
+    char *data;
+    int nd;
+    Py_ssize_t *dimensions;
+    Py_ssize_t *strides;
+    PyObject *base;
+    PyObject *descr;
+    int flags;
+} ArrayHead;
+
+/* ... and the leading fields of a dtype, the same in numpy 1 and 2: an array made elsewhere (numba, a view of
+ * a structured array) may have a dtype object of its own that equals the shared one */
+typedef struct {
+    PyObject_HEAD
+    PyTypeObject *typeobj;         /* the scalar type: numpy.float64, ... */
+    char kind, type, byteorder;
+} DescrHead;
+
+extern int c_contiguous;           /* numpy's flag of a C-contiguous array (`setup`) */
+extern PyTypeObject *ndarray;      /* numpy.ndarray (`setup`) */
+extern PyObject *dtypes[16];       /* by kind: the dtype object of contiguous arrays taken as they are */
+
+/* the size on the wire of a primitive of `kind` */
+static inline int size_of(long kind) {
+    switch (kind) {
+    case K_BOOL: case K_I8: case K_U8: return 1;
+    case K_I16: case K_U16: return 2;
+    case K_I32: case K_U32: case K_F32: return 4;
+    default: return 8;
+    }
+}
 
 #define FALLBACK 1                 /* not for the fast path: the caller uses the Python encoder */
 #define FAILED -1                  /* a Python exception is set (memory) */
@@ -99,6 +138,15 @@ struct Program {
 /* the compiled program a capsule made by `compile` holds (NULL, an exception set, if it is not one) */
 Program *program_of(PyObject *capsule);
 
+/* a program tuple's ops compiled (`compile` compiles the programs of nested messages); NULL: an exception set */
+Program *compile_ops(PyObject *ops, Program *(*compile)(PyObject *));
+
+/* how instances of `tp` hold the program's fields (slotted, at which offsets), learnt for `tp` */
+void learn(Program *program, PyTypeObject *tp);
+
+/* a compiled program (NULL: an exception is set) as the capsule Python holds */
+PyObject *capsule_of(Program *p);
+
 /* encode `msg` into `out` by `program`: 0, FALLBACK (the caller takes back what was written) or FAILED */
 int encode_program(Program *program, PyObject *msg);
 
@@ -115,6 +163,16 @@ typedef struct {
     Py_ssize_t cap, used;
     Buf bytes;
 } MemoTable;
+
+/* the memo in use (`enter`): two dicts (`encode`) or two tables (a log); NULL: none */
+extern PyObject *memo_now, *memo_old;
+extern MemoTable *table_now, *table_old;
+
+/* whether a memo is in use */
+int memo_on(void);
+
+/* the bytes kept for `obj` at `phase` (1; *p and *size set), none (0), or an error (-1, its exception set) */
+int memo_find(PyObject *obj, long phase, const char **p, Py_ssize_t *size);
 
 int table_traverse(const MemoTable *t, visitproc visit, void *arg);
 void table_clear(MemoTable *t);
@@ -134,6 +192,13 @@ typedef struct {
 
 State enter(Buf *to, Py_ssize_t at, PyObject *now, PyObject *old, MemoTable *tnow, MemoTable *told);
 void leave(State saved);
+
+/* the module's functions, each in the unit of its layer */
+PyObject *encode(PyObject *self, PyObject *args);
+PyObject *compile(PyObject *self, PyObject *program);
+PyObject *compile_decoder(PyObject *self, PyObject *program);
+PyObject *decode(PyObject *self, PyObject *args);
+PyObject *setup_decoding(PyObject *self, PyObject *error);
 
 /* the message log's types added to the module (`_messagelog.c`): 0, or -1 with an exception set */
 int messagelog_add_types(PyObject *module);

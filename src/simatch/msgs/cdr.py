@@ -8,7 +8,9 @@ by the C codec (``_cdr_accel.c``, built by ``pip install -e .``): `Codec` compil
 Python encoders (`simatch.msgs.cdr_encoders`) encode what the C encoder does not take as it is (a list where
 an array is expected, a value of the wrong type: converted, or the canonical error raised) and pack a
 fixed-size message, encapsulation header included, with one ``struct`` call. ``Codec(accelerate=False)`` uses
-the generated Python encoders and decoders (`simatch.msgs.cdr_decoders`) only; the tests compare both paths.
+the generated Python encoders only and reads payloads with rosbags' own deserializer: the reference the tests
+and the fuzzing targets hold the C codec to (the same bytes, the same messages, the same verdict on broken
+payloads). A big-endian payload is read by rosbags too.
 
 Decoding checks what it reads: a payload that is cut short, claims more elements than it holds, holds a bad
 string or bytes too many raises `MessageError`, never anything else. Primitive sequences come back as
@@ -25,7 +27,7 @@ checked on an array at import, and handed to the extension, which checks them ag
 messages by their slots (`simatch.msgs._with_slots`).
 
 Output: XCDR1 little endian with the 4-byte encapsulation header (`simatch.msgs.cdr_wire`), as ROS 2 and
-rosbag2 write it; a big-endian payload is handed to rosbags to read.
+rosbag2 write it.
 
     codec = Codec(msgs.typestore)
     data = codec.encode(msg)                     # bytes
@@ -35,7 +37,6 @@ rosbag2 write it; a big-endian payload is handed to rosbags to read.
 from __future__ import annotations
 
 import ctypes
-import struct
 import sys
 from collections.abc import Callable
 from typing import Any
@@ -45,7 +46,6 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys.base import normalize_fieldname
 
 from . import MessageError, unbuilt
-from .cdr_decoders import PythonDecoders
 from .cdr_encoders import PythonEncoders, _as_bytes
 from .cdr_wire import _LEN, _U32, _ZEROS, BASE, DTYPE, HEADER, _ident
 
@@ -143,7 +143,7 @@ _cdr_accel.setup(
 _cdr_accel.setup_decoding(MessageError)
 
 
-class Codec(PythonEncoders, PythonDecoders):
+class Codec(PythonEncoders):
     """Encoders and decoders for every type of a ``rosbags`` type store, generated on first use."""
 
     def __init__(self, typestore, *, memo: bool = False, accelerate: bool = True):
@@ -156,8 +156,6 @@ class Codec(PythonEncoders, PythonDecoders):
         self._memo = ({}, {})  # the C encoder's: this period's, the last one's
         self._whole: dict[str, Callable] = {}  # type -> encode(msg) -> bytes
         self._parts: dict[str, Callable] = {}  # type -> enc(msg, out, pos) -> pos
-        self._decoders: dict[str, Callable] = {}  # type -> decode(body) -> msg
-        self._decoders_at: dict[str, Callable] = {}  # type -> dec(body, pos) -> (msg, pos)
         self._c_decoders: dict[str, Any] = {}  # type -> the C decoder's compiled program
         self._seqs: dict[int, tuple] = {}  # memo: id(list) -> (list, phase, bytes)
         self._strings: dict[tuple, bytes] = {}
@@ -245,25 +243,12 @@ class Codec(PythonEncoders, PythonDecoders):
                 return _cdr_accel.decode(program, data)
             except MessageError as exc:
                 raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {exc}") from None
-        func = self._decoders.get(typename)
-        if func is None:
-            if typename not in self.typestore.fielddefs:
-                raise MessageError(f"unknown message type {typename!r}")
-            func = self._generate_decoder(typename)
-        if data[:2] != b"\x00\x01":  # not little-endian CDR: rosbags reads it (or refuses)
-            try:
-                return self.typestore.deserialize_cdr(data, typename)
-            except Exception as exc:
-                raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {exc}") from None
+        if typename not in self.typestore.fielddefs:
+            raise MessageError(f"unknown message type {typename!r}")
         try:
-            msg, end = func(data)
-        except MessageError as exc:
+            return self.typestore.deserialize_cdr(data, typename)
+        except Exception as exc:  # (rosbags raises its SerdeError, or what its reads meet: any means malformed)
             raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {exc}") from None
-        except (struct.error, ValueError, UnicodeDecodeError, IndexError, TypeError) as exc:
-            raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {exc}") from None
-        if end + 3 < len(data):
-            raise MessageError(f"malformed {typename} payload ({len(data)} bytes): {len(data) - end} bytes too many")
-        return msg
 
     def forget(self) -> None:
         """Start a new memo period: lists met in the last one are forgotten, messages encoded on their own in
@@ -378,7 +363,7 @@ class Codec(PythonEncoders, PythonDecoders):
         found = self._programs[typename] = tuple(ops)
         return found
 
-    # --- decoders -------------------------------------------------------------------------------------------
+    # --- the generated encoders' source ------------------------------------------------------------------------
 
     def _compile(self, lines: list[str], typename: str, fname: str) -> Callable:
         exec(compile("\n".join(lines) + "\n", f"<cdr {typename}>", "exec"), self._ns)

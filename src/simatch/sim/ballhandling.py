@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 
 from ..compiled import bind
-from .kernels import catch_candidate, keep_ball, roll_held_ball
+from .kernels import catch_candidate, in_mouth, keep_ball, mouth_velocity, roll_held_ball
 
 #: a bound on any robot's speed, used only to know when no catch can happen yet [m/s]
 _ROBOT_TOP_SPEED = 12.0
@@ -75,6 +75,8 @@ class BallHandling:
         self._roll = bind(roll_held_ball)
         self._keep_kernel = bind(keep_ball)
         self._catch_kernel = bind(catch_candidate)
+        self._in_mouth = bind(in_mouth)
+        self._mouth_vel = bind(mouth_velocity)
 
     def _init_dribbler(self, dr, model: mujoco.MjModel, index) -> None:
         dt = model.opt.timestep
@@ -125,29 +127,17 @@ class BallHandling:
             return
         self.kicks[i] = KickRequest(min(speed, self.lob_max if lob else self.kick_max), lob, until_step)
 
-    # --- geometry ---------------------------------------------------------------------------------------
-    def _ball_in_robot_frame(self, i: int) -> tuple[float, float, float]:
-        q = self.d.qpos
-        x, y, yaw = q[self.ix.robot_qpos[i]]
-        b = self.ix.ball_qpos
-        dx, dy = q[b] - x, q[b + 1] - y
-        c, s = math.cos(yaw), math.sin(yaw)
-        return (c * dx + s * dy, -s * dx + c * dy, q[b + 2])
-
+    # --- the mouth ----------------------------------------------------------------------------------------
     def in_mouth(self, i: int) -> bool:
-        bx, by, bz = self._ball_in_robot_frame(i)
-        dist = math.hypot(bx, by)
-        return dist <= self.hold_dist and bx >= self.hold_cos * dist and bz <= self.ball_r + 0.05
+        """Whether the ball is in robot i's mouth (`kernels.mouth_view`, as a catch judges it)."""
+        return self._in_mouth(
+            self._qpos, self._robot_q0, self._ball_q, i, self.hold_dist, self.hold_cos, self._catch_top
+        )
 
     def _mouth_velocity(self, i: int) -> np.ndarray:
-        """World velocity of robot i's mouth point (robot velocity plus w x r)."""
-        q, v = self.d.qpos, self.d.qvel
-        yaw = q[self.ix.robot_qpos[i, 2]]
-        vx, vy, w = v[self.ix.robot_qvel[i]]
-        mx = self.mouth[i, 0]
-        c, s = math.cos(yaw), math.sin(yaw)
-        rx, ry = c * mx, s * mx
-        return np.array([vx - w * ry, vy + w * rx, 0.0])
+        """World velocity (vx, vy, 0) of robot i's mouth point (`kernels.mouth_velocity`)."""
+        vx, vy = self._mouth_vel(self._qpos, self._qvel, self._robot_q0, self._robot_v0, i, self._mouth_xs[i])
+        return np.array([vx, vy, 0.0])
 
     # --- per physics step ---------------------------------------------------------------------------------
     def before_step(self, step: int, enabled: np.ndarray) -> None:
@@ -228,6 +218,7 @@ class BallHandling:
             cand,
             self.hold_dist,
             self.hold_cos,
+            self._catch_top,
             self._mouth_x,
             self.catch_speed,
         )

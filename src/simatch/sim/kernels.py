@@ -44,6 +44,50 @@ def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     return (fx * fx + fy * fy) ** 0.5
 
 
+#: the dribbler's mouth: how near [m] and how far off the heading (cosine) the ball may be, and how high its
+#: centre at most [m], for it to be in a robot's mouth
+MOUTH = dict(hold_dist=Float, hold_cos=Float, top=Float)
+
+
+@kernel
+def ball_from_robot(qpos, robot_q, ball_q, i):
+    """Where the ball's centre is from ground robot i's: (forward, lateral) in the robot's frame, and the
+    horizontal distance."""
+    dx = qpos[ball_q] - qpos[robot_q + 3 * i]
+    dy = qpos[ball_q + 1] - qpos[robot_q + 3 * i + 1]
+    yaw = qpos[robot_q + 3 * i + 2]
+    c = np.cos(yaw)
+    s = np.sin(yaw)
+    return c * dx + s * dy, -s * dx + c * dy, (dx * dx + dy * dy) ** 0.5
+
+
+@kernel
+def mouth_view(qpos, robot_q, ball_q, i, hold_dist, hold_cos, top):
+    """The ball as ground robot i's mouth sees it: (inside, forward, lateral, distance) (`ball_from_robot`).
+    The ball is inside the mouth within ``hold_dist``, within the bearing cone (forward at least ``hold_cos``
+    times the distance) and on the ground (its centre no higher than ``top``)."""
+    fwd, lat, dist = ball_from_robot(qpos, robot_q, ball_q, i)
+    inside = dist <= hold_dist and fwd >= hold_cos * dist and qpos[ball_q + 2] <= top
+    return inside, fwd, lat, dist
+
+
+@kernel(qpos=Vector, robot_q=Int, ball_q=Int, i=Int, **MOUTH)
+def in_mouth(qpos, robot_q, ball_q, i, hold_dist, hold_cos, top):
+    """Whether the ball is in ground robot i's mouth (`mouth_view`)."""
+    return mouth_view(qpos, robot_q, ball_q, i, hold_dist, hold_cos, top)[0]
+
+
+@kernel(qpos=Vector, qvel=Vector, robot_q=Int, robot_v=Int, i=Int, mouth_x=Float)
+def mouth_velocity(qpos, qvel, robot_q, robot_v, i, mouth_x):
+    """The world velocity (vx, vy) of ground robot i's mouth point, ``mouth_x`` ahead of its centre: the
+    robot's velocity plus w x r."""
+    yaw = qpos[robot_q + 3 * i + 2]
+    w = qvel[robot_v + 3 * i + 2]
+    rx = np.cos(yaw) * mouth_x
+    ry = np.sin(yaw) * mouth_x
+    return qvel[robot_v + 3 * i] - w * ry, qvel[robot_v + 3 * i + 1] + w * rx
+
+
 @kernel(
     qpos=Vector,
     qvel=Vector,
@@ -52,53 +96,37 @@ def equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type):
     ball_q=Int,
     ball_v=Int,
     candidates=Indices,
-    hold_dist=Float,
-    hold_cos=Float,
+    **MOUTH,
     mouth_x=Vector,
     catch_speed=Float,
 )
 def catch_candidate(
-    qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, mouth_x, catch_speed
+    qpos, qvel, robot_q, robot_v, ball_q, ball_v, candidates, hold_dist, hold_cos, top, mouth_x, catch_speed
 ):
     """The robot (index) that can take the ball now: among ``candidates`` (dribbler on, usable), those
-    with the ball within ``hold_dist`` and within the bearing cone, arriving no faster than
-    ``catch_speed`` relative to the mouth; the nearest wins (ties: lowest index). Returns
-    (robot, forward, lateral, nearest distance) with robot = -1 if none."""
-    bx = qpos[ball_q]
-    by = qpos[ball_q + 1]
+    with the ball in their mouth (`mouth_view`) arriving no faster than ``catch_speed`` relative to the
+    mouth (`mouth_velocity`); the nearest wins (ties: lowest index). Returns (robot, forward, lateral,
+    nearest distance) with robot = -1 if none."""
     best = -1
     best_d = np.inf
     best_f = 0.0
     best_l = 0.0
     nearest = np.inf
     for i in candidates:
-        x = qpos[robot_q + 3 * i]
-        y = qpos[robot_q + 3 * i + 1]
-        yaw = qpos[robot_q + 3 * i + 2]
-        dx = bx - x
-        dy = by - y
-        dist = (dx * dx + dy * dy) ** 0.5
+        inside, fwd, lat, dist = mouth_view(qpos, robot_q, ball_q, i, hold_dist, hold_cos, top)
         if dist < nearest:
             nearest = dist
-        if dist > hold_dist or dist >= best_d:
+        if not inside or dist >= best_d:
             continue
-        c = np.cos(yaw)
-        s = np.sin(yaw)
-        fwd = c * dx + s * dy
-        if fwd < hold_cos * dist:
-            continue
-        vx = qvel[robot_v + 3 * i]
-        vy = qvel[robot_v + 3 * i + 1]
-        w = qvel[robot_v + 3 * i + 2]
-        mx = mouth_x[i]
-        rvx = qvel[ball_v] - (vx - w * s * mx)
-        rvy = qvel[ball_v + 1] - (vy + w * c * mx)
+        mvx, mvy = mouth_velocity(qpos, qvel, robot_q, robot_v, i, mouth_x[i])
+        rvx = qvel[ball_v] - mvx
+        rvy = qvel[ball_v + 1] - mvy
         if (rvx * rvx + rvy * rvy) ** 0.5 > catch_speed:
             continue
         best = i
         best_d = dist
         best_f = fwd
-        best_l = -s * dx + c * dy
+        best_l = lat
     return best, best_f, best_l, nearest
 
 
@@ -155,15 +183,7 @@ def keep_ball(
         force = equality_force(efc_type, efc_id, efc_force, nefc, eq, eq_type)
         if force > grip:
             return 1, force
-    x = qpos[robot_q + 3 * robot]
-    y = qpos[robot_q + 3 * robot + 1]
-    yaw = qpos[robot_q + 3 * robot + 2]
-    bx = qpos[ball_q] - x
-    by = qpos[ball_q + 1] - y
-    c = np.cos(yaw)
-    s = np.sin(yaw)
-    fx = c * bx + s * by
-    fy = -s * bx + c * by
+    fx, fy, _ = ball_from_robot(qpos, robot_q, ball_q, robot)
     if ((fx - ax) ** 2 + (fy - ay) ** 2) ** 0.5 > 0.1:
         return 2, force
     return 0, force
@@ -179,16 +199,7 @@ def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     qx = qpos[ball_q + 4]
     qy = qpos[ball_q + 5]
     qz = qpos[ball_q + 6]
-    lx = qvel[ball_v + 3]
-    ly = qvel[ball_v + 4]
-    lz = qvel[ball_v + 5]
-    # world = q * local * q^-1: v + 2 qw (u x v) + 2 u x (u x v), u = (qx, qy, qz)
-    cx = qy * lz - qz * ly
-    cy = qz * lx - qx * lz
-    cz = qx * ly - qy * lx
-    wx = lx + 2.0 * (qw * cx + qy * cz - qz * cy)
-    wy = ly + 2.0 * (qw * cy + qz * cx - qx * cz)
-    wz = lz + 2.0 * (qw * cz + qx * cy - qy * cx)
+    wx, wy, wz = rotate(qw, qx, qy, qz, qvel[ball_v + 3], qvel[ball_v + 4], qvel[ball_v + 5])
     tx = -spin * qvel[ball_v + 1] / radius
     ty = spin * qvel[ball_v] / radius
     dx = tx - wx
@@ -197,15 +208,8 @@ def roll_held_ball(qpos, qvel, ball_q, ball_v, radius, spin, max_dw):
     if d > max_dw:
         dx *= max_dw / d
         dy *= max_dw / d
-    wx += dx
-    wy += dy
-    # local = q^-1 * world * q: the same with u negated
-    cx = -(qy * wz - qz * wy)
-    cy = -(qz * wx - qx * wz)
-    cz = -(qx * wy - qy * wx)
-    qvel[ball_v + 3] = wx + 2.0 * (qw * cx - qy * cz + qz * cy)
-    qvel[ball_v + 4] = wy + 2.0 * (qw * cy - qz * cx + qx * cz)
-    qvel[ball_v + 5] = wz + 2.0 * (qw * cz - qx * cy + qy * cx)
+    # back to the ball's frame: turned by the inverse quaternion
+    qvel[ball_v + 3], qvel[ball_v + 4], qvel[ball_v + 5] = rotate(qw, -qx, -qy, -qz, wx + dx, wy + dy, wz)
 
 
 @kernel
@@ -299,12 +303,22 @@ def _stuck(i, vx, vy, act, slow_since, step, stuck_steps):
 
 @kernel(R=Matrix, flags=FLAG_INPUTS, step=Int, wheels=Matrix, valid=Flags, stuck=Flags)
 def robot_flags(R, flags, step, wheels, valid, stuck):
-    """Per ground robot, from its state R (n, 6: x y yaw vx vy w): the rim speeds its actual motion means
-    (what wheel encoders measure; zero beyond its wheels) into ``wheels`` (n, W, of any float type),
-    whether it is on the field within 1 m and enabled (``valid``), and whether it is stuck: commanded
-    > 0.2 m/s but moving at less than half of it for ``flags.stuck_steps`` (updates ``flags.slow_since``)."""
+    """Per robot, from its state R (n, 6: x y yaw vx vy w; the ground robots first, as many as ``flags.rim``
+    has rows, then the aerial ones): the rim speeds its actual motion means (what wheel encoders measure;
+    zero beyond its wheels, and for an aerial robot) into ``wheels`` (n, W, of any float type), whether it is
+    over the field within 1 m and enabled (``valid``), and whether it is stuck (a ground robot commanded
+    > 0.2 m/s but moving at less than half of it for ``flags.stuck_steps``; updates ``flags.slow_since``;
+    an aerial robot never is)."""
     rim = flags.rim
+    ground = rim.shape[0]
     for i in range(R.shape[0]):
+        valid[i] = (
+            abs(R[i, 0]) <= flags.half_length + 1.0 and abs(R[i, 1]) <= flags.half_width + 1.0 and flags.enabled[i]
+        )
+        if i >= ground:
+            wheels[i, :] = 0.0
+            stuck[i] = False
+            continue
         c = np.cos(R[i, 2])
         s = np.sin(R[i, 2])
         bvx = c * R[i, 3] + s * R[i, 4]
@@ -313,9 +327,6 @@ def robot_flags(R, flags, step, wheels, valid, stuck):
         for k in range(rim.shape[1]):
             on = k < flags.n_wheels[i]
             wheels[i, k] = (rim[i, k, 0] * bvx + rim[i, k, 1] * bvy + rim[i, k, 2] * w) if on else 0.0
-        valid[i] = (
-            abs(R[i, 0]) <= flags.half_length + 1.0 and abs(R[i, 1]) <= flags.half_width + 1.0 and flags.enabled[i]
-        )
         stuck[i] = _stuck(i, R[i, 3], R[i, 4], flags.setpoint, flags.slow_since, step, flags.stuck_steps)
 
 

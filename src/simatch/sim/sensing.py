@@ -98,18 +98,11 @@ class Sensing:
         """The current world for perception (also updates each robot's 'stuck' flag)."""
         flying = self.aerial_arrays() if self.aerial is not None else None
         R = self.robot_array(flying)
-        ng = self.ng
         wheels = np.empty((self.n, self.drive.max_wheels))
-        valid = np.zeros(self.n, dtype=bool)
-        stuck = np.zeros(self.n, dtype=bool)
-        self._robot_flags(R[:ng], self._flag_inputs, self.step_index, wheels[:ng], valid[:ng], stuck[:ng])
-        heights = None
-        if self.aerial is not None:  # aerial robots: valid over the field while enabled; never stuck
-            F, air = self.field, R[ng:]
-            wheels[ng:] = 0.0
-            over = (np.abs(air[:, 0]) <= F.half_length + 1.0) & (np.abs(air[:, 1]) <= F.half_width + 1.0)
-            valid[ng:] = over & self.enabled[ng:]
-            heights = self.robot_heights(flying)
+        valid = np.empty(self.n, dtype=bool)
+        stuck = np.empty(self.n, dtype=bool)
+        self._robot_flags(R, self._flag_inputs, self.step_index, wheels, valid, stuck)
+        heights = self.robot_heights(flying) if self.aerial is not None else None
         self.stuck = stuck
         return Snapshot(
             step=self.step_index,

@@ -6,7 +6,8 @@ a robot's time to reach each sample (from its current velocity, with limited spe
 computed for all robots at once, and the first sample a robot reaches before the ball is its
 interception point: a robot runs to where the ball will be, not where it is.
 
-The sampling is a compiled kernel (`_team_intercepts`), run once per team picture for every robot.
+Where the ball is at a given time is one compiled function, `ball_at`: `BallPath.at` and the sampling
+use it. The sampling is a compiled kernel (`_team_intercepts`), run once per team picture for every robot.
 """
 
 from __future__ import annotations
@@ -27,6 +28,21 @@ CATCH_MARGIN = 0.15
 SKIP_MARGIN = 1e-3
 
 
+#: the path as the kernels take it (`BallPath.kernel_args`, their first ten parameters)
+PATH = dict(
+    x=Float,
+    y=Float,
+    speed=Float,
+    ux=Float,
+    uy=Float,
+    land_t=Float,
+    stop_t=Float,
+    decel=Float,
+    xlim=Float,
+    ylim=Float,
+)
+
+
 class BallPath:
     """The ball's predicted path from its current state (team frame)."""
 
@@ -39,8 +55,6 @@ class BallPath:
         "ux",
         "uy",
         "stop_t",
-        "stop_x",
-        "stop_y",
         "land_t",
         "decel",
         "xlim",
@@ -72,39 +86,14 @@ class BallPath:
         else:
             self.land_t = 0.0
         if speed < 0.05:
-            self.ux = self.uy = 0.0
-            self.stop_t, self.stop_x, self.stop_y = 0.0, x, y
+            self.ux = self.uy = self.stop_t = 0.0
             return
         self.ux, self.uy = vx / speed, vy / speed
-        roll_t = speed / decel if decel > 0 else 1e3
-        self.stop_t = self.land_t + roll_t
-        s_stop = speed * self.land_t + speed * roll_t - 0.5 * decel * roll_t * roll_t
-        # (min(max(v, -lim), lim), inline: Python's max keeps v unless -lim > v, min keeps it unless lim < v)
-        v = x + self.ux * s_stop
-        v = -xlim if -xlim > v else v
-        self.stop_x = xlim if xlim < v else v
-        v = y + self.uy * s_stop
-        v = -ylim if -ylim > v else v
-        self.stop_y = ylim if ylim < v else v
+        self.stop_t = self.land_t + (speed / decel if decel > 0 else 1e3)
 
     def at(self, t: float) -> tuple[float, float]:
-        """The ball's predicted position (x, y) in t seconds."""
-        if self.speed < 0.05 or t <= 0.0:
-            return self.x, self.y
-        if t >= self.stop_t:
-            return self.stop_x, self.stop_y
-        # (Python's min and max of two, inline: the first unless the second is smaller / larger)
-        land_t = self.land_t
-        tr = t - land_t
-        tr = tr if tr > 0.0 else 0.0
-        s = self.speed * ((land_t if land_t < t else t) + tr) - 0.5 * self.decel * tr * tr
-        lim = self.xlim
-        x = self.x + self.ux * s
-        x = -lim if -lim > x else x
-        lim2 = self.ylim
-        y = self.y + self.uy * s
-        y = -lim2 if -lim2 > y else y
-        return (lim if lim < x else x, lim2 if lim2 < y else y)
+        """The ball's predicted position (x, y) in t seconds (`ball_at`)."""
+        return ball_at(*self.kernel_args(), t)
 
     def kernel_args(self) -> tuple:
         """The path as the intercept kernels take it (their first ten arguments, in their order)."""
@@ -121,10 +110,18 @@ class BallPath:
             self.ylim,
         )
 
-    def speed_at(self, t: float) -> float:
-        if t <= self.land_t:
-            return self.speed
-        return max(0.0, self.speed - self.decel * (t - self.land_t))
+
+@kernel(**PATH, t=Float)
+def ball_at(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, t):
+    """Where the ball of the path (`BallPath.kernel_args`) is in ``t`` seconds: (x, y). It flies straight at
+    its speed until ``land_t``, then rolls slowing at ``decel`` until ``stop_t``, and stays; the boards
+    (``xlim``, ``ylim``) hold it on the floor. A ball slower than 5 cm/s is taken as lying still."""
+    if speed < 0.05:
+        return x, y
+    tt = min(t, stop_t)
+    tr = max(0.0, tt - land_t)
+    s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
+    return min(max(x + ux * s, -xlim), xlim), min(max(y + uy * s, -ylim), ylim)
 
 
 @kernel
@@ -143,17 +140,7 @@ def _intercepts(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, px, py, 
     sx = np.empty(SAMPLES)
     sy = np.empty(SAMPLES)
     for k in range(SAMPLES):
-        t = k * STEP
-        if speed < 0.05:
-            bx, by = x, y
-        else:
-            tt = min(t, stop_t)
-            tr = max(0.0, tt - land_t)
-            s = speed * (min(tt, land_t) + tr) - 0.5 * decel * tr * tr
-            bx = min(max(x + ux * s, -xlim), xlim)
-            by = min(max(y + uy * s, -ylim), ylim)
-        sx[k] = bx
-        sy[k] = by
+        sx[k], sy[k] = ball_at(x, y, speed, ux, uy, land_t, stop_t, decel, xlim, ylim, k * STEP)
     for r in range(px.shape[0]):
         for k in range(SAMPLES):
             t = k * STEP
@@ -262,16 +249,7 @@ def team_intercepts(
 
 
 @kernel(
-    x=Float,
-    y=Float,
-    speed=Float,
-    ux=Float,
-    uy=Float,
-    land_t=Float,
-    stop_t=Float,
-    decel=Float,
-    xlim=Float,
-    ylim=Float,
+    **PATH,
     us=Matrix,
     opps=Matrix,
     bx=Float,

@@ -27,32 +27,13 @@ class BallOutRule(Rule):
     def crossed_side_line(self, x: float, y: float) -> Call:
         obs, spots = self.m.obs, self.m.spots
         over = abs(y) - obs.field.half_width
-        last = self.m.touches.last
         where = f"over the side line at x = {x:.2f} m"
+        last = self.m.touches.last
         if last < 0:
             r = spots.throw_in("", x, y)
-            restart = spots.at_ball("dropped_ball", "", r.x, r.y)
-            return Call(
-                "ball_out",
-                x=x,
-                y=y,
-                value=over,
-                limit=self.limit(),
-                detail=f"ball out {where}; nobody touched it: dropped ball",
-                restart=restart,
-            )
+            return self._call(x, y, over, where, spots.at_ball("dropped_ball", "", r.x, r.y))
         team = obs.other(obs.team_of[last])
-        return Call(
-            "ball_out",
-            team=obs.team_of[last],
-            robot=last,
-            x=x,
-            y=y,
-            value=over,
-            limit=self.limit(),
-            detail=f"ball out {where}, last touched by {obs.names[last]}: throw-in for {team}",
-            restart=spots.throw_in(team, x, y),
-        )
+        return self._call(x, y, over, where, spots.throw_in(team, x, y), f"throw-in for {team}")
 
     def crossed_goal_line(self, side: int, x: float, y: float, z: float) -> Call:
         obs, spots = self.m.obs, self.m.spots
@@ -67,30 +48,25 @@ class BallOutRule(Rule):
             where = f"over {defending}'s goal line at y = {y:.2f} m, outside the posts"
         if last < 0:
             px, py = spots.restart_point(side, y)
-            return Call(
-                "ball_out",
-                x=x,
-                y=y,
-                value=over,
-                limit=self.limit(),
-                detail=f"ball out {where}; nobody touched it: dropped ball",
-                restart=spots.at_ball("dropped_ball", "", px, py),
-            )
-        toucher = obs.team_of[last]
-        if toucher == attacking:
-            restart = spots.goal_kick(defending, side, y)
-            then = f"goal kick for {defending}"
-        else:
-            restart = spots.corner(attacking, side, y)
-            then = f"corner kick for {attacking}"
+            return self._call(x, y, over, where, spots.at_ball("dropped_ball", "", px, py))
+        if obs.team_of[last] == attacking:
+            return self._call(x, y, over, where, spots.goal_kick(defending, side, y), f"goal kick for {defending}")
+        return self._call(x, y, over, where, spots.corner(attacking, side, y), f"corner kick for {attacking}")
+
+    def _call(self, x: float, y: float, over: float, where: str, restart, then: str = "") -> Call:
+        """The ball out ``where``, ``over`` past the line's middle, and its ``restart``: ``then`` after the
+        last touch, or a dropped ball when nobody has touched it."""
+        obs, last = self.m.obs, self.m.touches.last
         return Call(
             "ball_out",
-            team=toucher,
+            team=obs.team_of[last] if last >= 0 else "",
             robot=last,
             x=x,
             y=y,
             value=over,
             limit=self.limit(),
-            detail=f"ball out {where}, last touched by {obs.names[last]}: {then}",
+            detail=f"ball out {where}, last touched by {obs.names[last]}: {then}"
+            if last >= 0
+            else f"ball out {where}; nobody touched it: dropped ball",
             restart=restart,
         )
