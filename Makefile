@@ -30,7 +30,8 @@ setup-run: $(VENV)/.installed-run
 setup: $(VENV)/.installed-test
 
 # setup.py and the C extensions too: a changed extension is rebuilt by the next make
-$(VENV)/.installed-run: pyproject.toml setup.py src/simatch/msgs/_cdr_accel.c src/simatch/msgs/_cdr_accel.h src/simatch/record/_messagelog.c src/simatch/sim/_inputs.c src/simatch/msgs/_positional.c
+C_SOURCES := $(wildcard src/simatch/*/_*.c src/simatch/*/_*.h)
+$(VENV)/.installed-run: pyproject.toml setup.py $(C_SOURCES)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e .
