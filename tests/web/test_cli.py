@@ -14,7 +14,7 @@ import time
 import aiohttp
 import pytest
 
-URL = re.compile(r"^\s+(?P<label>[a-z ]+?)\s+(?P<url>http://\S+)$")
+URL = re.compile(r"^\s+(?P<label>[a-z0-9 ]+?)\s+(?P<url>http://\S+)$")
 
 
 def _start(*argv: str) -> subprocess.Popen:
@@ -83,9 +83,9 @@ def test_a_viewed_run_waits_for_a_page_plays_at_real_time_and_ends_when_the_page
     proc = _start(*command, "--view-port", "0", "--json", "--quiet")
     try:
         urls = _urls(proc)
-        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay"}
+        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay", "3d view"}
         assert all(u.startswith("http://127.0.0.1:") for u in urls.values()), "loopback by default"
-        assert len({u.split("token=")[1] for u in urls.values()}) == 4, "one token per page"
+        assert len({u.split("token=")[1] for u in urls.values()}) == 5, "one token per page"
         messages = _run(_watch(urls["referee"], 2.5))
         frames = [m for m in messages if m["type"] == "frame"]
         assert messages[0]["type"] == "hello" and messages[0]["role"] == "referee"

@@ -63,13 +63,14 @@ def test_an_unreadable_message_still_gets_its_answer_id():
 def test_each_page_has_its_own_token():
     access = Access(["cyan", "magenta"])
     tokens = set(access.tokens.values())
-    assert len(tokens) == 4 and all(len(t) >= 16 for t in tokens)
+    assert len(tokens) == 5 and all(len(t) >= 16 for t in tokens)
     assert access.grant(access.token("coach", "cyan")) == Grant("coach", "cyan")
     assert access.grant(access.token("referee")) == Grant("referee")
     assert access.grant("") is None and access.grant("guess") is None
     urls = access.urls("http://127.0.0.1:1")
     assert urls["magenta coach"] == f"http://127.0.0.1:1/coach/magenta?token={access.token('coach', 'magenta')}"
-    assert set(Access(["cyan"], live=False).tokens) == {Grant("replay")}
+    assert urls["3d view"] == f"http://127.0.0.1:1/view3d?token={access.token('view3d')}"
+    assert set(Access(["cyan"], live=False).tokens) == {Grant("replay"), Grant("view3d")}
 
 
 def test_timeline_finds_the_sample_at_any_time_across_chunks():
