@@ -273,3 +273,16 @@ def test_the_readme_screenshot_of_the_3d_view(browser):
         finally:
             page.close()
             view.close()
+
+
+def test_the_pages_link_to_the_3d_view(live, open_page):
+    sim, view = live()
+    sim.run(seconds=0.2)
+    token = view.access.token("view3d")
+    for label in ("referee", "replay"):
+        page = open_page(view.urls[label])
+        wait_frame(page, sim.time)
+        assert page.get_attribute("#link3d", "href") == f"/view3d?token={token}", label
+    coach = open_page(view.urls["cyan coach"])
+    wait_frame(coach, sim.time)
+    assert coach.get_attribute("#link3d", "href") == "/view3d", "a coach sees what its team perceives, not the world"

@@ -387,6 +387,7 @@ class ViewServer:
                 team=grant.team,
                 status=self.status,
                 capabilities=self.control.capabilities(grant) if self.control is not None else None,
+                links=self._links(grant),
             )
             await ws.send_str(json.dumps(hello))
             c.wake.set()
@@ -400,6 +401,13 @@ class ViewServer:
             self.clients.discard(c)
             self._viewers_changed()
         return ws
+
+    def _links(self, grant: Grant) -> dict[str, str]:
+        """The other pages a page links to: the 3D view, with its token for the pages that see the exact world
+        already (the referee console, the replay page); a coach page sees only what its team perceives, so its
+        link opens the 3D view with the address printed on the console."""
+        sees_all = grant.role in ("referee", "replay", "view3d")
+        return {"3d view": f"/view3d?token={self.access.token('view3d')}" if sees_all else "/view3d"}
 
     def _viewers_changed(self) -> None:
         if self.on_viewers is not None:

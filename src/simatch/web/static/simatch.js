@@ -532,7 +532,11 @@ export class FieldView {
 
 export function startPage(page, { onHello, render, onEvents }) {
   page.conn = new Connection({
-    onHello,
+    onHello(h) {
+      const link = document.getElementById("link3d");
+      if (link && h.links) link.href = h.links["3d view"];
+      onHello(h);
+    },
     onFrame(f) {
       page.frame = f;
       if (page.view) page.view.setFrame(f);
