@@ -70,7 +70,7 @@ export class Cameras {
     const f = this.field, W = f.width / 2 + f.margin;
     const [fx, fy] = focus(frame, this.ballGame);
     const span = Math.max(f.length, f.width);
-    const place = new THREE.Vector3(0.7 * fx, -(W + 0.45 * span), Math.max(0.38 * span, (f.ceiling || 0) + 1.5));
+    const place = new THREE.Vector3(0.7 * fx, -(W + 0.25 * span), Math.max(0.3 * span, (f.ceiling || 0) + 1.5));
     const look = new THREE.Vector3(0.9 * fx, 0.4 * fy, 0);
     this.move(place, look, jump);
   }
