@@ -83,3 +83,19 @@ def test_timeline_finds_the_sample_at_any_time_across_chunks():
     assert tl.index_at(3.9) == 7 and tl.sample(7)[0, 0] == 7
     assert tl.index_at(4.0) == 8 and tl.index_at(99.0) == 29
     assert json.dumps(float(tl.sample(29)[1, 5])) == "29.0"
+
+
+def test_timeline_keeps_a_bounded_history_and_reads_what_it_let_go_as_the_oldest_kept():
+    tl = Timeline(["a"], keep=10.0)
+    tl.CHUNK = 8
+    for k in range(80):  # 40 s at 2 samples a second: ten chunks of 4 s
+        tl.append(k * 0.5, np.full((1, 6), k))
+    assert tl.count == 80 and tl.end == 39.5
+    assert 10.0 <= tl.end - tl.start <= 10.0 + 2 * 4.0, "the last `keep` seconds, give or take two chunks"
+    first = tl.first
+    assert first % 8 == 0 and tl.time(first) == tl.start and tl.sample(first)[0, 0] == first
+    assert tl.index_at(0.0) == first and tl.sample(0)[0, 0] == first, "what was let go reads as the oldest kept"
+    assert tl.index_at(35.2) == 70 and tl.sample(70)[0, 0] == 70
+    assert tl.nbytes == (80 - first) // 8 * 8 * (8 + 6 * 4)
+    whole = Timeline(["a"])
+    assert whole.keep == Timeline.KEEP >= 1810.0, "a whole match (two halves and the break) by default"
