@@ -176,7 +176,35 @@ def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
     rules = [i for i, line in enumerate(printed) if line == "-" * 79]
     assert len(rules) == 2 and printed[rules[0] - 1] == ""
     block = printed[rules[0] + 1 : rules[1]]
-    assert block[2].split()[0] == "referee" and len(block) == 6 and "--open opens" not in " ".join(block)
+    assert block[2].split()[0] == "referee" and len(block) == 7 and "--open opens" not in " ".join(block)
+
+
+def test_open_3d_hands_the_3d_view_to_the_users_browser(tmp_path):
+    noted = tmp_path / "opened.txt"
+    stand_in = tmp_path / "browser.sh"
+    stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
+    stand_in.chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["BROWSER"] = str(stand_in)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "0.2", "--view", "--open-3d"]
+        + ["--view-port", "0", "--view-wait", "3", "--json", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        urls = _urls(proc)
+        deadline = time.monotonic() + 30
+        while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert noted.read_text().split() == [urls["3d view"]], "the 3D view, once"
+        _finish(proc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
 
 
 def test_open_without_a_browser_says_so_and_the_run_goes_on():

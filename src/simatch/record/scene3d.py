@@ -31,7 +31,7 @@ import numpy as np
 
 from ..config.schema import Scene
 from ..msgs.cdr import Codec
-from ..robots.looks import DRONE_SCALE, member_looks
+from ..robots.looks import member_looks
 from . import foxglove_msgs as fg
 from .messagelog import PoseSlot, fill_poses
 
@@ -251,12 +251,12 @@ class SceneBuilder:
         """Every robot's body as viewers draw it (`simatch.robots.looks`), by name."""
         return {f"{team}/{m.id}": member_looks(m) for team, spec in self.scene.teams.items() for m in spec.members()}
 
-    def _drone_entity(self, name: str, k: int, radius: float, mark):
+    def _drone_entity(self, name: str, k: int, body: dict, mark):
         """A drone: a flat disc in its team's colour at its height, turned with its heading, an arrow along
         the heading and its id (all at its centre: the template writes one pose per model)."""
         team, _, rid = name.partition("/")
         rgb = color_rgb(self.scene.team_color(team)) if team in self.scene.teams else (0.6, 0.6, 0.6)
-        span = 2 * radius * DRONE_SCALE
+        span = 2 * body["radius"] * body["scale"]  # drawn larger than it is, as every viewer draws it
         body = self._msg(
             "CylinderPrimitive",
             pose=mark(k, "drone", 0.0),
@@ -299,7 +299,7 @@ class SceneBuilder:
         for k, name in enumerate(names):
             body = bodies.get(name)
             if body is not None and body["kind"] == "drone":
-                entities.append(self._drone_entity(name, k, body["radius"], mark))
+                entities.append(self._drone_entity(name, k, body, mark))
                 continue
             if name == "ball":
                 r = self.scene.ball.radius
