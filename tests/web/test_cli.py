@@ -140,26 +140,11 @@ def test_serve_refuses_what_does_not_fit_a_scene_or_a_recording(argv, why):
 def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
     """`--open` opens the referee console with Python's webbrowser, which runs $BROWSER here: a stand-in that
     notes the address; the address then opens in real chromium as a user's browser would, and the run plays."""
-    noted = tmp_path / "opened.txt"
-    stand_in = tmp_path / "browser.sh"
-    stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
-    stand_in.chmod(0o755)
-    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    env["BROWSER"] = str(stand_in)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "1", "--view", "--open"]
-        + ["--view-port", "0", "--json", "--quiet"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    noted, proc = _with_stand_in_browser(tmp_path, "--duration", "1", "--open")
     printed: list[str] = []
     try:
         urls = _urls(proc, lines=printed)
-        deadline = time.monotonic() + 30
-        while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
-            time.sleep(0.1)
+        _wait_noted(noted)
         assert noted.read_text().split() == [urls["referee"]], "the referee console, once"
         page = browser.new_page()
         page.goto(noted.read_text().strip())
@@ -180,6 +165,21 @@ def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
 
 
 def test_open_3d_hands_the_3d_view_to_the_users_browser(tmp_path):
+    noted, proc = _with_stand_in_browser(tmp_path, "--duration", "0.2", "--open-3d", "--view-wait", "3")
+    try:
+        urls = _urls(proc)
+        _wait_noted(noted)
+        assert noted.read_text().split() == [urls["3d view"]], "the 3D view, once"
+        _finish(proc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
+
+
+def _with_stand_in_browser(tmp_path, *options: str):
+    """``simatch run msl_5v5 --view`` with ``options``, its $BROWSER a stand-in that notes the address it is given
+    in the file returned (with the process)."""
     noted = tmp_path / "opened.txt"
     stand_in = tmp_path / "browser.sh"
     stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
@@ -187,24 +187,20 @@ def test_open_3d_hands_the_3d_view_to_the_users_browser(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["BROWSER"] = str(stand_in)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "0.2", "--view", "--open-3d"]
-        + ["--view-port", "0", "--view-wait", "3", "--json", "--quiet"],
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--view", *options]
+        + ["--view-port", "0", "--json", "--quiet"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         env=env,
     )
-    try:
-        urls = _urls(proc)
-        deadline = time.monotonic() + 30
-        while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert noted.read_text().split() == [urls["3d view"]], "the 3D view, once"
-        _finish(proc)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 0
+    return noted, proc
+
+
+def _wait_noted(noted, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
+        time.sleep(0.1)
 
 
 def test_open_without_a_browser_says_so_and_the_run_goes_on():
