@@ -82,6 +82,8 @@ export class Stage {
     const moving = this.cameras.mode === "broadcast" || this.cameras.mode === "follow";
     if (!this.dirty && !moving) return;
     this.cameras.update(this.frame, dt);
+    const followed = this.cameras.mode === "follow" ? this.cameras.target : null;
+    for (const [name, item] of this.bodies.robots) item.tag.visible = item.group.visible && name !== followed;  // not in the lens
     this.renderer.render(this.scene, this.cameras.camera);
     this.dirty = false;
     this.drawn++;
