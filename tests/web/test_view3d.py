@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import io
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -195,8 +197,23 @@ def test_the_3d_view_draws_each_body_where_the_simulator_has_it_and_follows_the_
     _local(requests)
 
 
-def test_the_3d_view_replays_a_recording_sought_to_a_moment(recording, browser):  # noqa: F811
-    proc = _start("replay", str(recording), "--view", "--view-port", "0")
+@pytest.fixture(scope="module")
+def rosbag2_folder(recording, tmp_path_factory):  # noqa: F811
+    """The module's recording as a rosbag2 folder (``simatch export --format rosbag2``)."""
+    folder = tmp_path_factory.mktemp("rosbag2") / "match"
+    subprocess.run(
+        [sys.executable, "-m", "simatch", "export", str(recording), "--format", "rosbag2", "--out", str(folder)],
+        check=True,
+        timeout=120,
+        stdout=subprocess.DEVNULL,
+    )
+    return folder
+
+
+@pytest.mark.parametrize("kind", ["mcap", "rosbag2"])
+def test_the_3d_view_replays_a_recording_sought_to_a_moment(kind, request, browser):
+    path = request.getfixturevalue("recording" if kind == "mcap" else "rosbag2_folder")
+    proc = _start("replay", str(path), "--view", "--view-port", "0")
     page = browser.new_page(viewport={"width": 1400, "height": 850}, device_scale_factor=1)
     requests: list[str] = []
     _watch_requests(page, requests)
@@ -217,13 +234,13 @@ def test_the_3d_view_replays_a_recording_sought_to_a_moment(recording, browser):
         )
         page.evaluate("() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))")
         frame = page.evaluate("window.simatch.frame")
-        recorded = _recorded_at(recording, frame["t"])
+        recorded = _recorded_at(path, frame["t"])
         img = _screen(page)
         for r in frame["robots"]:
             assert (r["x"], r["y"]) == pytest.approx(recorded[r["name"]], abs=1e-3)
         for name in ("magenta/2", "magenta/4"):
             _assert_drawn_at(page, img, "magenta", *recorded[name], f"{name} at {frame['t']} s")
-        shot(page, "view3d_replay")
+        shot(page, f"view3d_replay_{kind}")
         assert page.evaluate("window.simatch.view.contextLost") == 0
         _local(requests)
         assert not errors, errors
