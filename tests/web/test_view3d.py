@@ -192,6 +192,18 @@ def test_the_3d_view_draws_each_body_where_the_simulator_has_it_and_follows_the_
     img = _screen(page)
     assert _centre(img, "cyan", up, 12)[2] > 5, "the drone is drawn in the air"
     assert _centre(img, "cyan", floor, 8)[2] == 0, "not on the floor"
+    # ... and a ball in the air (a lob) at its height, not on the floor
+    sim.set_model_state("ball", x=-1.0, y=3.0, z=1.0, vx=0.0, vy=0.0, vz=0.0)
+    sim.run(seconds=0.02)
+    wait_frame(page, sim.time)
+    b = sim.model_states()["ball"]
+    assert b.z > 0.9
+    up = page.evaluate("([x, y, z]) => window.simatch.view.project(x, y, z)", [b.x, b.y, b.z])
+    floor = page.evaluate("([x, y, z]) => window.simatch.view.project(x, y, z)", [b.x, b.y, 0.11])
+    assert floor[1] - up[1] > 15, f"1 m of height is {floor[1] - up[1]:.0f} px on the side camera"
+    img = _screen(page)
+    assert _centre(img, "ball", up, 8)[2] > 5, "the ball is drawn in the air"
+    assert _centre(img, "ball", floor, 5)[2] == 0, "not on the floor"
     shot(page, "view3d_broadcast")
     assert page.evaluate("window.simatch.view.contextLost") == 0, "the WebGL context was never lost"
     _local(requests)
