@@ -74,7 +74,7 @@ class ReplayCursor:
 
 @dataclass
 class Archive:
-    """What the replay pages go through: the timeline of the whole run and its pictures — the live run's
+    """What the replay pages go through: the timeline of the run (its last hour) and its pictures — the live run's
     own observer, or one loaded from a recording (``complete`` says when it stops growing)."""
 
     observer: RunObserver

@@ -74,13 +74,17 @@ function drone(body, color) {
   return { group, material, top: 0.05 };
 }
 
-// Where a flyer is over the floor: a shadow and a thin pole from the floor up to it (its altitude, at a glance).
-function groundMarks(radius) {
-  const shadow = new THREE.Mesh(new THREE.CircleGeometry(radius, 24),
+// A dark disc on the floor under something in the air.
+function shadow(radius) {
+  return new THREE.Mesh(new THREE.CircleGeometry(radius, 24),
     new THREE.MeshBasicMaterial({ color: 0x000000, transparent: true, opacity: 0.3, depthWrite: false }));
+}
+
+// Where a flyer is over the floor: its shadow and a thin pole from the floor up to it (its altitude, at a glance).
+function groundMarks(radius) {
   const pole = new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(0, 0, 1)]),
     new THREE.LineDashedMaterial({ color: 0xe3f2fd, dashSize: 0.1, gapSize: 0.08 }));
-  return { shadow, pole };
+  return { shadow: shadow(radius), pole };
 }
 
 export class Bodies {
@@ -93,8 +97,8 @@ export class Bodies {
     this.ball = new THREE.Mesh(new THREE.SphereGeometry(R, 24, 16), new THREE.MeshLambertMaterial({ color: 0xff9800 }));
     this.ball.visible = false;
     scene.add(this.ball);
-    this.ballShadow = groundMarks(R);
-    scene.add(this.ballShadow.shadow);
+    this.ballShadow = shadow(R);
+    scene.add(this.ballShadow);
     this.holder = new THREE.Mesh(new THREE.RingGeometry(1, 1.12, 40), new THREE.MeshBasicMaterial({ color: 0xffeb3b, side: THREE.DoubleSide }));
     this.holder.visible = false;
     scene.add(this.holder);
@@ -147,12 +151,13 @@ export class Bodies {
 
   updateBall(frame) {
     const b = frame.ball;
-    this.ball.visible = this.ballShadow.shadow.visible = Boolean(b);
+    this.ball.visible = Boolean(b);
+    this.ballShadow.visible = false;
     this.holder.visible = false;
     if (!b) { this.trail = []; this.drawTrail(); return; }
     this.ball.position.set(b.x, b.y, b.z);
-    this.ballShadow.shadow.position.set(b.x, b.y, 0.005);
-    this.ballShadow.shadow.visible = b.z > 2.2 * this.hello.ball_radius;
+    this.ballShadow.position.set(b.x, b.y, 0.005);
+    this.ballShadow.visible = b.z > 2.2 * this.hello.ball_radius;
     this.markHolder(frame, b);
     const last = this.trail[this.trail.length - 1];
     // a new trail after a jump in time (seek, reconnect) or in space (the ball was placed)
