@@ -69,6 +69,9 @@ FLAGS = [
     "--disable-background-networking",
     "--disable-component-update",
     "--disable-sync",
+    # WebGL without a GPU (the 3D view): Chromium's software renderer, SwiftShader, through ANGLE
+    "--enable-unsafe-swiftshader",
+    "--use-angle=swiftshader",
 ]
 
 

@@ -14,7 +14,7 @@ import time
 import aiohttp
 import pytest
 
-URL = re.compile(r"^\s+(?P<label>[a-z ]+?)\s+(?P<url>http://\S+)$")
+URL = re.compile(r"^\s+(?P<label>[a-z0-9 ]+?)\s+(?P<url>http://\S+)$")
 
 
 def _start(*argv: str) -> subprocess.Popen:
@@ -83,9 +83,9 @@ def test_a_viewed_run_waits_for_a_page_plays_at_real_time_and_ends_when_the_page
     proc = _start(*command, "--view-port", "0", "--json", "--quiet")
     try:
         urls = _urls(proc)
-        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay"}
+        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay", "3d view"}
         assert all(u.startswith("http://127.0.0.1:") for u in urls.values()), "loopback by default"
-        assert len({u.split("token=")[1] for u in urls.values()}) == 4, "one token per page"
+        assert len({u.split("token=")[1] for u in urls.values()}) == 5, "one token per page"
         messages = _run(_watch(urls["referee"], 2.5))
         frames = [m for m in messages if m["type"] == "frame"]
         assert messages[0]["type"] == "hello" and messages[0]["role"] == "referee"
@@ -140,26 +140,11 @@ def test_serve_refuses_what_does_not_fit_a_scene_or_a_recording(argv, why):
 def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
     """`--open` opens the referee console with Python's webbrowser, which runs $BROWSER here: a stand-in that
     notes the address; the address then opens in real chromium as a user's browser would, and the run plays."""
-    noted = tmp_path / "opened.txt"
-    stand_in = tmp_path / "browser.sh"
-    stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
-    stand_in.chmod(0o755)
-    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    env["BROWSER"] = str(stand_in)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--duration", "1", "--view", "--open"]
-        + ["--view-port", "0", "--json", "--quiet"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    noted, proc = _with_stand_in_browser(tmp_path, "--duration", "1", "--open")
     printed: list[str] = []
     try:
         urls = _urls(proc, lines=printed)
-        deadline = time.monotonic() + 30
-        while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
-            time.sleep(0.1)
+        _wait_noted(noted)
         assert noted.read_text().split() == [urls["referee"]], "the referee console, once"
         page = browser.new_page()
         page.goto(noted.read_text().strip())
@@ -176,7 +161,46 @@ def test_open_hands_the_referee_console_to_the_users_browser(tmp_path, browser):
     rules = [i for i, line in enumerate(printed) if line == "-" * 79]
     assert len(rules) == 2 and printed[rules[0] - 1] == ""
     block = printed[rules[0] + 1 : rules[1]]
-    assert block[2].split()[0] == "referee" and len(block) == 6 and "--open opens" not in " ".join(block)
+    assert block[2].split()[0] == "referee" and len(block) == 7 and "--open opens" not in " ".join(block)
+
+
+def test_open_3d_hands_the_3d_view_to_the_users_browser(tmp_path):
+    noted, proc = _with_stand_in_browser(tmp_path, "--duration", "0.2", "--open-3d", "--view-wait", "3")
+    try:
+        urls = _urls(proc)
+        _wait_noted(noted)
+        assert noted.read_text().split() == [urls["3d view"]], "the 3D view, once"
+        _finish(proc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
+
+
+def _with_stand_in_browser(tmp_path, *options: str):
+    """``simatch run msl_5v5 --view`` with ``options``, its $BROWSER a stand-in that notes the address it is given
+    in the file returned (with the process)."""
+    noted = tmp_path / "opened.txt"
+    stand_in = tmp_path / "browser.sh"
+    stand_in.write_text(f'#!/bin/sh\necho "$1" >> {noted}\n')
+    stand_in.chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["BROWSER"] = str(stand_in)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "simatch", "run", "msl_5v5", "--view", *options]
+        + ["--view-port", "0", "--json", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    return noted, proc
+
+
+def _wait_noted(noted, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not (noted.exists() and noted.read_text().strip()) and time.monotonic() < deadline:
+        time.sleep(0.1)
 
 
 def test_open_without_a_browser_says_so_and_the_run_goes_on():

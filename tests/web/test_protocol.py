@@ -63,13 +63,14 @@ def test_an_unreadable_message_still_gets_its_answer_id():
 def test_each_page_has_its_own_token():
     access = Access(["cyan", "magenta"])
     tokens = set(access.tokens.values())
-    assert len(tokens) == 4 and all(len(t) >= 16 for t in tokens)
+    assert len(tokens) == 5 and all(len(t) >= 16 for t in tokens)
     assert access.grant(access.token("coach", "cyan")) == Grant("coach", "cyan")
     assert access.grant(access.token("referee")) == Grant("referee")
     assert access.grant("") is None and access.grant("guess") is None
     urls = access.urls("http://127.0.0.1:1")
     assert urls["magenta coach"] == f"http://127.0.0.1:1/coach/magenta?token={access.token('coach', 'magenta')}"
-    assert set(Access(["cyan"], live=False).tokens) == {Grant("replay")}
+    assert urls["3d view"] == f"http://127.0.0.1:1/view3d?token={access.token('view3d')}"
+    assert set(Access(["cyan"], live=False).tokens) == {Grant("replay"), Grant("view3d")}
 
 
 def test_timeline_finds_the_sample_at_any_time_across_chunks():
@@ -82,3 +83,19 @@ def test_timeline_finds_the_sample_at_any_time_across_chunks():
     assert tl.index_at(3.9) == 7 and tl.sample(7)[0, 0] == 7
     assert tl.index_at(4.0) == 8 and tl.index_at(99.0) == 29
     assert json.dumps(float(tl.sample(29)[1, 5])) == "29.0"
+
+
+def test_timeline_keeps_a_bounded_history_and_reads_what_it_let_go_as_the_oldest_kept():
+    tl = Timeline(["a"], keep=10.0)
+    tl.CHUNK = 8
+    for k in range(80):  # 40 s at 2 samples a second: ten chunks of 4 s
+        tl.append(k * 0.5, np.full((1, 6), k))
+    assert tl.count == 80 and tl.end == 39.5
+    assert 10.0 <= tl.end - tl.start <= 10.0 + 2 * 4.0, "the last `keep` seconds, give or take two chunks"
+    first = tl.first
+    assert first % 8 == 0 and tl.time(first) == tl.start and tl.sample(first)[0, 0] == first
+    assert tl.index_at(0.0) == first and tl.sample(0)[0, 0] == first, "what was let go reads as the oldest kept"
+    assert tl.index_at(35.2) == 70 and tl.sample(70)[0, 0] == 70
+    assert tl.nbytes == (80 - first) // 8 * 8 * (8 + 6 * 4)
+    whole = Timeline(["a"])
+    assert whole.keep == Timeline.KEEP >= 1810.0, "a whole match (two halves and the break) by default"

@@ -64,7 +64,7 @@ def test_the_readme_screenshots_of_the_referee_console_and_a_coach_page(browser)
 def test_the_readme_shows_the_screenshots_it_has():
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     first_screen = readme[: readme.index("## What is here")]
-    for name in ("referee-console", "coach-page"):
+    for name in ("referee-console", "coach-page", "view3d"):  # view3d: tests/web/test_view3d.py
         assert f"docs/img/{name}.png" in first_screen
         path = ROOT / "docs" / "img" / f"{name}.png"
         assert path.exists() and _png_size(path) == (SIZE["width"], SIZE["height"])

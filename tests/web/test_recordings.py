@@ -63,7 +63,7 @@ def test_a_recording_plays_in_the_live_pages_and_the_replay_page_goes_through_it
     proc = _start(*[a.format(file=recording) for a in command], "--view-port", "0")
     try:
         urls = _urls(proc)
-        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay"}
+        assert set(urls) == {"cyan coach", "magenta coach", "referee", "replay", "3d view"}
         # the replay page: the whole recording, loaded from the file, with a timeline of its own
         replay = open_page(urls["replay"])
         replay.wait_for_function("window.simatch.frame && window.simatch.frame.timeline.complete")

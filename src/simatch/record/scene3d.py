@@ -31,7 +31,7 @@ import numpy as np
 
 from ..config.schema import Scene
 from ..msgs.cdr import Codec
-from ..robots import model_class
+from ..robots.looks import member_looks
 from . import foxglove_msgs as fg
 from .messagelog import PoseSlot, fill_poses
 
@@ -57,7 +57,6 @@ NAMED_COLORS = {
     "brown": (0.55, 0.35, 0.15),
 }
 
-DRONE_SCALE = 2.0  # drones are drawn this much larger than they are (for the eye)
 GRID = 1024.0  # positions drawn: steps per metre
 TURN_GRID = 4096.0  # orientations drawn: steps per unit of a quaternion
 
@@ -248,27 +247,16 @@ class SceneBuilder:
             self._build_template(list(names))
         return self._template, self._slots
 
-    def _robot_shape(self, team: str) -> tuple[float, float]:
-        spec = self.scene.teams.get(team)
-        params = spec.model_params if spec is not None else {}
-        return float(params.get("radius", 0.25)), float(params.get("height", 0.8))
+    def _bodies(self) -> dict[str, dict]:
+        """Every robot's body as viewers draw it (`simatch.robots.looks`), by name."""
+        return {f"{team}/{m.id}": member_looks(m) for team, spec in self.scene.teams.items() for m in spec.members()}
 
-    def _flyers(self) -> dict[str, float]:
-        """The aerial robots: name -> footprint radius."""
-        out = {}
-        for team, spec in self.scene.teams.items():
-            for m in spec.members():
-                model = model_class(m.model)(m.model_params)
-                if model.aerial:
-                    out[f"{team}/{m.id}"] = model.radius
-        return out
-
-    def _drone_entity(self, name: str, k: int, radius: float, mark):
+    def _drone_entity(self, name: str, k: int, body: dict, mark):
         """A drone: a flat disc in its team's colour at its height, turned with its heading, an arrow along
         the heading and its id (all at its centre: the template writes one pose per model)."""
         team, _, rid = name.partition("/")
         rgb = color_rgb(self.scene.team_color(team)) if team in self.scene.teams else (0.6, 0.6, 0.6)
-        span = 2 * radius * DRONE_SCALE
+        span = 2 * body["radius"] * body["scale"]  # drawn larger than it is, as every viewer draws it
         body = self._msg(
             "CylinderPrimitive",
             pose=mark(k, "drone", 0.0),
@@ -307,10 +295,11 @@ class SceneBuilder:
             return self._pose(value, 0.0, z)
 
         entities = []
-        flyers = self._flyers()
+        bodies = self._bodies()
         for k, name in enumerate(names):
-            if name in flyers:
-                entities.append(self._drone_entity(name, k, flyers[name], mark))
+            body = bodies.get(name)
+            if body is not None and body["kind"] == "drone":
+                entities.append(self._drone_entity(name, k, body, mark))
                 continue
             if name == "ball":
                 r = self.scene.ball.radius
@@ -329,7 +318,7 @@ class SceneBuilder:
                 )
                 continue
             team, _, rid = name.partition("/")
-            radius, height = self._robot_shape(team)
+            radius, height = (body["radius"], body["height"]) if body is not None else (0.25, 0.8)
             rgb = color_rgb(self.scene.team_color(team)) if team in self.scene.teams else (0.6, 0.6, 0.6)
             body = self._msg(
                 "CylinderPrimitive",

@@ -11,6 +11,7 @@ timeline grows while the file loads; `complete` says when it is all there.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections.abc import Callable
 
@@ -39,7 +40,7 @@ class RecordingArchive:
         self.open_recording = open_recording
         self.name = name
         self.bus = InProcessBus("archive")
-        self.observer = RunObserver(self.bus, robots, control_period)
+        self.observer = RunObserver(self.bus, robots, control_period, keep=math.inf)  # the file bounds it
         self.error: str | None = None
         self._done = threading.Event()
         self._stop = False

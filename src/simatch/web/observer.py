@@ -4,7 +4,8 @@
 StrategyInfo, each team's CoachInfo, game_state, events) and keeps, with their simulated time stamps:
 
 * a `Timeline` of the exact world (every model's x, y, z, yaw, vx, vy) sampled at about 66 Hz of
-  simulated time, for the whole run: live pages draw from it, the replay page seeks through it;
+  simulated time, for the last hour of the run (`Timeline.KEEP`: a whole match): live pages draw from it, the
+  replay page and the 3D view look back through it;
 * the last second of every robot's perception and intentions, for the coach pages;
 * every event and every change of the game state, and the cards each robot was shown.
 
@@ -32,52 +33,80 @@ COLUMNS = ("x", "y", "z", "yaw", "vx", "vy")
 
 class Timeline:
     """Samples of every model's state, appended in time order, stored in fixed-size chunks so that a long
-    match costs a few tens of megabytes and no copying (float32: a display, not a digest)."""
+    match costs a few tens of megabytes and no copying (float32: a display, not a digest).
+
+    The history is bounded: once it spans more than ``keep`` seconds, its oldest chunk is let go (about a
+    minute of samples at a time), so a run that goes on for hours holds the last ``keep`` seconds at most.
+    Indices stay absolute (``count`` keeps counting); one that has been let go reads as the oldest kept.
+    The chunks are one tuple replaced whole, so a reader in another thread never sees half a change."""
 
     CHUNK = 4096
+    KEEP = 3600.0  # [s] of simulated time kept by default: a whole match (2 x 15 min and the break) and more
 
-    def __init__(self, names: list[str]):
+    def __init__(self, names: list[str], keep: float | None = None):
         self.names = list(names)
-        self._times: list[np.ndarray] = []
-        self._data: list[np.ndarray] = []
-        self._starts: list[float] = []
+        self.keep = self.KEEP if keep is None else keep
+        # (chunks let go, times, samples, each chunk's first time)
+        self._chunks: tuple[int, list[np.ndarray], list[np.ndarray], list[float]] = (0, [], [], [])
         self.count = 0
 
     def append(self, t: float, sample: np.ndarray) -> None:
         k, j = divmod(self.count, self.CHUNK)
-        if k == len(self._times):
-            self._times.append(np.empty(self.CHUNK))
-            self._data.append(np.empty((self.CHUNK, len(self.names), len(COLUMNS)), dtype=np.float32))
-            self._starts.append(t)
-        self._times[k][j] = t
-        self._data[k][j] = sample
+        dropped, times, data, starts = self._chunks
+        if k - dropped == len(times):
+            times = times + [np.empty(self.CHUNK)]
+            data = data + [np.empty((self.CHUNK, len(self.names), len(COLUMNS)), dtype=np.float32)]
+            starts = starts + [t]
+            if len(starts) > 2 and t - starts[1] > self.keep:  # the second chunk alone still spans `keep`
+                dropped, times, data, starts = dropped + 1, times[1:], data[1:], starts[1:]
+            self._chunks = (dropped, times, data, starts)
+        times[k - dropped][j] = t
+        data[k - dropped][j] = sample
         self.count += 1  # last: a reader never sees a slot before it is filled
 
     @property
+    def first(self) -> int:
+        """The index of the oldest sample kept."""
+        return self._chunks[0] * self.CHUNK
+
+    @property
     def start(self) -> float:
-        return float(self._times[0][0]) if self.count else 0.0
+        return self.time(self.first) if self.count else 0.0
 
     @property
     def end(self) -> float:
         return self.time(self.count - 1) if self.count else 0.0
 
+    def _slot(self, i: int):
+        dropped, times, data, _ = self._chunks
+        k, j = divmod(max(i, dropped * self.CHUNK), self.CHUNK)
+        return times[k - dropped], data[k - dropped], j
+
     def time(self, i: int) -> float:
-        k, j = divmod(i, self.CHUNK)
-        return float(self._times[k][j])
+        times, _, j = self._slot(i)
+        return float(times[j])
 
     def sample(self, i: int) -> np.ndarray:
-        k, j = divmod(i, self.CHUNK)
-        return self._data[k][j]
+        _, data, j = self._slot(i)
+        return data[j]
 
     def index_at(self, t: float) -> int:
-        """The last sample at or before ``t`` (the first one if ``t`` is earlier); -1 if there is none."""
+        """The last sample at or before ``t`` (the oldest kept if ``t`` is earlier); -1 if there is none."""
         n = self.count
         if n == 0:
             return -1
-        k = min(max(0, bisect.bisect_right(self._starts, t) - 1), (n - 1) // self.CHUNK)
-        filled = min(self.CHUNK, n - k * self.CHUNK)
-        j = int(np.searchsorted(self._times[k][:filled], t, side="right")) - 1
-        return k * self.CHUNK + max(j, 0)
+        dropped, times, _, starts = self._chunks
+        last = (n - 1) // self.CHUNK - dropped
+        k = min(max(0, bisect.bisect_right(starts, t) - 1), last)
+        filled = min(self.CHUNK, n - (k + dropped) * self.CHUNK)
+        j = int(np.searchsorted(times[k][:filled], t, side="right")) - 1
+        return (k + dropped) * self.CHUNK + max(j, 0)
+
+    @property
+    def nbytes(self) -> int:
+        """The memory the samples hold now [bytes]."""
+        _, times, data, _ = self._chunks
+        return sum(a.nbytes for a in times) + sum(a.nbytes for a in data)
 
 
 def _stamped_before(buffer: deque, t: float):
@@ -148,13 +177,15 @@ def game_record(msg) -> dict:
 
 
 class RunObserver:
-    """Subscribes to a run's topics on ``bus`` and keeps what the pages draw (see the module docstring)."""
+    """Subscribes to a run's topics on ``bus`` and keeps what the pages draw (see the module docstring);
+    ``keep`` bounds the Timeline's history (seconds)."""
 
     SAMPLE_PERIOD = 1.0 / 66.0  # [s] of simulated time between Timeline samples
     RECENT = 1.0  # [s] of perception and intentions kept per robot
 
-    def __init__(self, bus: Bus, robots: dict[str, list[int]], control_period: float):
+    def __init__(self, bus: Bus, robots: dict[str, list[int]], control_period: float, keep: float | None = None):
         self.bus = bus
+        self.keep = keep  # [s] of the Timeline's history (None: Timeline.KEEP)
         self.robots = robots
         self.timeline: Timeline | None = None
         self.events: list[dict] = []
@@ -204,7 +235,7 @@ class RunObserver:
         """Append a ModelStates sample whatever the sampling rate (e.g. a recording's very last one)."""
         t = float(msg.stamp)
         if self.timeline is None:
-            self.timeline = Timeline(list(msg.name))
+            self.timeline = Timeline(list(msg.name), keep=self.keep)
         m = len(msg.name)
         pose = np.asarray(msg.pose).reshape(m, 7)
         twist = np.asarray(msg.twist).reshape(m, 6)

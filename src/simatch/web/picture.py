@@ -19,6 +19,7 @@ import math
 from .. import frames
 from ..msgs.game_commands import name as command_name
 from ..robots import model_class
+from ..robots.looks import member_looks
 from ..strategy.roles import action_words, role_words
 from .observer import RunObserver
 
@@ -45,21 +46,25 @@ class Picture:
         }
 
     def robots_meta(self) -> list[dict]:
+        """Each robot as the pages draw it: its team, id, footprint radius, and its body (`simatch.robots.looks`:
+        the one description of a body that the recordings' 3D scene draws too)."""
         out = []
         for team in self.teams:
-            radius = float(self.spec.teams[team].model_params.get("radius", 0.25))
-            for rid in self.ids[team]:
-                name = f"{team}/{rid}"
+            spec = self.spec.teams[team]
+            for m in spec.members():
+                name = f"{team}/{m.id}"
+                body = member_looks(m)
                 meta = {
                     "name": name,
                     "team": team,
-                    "id": rid,
-                    "radius": radius,
-                    "goalkeeper": rid == self.spec.teams[team].goalkeeper,
+                    "id": m.id,
+                    "radius": body["radius"],
+                    "goalkeeper": m.id == spec.goalkeeper,
+                    "body": body,
                 }
                 flyer = self.aerial.get(name)
                 if flyer is not None:
-                    meta.update(radius=flyer.radius, aerial=True, model=flyer.name, goalkeeper=False)
+                    meta.update(aerial=True, model=flyer.name, goalkeeper=False)
                 out.append(meta)
         return out
 

@@ -131,7 +131,8 @@ class AutoReferee(_Msg):
 
 
 class Timeline(_Msg):
-    """The replay page's own timeline: play, pause, seek (simulated seconds) and speed."""
+    """A page's own timeline (the replay page, the 3D view): play, pause, seek (simulated seconds), speed, and
+    ``live``: back to the moment the live pages show."""
 
     type: Literal["timeline"]
     action: Literal["play", "pause", "seek", "speed", "live"]
@@ -149,6 +150,7 @@ ALLOWED = {
     "coach": {"command", "limits", "test"},
     "referee": {"command", "limits", "place_ball", "send_off", "pause", "resume", "card", "award_goal", "auto_referee"},
     "replay": {"timeline"},
+    "view3d": {"timeline"},
 }
 
 

@@ -31,7 +31,7 @@ from .picture import Picture
 
 log = logging.getLogger(__name__)
 
-PAGES = {"referee": "referee.html", "replay": "replay.html", "coach": "coach.html"}
+PAGES = {"referee": "referee.html", "replay": "replay.html", "coach": "coach.html", "view3d": "view3d.html"}
 LAG = 0.25  # [s] the live picture trails the newest state by at most this
 EVENT_BACKLOG = 300  # events a page gets when it (re)connects
 RECENT_EVENTS = 12  # events a replay frame carries (those before its time)
@@ -74,7 +74,7 @@ class ReplayCursor:
 
 @dataclass
 class Archive:
-    """What the replay pages go through: the timeline of the whole run and its pictures — the live run's
+    """What the replay pages go through: the timeline of the run (its last hour) and its pictures — the live run's
     own observer, or one loaded from a recording (``complete`` says when it stops growing)."""
 
     observer: RunObserver
@@ -93,7 +93,19 @@ class Client:
 
     @property
     def live(self) -> bool:
+        """A page that watches the run as it happens (it paces the run): all but the replay page. The 3D view
+        is one even while it looks back over its own timeline (``cursor``), as its viewer is watching."""
         return self.grant.role != "replay"
+
+    @property
+    def following(self) -> bool:
+        """The page shows the live picture (the one built for all pages of its kind), not its own timeline's."""
+        return self.cursor is None
+
+    @property
+    def kind(self) -> tuple[str, str]:
+        """Which live picture the page shows: its team's (a coach page) or the world's."""
+        return (self.grant.role, self.grant.team)
 
 
 class ViewServer:
@@ -206,6 +218,7 @@ class ViewServer:
         app.router.add_get("/", self._page("index.html"))
         app.router.add_get("/referee", self._page(PAGES["referee"]))
         app.router.add_get("/replay", self._page(PAGES["replay"]))
+        app.router.add_get("/view3d", self._page(PAGES["view3d"]))
         app.router.add_get("/coach/{team}", self._coach_page)
         app.router.add_get("/ws", self._ws)
         app.router.add_get("/favicon.ico", _no_content)
@@ -271,17 +284,37 @@ class ViewServer:
         tl = self.observer.timeline
         if self.live_t is None or tl is None:
             return
-        wanted = {(c.grant.role, c.grant.team) for c in list(self.clients) if c.live}
+        wanted = {c.kind for c in list(self.clients) if c.live and c.following}
         frames = {}
+        world = None
         for role, team in wanted:
             if role == "coach":
                 pic = self.picture.team(team, self.live_t)
             else:
-                pic = self.picture.world(tl.index_at(self.live_t), live=True)
+                world = world or self.picture.world(tl.index_at(self.live_t), live=True)
+                pic = dict(world)
+            if role == "view3d":
+                pic["timeline"] = self._history(tl)
             pic["status"] = self.status
             frames[(role, team)] = json.dumps(pic, separators=(",", ":"))
         self._live = frames
         self._seq += 1
+
+    def _history(self, tl) -> dict:
+        """Where the live picture stands in what can be looked back over (the 3D view's timeline)."""
+        archive = self.archive.observer.timeline
+        start, end = (archive.start, archive.end) if archive is not None else (tl.start, tl.end)
+        t = round(self.live_t, 3)
+        return {
+            "start": round(start, 3),
+            "end": round(end, 3),
+            "t": t,
+            "speed": 1.0,
+            "playing": True,
+            "complete": self.archive.complete(),
+            "follow": t,
+            "live": True,
+        }
 
     def _replay_frame(self, c: Client, dt: float) -> str | None:
         archive = self.archive
@@ -306,14 +339,22 @@ class ViewServer:
                 "playing": cur.playing,
                 "complete": complete,
                 "follow": None if self.live_t is None else round(self.live_t, 3),
+                "live": False,
             },
         )
         return json.dumps(pic, separators=(",", ":"))
 
     def _timeline(self, c: Client, m: P.Timeline) -> None:
+        """Move a page's own timeline. A live page (the 3D view) that leaves the live picture gets a timeline
+        of its own, starting where the live picture is; ``live`` gives it back the live picture."""
         tl = self.archive.observer.timeline
         start, end = (tl.start, tl.end) if tl is not None else (0.0, 0.0)
-        c.cursor.apply(m, start, end, follow=self.live_t)
+        if c.live and m.action == "live":
+            c.cursor = None
+        else:
+            if c.cursor is None:
+                c.cursor = ReplayCursor(t=min(max(self.live_t if self.live_t is not None else end, start), end))
+            c.cursor.apply(m, start, end, follow=self.live_t)
         c.wake.set()
 
     # --- one page --------------------------------------------------------------------------------------------
@@ -346,6 +387,7 @@ class ViewServer:
                 team=grant.team,
                 status=self.status,
                 capabilities=self.control.capabilities(grant) if self.control is not None else None,
+                links=self._links(grant),
             )
             await ws.send_str(json.dumps(hello))
             c.wake.set()
@@ -359,6 +401,13 @@ class ViewServer:
             self.clients.discard(c)
             self._viewers_changed()
         return ws
+
+    def _links(self, grant: Grant) -> dict[str, str]:
+        """The other pages a page links to: the 3D view, with its token for the pages that see the exact world
+        already (the referee console, the replay page); a coach page sees only what its team perceives, so its
+        link opens the 3D view with the address printed on the console."""
+        sees_all = grant.role in ("referee", "replay", "view3d")
+        return {"3d view": f"/view3d?token={self.access.token('view3d')}" if sees_all else "/view3d"}
 
     def _viewers_changed(self) -> None:
         if self.on_viewers is not None:
@@ -377,8 +426,8 @@ class ViewServer:
                 c.wake.clear()
                 now = loop.time()
                 dt, last = now - last, now
-                if c.live:
-                    key = (c.grant.role, c.grant.team)
+                if c.live and c.following:
+                    key = c.kind
                     if self._seq != seq and key in self._live:
                         seq = self._seq
                         await c.ws.send_str(self._live[key])

@@ -56,8 +56,16 @@ def add_view_options(group, default_wait: float | None = None) -> None:
     group.add_argument(
         "--open",
         dest="open_page",
-        action="store_true",
+        action="store_const",
+        const="first",
         help="open the referee console (for a recording: the replay page) in this machine's web browser",
+    )
+    group.add_argument(
+        "--open-3d",
+        dest="open_page",
+        action="store_const",
+        const="3d view",
+        help="open the 3D view in this machine's web browser",
     )
 
 
@@ -96,13 +104,13 @@ def print_urls(view: Hosted, file=sys.stderr, first: str = "referee", opened: bo
     for label in order:
         print(f"  {label:14s} {urls[label]}", file=file)
     if not opened:
-        print(f"  (--open opens the {_page_name(first)} in this machine's browser)", file=file)
+        print(f"  (--open opens the {_page_name(first)} in this machine's browser, --open-3d the 3D view)", file=file)
     print(rule, file=file)
     file.flush()
 
 
 def _page_name(label: str) -> str:
-    return {"referee": "referee console", "replay": "replay page"}.get(label, f"{label} page")
+    return {"referee": "referee console", "replay": "replay page", "3d view": "3D view"}.get(label, f"{label} page")
 
 
 def open_in_browser(url: str, file=sys.stderr) -> bool:
@@ -132,11 +140,11 @@ def open_in_browser(url: str, file=sys.stderr) -> bool:
 
 
 def announce(view: Hosted, args, first: str = "referee") -> None:
-    """Print the addresses and, with --open, open the first page in the browser."""
-    opened = bool(getattr(args, "open_page", False))
-    print_urls(view, first=first, opened=opened)
-    if opened:
-        open_in_browser(view.urls[first])
+    """Print the addresses and, with --open, open the first page (--open-3d: the 3D view) in the browser."""
+    which = getattr(args, "open_page", None)
+    print_urls(view, first=first, opened=which is not None)
+    if which is not None:
+        open_in_browser(view.urls[first if which == "first" else which])
 
 
 def wait_for_page(view: Hosted, wait: float | None, any_page: bool = False) -> None:
@@ -175,10 +183,10 @@ class _ViewOption:
     @contextlib.contextmanager
     def attach(self, target, args):
         if not getattr(args, "view", False):
-            if getattr(args, "open_page", False):
+            if getattr(args, "open_page", None) is not None:
                 from ..errors import UsageError
 
-                raise UsageError("--open opens a page of the web UI: it goes with --view")
+                raise UsageError("--open (or --open-3d) opens a page of the web UI: it goes with --view")
             yield None
             return
         with self.start(target, args) as view:

@@ -1,7 +1,7 @@
 // The referee console: both teams, score and clock, the event log with reasons, manual mode. In a run with
 // an automatic referee every button is a request to the referee (its operator interface); without one,
 // commands go to both teams' coaches. A recording is shown read-only.
-import { EventLog, FieldView, attackArrow, clock, fmt, gameClock, setPieceButtons, startPage, teamColor } from "/static/simatch.js";
+import { EventLog, FieldView, attackArrow, clock, commandText, fmt, gameClock, scoreboard, setPieceButtons, startPage, teamColor } from "/static/simatch.js";
 
 const $ = (id) => document.getElementById(id);
 const page = { hello: null, view: null, frame: null, team: null, caps: null };
@@ -149,14 +149,6 @@ function dragging(view) {
   });
 }
 
-// The referee's command in neutral words: "FREEKICK magenta", "STOPROBOT, next KICKOFF cyan" (GameState gives
-// commands from the first team's point of view and names the team whose set piece it is).
-const neutral = (name) => name.replace(/^(OUR|OPP)_/, "");
-function commandText(g) {
-  if (g.next_command) return `${g.command_name}, next ${neutral(g.next_command_name)} ${g.command_team}`;
-  return g.command_team ? `${neutral(g.command_name)} ${g.command_team}` : g.command_name;
-}
-
 function render(f) {
   const h = page.hello;
   const g = f.game;
@@ -167,9 +159,7 @@ function render(f) {
   $("stage").textContent = g ? g.stage : "no referee";
   const teams = h.teams.map((t) => t.name);
   const score = (t) => (g && g.score[t] !== undefined ? g.score[t] : 0);
-  $("scoreboard").innerHTML = teams.length === 2
-    ? `<span style="color:${teamColor(h, teams[0])}">${teams[0]}</span><span class="score" id="score">${score(teams[0])} : ${score(teams[1])}</span><span style="color:${teamColor(h, teams[1])}">${teams[1]}</span>`
-    : `<span class="score" id="score">${teams.map(score).join(" : ")}</span>`;
+  $("scoreboard").innerHTML = scoreboard(h, g);
   // which way each team attacks on the screen now (the teams change ends at half time)
   $("ends").textContent = teams.map((t) => `${t} ${attackArrow(h, g, t, page.view && page.view.flip)}`).join(" · ");
   const cmds = f.commands || {};

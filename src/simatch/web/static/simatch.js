@@ -113,6 +113,23 @@ export function gameClock(g, t) {
   return g.paused ? g.clock : g.clock + Math.max(0, t - g.t);
 }
 
+// The referee's command in neutral words: "FREEKICK magenta", "STOPROBOT, next KICKOFF cyan" (GameState gives
+// commands from the first team's point of view and names the team whose set piece it is).
+const neutral = (name) => name.replace(/^(OUR|OPP)_/, "");
+export function commandText(g) {
+  if (g.next_command) return `${g.command_name}, next ${neutral(g.next_command_name)} ${g.command_team}`;
+  return g.command_team ? `${neutral(g.command_name)} ${g.command_team}` : g.command_name;
+}
+
+// The score as the pages' headers show it: "cyan 1 : 0 magenta" in the teams' colours (more teams: the scores).
+export function scoreboard(hello, game) {
+  const teams = hello.teams.map((t) => t.name);
+  const score = (t) => (game && game.score[t] !== undefined ? game.score[t] : 0);
+  return teams.length === 2
+    ? `<span style="color:${teamColor(hello, teams[0])}">${teams[0]}</span><span class="score" id="score">${score(teams[0])} : ${score(teams[1])}</span><span style="color:${teamColor(hello, teams[1])}">${teams[1]}</span>`
+    : `<span class="score" id="score">${teams.map(score).join(" : ")}</span>`;
+}
+
 // The way a team attacks now: +1 towards +x, -1 towards -x. The game state says it (the teams change ends at
 // half time); before the first game state, or without a referee, the scene's team frame.
 export function attackSign(hello, game, team) {
@@ -515,7 +532,11 @@ export class FieldView {
 
 export function startPage(page, { onHello, render, onEvents }) {
   page.conn = new Connection({
-    onHello,
+    onHello(h) {
+      const link = document.getElementById("link3d");
+      if (link && h.links) link.href = h.links["3d view"];
+      onHello(h);
+    },
     onFrame(f) {
       page.frame = f;
       if (page.view) page.view.setFrame(f);
