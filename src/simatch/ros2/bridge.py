@@ -15,7 +15,7 @@ It joins a run as simatch's own processes do (docs/distributed.md), so the serve
   commands, the events, and the privileged ``set_model_state`` topic;
 * always ``/clock`` (simulated time) and its team's game commands.
 
-rclpy runs in this process only (`graph.RosGraph`, its executor in a thread of its own); the simulation's
+rclpy runs in this process only (`graph.RosGraph`, its executors in threads of their own); the simulation's
 process never loads it.
 """
 
@@ -102,7 +102,7 @@ class RosRobotNode(Node):
             self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(sign, me)
 
     def _forward_velocity(self) -> None:
-        """The new cmd_vel onto the bus at once (the executor's thread), when the run is real time."""
+        """The new cmd_vel onto the bus at once (the cmd_vel executor's thread), when the run is real time."""
         bridge = self.bridge
         proc = bridge.proc
         if proc is None or proc.mode == protocol.LOCKSTEP:
