@@ -82,7 +82,8 @@ class RosRobotNode(Node):
         self.sub = bus.subscribe(
             topics.robot_topic(self.team, self.rid, topics.OMNI_VISION), msgs.OmniVisionInfo, self._on_vision
         )
-        self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
+        # express: a command sent between ticks leaves from the executor's thread, without waking Zenoh's own
+        self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd, express=True)
         self.pub_action = bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
         # in a real-time run a cmd_vel is sent on as it arrives (the server applies it at its next physics
         # step), not held until the next control tick: ROS commands then reach the simulator as quickly as
