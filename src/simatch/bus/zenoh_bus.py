@@ -193,12 +193,15 @@ class ZenohBus(Bundles):
     def key(self, topic: str) -> str:
         return self.prefix + topic
 
-    def publisher(self, topic: str, msgtype: Any) -> _Publisher:
+    def publisher(self, topic: str, msgtype: Any, express: bool = False) -> _Publisher:
+        """``express`` (this transport's own, the first call for a topic decides): a sample put outside a batch
+        leaves at once from the calling thread (see `_declare_zpub`), for one sent alone whose latency counts
+        (a ROS 2 bridge's command between two ticks)."""
         pub = self._pubs.get(topic)
         local = self.local.publisher(topic, msgtype)  # raises TypeError on a type clash
         if pub is not None:
             return pub
-        zpub = self._declare_zpub(topic, _ENCODING_PREFIX + msgs.msgtype_name(msgtype))
+        zpub = self._declare_zpub(topic, _ENCODING_PREFIX + msgs.msgtype_name(msgtype), express=express)
         pub = _Publisher(self, topic, msgtype, local, zpub)
         self._pubs[topic] = pub
         return pub

@@ -15,7 +15,7 @@ It joins a run as simatch's own processes do (docs/distributed.md), so the serve
   commands, the events, and the privileged ``set_model_state`` topic;
 * always ``/clock`` (simulated time) and its team's game commands.
 
-rclpy runs in this process only (`graph.RosGraph`, its executor in a thread of its own); the simulation's
+rclpy runs in this process only (`graph.RosGraph`, its executors in threads of their own); the simulation's
 process never loads it.
 """
 
@@ -25,7 +25,9 @@ import logging
 import os
 import queue
 import sys
+import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -44,6 +46,11 @@ log = logging.getLogger(__name__)
 #: how long a driven robot keeps its last cmd_vel without a new one [simulated s] (then the simulator's
 #: watchdog stops it, as ROS base controllers stop on a cmd_vel timeout)
 COMMAND_TIMEOUT = 0.5
+
+#: the GIL's switch interval of a driving bridge's process [s] (Python's default: 5 ms): a cmd_vel that
+#: arrives while another thread runs Python (a tick's answer, its messages to ROS) waits for the GIL at most
+#: about this long before the command's thread gets it
+SWITCH_INTERVAL = 0.0005
 
 
 def _stderr(text: str) -> None:
@@ -75,7 +82,8 @@ class RosRobotNode(Node):
         self.sub = bus.subscribe(
             topics.robot_topic(self.team, self.rid, topics.OMNI_VISION), msgs.OmniVisionInfo, self._on_vision
         )
-        self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd)
+        # express: a command sent between ticks leaves from the executor's thread, without waking Zenoh's own
+        self.pub_vel = bus.publisher(topics.robot_topic(self.team, self.rid, topics.VEL_CMD), msgs.VelCmd, express=True)
         self.pub_action = bus.publisher(topics.robot_topic(self.team, self.rid, topics.ACTION_CMD), msgs.ActionCmd)
         # in a real-time run a cmd_vel is sent on as it arrives (the server applies it at its next physics
         # step), not held until the next control tick: ROS commands then reach the simulator as quickly as
@@ -86,9 +94,8 @@ class RosRobotNode(Node):
         self.tick_no = int(info.tick)
         graph = self.bridge.graph
         graph.set_time(info.stamp)
-        vision = self.ports.vision
         sign = self.bridge.signs[self.team]  # the team frame of now: it turns when the teams change ends
-        graph.publish_perception(self.ports, sign, info, msgs.encode(info) if graph.heard(vision) else None)
+        self.bridge.to_ros(graph.publish_perception, self.ports, sign, info)
         me = next((r for r in info.robots if r.id == self.rid), None)
         #: an odom went out this tick: with --wait-answers, a cmd_vel is waited for (not from a robot sent off)
         self.expects_answer = me is not None and me.valid
@@ -96,7 +103,7 @@ class RosRobotNode(Node):
             self.bridge.own_poses[f"{self.team}/{self.rid}"] = robot_pose(sign, me)
 
     def _forward_velocity(self) -> None:
-        """The new cmd_vel onto the bus at once (the executor's thread), when the run is real time."""
+        """The new cmd_vel onto the bus at once (the cmd_vel executor's thread), when the run is real time."""
         bridge = self.bridge
         proc = bridge.proc
         if proc is None or proc.mode == protocol.LOCKSTEP:
@@ -159,6 +166,7 @@ class RosTeamProcess(TeamProcess):
 
     def _answer(self) -> None:
         super()._answer()
+        self.bridge.publish_held()
         self.bridge.flush_requests()
 
     def between_ticks(self, send: Callable[[], None]) -> None:
@@ -214,6 +222,9 @@ class Bridge:
         #: start, then from the game state's ``attacks``: the teams change ends at half time (docs/referee.md)
         self.signs: dict[str, int] = {}
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        #: what a real-time tick's answer has for ROS, published once the answer has let go of the bus (`to_ros`)
+        self._held: deque = deque()
+        self._publishing = threading.Lock()  # one thread at a time publishes what was held, in order
         self._pub_set_model = None
         self.ros_nodes: list[RosRobotNode] = []
         self._models_at = -1.0
@@ -224,6 +235,7 @@ class Bridge:
         self.ended: str | None = None
         self._server_lost_at: float | None = None
         self._stop: BaseException | None = None
+        self._switch_interval: float | None = None  # the process's own, while this bridge drives robots
 
     # --- what the robot nodes call --------------------------------------------------------------------------------
     def before_robot_ticks(self, now: float) -> None:
@@ -236,7 +248,29 @@ class Bridge:
             waiting = [(n.ports.command, n.seen) for n in self.ros_nodes if n.expects_answer]
             self.graph.wait_for_commands(waiting, self.wait_answers)
         if self.own_poses and not self.observing:
-            self.graph.publish_own_frames(now, self.own_poses)
+            self.to_ros(self.graph.publish_own_frames, now, dict(self.own_poses))
+
+    def to_ros(self, publish: Callable[..., None], *args) -> None:
+        """``publish(*args)`` (something for ROS), at once or, when a real-time run's tick is being answered,
+        once the answer has let go of the process's bus (`publish_held`): making and publishing rclpy
+        messages takes milliseconds, and a ``cmd_vel`` sent on between ticks (`RosRobotNode._forward_velocity`)
+        waits for the bus meanwhile. In lockstep everything is published at once, before the tick's commands
+        are taken (what ``wait_answers`` waits for answers to)."""
+        if self.proc is not None and self.proc.mode != protocol.LOCKSTEP:
+            self._held.append((publish, args))
+        else:
+            publish(*args)
+
+    def publish_held(self) -> None:
+        """Publish what `to_ros` held, oldest first (from whichever thread answered the tick)."""
+        held = self._held
+        with self._publishing:
+            while held:
+                publish, args = held.popleft()
+                try:
+                    publish(*args)
+                except Exception as exc:  # what ROS could not take (as the bus's delivery, never a stop)
+                    log.warning("not published to ROS 2 (%s): %s", getattr(publish, "__name__", publish), exc)
 
     def flush_requests(self) -> None:
         """Send what ROS asked for meanwhile (set_model_state), from the thread that owns the bus."""
@@ -268,6 +302,8 @@ class Bridge:
         self.observing = admin if self.world is None else bool(self.world)
         if self.team is not None:
             names.check_team(self.team)
+            self._switch_interval = sys.getswitchinterval()
+            sys.setswitchinterval(SWITCH_INTERVAL)
             self.proc = RosTeamProcess(
                 self,
                 self.team,
@@ -341,7 +377,7 @@ class Bridge:
         feed = self.offer.get("ros2_feed") if self.proc is None else None
         if feed:
             bus.take_feed(feed["topic"], feed["covers"])
-        bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: graph.publish_clock(m.stamp))
+        bus.subscribe(topics.CLOCK, msgs.Clock, self._on_clock)
         graph.add_game_state()
         bus.subscribe(topics.GAME_STATE, msgs.GameState, self._on_game_state)
         teams = list(spec.teams) if self.observing else [self.team]
@@ -350,7 +386,7 @@ class Bridge:
             bus.subscribe(
                 topics.team_topic(team, topics.RECEIVE_FROM_COACH),
                 msgs.CoachInfo,
-                lambda m, team=team: graph.publish_coach(team, m, msgs.encode(m)),
+                lambda m, team=team: self.to_ros(graph.publish_coach, team, m, msgs.encode(m)),
             )
         if self.observing:
             admin = credentials.read(self.key).name == credentials.ADMIN
@@ -360,7 +396,7 @@ class Bridge:
                 team, rid = topics.split_robot_name(name)
                 graph.add_robot(team, rid, driven=False)
             bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, self._on_models)
-            bus.subscribe(topics.EVENTS, msgs.GameEvent, lambda m: graph.publish_event(msgs.encode(m)))
+            bus.subscribe(topics.EVENTS, msgs.GameEvent, lambda m: self.to_ros(graph.publish_event, msgs.encode(m)))
         if self.proc is None:
             bus.subscribe_raw(protocol.END, self._on_end, verify=False)
             bus.watch_liveliness(protocol.SERVER_ALIVE, self._on_server)
@@ -389,8 +425,12 @@ class Bridge:
                 self.signs[team] = sign
                 changed = True
         if changed:
-            self.graph.set_team_signs(self.signs)
-        self.graph.publish_game_state(msgs.encode(m))
+            self.to_ros(self.graph.set_team_signs, dict(self.signs))
+        self.to_ros(self.graph.publish_game_state, msgs.encode(m))
+
+    def _on_clock(self, m) -> None:
+        self.graph.set_time(m.stamp)
+        self.to_ros(self.graph.publish_clock, m.stamp)
 
     def _on_models(self, m) -> None:
         # the server sends them every physics step; ROS gets them once per control period
@@ -400,9 +440,9 @@ class Bridge:
         poses = model_poses(m.name, m.pose, m.twist)
         graph = self.graph
         graph.set_time(m.stamp)
-        graph.publish_ground_truth(m.stamp, poses)
+        self.to_ros(graph.publish_ground_truth, m.stamp, poses)
         if graph.heard(graph.pub_models):
-            graph.publish_models(msgs.encode(m))
+            self.to_ros(graph.publish_models, msgs.encode(m))
 
     def _on_end(self, topic, payload, attachment, arrival) -> None:
         try:
@@ -455,3 +495,6 @@ class Bridge:
         finally:
             if self.graph is not None:
                 self.graph.close()
+            if self._switch_interval is not None:
+                sys.setswitchinterval(self._switch_interval)
+                self._switch_interval = None

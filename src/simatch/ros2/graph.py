@@ -1,4 +1,6 @@
-"""The ROS 2 side of the bridge: one rclpy node, its publishers and subscriptions, spun in a thread of its own.
+"""The ROS 2 side of the bridge: one rclpy node, its publishers and subscriptions, spun in a thread of its own;
+a driving bridge's ``cmd_vel`` subscriptions on a second node with an executor and a thread of their own
+(`RosGraph._commands`).
 
 Imported only in the bridge's process (`simatch ros2`): it imports rclpy, whose shared libraries the ``ros2``
 extra's wheels put on ``LD_LIBRARY_PATH`` when this Python starts (their ``ros_wheels_bootstrapper``).
@@ -31,16 +33,16 @@ from dataclasses import dataclass, field
 
 import rclpy
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point, Pose, PoseArray, TransformStamped, Twist
+from geometry_msgs.msg import Pose, PoseArray, TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from std_msgs.msg import Bool, ColorRGBA, Float32, UInt8
-from visualization_msgs.msg import Marker, MarkerArray
+from std_msgs.msg import Bool, Float32, UInt8
+from visualization_msgs.msg import MarkerArray
 
 from .. import msgs
-from . import names
+from . import markers, names
 from .convert import WorldPose, is_bad_velocity, quaternion_of_yaw, robot_pose, stamp_of, velocity_of_twist, world_pose
 
 log = logging.getLogger(__name__)
@@ -66,19 +68,6 @@ CLOCK = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=Hist
 TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
 MARKERS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
 
-ROBOT_RADIUS = 0.25  # [m] the drawn footprint (the shipped models')
-ROBOT_HEIGHT = 0.8
-BALL_RADIUS = 0.11
-
-_COLORS = {
-    "cyan": (0.0, 0.8, 0.9),
-    "magenta": (0.9, 0.1, 0.7),
-    "blue": (0.1, 0.3, 0.9),
-    "yellow": (0.95, 0.85, 0.1),
-    "red": (0.9, 0.1, 0.1),
-    "green": (0.1, 0.8, 0.2),
-}
-
 
 def has_simatch_msgs() -> bool:
     return _smsg is not None
@@ -87,10 +76,6 @@ def has_simatch_msgs() -> bool:
 def _time(seconds: float) -> Time:
     sec, nsec = stamp_of(seconds)
     return Time(sec=sec, nanosec=nsec)
-
-
-def _color(rgb: tuple[float, float, float], a: float = 1.0) -> ColorRGBA:
-    return ColorRGBA(r=float(rgb[0]), g=float(rgb[1]), b=float(rgb[2]), a=float(a))
 
 
 @dataclass
@@ -155,13 +140,16 @@ class RosGraph:
         self.node = rclpy.create_node(names.node_name(what), context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        self._what = what
+        self.command_node = None  # the cmd_vel subscriptions' node, with the first driven robot (`_commands`)
+        self.command_executor = None
         self.now = 0.0  # simulated time of the newest clock or tick
         self._cond = threading.Condition()
         self.robots: dict[str, RobotPorts] = {}
         self.markers_period = markers_period
         self._listeners: dict = {}  # publisher -> (when looked up, anybody subscribed)
         self._markers_at = -math.inf
-        self._field_markers = self._field()
+        self._field_markers = markers.field(spec)
         n = self.node
         self.pub_clock = n.create_publisher(Clock, names.CLOCK, CLOCK) if clock else None
         self.pub_tf = n.create_publisher(TFMessage, names.TF, TF) if TFMessage is not None else None
@@ -172,17 +160,40 @@ class RosGraph:
         self.pub_events = None
         self.team_pubs: dict[str, tuple] = {}
         self.malformed = 0
-        self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
-        self._thread.start()
+        self._threads: list[threading.Thread] = []
+        self._start(self.executor, "rclpy-executor")
         self._static_frames()
 
-    def _spin(self) -> None:
+    def _start(self, executor, name: str) -> None:
+        thread = threading.Thread(target=self._spin, args=(executor,), name=name, daemon=True)
+        self._threads.append(thread)
+        thread.start()
+
+    @staticmethod
+    def _spin(executor) -> None:
         try:
-            self.executor.spin()
+            executor.spin()
         except (ExternalShutdownException, rclpy.executors.ShutdownException):
             pass
         except Exception:  # keep the bridge's own thread informed through the log
             log.exception("the ROS 2 executor stopped")
+
+    def _commands(self):
+        """The node of the cmd_vel subscriptions, spun by an executor and a thread of their own: an rclpy
+        executor builds its wait set in Python from every entity of its nodes at each wake-up (on the main
+        node, its publishers, subscriptions and their QoS event handlers: milliseconds of the GIL), so a
+        command waits far less on a node that has only them. Named as the bridge's node, with
+        ``names.COMMANDS_SUFFIX``."""
+        if self.command_node is None:
+            self.command_node = rclpy.create_node(
+                names.node_name(self._what) + names.COMMANDS_SUFFIX,
+                context=self.context,
+                start_parameter_services=False,
+            )
+            self.command_executor = SingleThreadedExecutor(context=self.context)
+            self.command_executor.add_node(self.command_node)
+            self._start(self.command_executor, "rclpy-commands")
+        return self.command_node
 
     # --- set-up ------------------------------------------------------------------------------------------------
     def add_world(self, set_model_state: Callable[[object], None] | None) -> None:
@@ -240,7 +251,9 @@ class RosGraph:
             if _smsg is not None:
                 ports.vision = n.create_publisher(_smsg.OmniVisionInfo, topic(names.OMNI_VISION), SENSOR)
             slot = ports.command
-            n.create_subscription(Twist, topic(names.CMD_VEL), lambda m: self._on_cmd_vel(slot, m), COMMANDS)
+            self._commands().create_subscription(
+                Twist, topic(names.CMD_VEL), lambda m: self._on_cmd_vel(slot, m), COMMANDS
+            )
             n.create_subscription(Bool, topic(names.DRIBBLE), lambda m: self._on_dribble(slot, m), COMMANDS)
             n.create_subscription(Float32, topic(names.KICK), lambda m: self._on_kick(slot, m, False), COMMANDS)
             n.create_subscription(Float32, topic(names.LOB), lambda m: self._on_kick(slot, m, True), COMMANDS)
@@ -346,11 +359,10 @@ class RosGraph:
             self.now = max(self.now, float(t))
 
     def publish_clock(self, t: float) -> None:
-        self.set_time(t)
         if self.pub_clock is not None:
             self.pub_clock.publish(Clock(clock=_time(t)))
 
-    def publish_perception(self, ports: RobotPorts, sign: int, info, raw: bytes | None) -> None:
+    def publish_perception(self, ports: RobotPorts, sign: int, info) -> None:
         """A robot's OmniVisionInfo (team frame) as odom, ball, obstacles, team-mates (``map``), holding_ball
         and, when simatch_msgs is built, the message itself (``omni_vision``, team frame as on the bus)."""
         stamp = _time(info.stamp)
@@ -372,8 +384,8 @@ class RosGraph:
         if heard(ports.teammates):
             mates = [robot_pose(sign, r) for r in info.robots if r.id != ports.rid and r.valid]
             ports.teammates.publish(self._poses(stamp, mates))
-        if raw is not None and heard(ports.vision):
-            ports.vision.publish(raw)
+        if heard(ports.vision):
+            ports.vision.publish(msgs.encode(info))
 
     def heard(self, pub) -> bool:
         """Somebody subscribes to ``pub`` (looked up at most twice a second of wall time per publisher): what
@@ -406,7 +418,7 @@ class RosGraph:
             self.pub_tf.publish(TFMessage(transforms=tfs))
         if self.heard(self.pub_markers) and t - self._markers_at >= self.markers_period - 1e-9:
             self._markers_at = t
-            self.pub_markers.publish(self._markers(stamp, poses))
+            self.pub_markers.publish(markers.markers(self.spec, self._field_markers, stamp, poses))
 
     def publish_own_frames(self, t: float, poses: dict[str, WorldPose]) -> None:
         """/tf of the robots a team bridge perceives itself (no ground truth for a team's credential)."""
@@ -480,110 +492,20 @@ class RosGraph:
             out.poses.append(q)
         return out
 
-    def _field(self) -> list:
-        """The field's markings (one LINE_LIST) and the goals, in ``map``: drawn with every MarkerArray."""
-        geo = self.spec.world.geometry()
-        lines = Marker()
-        lines.header.frame_id = names.MAP
-        lines.ns, lines.id, lines.type, lines.action = "field", 0, Marker.LINE_LIST, Marker.ADD
-        lines.scale.x = float(geo.line_width)
-        lines.color = _color((1.0, 1.0, 1.0))
-        lines.pose.orientation.w = 1.0
-        for item in geo.lines():
-            if item["kind"] == "polyline":
-                pts = item["points"]
-                segs = zip(pts[:-1], pts[1:])
-            elif item["kind"] == "arc":
-                (cx, cy), r = item["center"], item["radius"]
-                a0, a1 = item["start"], item["end"]
-                k = max(4, int(abs(a1 - a0) / (2 * math.pi) * 48))
-                arc = [
-                    (cx + r * math.cos(a0 + (a1 - a0) * i / k), cy + r * math.sin(a0 + (a1 - a0) * i / k))
-                    for i in range(k + 1)
-                ]
-                segs = zip(arc[:-1], arc[1:])
-            else:
-                continue
-            for (x0, y0), (x1, y1) in segs:
-                lines.points.append(Point(x=float(x0), y=float(y0), z=0.01))
-                lines.points.append(Point(x=float(x1), y=float(y1), z=0.01))
-        out = [lines]
-        spec_world = self.spec.world
-        L = geo.half_length
-        for k, side in enumerate((-1, 1)):
-            goal = Marker()
-            goal.header.frame_id = names.MAP
-            goal.ns, goal.id, goal.type, goal.action = "goals", k, Marker.CUBE, Marker.ADD
-            depth = float(getattr(spec_world, "goal_depth", 0.6))
-            goal.pose.position.x = side * (L + depth / 2)
-            goal.pose.position.z = 0.5
-            goal.pose.orientation.w = 1.0
-            goal.scale.x, goal.scale.y, goal.scale.z = depth, float(getattr(spec_world, "goal_width", 2.4)), 1.0
-            goal.color = _color((0.9, 0.9, 0.9), 0.4)
-            out.append(goal)
-        return out
-
-    def _markers(self, stamp, poses: dict[str, WorldPose]) -> MarkerArray:
-        out = MarkerArray()
-        for m in self._field_markers:
-            m.header.stamp = stamp
-            out.markers.append(m)
-        for name, p in sorted(poses.items()):
-            m = Marker()
-            m.header.stamp = stamp
-            m.header.frame_id = names.MAP
-            m.action = Marker.ADD
-            m.pose.orientation.w = 1.0
-            if name == names.BALL:
-                m.ns, m.id, m.type = "ball", 0, Marker.SPHERE
-                m.pose.position.x, m.pose.position.y = p.x, p.y
-                m.pose.position.z = p.z
-                m.scale.x = m.scale.y = m.scale.z = 2 * BALL_RADIUS
-                m.color = _color((1.0, 0.5, 0.0))
-                out.markers.append(m)
-                continue
-            team, _, rid = name.partition("/")
-            rgb = _COLORS.get(self.spec.team_color(team), (0.7, 0.7, 0.7))
-            m.ns, m.id, m.type = f"robots/{team}", int(rid), Marker.CYLINDER
-            m.pose.position.x, m.pose.position.y, m.pose.position.z = p.x, p.y, p.z + ROBOT_HEIGHT / 2
-            qx, qy, qz, qw = quaternion_of_yaw(p.yaw)
-            m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = qx, qy, qz, qw
-            m.scale.x = m.scale.y = 2 * ROBOT_RADIUS
-            m.scale.z = ROBOT_HEIGHT
-            m.color = _color(rgb)
-            out.markers.append(m)
-            head = Marker()  # the kicker's side
-            head.header = m.header
-            head.ns, head.id, head.type, head.action = f"heading/{team}", int(rid), Marker.ARROW, Marker.ADD
-            head.pose = m.pose
-            head.scale.x, head.scale.y, head.scale.z = ROBOT_RADIUS * 1.6, 0.08, 0.08
-            head.color = _color((1.0, 1.0, 1.0))
-            out.markers.append(head)
-            label = Marker()
-            label.header = m.header
-            label.ns, label.id, label.type, label.action = (
-                f"labels/{team}",
-                int(rid),
-                Marker.TEXT_VIEW_FACING,
-                Marker.ADD,
-            )
-            label.pose.position.x, label.pose.position.y, label.pose.position.z = p.x, p.y, p.z + ROBOT_HEIGHT + 0.3
-            label.pose.orientation.w = 1.0
-            label.scale.z = 0.4
-            label.color = _color((1.0, 1.0, 1.0))
-            label.text = name
-            out.markers.append(label)
-        return out
-
     # --- closing -------------------------------------------------------------------------------------------------
     def close(self) -> None:
+        for executor in (self.command_executor, self.executor):
+            try:
+                if executor is not None:
+                    executor.shutdown(timeout_sec=1.0)
+            except Exception:  # shutting down twice, or a context already gone
+                pass
         try:
-            self.executor.shutdown(timeout_sec=1.0)
-        except Exception:  # shutting down twice, or a context already gone
-            pass
-        try:
+            if self.command_node is not None:
+                self.command_node.destroy_node()
             self.node.destroy_node()
         finally:
             if self.context.ok():
                 rclpy.shutdown(context=self.context)
-        self._thread.join(timeout=2.0)
+        for thread in self._threads:
+            thread.join(timeout=2.0)

@@ -72,6 +72,10 @@ def team_frame(team: str) -> str:
     return f"{team}/field"
 
 
+#: the bridge's second node, which takes the cmd_vel messages (`graph.RosGraph`): its name is the bridge's and this
+COMMANDS_SUFFIX = "_commands"
+
+
 def node_name(what: str) -> str:
     """The bridge node's name: ``simatch_bridge`` plus what it serves (``cyan``, ``cyan_2``, ``observer``)."""
     return "simatch_bridge_" + re.sub(r"[^A-Za-z0-9_]", "_", what)
