@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 
 from . import UsageError
-from .server import add_join_options
+from .server import add_join_options, play_on_server
 
 #: ROS 2 discovery stays on this machine unless asked (``--open-discovery``) or set by the user
 DISCOVERY = "ROS_AUTOMATIC_DISCOVERY_RANGE"
@@ -134,9 +134,6 @@ def main(args) -> int:
         import rclpy  # noqa: F401
     except ImportError as exc:
         raise UsageError(f"ROS 2 is not installed ({exc}): pip install 'simatch[ros2]'") from None
-    from ..distributed import interrupt_on_term
-    from ..distributed.client import ClientError
-    from ..distributed.credentials import CredentialError
     from ..ros2 import interfaces
     from ..ros2.bridge import COMMAND_TIMEOUT, Bridge
 
@@ -158,14 +155,9 @@ def main(args) -> int:
         clock=args.clock,
         wait=args.wait,
     )
-    with interrupt_on_term(bridge.stop_soon):
-        try:
-            reason = bridge.run()
-        except (ClientError, CredentialError, ValueError) as exc:
-            raise UsageError(str(exc)) from None
-        except KeyboardInterrupt:
-            bridge.say("interrupted; left the run")
-            return 130
+    reason = play_on_server(bridge, interrupted="interrupted; left the run")
+    if reason is None:
+        return 130
     stats = bridge.stats()
     bad = sum(s["bad"] for s in stats.values())
     got = sum(s["received"] for s in stats.values())

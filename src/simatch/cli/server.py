@@ -37,10 +37,10 @@ def add_join_options(p) -> None:
     add_network_options(p, "the run to join")
 
 
-def play_on_server(proc) -> str | None:
+def play_on_server(proc, interrupted: str | None = None) -> str | None:
     """Run ``proc``, a process that joined a server's run (a team's, a ROS bridge's), until the server ends the
-    run: the reason it gave; None when interrupted (said: the process left the run). A join the server refuses
-    (a bad credential, an unknown run or team) is a usage error."""
+    run: the reason it gave; None when interrupted (said, ``interrupted`` or the ticks it played: the process
+    left the run). A join the server refuses (a bad credential, an unknown run or team) is a usage error."""
     from ..distributed import interrupt_on_term
     from ..distributed.client import ClientError
     from ..distributed.credentials import CredentialError
@@ -51,7 +51,7 @@ def play_on_server(proc) -> str | None:
         except (ClientError, CredentialError, ValueError) as exc:
             raise UsageError(str(exc)) from None
         except KeyboardInterrupt:
-            proc.say(f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
+            proc.say(interrupted or f"{proc.what}: interrupted after {proc.ticks} ticks; left the run")
             return None
 
 
