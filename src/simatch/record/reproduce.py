@@ -42,7 +42,8 @@ import numpy as np
 from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
-from . import environment
+from . import environment, layout
+from .divergence import ComponentCheck, ComponentDifference
 from .reader import Recording, RecordingError
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
@@ -76,9 +77,9 @@ class Difference:
     differing_values: int
 
     def describe(self) -> str:
+        """What differs, and both values: ``magenta/2 x 3.0 recorded, 2.9 here (2 value(s) of that step differ)``."""
         return (
-            f"first difference at t={self.t:.3f} s (physics step {self.step}): {self.model} {self.field} "
-            f"recorded {self.recorded!r}, re-simulated {self.simulated!r} "
+            f"{self.model} {self.field} {self.recorded!r} recorded, {self.simulated!r} here "
             f"({self.differing_values} value(s) of that step differ)"
         )
 
@@ -96,6 +97,11 @@ class Verdict:
     inputs: int = 0  # world inputs carried out again (mode "inputs")
     #: what differs between the recording's environment and this one (`environment.differences`)
     environment: list[str] = field(default_factory=list)
+    #: the first step and component whose fingerprint differs (`divergence`), None if none does
+    component: ComponentDifference | None = None
+    #: the recording's format version, and whether it holds component fingerprints (format 3 on)
+    format_version: str = ""
+    components: bool = False
 
     def describe(self) -> str:
         if self.identical:
@@ -111,10 +117,33 @@ class Verdict:
             if not self.complete:
                 head += "; the recording is incomplete, so only what it holds was checked"
         else:
-            head = f"NOT reproduced: {self.first_difference.describe()}" if self.first_difference else "NOT reproduced"
+            head = f"NOT reproduced: {self.where()}"
             if self.environment:
                 head += f"; made in another environment: {', '.join(self.environment)}"
         return "\n".join([head] + [f"note: {p}" for p in self.problems])
+
+    def where(self) -> str:
+        """The first divergent step, its component (where the recording holds them) and the first values
+        that differ, in one line."""
+        diff, comp = self.first_difference, self.component
+        if comp is not None:
+            if diff is None:
+                return (
+                    f"{comp.describe()} — the model states and the exact states' fingerprints agree to the end "
+                    f"({self.compared} samples)"
+                )
+            return f"{comp.describe()} — then at step {diff.step} (t={diff.t:.3f} s): {diff.describe()}"
+        if diff is None:
+            return "no difference found"
+        head = f"differs from step {diff.step} (t={diff.t:.3f} s)"
+        if not self.components:
+            head += (
+                f": the recording (format {self.format_version or '?'}) predates component fingerprints, "
+                "so no component is named"
+            )
+        else:
+            head += ": no component fingerprint recorded up to there differs"
+        return f"{head} — {diff.describe()}"
 
     def as_dict(self) -> dict:
         out = {
@@ -128,6 +157,10 @@ class Verdict:
             "problems": self.problems,
             "environment": self.environment,
             "first_difference": None,
+            "format_version": self.format_version,
+            "components": self.components,
+            "first_component": dict(self.component.__dict__) if self.component is not None else None,
+            "verdict": self.describe().splitlines()[0],
         }
         if self.first_difference:
             out["first_difference"] = dict(self.first_difference.__dict__)
@@ -206,12 +239,22 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
         if mode == "auto":
             problems.append("the recording holds no world inputs: re-simulated from its strategies")
         verdict = _verify_strategies(rec, scene, kind, problems, progress)
+    verdict.format_version = meta.get("format_version", "")
+    verdict.components = holds_components(rec)
     then = environment.recorded(meta)
     if then is not None:
         verdict.environment = environment.differences(then)
     elif not verdict.identical:
         verdict.environment = ["the recording does not say what made it (made before simatch kept that)"]
     return verdict
+
+
+def holds_components(rec: Recording) -> bool:
+    """Whether the recording holds the component fingerprints of its steps (format 3 on)."""
+    try:
+        return int(rec.metadata.get("format_version", "1")) >= layout.COMPONENTS_SINCE
+    except ValueError:
+        return False
 
 
 def _fingerprint_kind(rec: Recording) -> str:
@@ -247,19 +290,21 @@ def _verify_strategies(rec: Recording, scene, kind: str, problems: list[str], pr
 def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
     """Re-simulate the world alone from the recorded inputs and compare (see the module's docstring)."""
     from ..config.loader import check_models
+    from ..sim.components import COMPONENTS, ComponentPrints
     from ..sim.inputs import InputError, WorldReplay
-    from ..sim.node import fingerprint, model_states_message
     from ..sim.simulator import Simulator
 
     check_models(scene)
     sim = Simulator(scene.spec, int(rec.metadata.get("seed", "0")))
+    sim.prints = ComponentPrints(sim)
     replay = WorldReplay(sim)
-    encode = Codec(msgs.typestore).encode
     verdict = Verdict(identical=True, compared=0, until=0.0, mode="inputs")
-    last_report = -1.0
-    dt = sim.dt
+    check = ComponentCheck(sim.dt)
+    holds = holds_components(rec)
+    wanted = {topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS, topics.COMPONENT_FINGERPRINTS}
+    states = _InputStates(rec, sim, replay, kind, verdict, progress)
     try:
-        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS}):
+        for topic, _, data in rec.raw(topics=wanted):
             if topic == topics.WORLD_INPUTS:
                 msg = rec.decode("simatch_msgs/msg/WorldInputs", data, topic)
                 if msg is None:
@@ -268,49 +313,67 @@ def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
                     raise VerifyError(f"{rec.path}: the inputs of step {msg.step} come after that step")
                 replay.advance_to(int(msg.step))
                 replay.apply(msg)
-                continue
-            if topic == topics.STATE_FINGERPRINT:
-                fp = rec.decode("simatch_msgs/msg/StateFingerprint", data, topic)
-                if fp is None or int(fp.step) < sim.step_index:
-                    continue
-                replay.advance_to(int(fp.step))
-                _, pose, twist = sim.model_state_arrays()
-                if fingerprint(pose, twist, kind) != int(fp.fingerprint):
-                    verdict.identical = False
-                    verdict.first_difference = Difference(
-                        fp.step * dt,
-                        int(fp.step),
-                        "(every model)",
-                        "fingerprint of the exact states",
-                        int(fp.fingerprint),
-                        fingerprint(pose, twist, kind),
-                        1,
-                    )
-                    break
-                continue
-            _, step = _STEP.unpack_from(data)
-            if step < sim.step_index:
-                continue  # (a second recorder's copy, or out of order: compared once)
-            replay.advance_to(step)
-            names, pose, twist = sim.model_state_arrays()
-            mine = model_states_message(step * dt, step, names, pose, twist)
-            verdict.compared += 1
-            verdict.until = step * dt
-            if encode(mine) != data:
-                verdict.identical = False
-                verdict.first_difference = _difference(rec, bytes(data), mine, dt)
+            elif topic == topics.COMPONENT_FINGERPRINTS:
+                msg = rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topic)
+                if msg is not None:  # (re-simulated through the last step it holds, then compared)
+                    rows = len(msg.fingerprint) // max(1, len(msg.component))
+                    replay.advance_to(max(int(msg.step) + rows, sim.step_index))
+                    first, rows = sim.prints.take()
+                    check.simulated(first, COMPONENTS, rows)
+                verdict.component = check.take(msg)
+            elif verdict.first_difference is None:
+                states.compare(topic, data)
+            # past the first difference of the states, read on until the components of its step are known
+            if verdict.first_difference is not None and (not holds or check.settled(verdict.first_difference)):
                 break
-            if progress is not None and verdict.until - last_report >= 1.0:
-                last_report = verdict.until
-                progress(verdict.until)
     except InputError as exc:
         raise VerifyError(f"{rec.path}: {exc}") from None
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
+    verdict.identical = verdict.first_difference is None and verdict.component is None
     verdict.inputs = replay.applied
     verdict.problems = list(rec.problems)
     verdict.complete = rec.finalised and not rec.problems
     return verdict
+
+
+class _InputStates:
+    """The comparison of the recorded model states and exact states' fingerprints with those of the world
+    re-simulated from its inputs (`_verify_inputs`): the first difference goes into the verdict."""
+
+    def __init__(self, rec: Recording, sim, replay, kind: str, verdict: Verdict, progress):
+        self.rec, self.sim, self.replay, self.kind = rec, sim, replay, kind
+        self.verdict, self.progress = verdict, progress
+        self.encode = Codec(msgs.typestore).encode
+        self.last_report = -1.0
+
+    def compare(self, topic: str, data) -> None:
+        from ..sim.node import fingerprint, model_states_message
+
+        sim, verdict, dt = self.sim, self.verdict, self.sim.dt
+        if topic == topics.STATE_FINGERPRINT:
+            fp = self.rec.decode("simatch_msgs/msg/StateFingerprint", data, topic)
+            if fp is None or int(fp.step) < sim.step_index:
+                return
+            self.replay.advance_to(int(fp.step))
+            _, pose, twist = sim.model_state_arrays()
+            mine = fingerprint(pose, twist, self.kind)
+            if mine != int(fp.fingerprint):
+                verdict.first_difference = _fingerprint_difference(int(fp.step), dt, int(fp.fingerprint), mine)
+            return
+        _, step = _STEP.unpack_from(data)
+        if step < sim.step_index:
+            return  # (a second recorder's copy, or out of order: compared once)
+        self.replay.advance_to(step)
+        names, pose, twist = sim.model_state_arrays()
+        mine = model_states_message(step * dt, step, names, pose, twist)
+        verdict.compared += 1
+        verdict.until = step * dt
+        if self.encode(mine) != data:
+            verdict.first_difference = _difference(self.rec, bytes(data), mine, dt)
+        elif self.progress is not None and verdict.until - self.last_report >= 1.0:
+            self.last_report = verdict.until
+            self.progress(verdict.until)
 
 
 class _DuringStep(Node):
@@ -338,9 +401,16 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))
     prints = _Fingerprints()
+    check = ComponentCheck(sim.dt)
+    holds = holds_components(rec)
     subs = [
         sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
         sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
+        sim.bus.subscribe(
+            topics.COMPONENT_FINGERPRINTS,
+            msgs.ComponentFingerprints,
+            lambda m: check.simulated(m.step, m.component, m.fingerprint),
+        ),
     ]
     pending: list = []
     last_report = -1.0
@@ -362,7 +432,15 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     try:
         # a sample is compared once the next one is read: the commands made during its step come after it
         held: tuple[int, bytes] | None = None
-        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT}):
+        wanted = {topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT, topics.COMPONENT_FINGERPRINTS}
+        for topic, _, data in rec.raw(topics=wanted):
+            if topic == topics.COMPONENT_FINGERPRINTS:
+                verdict.component = check.take(rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topic))
+                if check.settled(verdict.first_difference):
+                    break
+                continue
+            if verdict.first_difference is not None:
+                continue  # (past the first difference: only the components of its step are read on)
             if topic == topics.OPERATOR:
                 op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
                 if op is not None:
@@ -374,7 +452,10 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
             _, step = _STEP.unpack_from(data)
             if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
                 held = None
-                break
+                _take_unpublished(sim.simulator, check)
+                if not holds:
+                    break
+                continue
             held = (step, bytes(data)) if step >= sim.simulator.step_index else None
             if progress is not None and verdict.until - last_report >= 1.0:
                 last_report = verdict.until
@@ -386,9 +467,21 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
             sub.close()
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
+    _take_unpublished(sim.simulator, check)
+    verdict.component = check.compare(sim.simulator.step_index - 1)
+    verdict.identical = verdict.first_difference is None and verdict.component is None
     verdict.problems = problems + rec.problems
     verdict.complete = rec.finalised and not rec.problems
     return verdict
+
+
+def _take_unpublished(simulator, check: ComponentCheck) -> None:
+    """The re-simulation's component rows not yet published (those of the control period under way)."""
+    from ..sim.components import COMPONENTS
+
+    if simulator.prints is not None:
+        first, rows = simulator.prints.take()
+        check.simulated(first, COMPONENTS, rows)
 
 
 class _Fingerprints:
@@ -412,18 +505,15 @@ class _Fingerprints:
         for step in sorted(k for k in self.theirs if k <= upto):
             theirs, mine = self.theirs.pop(step), self.mine.get(step)
             if found is None and theirs != mine:
-                found = Difference(
-                    step * dt,
-                    step,
-                    "(every model)",
-                    "fingerprint of the exact states",
-                    theirs,
-                    "none" if mine is None else mine,
-                    1,
-                )
+                found = _fingerprint_difference(step, dt, theirs, "none" if mine is None else mine)
         for step in [k for k in self.mine if k <= upto]:
             del self.mine[step]
         return found
+
+
+def _fingerprint_difference(step: int, dt: float, theirs: int, mine) -> Difference:
+    """The exact states' fingerprints of step ``step`` differ."""
+    return Difference(step * dt, step, "(every model)", "fingerprint of the exact states", theirs, mine, 1)
 
 
 def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim, prints: _Fingerprints) -> bool:

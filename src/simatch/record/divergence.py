@@ -1,0 +1,100 @@
+"""Where a re-simulation first departs from its recording: the step and the component.
+
+A recording of format 3 on holds each physics step's component fingerprints (`simatch.sim.components`:
+the world's inputs, the drive, ball handling, applied forces, the flight controller, MuJoCo's step, the
+ball's bounce, in pipeline order). `ComponentCheck` holds the recorded rows and the re-simulated ones by step
+and finds the first step where any differs and, in that step, the first component in pipeline order: the
+step before ended with the same state, so that component is where the re-simulation departs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..sim.components import DESCRIPTIONS
+
+
+@dataclass
+class ComponentDifference:
+    """The first step and component whose fingerprint differs (``simulated`` None: not re-simulated)."""
+
+    t: float
+    step: int
+    component: str
+    recorded: int
+    simulated: int | None
+
+    def describe(self) -> str:
+        return (
+            f"differs from step {self.step} (t={self.t:.3f} s): "
+            f"first in {DESCRIPTIONS.get(self.component, self.component)}"
+        )
+
+
+class ComponentCheck:
+    """The component fingerprints recorded and re-simulated, by physics step (see the module)."""
+
+    def __init__(self, dt: float):
+        self.dt = dt
+        self.theirs: dict[int, tuple[tuple[str, ...], np.ndarray]] = {}
+        self.mine: dict[int, tuple[tuple[str, ...], np.ndarray]] = {}
+        #: one past the last step whose recorded row was read, and whose re-simulated row was
+        self.covered = 0
+        self.simulated_to = 0
+        self.found: ComponentDifference | None = None
+
+    @staticmethod
+    def _rows(step: int, names, flat) -> dict[int, tuple[tuple[str, ...], np.ndarray]]:
+        names = tuple(names)
+        rows = np.asarray(flat, dtype=np.uint64).reshape(-1, len(names)) if names else np.zeros((0, 0), np.uint64)
+        return {int(step) + i: (names, row) for i, row in enumerate(rows)}
+
+    def recorded(self, msg) -> int:
+        """Keep a recorded ComponentFingerprints message; the last step it covers (its first if it is empty)."""
+        rows = self._rows(msg.step, msg.component, msg.fingerprint)
+        self.theirs.update(rows)
+        last = max(rows, default=int(msg.step))
+        self.covered = max(self.covered, last + 1)
+        return last
+
+    def simulated(self, step: int, names, flat) -> None:
+        """Keep the re-simulation's rows from physics step ``step`` on."""
+        rows = self._rows(step, names, flat)
+        self.mine.update(rows)
+        self.simulated_to = max(self.simulated_to, max(rows, default=-1) + 1)
+
+    def compare(self, upto: int) -> ComponentDifference | None:
+        """Compare the rows of every step up to ``upto`` that is re-simulated by now and forget them; the first
+        difference found so far."""
+        upto = min(upto, self.simulated_to - 1)
+        for step in sorted(k for k in self.theirs if k <= upto):
+            names, theirs = self.theirs.pop(step)
+            mine = self.mine.pop(step, None)
+            if self.found is not None:
+                continue
+            if mine is None:
+                self.found = ComponentDifference(step * self.dt, step, names[0], int(theirs[0]), None)
+                continue
+            here = dict(zip(mine[0], mine[1].tolist()))
+            for name, value in zip(names, theirs.tolist()):
+                if here.get(name) != value:
+                    self.found = ComponentDifference(step * self.dt, step, name, value, here.get(name))
+                    break
+        for step in [k for k in self.mine if k <= upto]:
+            del self.mine[step]
+        return self.found
+
+    def take(self, msg) -> ComponentDifference | None:
+        """Keep a recorded message (None: one that did not decode) and compare what is re-simulated by now;
+        the first difference found so far."""
+        if msg is not None:
+            self.compare(self.recorded(msg))
+        return self.found
+
+    def settled(self, diff) -> bool:
+        """Whether the comparison can stop at the first difference of the states ``diff`` (None: none yet):
+        a component differs, or the recorded rows of its step were read (states are published before
+        their step's components run: the world as that step took it is compared too)."""
+        return diff is not None and (self.found is not None or self.covered > diff.step)

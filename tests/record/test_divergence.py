@@ -1,0 +1,191 @@
+"""A re-simulation that departs from its recording names the first step and component (world physics, ball
+handling, ...) from the per-component fingerprints a recording keeps (`simatch.sim.components`)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+from mcap.reader import NonSeekingReader
+from mcap.writer import Writer
+
+import simatch
+from simatch import msgs
+from simatch.bus import topics
+from simatch.record import Recorder, layout
+from simatch.record.reader import Recording
+from simatch.record.reproduce import verify
+from simatch.sim.ballhandling import BallHandling
+from simatch.sim.components import COMPONENTS
+
+from .conftest import NOISY, play_a_little
+
+CHANNEL = layout.channel_topic(topics.COMPONENT_FINGERPRINTS)
+TYPE = "simatch_msgs/msg/ComponentFingerprints"
+
+
+def rewrite(src, dst, change, metadata=lambda name, data: data) -> int:
+    """Copy the recording ``src`` into ``dst`` (a plain MCAP writer), each message's payload passed through
+    ``change(channel topic, data) -> data`` (None: left out) and each metadata record through ``metadata``;
+    the number of messages changed."""
+    changed = 0
+    with open(src, "rb") as f:
+        meta = [(m.name, dict(m.metadata)) for m in NonSeekingReader(f).iter_metadata()]
+    with open(src, "rb") as f, open(dst, "wb") as out:
+        writer = Writer(out)
+        writer.start(profile=layout.PROFILE, library="test")
+        schemas, channels = {}, {}
+        for schema, channel, message in NonSeekingReader(f).iter_messages():
+            data = change(channel.topic, message.data)
+            if data is None:
+                continue
+            changed += data != message.data
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id], channel.metadata
+                )
+            writer.add_message(channels[channel.id], message.log_time, data, message.publish_time, message.sequence)
+        for name, data in meta:
+            writer.add_metadata(name, metadata(name, data))
+        writer.finish()
+    return changed
+
+
+def tamper(src, dst, step: int, component: str) -> None:
+    """Rewrite the one recorded fingerprint of ``component`` at physics step ``step`` (one bit flipped)."""
+
+    def change(topic, data):
+        if topic != CHANNEL:
+            return data
+        msg = msgs.decode(msgs.ComponentFingerprints, data)
+        rows = np.asarray(msg.fingerprint, dtype=np.uint64).reshape(-1, len(msg.component)).copy()
+        if not msg.step <= step < msg.step + len(rows):
+            return data
+        rows[step - msg.step, list(msg.component).index(component)] ^= np.uint64(1)
+        msg.fingerprint = rows.ravel()
+        return msgs.encode(msg)
+
+    assert rewrite(src, dst, change) == 1
+
+
+def test_every_step_of_a_recording_has_its_component_fingerprints(recording):
+    path, _ = recording
+    rec = Recording(path)
+    assert rec.metadata["format_version"] == layout.FORMAT_VERSION == "3"
+    steps = []
+    for _, _, msg in rec.messages(topics={topics.COMPONENT_FINGERPRINTS}):
+        assert tuple(msg.component) == COMPONENTS
+        rows = np.asarray(msg.fingerprint).reshape(-1, len(COMPONENTS))
+        steps += range(msg.step, msg.step + len(rows))
+        assert rows[:, COMPONENTS.index("world physics")].all() and rows[:, COMPONENTS.index("inputs")].all()
+    # every step but those of the control period under way when the recording ended (5 steps of 5 ms)
+    assert steps == list(range(len(steps))) and len(steps) == 400 - 5
+
+
+@pytest.mark.parametrize(("step", "component"), [(123, "ball handling"), (250, "world physics"), (7, "inputs")])
+def test_a_tampered_component_fingerprint_is_named_at_its_step(recording, tmp_path, step, component):
+    path, _ = recording
+    tampered = tmp_path / "tampered.mcap"
+    tamper(path, tampered, step, component)
+    for mode in ("inputs", "strategies"):
+        verdict = verify(tampered, mode=mode)
+        assert not verdict.identical and verdict.first_difference is None, (mode, verdict.describe())
+        assert (verdict.component.step, verdict.component.component) == (step, component), mode
+        line = verdict.describe().splitlines()[0]
+        assert line.startswith(f"NOT reproduced: differs from step {step} (t={step * 0.005:.3f} s): first in "), line
+        assert "the model states and the exact states' fingerprints agree to the end (400 samples)" in line, line
+        out = verdict.as_dict()
+        assert out["first_component"]["component"] == component and out["verdict"] == line
+
+
+def _nudged_mj_step(at: int):
+    """MuJoCo's step, with one robot's x velocity one ULP off after step ``at``."""
+    original = mujoco.mj_step
+
+    def mj_step(m, d, *args):
+        k = round(d.time / m.opt.timestep)
+        original(m, d, *args)
+        if k == at:
+            d.qvel[0] = np.nextafter(d.qvel[0], np.inf)
+
+    return mj_step
+
+
+def _nudged_ball_handling(at: int):
+    """Ball handling's step, with the ball's x velocity one ULP off at step ``at``."""
+    original = BallHandling.before_step
+
+    def before_step(self, step, enabled):
+        original(self, step, enabled)
+        if step == at:
+            v = self.ix.ball_qvel
+            self.d.qvel[v] = np.nextafter(self.d.qvel[v], np.inf)
+
+    return before_step
+
+
+@pytest.mark.parametrize(
+    ("component", "target", "name", "nudge"),
+    [
+        ("world physics", mujoco, "mj_step", _nudged_mj_step),
+        ("ball handling", BallHandling, "before_step", _nudged_ball_handling),
+    ],
+)
+def test_a_component_one_ulp_off_at_a_step_is_named_there(tmp_path, monkeypatch, component, target, name, nudge):
+    """A run recorded with one component's output one ULP off at step 137 (the rest exact), verified with the
+    exact component: the verdict names step 137 and that component, from the inputs and from the strategies."""
+    path = tmp_path / "nudged.mcap"
+    monkeypatch.setattr(target, name, nudge(137))
+    with simatch.Simulation("msl_5v5", seed=2, overrides=NOISY) as sim:
+        with Recorder.for_run(sim, path, command_line=["pytest"]):
+            play_a_little(sim)
+    monkeypatch.undo()
+    for mode in ("inputs", "strategies"):
+        verdict = verify(path, mode=mode)
+        assert not verdict.identical, mode
+        assert (verdict.component.step, verdict.component.component) == (137, component), (mode, verdict.describe())
+    proc = subprocess.run(
+        [sys.executable, "-m", "simatch", "replay", str(path), "--verify", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    out = json.loads(proc.stdout)
+    assert proc.returncode != 0 and out["first_component"]["component"] == component, proc.stdout + proc.stderr
+    assert out["verdict"].startswith(f"NOT reproduced: differs from step 137 (t=0.685 s): first in {component}")
+
+
+def test_a_recording_without_component_fingerprints_names_the_step_only(recording, tmp_path):
+    """A recording of format 2 (before the component fingerprints) that does not reproduce: the verdict names
+    the step and says that the recording predates them."""
+    path, _ = recording
+    old = tmp_path / "format2.mcap"
+
+    def as_format_2(topic, data):
+        """No component fingerprints; the first robot's recorded x one float32 ULP off at step 300."""
+        if topic == CHANNEL:
+            return None
+        if topic == layout.channel_topic(topics.MODEL_STATES) and msgs.decode(msgs.ModelStates, data).step == 300:
+            msg = msgs.decode(msgs.ModelStates, data)
+            msg.pose = np.asarray(msg.pose).copy()
+            msg.pose[0] = np.nextafter(msg.pose[0], np.float32(np.inf))
+            return msgs.encode(msg)
+        return data
+
+    def format_2(name, data):
+        return {**data, "format_version": "2"} if name == layout.META_START else data
+
+    assert rewrite(path, old, as_format_2, format_2) == 1
+    verdict = verify(old)
+    assert not verdict.identical and verdict.component is None and not verdict.components
+    line = verdict.describe().splitlines()[0]
+    assert line.startswith(
+        "NOT reproduced: differs from step 300 (t=1.500 s): the recording (format 2) predates component fingerprints, "
+        "so no component is named — "
+    ), line
