@@ -189,3 +189,23 @@ def test_a_recording_without_component_fingerprints_names_the_step_only(recordin
         "NOT reproduced: differs from step 300 (t=1.500 s): the recording (format 2) predates component fingerprints, "
         "so no component is named — "
     ), line
+
+
+def test_a_strategy_that_decides_otherwise_is_named_from_the_strategies(tmp_path):
+    """A strategy drawing from unseeded randomness: re-run from the strategies, its commands differ at the first
+    control tick where it decides, before anything in the world, and the verdict names a strategy; from the
+    recorded inputs the world reproduces."""
+    path = tmp_path / "wander.mcap"
+    overrides = {**NOISY, "teams.cyan.strategy": "tests.record.random_plugins:Wanderer"}
+    with simatch.Simulation("msl_5v5", seed=1, overrides=overrides) as sim:
+        with Recorder.for_run(sim, path, command_line=["pytest"]):
+            for coach in sim.coaches.values():
+                coach.start_play()
+            sim.run(seconds=0.5)
+    assert verify(path).identical
+    verdict = verify(path, mode="strategies")
+    assert verdict.component.component == "strategies" and verdict.component.step % 5 == 0, verdict.describe()
+    assert verdict.describe().startswith(
+        f"NOT reproduced: differs from step {verdict.component.step} (t={verdict.component.t:.3f} s): "
+        "first in a strategy (the commands the robots sent)"
+    )

@@ -23,7 +23,7 @@ class ComponentDifference:
     t: float
     step: int
     component: str
-    recorded: int
+    recorded: int | None  # (None for the run's nodes' messages, compared whole)
     simulated: int | None
 
     def describe(self) -> str:
@@ -31,6 +31,52 @@ class ComponentDifference:
             f"differs from step {self.step} (t={self.t:.3f} s): "
             f"first in {DESCRIPTIONS.get(self.component, self.component)}"
         )
+
+
+#: what the run's nodes publish that ``--verify strategies`` compares too (by topic leaf), in the order a control
+#: tick makes it: perception (SENSE), the referee and coaches (JUDGE), the strategies (TEAM, ROBOT); their
+#: commands then enter the world as the step's inputs
+DECISIONS = (
+    ("perception", ("OmniVisionInfo",)),
+    ("referee", ("game_state", "receive_from_coach")),
+    ("strategies", ("TeamStrategy", "VelCmd", "ActionCmd", "StrategyInfo")),
+)
+_GROUP = {leaf: g for g, (_, leaves) in enumerate(DECISIONS) for leaf in leaves}
+
+
+def decision_of(topic: str) -> int | None:
+    """The `DECISIONS` group of a bus topic (None: not one of them)."""
+    return _GROUP.get(topic.rsplit("/", 1)[-1])
+
+
+class DecisionCheck:
+    """The messages of the run's nodes (`DECISIONS`), recorded and re-simulated, folded by physics step and
+    group into one hash each (the same process hashes both sides, in the order they were published)."""
+
+    def __init__(self):
+        self.theirs: dict[tuple[int, int], int] = {}
+        self.mine: dict[tuple[int, int], int] = {}
+
+    @staticmethod
+    def _fold(into: dict, step: int, topic: str, data: bytes) -> None:
+        group = decision_of(topic)
+        if group is not None:
+            key = (int(step), group)
+            into[key] = hash((into.get(key, 0), topic, bytes(data)))
+
+    def recorded(self, topic: str, step: int, data: bytes) -> None:
+        self._fold(self.theirs, step, topic, data)
+
+    def simulated(self, topic: str, step: int, data: bytes) -> None:
+        self._fold(self.mine, step, topic, data)
+
+    def first(self, upto: int, dt: float) -> ComponentDifference | None:
+        """The first step up to ``upto`` and the first group in it whose messages differ."""
+        keys = sorted(k for k in set(self.theirs) | set(self.mine) if k[0] <= upto)
+        for step, group in keys:
+            if self.theirs.get((step, group)) != self.mine.get((step, group)):
+                return ComponentDifference(step * dt, step, DECISIONS[group][0], None, None)
+        return None
 
 
 class ComponentCheck:

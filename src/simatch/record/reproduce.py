@@ -22,7 +22,11 @@ again, and the model states the simulator publishes are compared with the record
 (CDR), at every physics step, and so are the fingerprints of the exact float64 states (StateFingerprint,
 every control tick): the model states are float32, the fingerprints tell any difference of the
 simulator's own numbers. The first step where they differ is reported with the model, the field and both
-values.
+values. A recording of format 3 on also holds each physics step's component fingerprints (the world's
+inputs, the drive, ball handling, ... MuJoCo's step: `simatch.sim.components`); the re-simulation takes them
+too, and the verdict names the first step and component that differ (`simatch.record.divergence`); from
+the strategies, the run's nodes' messages (perception, the referee's, the strategies') are compared as well,
+and one that differs first is named.
 
 Operator commands name what they did (`OperatorCommand.call`): a `Simulation` method of the Python API
 (`WORLD_CALLS`), ``coach`` (a command given to ``sim.coaches[target]``), or ``judge.<method>`` for a judge
@@ -34,7 +38,6 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +46,10 @@ from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
 from . import environment, layout
-from .divergence import ComponentCheck, ComponentDifference
+from .divergence import ComponentCheck, ComponentDifference, DecisionCheck, decision_of
 from .reader import Recording, RecordingError
+from .recorder import TEAM_TOPICS
+from .verdict import Difference, Verdict
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
 WORLD_CALLS = {
@@ -64,107 +69,6 @@ _STEP = struct.Struct("<4xdQ")  # CDR header, then ModelStates.stamp and .step
 
 class VerifyError(Exception):
     """A recording that cannot be re-simulated (the message says why)."""
-
-
-@dataclass
-class Difference:
-    t: float
-    step: int
-    model: str
-    field: str
-    recorded: float | str
-    simulated: float | str
-    differing_values: int
-
-    def describe(self) -> str:
-        """What differs, and both values: ``magenta/2 x 3.0 recorded, 2.9 here (2 value(s) of that step differ)``."""
-        return (
-            f"{self.model} {self.field} {self.recorded!r} recorded, {self.simulated!r} here "
-            f"({self.differing_values} value(s) of that step differ)"
-        )
-
-
-@dataclass
-class Verdict:
-    identical: bool
-    compared: int  # model-state samples compared
-    until: float  # simulated time of the last one [s]
-    first_difference: Difference | None = None
-    operator_commands: int = 0
-    problems: list[str] = field(default_factory=list)
-    complete: bool = True  # the whole run was recorded and compared (file intact, finalised)
-    mode: str = "strategies"  # how it was re-simulated: "inputs" (the world from its recorded inputs) or "strategies"
-    inputs: int = 0  # world inputs carried out again (mode "inputs")
-    #: what differs between the recording's environment and this one (`environment.differences`)
-    environment: list[str] = field(default_factory=list)
-    #: the first step and component whose fingerprint differs (`divergence`), None if none does
-    component: ComponentDifference | None = None
-    #: the recording's format version, and whether it holds component fingerprints (format 3 on)
-    format_version: str = ""
-    components: bool = False
-
-    def describe(self) -> str:
-        if self.identical:
-            how = (
-                f"from {self.inputs} recorded world input(s)"
-                if self.mode == "inputs"
-                else f"from the strategies, {self.operator_commands} operator command(s) re-applied"
-            )
-            head = (
-                f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
-                f"re-simulated {how}"
-            )
-            if not self.complete:
-                head += "; the recording is incomplete, so only what it holds was checked"
-        else:
-            head = f"NOT reproduced: {self.where()}"
-            if self.environment:
-                head += f"; made in another environment: {', '.join(self.environment)}"
-        return "\n".join([head] + [f"note: {p}" for p in self.problems])
-
-    def where(self) -> str:
-        """The first divergent step, its component (where the recording holds them) and the first values
-        that differ, in one line."""
-        diff, comp = self.first_difference, self.component
-        if comp is not None:
-            if diff is None:
-                return (
-                    f"{comp.describe()} — the model states and the exact states' fingerprints agree to the end "
-                    f"({self.compared} samples)"
-                )
-            return f"{comp.describe()} — then at step {diff.step} (t={diff.t:.3f} s): {diff.describe()}"
-        if diff is None:
-            return "no difference found"
-        head = f"differs from step {diff.step} (t={diff.t:.3f} s)"
-        if not self.components:
-            head += (
-                f": the recording (format {self.format_version or '?'}) predates component fingerprints, "
-                "so no component is named"
-            )
-        else:
-            head += ": no component fingerprint recorded up to there differs"
-        return f"{head} — {diff.describe()}"
-
-    def as_dict(self) -> dict:
-        out = {
-            "identical": self.identical,
-            "mode": self.mode,
-            "inputs": self.inputs,
-            "compared": self.compared,
-            "until": self.until,
-            "operator_commands": self.operator_commands,
-            "complete": self.complete,
-            "problems": self.problems,
-            "environment": self.environment,
-            "first_difference": None,
-            "format_version": self.format_version,
-            "components": self.components,
-            "first_component": dict(self.component.__dict__) if self.component is not None else None,
-            "verdict": self.describe().splitlines()[0],
-        }
-        if self.first_difference:
-            out["first_difference"] = dict(self.first_difference.__dict__)
-        return out
 
 
 def apply_operator(sim, op) -> None:
@@ -400,20 +304,11 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     latest: list = [None]
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))
-    prints = _Fingerprints()
-    check = ComponentCheck(sim.dt)
-    holds = holds_components(rec)
-    subs = [
-        sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
-        sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
-        sim.bus.subscribe(
-            topics.COMPONENT_FINGERPRINTS,
-            msgs.ComponentFingerprints,
-            lambda m: check.simulated(m.step, m.component, m.fingerprint),
-        ),
-    ]
+    prints, check, decisions = _Fingerprints(), ComponentCheck(sim.dt), DecisionCheck()
+    subs = _listen(sim, latest, prints, check, decisions, encode)
     pending: list = []
     last_report = -1.0
+    dt_ns = layout.ns(sim.dt)
 
     def step_to(step: int) -> None:
         """Advance the re-simulation through physics step ``step`` with the commands recorded for it."""
@@ -433,33 +328,34 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
         # a sample is compared once the next one is read: the commands made during its step come after it
         held: tuple[int, bytes] | None = None
         wanted = {topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT, topics.COMPONENT_FINGERPRINTS}
-        for topic, _, data in rec.raw(topics=wanted):
+        wanted |= {t for t in rec.topics() if decision_of(t) is not None}
+        for topic, t_ns, data in rec.raw(topics=wanted):
             if topic == topics.COMPONENT_FINGERPRINTS:
                 verdict.component = check.take(rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topic))
                 if check.settled(verdict.first_difference):
                     break
-                continue
-            if verdict.first_difference is not None:
+            elif verdict.first_difference is not None:
                 continue  # (past the first difference: only the components of its step are read on)
-            if topic == topics.OPERATOR:
+            elif topic == topics.OPERATOR:
                 op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
                 if op is not None:
                     pending.append(op)
-                continue
-            if topic == topics.STATE_FINGERPRINT:
+            elif topic == topics.STATE_FINGERPRINT:
                 prints.recorded(rec.decode("simatch_msgs/msg/StateFingerprint", data, topic))
-                continue
-            _, step = _STEP.unpack_from(data)
-            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
-                held = None
-                _take_unpublished(sim.simulator, check)
-                if not holds:
-                    break
-                continue
-            held = (step, bytes(data)) if step >= sim.simulator.step_index else None
-            if progress is not None and verdict.until - last_report >= 1.0:
-                last_report = verdict.until
-                progress(verdict.until)
+            elif topic != topics.MODEL_STATES:
+                decisions.recorded(topic, t_ns // dt_ns, data)
+            else:
+                _, step = _STEP.unpack_from(data)
+                if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
+                    held = None
+                    _take_unpublished(sim.simulator, check)
+                    if not holds_components(rec):
+                        break
+                    continue
+                held = (step, bytes(data)) if step >= sim.simulator.step_index else None
+                if progress is not None and verdict.until - last_report >= 1.0:
+                    last_report = verdict.until
+                    progress(verdict.until)
         if held is not None:
             _check(held, step_to, latest, encode, verdict, rec, sim, prints)
     finally:
@@ -468,11 +364,52 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
     _take_unpublished(sim.simulator, check)
-    verdict.component = check.compare(sim.simulator.step_index - 1)
+    verdict.component = _first_of(check.compare(sim.simulator.step_index - 1), decisions, verdict, sim)
     verdict.identical = verdict.first_difference is None and verdict.component is None
     verdict.problems = problems + rec.problems
     verdict.complete = rec.finalised and not rec.problems
     return verdict
+
+
+def _listen(sim, latest: list, prints, check: ComponentCheck, decisions: DecisionCheck, encode) -> list:
+    """The re-simulation's subscriptions: its model states, fingerprints and its nodes' messages (each at the
+    step of the last clock or model states before it, as the recorder times them)."""
+    now = [0]
+
+    def states(msg) -> None:
+        latest[0] = msg
+        now[0] = msg.step
+
+    def decided(topic: str, msg) -> None:
+        if decision_of(topic) is not None:
+            decisions.simulated(topic, now[0], encode(msg))
+
+    return [
+        sim.bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: now.__setitem__(0, m.step)),
+        sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, states),
+        sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
+        sim.bus.subscribe(
+            topics.COMPONENT_FINGERPRINTS,
+            msgs.ComponentFingerprints,
+            lambda m: check.simulated(m.step, m.component, m.fingerprint),
+        ),
+        sim.bus.subscribe_all(TEAM_TOPICS, decided),
+        sim.bus.subscribe_all(topics.GAME_STATE, decided),
+    ]
+
+
+def _first_of(component: ComponentDifference | None, decisions: DecisionCheck, verdict: Verdict, sim):
+    """The first of the world's components and the run's nodes' messages (perception, referee, strategies)
+    that differs. At one step the nodes' come first (their commands are the step's inputs), but after the
+    states published at that step: nodes that were told another state did not depart by themselves."""
+    diff = verdict.first_difference
+    upto = sim.simulator.step_index
+    if component is not None:
+        upto = component.step
+    if diff is not None:
+        upto = min(upto, diff.step - 1)
+    decided = decisions.first(upto, sim.dt)
+    return decided if decided is not None else component
 
 
 def _take_unpublished(simulator, check: ComponentCheck) -> None:

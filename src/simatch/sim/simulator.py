@@ -36,7 +36,7 @@ from ..config.schema import Scene
 from ..robots.drive import OmniDrive, plan_drive
 from .ballhandling import BallHandling
 from .commands import MAX_COMMAND_SPEED, MAX_COMMAND_TURN, MAX_KICK_REQUEST, CommandError, CommandIntake
-from .components import BALL, BOUNCE, DRIVE, FLIGHT, FORCES, INPUTS, PHYSICS, ComponentPrints
+from .components import ComponentPrints
 from .engine import EngineViews
 from .flight import AerialFleet, frame_contacts
 from .inputs import InputLog, install
@@ -231,40 +231,33 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
             self.watchdog(self.scene.control.command_timeout, cs)
         fp = self.prints  # each component's fingerprint, while recorded (`simatch.sim.components`)
         if fp is not None:
-            fp.take_step(INPUTS)
+            fp.inputs()
         if drive.any_dirty or (into == 0 and any(self._drive_ramping)):
             self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), cs - into)
         if self.track_wheels:
             self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self.engine.setpoint) * self.dt
-        if fp is not None:
-            fp.take_step(DRIVE)
         self.ball.before_step(k, self.usable)
-        if fp is not None:
-            fp.take_step(BALL)
-        if self._wrenches:
+        wrenched = bool(self._wrenches)
+        if wrenched:
             self._apply_wrenches()
-            if fp is not None:
-                fp.take_step(FORCES)
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
-            if fp is not None:
-                fp.take_step(FLIGHT)
+        if fp is not None:
+            fp.before_physics(wrenched)
         e = self.engine  # the ball's height and vertical speed, before and after the step: a bounce?
         qpos = e.qpos_flat
         vz = e.qvel_flat[e.ball_vz]
         z = qpos[e.ball_z]
         mujoco.mj_step(self.m, d)
         if fp is not None:
-            fp.take_step(PHYSICS)
+            fp.physics()
         if vz < -BOUNCE_MIN_SPEED and qpos[e.ball_z] < self.ball_radius and self.restitution > 0:
             self._bounce(z, vz)
             if fp is not None:
-                fp.take_step(BOUNCE)
+                fp.bounce()
         if self.aerial is not None:
             self._frame_contacts()
-        if fp is not None:
-            fp.end_step()
         self.step_index += 1
 
     def _frame_contacts(self) -> None:
