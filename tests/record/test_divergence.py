@@ -4,8 +4,10 @@ handling, ...) from the per-component fingerprints a recording keeps (`simatch.s
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -209,3 +211,65 @@ def test_a_strategy_that_decides_otherwise_is_named_from_the_strategies(tmp_path
         f"NOT reproduced: differs from step {verdict.component.step} (t={verdict.component.t:.3f} s): "
         "first in a strategy (the commands the robots sent)"
     )
+
+
+ROOT = Path(__file__).resolve().parents[2]
+#: other Pythons to check recordings across: SIMATCH_OTHER_PYTHONS (interpreters, separated by os.pathsep), or the
+#: checkout's .venv-3.* (each with simatch's run dependencies and its C extensions built in place for it)
+OTHER_PYTHONS = os.environ.get("SIMATCH_OTHER_PYTHONS", "")
+
+
+def _other_python() -> str:
+    """Another Python than this one that runs simatch from this checkout (the test is skipped without one)."""
+    candidates = [c for c in OTHER_PYTHONS.split(os.pathsep) if c] or [
+        str(p) for p in sorted(ROOT.glob(".venv-3.*/bin/python"))
+    ]
+    tried = []
+    for python in candidates:
+        probe = subprocess.run(
+            [python, "-c", "import sys, simatch.sim.simulator; print(sys.version_info[:2])"],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "PYTHONPATH": str(ROOT / "src")},
+            timeout=120,
+        )
+        if probe.returncode == 0 and probe.stdout.strip() != str(sys.version_info[:2]):
+            return python
+        tried.append(f"{python}: {(probe.stderr.strip().splitlines() or ['the same Python as this one'])[-1]}")
+    pytest.skip(
+        "no other Python runs simatch here (CI has Python 3.11 only; set SIMATCH_OTHER_PYTHONS to another "
+        "interpreter with simatch's run dependencies and its C extensions built for it)"
+        + (f"; tried {'; '.join(tried)}" if tried else "")
+    )
+
+
+@pytest.mark.parametrize("made_there", [True, False], ids=["made-there-verified-here", "made-here-verified-there"])
+def test_a_recording_made_under_another_python_is_verified_or_refused_precisely(tmp_path, made_there):
+    """A recording made under another Python and verified under this one (and the reverse) is reproduced, or
+    the verdict names the first divergent step and component and says that the Python differs."""
+    other = _other_python()
+    maker, checker = (other, sys.executable) if made_there else (sys.executable, other)
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    path = tmp_path / "python.mcap"
+    made = subprocess.run(
+        [maker, "-m", "simatch", "run", "msl_5v5", "--duration", "1", "--record", str(path)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    assert made.returncode == 0, made.stderr
+    proc = subprocess.run(
+        [checker, "-m", "simatch", "replay", str(path), "--verify", "--json"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    out = json.loads(proc.stdout)
+    if out["identical"]:
+        assert proc.returncode == 0 and out["verdict"].startswith("reproduced bit for bit"), out["verdict"]
+    else:
+        assert proc.returncode == 1 and out["first_component"] is not None, proc.stdout + proc.stderr
+        assert out["verdict"].startswith("NOT reproduced: differs from step "), out["verdict"]
+        assert any(d.startswith("python CPython") for d in out["environment"]), out["environment"]

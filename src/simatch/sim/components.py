@@ -8,9 +8,12 @@ they run (`COMPONENTS`):
 ``engine model``
     what MuJoCo computed when it compiled the world (masses, inertias, their frames, the bodies' and dofs'
     inverse weights, bounding volumes, actuators' reference accelerations): the same in every row;
-``robot constants``
-    what simatch computed when it built the robots (the drive's wheel matrices and their pseudo-inverses,
-    wheel limits; the drones' mixers, parameters and limits): the same in every row;
+``drive constants``
+    what simatch computed when it built the ground robots' drives: the wheel matrices, their pseudo-inverses
+    (`numpy.linalg.pinv`, by LAPACK) and the wheel limits: the same in every row;
+``flight constants``
+    what it computed when it built the drones: their mixers (`numpy.linalg` again), parameters and limits: the
+    same in every row (0 in a world without drones);
 ``inputs``
     the world as the step takes it: the engine's state (qpos, qvel, act) after the placements, teleports and
     drive resets made between steps, the commands after intake and the watchdog, who may move;
@@ -45,7 +48,8 @@ from .kernels import Words, mix64
 #: the components in pipeline order (the ComponentFingerprints message names them the same)
 COMPONENTS = (
     "engine model",
-    "robot constants",
+    "drive constants",
+    "flight constants",
     "inputs",
     "drive",
     "ball handling",
@@ -54,11 +58,12 @@ COMPONENTS = (
     "world physics",
     "ball bounce",
 )
-ENGINE, ROBOTS, INPUTS, DRIVE, BALL, FORCES, FLIGHT, PHYSICS, BOUNCE = range(len(COMPONENTS))
+ENGINE, DRIVE_CONSTANTS, FLIGHT_CONSTANTS, INPUTS, DRIVE, BALL, FORCES, FLIGHT, PHYSICS, BOUNCE = range(len(COMPONENTS))
 #: what each component is, for a verdict
 DESCRIPTIONS = {
     "engine model": "the engine's model (what MuJoCo computed when it compiled the world)",
-    "robot constants": "the robots' constants (drive wheel matrices and pseudo-inverses, drone mixers)",
+    "drive constants": "the drives' constants (wheel matrices and their pseudo-inverses, limits)",
+    "flight constants": "the drones' constants (mixers, parameters, limits)",
     "inputs": "the world's inputs (commands after intake and the watchdog, placements)",
     "drive": "the drive (wheel planning: the servos' rates and biases)",
     "ball handling": "ball handling (dribbler, kicker)",
@@ -208,10 +213,9 @@ class ComponentPrints:
         start = np.zeros(len(COMPONENTS), dtype=np.uint64)
         start[ENGINE] = constants([getattr(m, name) for name in ENGINE_CONSTANTS])
         drive, fleet = sim.drive, sim.aerial
-        robots = [drive.M, drive.Mpinv, drive.max_speed, drive.up, drive.down]
+        start[DRIVE_CONSTANTS] = constants([drive.M, drive.Mpinv, drive.max_speed, drive.up, drive.down])
         if fleet is not None:
-            robots += [fleet.mix, fleet.P.view(np.float64), fleet.limits]
-        start[ROBOTS] = constants(robots)
+            start[FLIGHT_CONSTANTS] = constants([fleet.mix, fleet.P.view(np.float64), fleet.limits])
         self._start = start
         qpos, qvel, act, ctrl = _words(d.qpos), _words(d.qvel), _words(d.act), _words(d.ctrl)
         aerial = _words(fleet.cmd) if fleet is not None else np.zeros(0, dtype=np.uint64)
