@@ -12,6 +12,7 @@ connects it to the other subsystems.
 * `simatch.sim.services`: the Gazebo-like world services (`WorldServices`);
 * `simatch.sim.readout`: the states, the fingerprint and the digest (`StateReadout`);
 * `simatch.sim.sensing`: the robots' perception and the ball's contacts (`Sensing`);
+* `simatch.sim.components`: each step's per-component fingerprints, while somebody records them (`prints`);
 * `simatch.sim.ballhandling`, `simatch.sim.flight`, `simatch.robots.drive`: the mechanisms.
 
 This module builds the world, steps it, plans the wheels and reports events.
