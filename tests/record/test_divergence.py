@@ -273,3 +273,25 @@ def test_a_recording_made_under_another_python_is_verified_or_refused_precisely(
         assert proc.returncode == 1 and out["first_component"] is not None, proc.stdout + proc.stderr
         assert out["verdict"].startswith("NOT reproduced: differs from step "), out["verdict"]
         assert any(d.startswith("python CPython") for d in out["environment"]), out["environment"]
+
+
+def test_a_damaged_component_message_is_left_out_and_said(recording, tmp_path):
+    """A component-fingerprints message that claims steps after the one it was recorded at (a damaged step
+    number) is neither followed nor compared: the verdict notes it, and the rest is verified."""
+    path, _ = recording
+    damaged = tmp_path / "damaged.mcap"
+
+    def change(topic, data):
+        if topic != CHANNEL:
+            return data
+        msg = msgs.decode(msgs.ComponentFingerprints, data)
+        if msg.step != 100:
+            return data
+        msg.step = 10**12
+        return msgs.encode(msg)
+
+    assert rewrite(path, damaged, change) == 1
+    for mode in ("inputs", "strategies"):
+        verdict = verify(damaged, mode=mode)
+        assert verdict.identical and not verdict.complete, (mode, verdict.describe())
+        assert any("component-fingerprints message at t=0.525 s is damaged" in p for p in verdict.problems), mode

@@ -79,6 +79,14 @@ class DecisionCheck:
         return None
 
 
+def well_formed(msg, t_ns: int, dt_ns: int) -> bool:
+    """Whether a recorded ComponentFingerprints message (None: it did not decode) can be compared: whole rows of
+    named components, of steps before the one it was recorded at (a damaged one is left out, not followed)."""
+    if msg is None or not len(msg.component) or len(msg.fingerprint) % len(msg.component):
+        return False
+    return int(msg.step) + len(msg.fingerprint) // len(msg.component) <= t_ns // dt_ns
+
+
 class ComponentCheck:
     """The component fingerprints recorded and re-simulated, by physics step (see the module)."""
 

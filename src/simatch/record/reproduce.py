@@ -46,7 +46,7 @@ from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
 from . import environment, layout
-from .divergence import ComponentCheck, ComponentDifference, DecisionCheck, decision_of
+from .divergence import ComponentCheck, ComponentDifference, DecisionCheck, decision_of, well_formed
 from .reader import Recording, RecordingError
 from .recorder import TEAM_TOPICS
 from .verdict import Difference, Verdict
@@ -208,7 +208,7 @@ def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
     wanted = {topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS, topics.COMPONENT_FINGERPRINTS}
     states = _InputStates(rec, sim, replay, kind, verdict, progress)
     try:
-        for topic, _, data in rec.raw(topics=wanted):
+        for topic, t_ns, data in rec.raw(topics=wanted):
             if topic == topics.WORLD_INPUTS:
                 msg = rec.decode("simatch_msgs/msg/WorldInputs", data, topic)
                 if msg is None:
@@ -218,9 +218,9 @@ def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
                 replay.advance_to(int(msg.step))
                 replay.apply(msg)
             elif topic == topics.COMPONENT_FINGERPRINTS:
-                msg = rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topic)
+                msg = _components(rec, data, t_ns, layout.ns(sim.dt))
                 if msg is not None:  # (re-simulated through the last step it holds, then compared)
-                    rows = len(msg.fingerprint) // max(1, len(msg.component))
+                    rows = len(msg.fingerprint) // len(msg.component)
                     replay.advance_to(max(int(msg.step) + rows, sim.step_index))
                     first, rows = sim.prints.take()
                     check.simulated(first, COMPONENTS, rows)
@@ -331,7 +331,7 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
         wanted |= {t for t in rec.topics() if decision_of(t) is not None}
         for topic, t_ns, data in rec.raw(topics=wanted):
             if topic == topics.COMPONENT_FINGERPRINTS:
-                verdict.component = check.take(rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topic))
+                verdict.component = check.take(_components(rec, data, t_ns, dt_ns))
                 if check.settled(verdict.first_difference):
                     break
             elif verdict.first_difference is not None:
@@ -410,6 +410,17 @@ def _first_of(component: ComponentDifference | None, decisions: DecisionCheck, v
         upto = min(upto, diff.step - 1)
     decided = decisions.first(upto, sim.dt)
     return decided if decided is not None else component
+
+
+def _components(rec: Recording, data: bytes, t_ns: int, dt_ns: int):
+    """A recorded ComponentFingerprints message, or None for one that is damaged (noted among the problems)."""
+    msg = rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topics.COMPONENT_FINGERPRINTS)
+    if well_formed(msg, t_ns, dt_ns):
+        return msg
+    note = f"a component-fingerprints message at t={t_ns / layout.NS:.3f} s is damaged: left out of the comparison"
+    if note not in rec.problems:
+        rec.problems.append(note)
+    return None
 
 
 def _take_unpublished(simulator, check: ComponentCheck) -> None:
