@@ -238,14 +238,14 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
         if self.track_wheels:
             self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self.engine.setpoint) * self.dt
         self.ball.before_step(k, self.usable)
-        wrenched = bool(self._wrenches)
+        wrenched = self._wrenches  # (the list of this step: applying them makes a new one)
         if wrenched:
             self._apply_wrenches()
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
         if fp is not None:
-            fp.before_physics(wrenched)
+            fp.before_physics(bool(wrenched))
         e = self.engine  # the ball's height and vertical speed, before and after the step: a bounce?
         qpos = e.qpos_flat
         vz = e.qvel_flat[e.ball_vz]
