@@ -149,7 +149,8 @@ class SimulatorNode(Node):
         if into == 0:
             if self.pub_fingerprint.active:
                 self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
-            self._component_prints(now)
+            if sim.prints is not None or self.pub_components.active:
+                self._component_prints(now)
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()
             self.pub_links.put(
