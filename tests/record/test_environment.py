@@ -61,7 +61,8 @@ def test_a_recording_made_elsewhere_that_does_not_reproduce_says_what_differs(tm
     verdict = verify(path, mode="strategies")
     assert not verdict.identical
     line = verdict.describe().splitlines()[0]
-    assert line.startswith("NOT reproduced: first difference at t=0.300 s (physics step 60): magenta/2")
+    assert line.startswith("NOT reproduced: differs from step 60 (t=0.300 s): first in the world's inputs"), line
+    assert "then at step 60 (t=0.300 s): magenta/2" in line, line
     assert "made in another environment: CPU vector extensions (avx512f there, not here), python CPython 3.99.0" in line
     assert verdict.as_dict()["environment"] == environment.differences(elsewhere, here)
 
@@ -79,5 +80,6 @@ def test_the_recordings_made_on_another_machine_are_verified_or_refused_with_the
     if proc.returncode == 0:
         assert first.startswith("reproduced bit for bit"), first
     else:
-        assert first.startswith("NOT reproduced: first difference at t="), proc.stdout + proc.stderr
-        assert "physics step" in first and "made in another environment" in first, first
+        # (recorded before the component fingerprints: the step, and why no component is named)
+        assert first.startswith("NOT reproduced: differs from step "), proc.stdout + proc.stderr
+        assert "predates component fingerprints" in first and "made in another environment" in first, first

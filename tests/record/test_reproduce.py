@@ -49,6 +49,8 @@ def _verify_a_run_changed_behind_the_recorder(path, change):
     )
     verdict = verify(path, mode="strategies")
     assert not verdict.identical
+    # the placement behind the recorder's back came between steps 99 and 100: the world's inputs of step 100
+    assert (verdict.component.step, verdict.component.component) == (100, "inputs"), verdict.describe()
     return verdict.first_difference
 
 
@@ -64,11 +66,11 @@ def test_the_first_difference_is_named(tmp_path):
     )
     assert proc.returncode == 1
     assert re.search(
-        r"first difference at t=0\.500 s \(physics step 100\): magenta/2 x recorded 3\.0, "
-        r"re-simulated (\d+\.\d+)",
+        r"^NOT reproduced: differs from step 100 \(t=0\.500 s\): first in the world's inputs \(.*\) — "
+        r"then at step 100 \(t=0\.500 s\): magenta/2 x 3\.0 recorded, (\d+\.\d+) here",
         proc.stdout,
     ), proc.stdout
-    shown = float(re.search(r"re-simulated (\d+\.\d+)", proc.stdout).group(1))
+    shown = float(re.search(r"recorded, (\d+\.\d+) here", proc.stdout).group(1))
     assert shown == diff.simulated
 
 

@@ -22,6 +22,7 @@ RECEIVE_FROM_COACH = "receive_from_coach"
 CLOCK = "clock"
 MODEL_STATES = "model_states"
 STATE_FINGERPRINT = "state_fingerprint"  # the exact states' identity at every control tick (when listened to)
+COMPONENT_FINGERPRINTS = "component_fingerprints"  # each step's per-component fingerprints (when listened to)
 LINK_STATES = "link_states"
 SET_MODEL_STATE = "set_model_state"
 SET_LINK_STATE = "set_link_state"

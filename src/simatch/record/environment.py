@@ -9,6 +9,7 @@ reproduce it.
 
 from __future__ import annotations
 
+import ctypes
 import json
 import platform
 import subprocess
@@ -23,7 +24,7 @@ VECTOR_FLAGS = ("sse4_2", "avx", "avx2", "fma", "avx512f", "avx512dq", "avx512bw
 #: the packages whose versions can change a run's results
 PACKAGES = ("simatch", "mujoco-core", "numpy", "numba", "llvmlite")
 #: the order in which differences are named: what changes results first
-ORDER = ("cpu_flags", "python", "mujoco-core", "numpy", "numba", "llvmlite", "libc", "machine", "cpu")
+ORDER = ("cpu_flags", "python", "mujoco-core", "numpy", "openblas", "numba", "llvmlite", "libc", "machine", "cpu")
 ORDER += ("simatch", "commit")
 
 
@@ -34,6 +35,31 @@ def _package(name: str) -> str:
         if name == "mujoco-core":  # (the engine's own wheel where it is installed as plain mujoco)
             return _package("mujoco")
         return "not installed"
+
+
+def _openblas() -> str:
+    """NumPy's OpenBLAS: its version and the CPU kernels it chose here (its ``DYNAMIC_ARCH`` build picks them
+    by the CPU: ``Haswell``, ``SkylakeX``, ...), which decide the last bits of NumPy's linear algebra."""
+    try:
+        import numpy
+
+        blas = numpy.__config__.CONFIG["Build Dependencies"]["blas"]
+        version = str(blas.get("version", "unknown"))
+        if "openblas" not in str(blas.get("name", "")):
+            return f"{blas.get('name', 'unknown')} {version}"
+        libs = sorted(Path(numpy.__file__).parent.parent.glob("numpy.libs/lib*openblas*.so*"))
+        core = ""
+        if libs:
+            lib = ctypes.CDLL(str(libs[0]))
+            for name in ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename", "openblas_get_corename"):
+                get = getattr(lib, name, None)
+                if get is not None:
+                    get.restype = ctypes.c_char_p
+                    core = (get() or b"").decode()
+                    break
+        return f"{version} ({core})" if core else version
+    except Exception:  # (a NumPy without that configuration, a library that does not load: not known)
+        return "unknown"
 
 
 def _commit() -> str:
@@ -75,6 +101,7 @@ def describe() -> dict[str, str]:
         "python": f"{platform.python_implementation()} {platform.python_version()}",
         "commit": _commit(),
         **{name: _package(name) for name in PACKAGES},
+        "openblas": _openblas(),
         "machine": platform.machine(),
         "cpu": model,
         "cpu_flags": flags,

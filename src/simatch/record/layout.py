@@ -23,8 +23,12 @@
 from __future__ import annotations
 
 FORMAT = "simatch-recording"
-#: 2: the exact states' fingerprints by `simatch.sim.kernels.mix64` (metadata ``fingerprint``), 1: by SHA-256
-FORMAT_VERSION = "2"
+#: 3: with the per-component fingerprints of every physics step (``/component_fingerprints``,
+#: `simatch.sim.components`); 2: the exact states' fingerprints by `simatch.sim.kernels.mix64` (metadata
+#: ``fingerprint``); 1: by SHA-256
+FORMAT_VERSION = "3"
+#: the first format version whose recordings hold the component fingerprints
+COMPONENTS_SINCE = 3
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
 MESSAGE_ENCODING = "cdr"

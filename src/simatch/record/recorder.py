@@ -51,6 +51,7 @@ WORLD_TOPICS = (
     topics.CLOCK,
     topics.MODEL_STATES,
     topics.STATE_FINGERPRINT,
+    topics.COMPONENT_FINGERPRINTS,
     topics.BALL_CONTACTS,
     topics.EVENTS,
     topics.GAME_STATE,

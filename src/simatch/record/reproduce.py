@@ -22,7 +22,11 @@ again, and the model states the simulator publishes are compared with the record
 (CDR), at every physics step, and so are the fingerprints of the exact float64 states (StateFingerprint,
 every control tick): the model states are float32, the fingerprints tell any difference of the
 simulator's own numbers. The first step where they differ is reported with the model, the field and both
-values.
+values. A recording of format 3 on also holds each physics step's component fingerprints (the world's
+inputs, the drive, ball handling, ... MuJoCo's step: `simatch.sim.components`); the re-simulation takes them
+too, and the verdict names the first step and component that differ (`simatch.record.divergence`); from
+the strategies, the run's nodes' messages (perception, the referee's, the strategies') are compared as well,
+and one that differs first is named.
 
 Operator commands name what they did (`OperatorCommand.call`): a `Simulation` method of the Python API
 (`WORLD_CALLS`), ``coach`` (a command given to ``sim.coaches[target]``), or ``judge.<method>`` for a judge
@@ -34,7 +38,6 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -42,8 +45,11 @@ import numpy as np
 from .. import msgs, version
 from ..bus import Node, Phase, topics
 from ..msgs.cdr import Codec
-from . import environment
+from . import environment, layout
+from .divergence import ComponentCheck, ComponentDifference, DecisionCheck, decision_of, well_formed
 from .reader import Recording, RecordingError
+from .recorder import TEAM_TOPICS
+from .verdict import Difference, Verdict
 
 #: Simulation methods that an operator command may name (called as method(target, **args))
 WORLD_CALLS = {
@@ -63,75 +69,6 @@ _STEP = struct.Struct("<4xdQ")  # CDR header, then ModelStates.stamp and .step
 
 class VerifyError(Exception):
     """A recording that cannot be re-simulated (the message says why)."""
-
-
-@dataclass
-class Difference:
-    t: float
-    step: int
-    model: str
-    field: str
-    recorded: float | str
-    simulated: float | str
-    differing_values: int
-
-    def describe(self) -> str:
-        return (
-            f"first difference at t={self.t:.3f} s (physics step {self.step}): {self.model} {self.field} "
-            f"recorded {self.recorded!r}, re-simulated {self.simulated!r} "
-            f"({self.differing_values} value(s) of that step differ)"
-        )
-
-
-@dataclass
-class Verdict:
-    identical: bool
-    compared: int  # model-state samples compared
-    until: float  # simulated time of the last one [s]
-    first_difference: Difference | None = None
-    operator_commands: int = 0
-    problems: list[str] = field(default_factory=list)
-    complete: bool = True  # the whole run was recorded and compared (file intact, finalised)
-    mode: str = "strategies"  # how it was re-simulated: "inputs" (the world from its recorded inputs) or "strategies"
-    inputs: int = 0  # world inputs carried out again (mode "inputs")
-    #: what differs between the recording's environment and this one (`environment.differences`)
-    environment: list[str] = field(default_factory=list)
-
-    def describe(self) -> str:
-        if self.identical:
-            how = (
-                f"from {self.inputs} recorded world input(s)"
-                if self.mode == "inputs"
-                else f"from the strategies, {self.operator_commands} operator command(s) re-applied"
-            )
-            head = (
-                f"reproduced bit for bit: {self.compared} model-state samples (0 to {self.until:.3f} s), "
-                f"re-simulated {how}"
-            )
-            if not self.complete:
-                head += "; the recording is incomplete, so only what it holds was checked"
-        else:
-            head = f"NOT reproduced: {self.first_difference.describe()}" if self.first_difference else "NOT reproduced"
-            if self.environment:
-                head += f"; made in another environment: {', '.join(self.environment)}"
-        return "\n".join([head] + [f"note: {p}" for p in self.problems])
-
-    def as_dict(self) -> dict:
-        out = {
-            "identical": self.identical,
-            "mode": self.mode,
-            "inputs": self.inputs,
-            "compared": self.compared,
-            "until": self.until,
-            "operator_commands": self.operator_commands,
-            "complete": self.complete,
-            "problems": self.problems,
-            "environment": self.environment,
-            "first_difference": None,
-        }
-        if self.first_difference:
-            out["first_difference"] = dict(self.first_difference.__dict__)
-        return out
 
 
 def apply_operator(sim, op) -> None:
@@ -206,12 +143,22 @@ def verify(path: str | Path, progress: Callable[[float], None] | None = None, mo
         if mode == "auto":
             problems.append("the recording holds no world inputs: re-simulated from its strategies")
         verdict = _verify_strategies(rec, scene, kind, problems, progress)
+    verdict.format_version = meta.get("format_version", "")
+    verdict.components = holds_components(rec)
     then = environment.recorded(meta)
     if then is not None:
         verdict.environment = environment.differences(then)
     elif not verdict.identical:
         verdict.environment = ["the recording does not say what made it (made before simatch kept that)"]
     return verdict
+
+
+def holds_components(rec: Recording) -> bool:
+    """Whether the recording holds the component fingerprints of its steps (format 3 on)."""
+    try:
+        return int(rec.metadata.get("format_version", "1")) >= layout.COMPONENTS_SINCE
+    except ValueError:
+        return False
 
 
 def _fingerprint_kind(rec: Recording) -> str:
@@ -247,19 +194,21 @@ def _verify_strategies(rec: Recording, scene, kind: str, problems: list[str], pr
 def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
     """Re-simulate the world alone from the recorded inputs and compare (see the module's docstring)."""
     from ..config.loader import check_models
+    from ..sim.components import COMPONENTS, ComponentPrints
     from ..sim.inputs import InputError, WorldReplay
-    from ..sim.node import fingerprint, model_states_message
     from ..sim.simulator import Simulator
 
     check_models(scene)
     sim = Simulator(scene.spec, int(rec.metadata.get("seed", "0")))
+    sim.prints = ComponentPrints(sim)
     replay = WorldReplay(sim)
-    encode = Codec(msgs.typestore).encode
     verdict = Verdict(identical=True, compared=0, until=0.0, mode="inputs")
-    last_report = -1.0
-    dt = sim.dt
+    check = ComponentCheck(sim.dt)
+    holds = holds_components(rec)
+    wanted = {topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS, topics.COMPONENT_FINGERPRINTS}
+    states = _InputStates(rec, sim, replay, kind, verdict, progress)
     try:
-        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.STATE_FINGERPRINT, topics.WORLD_INPUTS}):
+        for topic, t_ns, data in rec.raw(topics=wanted):
             if topic == topics.WORLD_INPUTS:
                 msg = rec.decode("simatch_msgs/msg/WorldInputs", data, topic)
                 if msg is None:
@@ -268,49 +217,67 @@ def _verify_inputs(rec: Recording, scene, kind: str, progress) -> Verdict:
                     raise VerifyError(f"{rec.path}: the inputs of step {msg.step} come after that step")
                 replay.advance_to(int(msg.step))
                 replay.apply(msg)
-                continue
-            if topic == topics.STATE_FINGERPRINT:
-                fp = rec.decode("simatch_msgs/msg/StateFingerprint", data, topic)
-                if fp is None or int(fp.step) < sim.step_index:
-                    continue
-                replay.advance_to(int(fp.step))
-                _, pose, twist = sim.model_state_arrays()
-                if fingerprint(pose, twist, kind) != int(fp.fingerprint):
-                    verdict.identical = False
-                    verdict.first_difference = Difference(
-                        fp.step * dt,
-                        int(fp.step),
-                        "(every model)",
-                        "fingerprint of the exact states",
-                        int(fp.fingerprint),
-                        fingerprint(pose, twist, kind),
-                        1,
-                    )
-                    break
-                continue
-            _, step = _STEP.unpack_from(data)
-            if step < sim.step_index:
-                continue  # (a second recorder's copy, or out of order: compared once)
-            replay.advance_to(step)
-            names, pose, twist = sim.model_state_arrays()
-            mine = model_states_message(step * dt, step, names, pose, twist)
-            verdict.compared += 1
-            verdict.until = step * dt
-            if encode(mine) != data:
-                verdict.identical = False
-                verdict.first_difference = _difference(rec, bytes(data), mine, dt)
+            elif topic == topics.COMPONENT_FINGERPRINTS:
+                msg = _components(rec, data, t_ns, layout.ns(sim.dt))
+                if msg is not None:  # (re-simulated through the last step it holds, then compared)
+                    rows = len(msg.fingerprint) // len(msg.component)
+                    replay.advance_to(max(int(msg.step) + rows, sim.step_index))
+                    first, rows = sim.prints.take()
+                    check.simulated(first, COMPONENTS, rows)
+                verdict.component = check.take(msg)
+            elif verdict.first_difference is None:
+                states.compare(topic, data)
+            # past the first difference of the states, read on until the components of its step are known
+            if verdict.first_difference is not None and (not holds or check.settled(verdict.first_difference)):
                 break
-            if progress is not None and verdict.until - last_report >= 1.0:
-                last_report = verdict.until
-                progress(verdict.until)
     except InputError as exc:
         raise VerifyError(f"{rec.path}: {exc}") from None
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
+    verdict.identical = verdict.first_difference is None and verdict.component is None
     verdict.inputs = replay.applied
     verdict.problems = list(rec.problems)
     verdict.complete = rec.finalised and not rec.problems
     return verdict
+
+
+class _InputStates:
+    """The comparison of the recorded model states and exact states' fingerprints with those of the world
+    re-simulated from its inputs (`_verify_inputs`): the first difference goes into the verdict."""
+
+    def __init__(self, rec: Recording, sim, replay, kind: str, verdict: Verdict, progress):
+        self.rec, self.sim, self.replay, self.kind = rec, sim, replay, kind
+        self.verdict, self.progress = verdict, progress
+        self.encode = Codec(msgs.typestore).encode
+        self.last_report = -1.0
+
+    def compare(self, topic: str, data) -> None:
+        from ..sim.node import fingerprint, model_states_message
+
+        sim, verdict, dt = self.sim, self.verdict, self.sim.dt
+        if topic == topics.STATE_FINGERPRINT:
+            fp = self.rec.decode("simatch_msgs/msg/StateFingerprint", data, topic)
+            if fp is None or int(fp.step) < sim.step_index:
+                return
+            self.replay.advance_to(int(fp.step))
+            _, pose, twist = sim.model_state_arrays()
+            mine = fingerprint(pose, twist, self.kind)
+            if mine != int(fp.fingerprint):
+                verdict.first_difference = _fingerprint_difference(int(fp.step), dt, int(fp.fingerprint), mine)
+            return
+        _, step = _STEP.unpack_from(data)
+        if step < sim.step_index:
+            return  # (a second recorder's copy, or out of order: compared once)
+        self.replay.advance_to(step)
+        names, pose, twist = sim.model_state_arrays()
+        mine = model_states_message(step * dt, step, names, pose, twist)
+        verdict.compared += 1
+        verdict.until = step * dt
+        if self.encode(mine) != data:
+            verdict.first_difference = _difference(self.rec, bytes(data), mine, dt)
+        elif self.progress is not None and verdict.until - self.last_report >= 1.0:
+            self.last_report = verdict.until
+            self.progress(verdict.until)
 
 
 class _DuringStep(Node):
@@ -337,13 +304,11 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     latest: list = [None]
     verdict = Verdict(identical=True, compared=0, until=0.0)
     during = sim.clock.add(_DuringStep(sim, verdict))
-    prints = _Fingerprints()
-    subs = [
-        sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, lambda m: latest.__setitem__(0, m)),
-        sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
-    ]
+    prints, check, decisions = _Fingerprints(), ComponentCheck(sim.dt), DecisionCheck()
+    subs = _listen(sim, latest, prints, check, decisions, encode)
     pending: list = []
     last_report = -1.0
+    dt_ns = layout.ns(sim.dt)
 
     def step_to(step: int) -> None:
         """Advance the re-simulation through physics step ``step`` with the commands recorded for it."""
@@ -362,23 +327,35 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
     try:
         # a sample is compared once the next one is read: the commands made during its step come after it
         held: tuple[int, bytes] | None = None
-        for topic, _, data in rec.raw(topics={topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT}):
-            if topic == topics.OPERATOR:
+        wanted = {topics.MODEL_STATES, topics.OPERATOR, topics.STATE_FINGERPRINT, topics.COMPONENT_FINGERPRINTS}
+        wanted |= {t for t in rec.topics() if decision_of(t) is not None}
+        for topic, t_ns, data in rec.raw(topics=wanted):
+            if topic == topics.COMPONENT_FINGERPRINTS:
+                verdict.component = check.take(_components(rec, data, t_ns, dt_ns))
+                if check.settled(verdict.first_difference):
+                    break
+            elif verdict.first_difference is not None:
+                continue  # (past the first difference: only the components of its step are read on)
+            elif topic == topics.OPERATOR:
                 op = rec.decode("simatch_msgs/msg/OperatorCommand", data, topic)
                 if op is not None:
                     pending.append(op)
-                continue
-            if topic == topics.STATE_FINGERPRINT:
+            elif topic == topics.STATE_FINGERPRINT:
                 prints.recorded(rec.decode("simatch_msgs/msg/StateFingerprint", data, topic))
-                continue
-            _, step = _STEP.unpack_from(data)
-            if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
-                held = None
-                break
-            held = (step, bytes(data)) if step >= sim.simulator.step_index else None
-            if progress is not None and verdict.until - last_report >= 1.0:
-                last_report = verdict.until
-                progress(verdict.until)
+            elif topic != topics.MODEL_STATES:
+                decisions.recorded(topic, t_ns // dt_ns, data)
+            else:
+                _, step = _STEP.unpack_from(data)
+                if held is not None and not _check(held, step_to, latest, encode, verdict, rec, sim, prints):
+                    held = None
+                    _take_unpublished(sim.simulator, check)
+                    if not holds_components(rec):
+                        break
+                    continue
+                held = (step, bytes(data)) if step >= sim.simulator.step_index else None
+                if progress is not None and verdict.until - last_report >= 1.0:
+                    last_report = verdict.until
+                    progress(verdict.until)
         if held is not None:
             _check(held, step_to, latest, encode, verdict, rec, sim, prints)
     finally:
@@ -386,9 +363,73 @@ def _compare(rec: Recording, sim, problems: list[str], progress) -> Verdict:
             sub.close()
     if verdict.compared == 0:
         raise VerifyError(f"{rec.path} holds no model states to compare")
+    _take_unpublished(sim.simulator, check)
+    verdict.component = _first_of(check.compare(sim.simulator.step_index - 1), decisions, verdict, sim)
+    verdict.identical = verdict.first_difference is None and verdict.component is None
     verdict.problems = problems + rec.problems
     verdict.complete = rec.finalised and not rec.problems
     return verdict
+
+
+def _listen(sim, latest: list, prints, check: ComponentCheck, decisions: DecisionCheck, encode) -> list:
+    """The re-simulation's subscriptions: its model states, fingerprints and its nodes' messages (each at the
+    step of the last clock or model states before it, as the recorder times them)."""
+    now = [0]
+
+    def states(msg) -> None:
+        latest[0] = msg
+        now[0] = msg.step
+
+    def decided(topic: str, msg) -> None:
+        if decision_of(topic) is not None:
+            decisions.simulated(topic, now[0], encode(msg))
+
+    return [
+        sim.bus.subscribe(topics.CLOCK, msgs.Clock, lambda m: now.__setitem__(0, m.step)),
+        sim.bus.subscribe(topics.MODEL_STATES, msgs.ModelStates, states),
+        sim.bus.subscribe(topics.STATE_FINGERPRINT, msgs.StateFingerprint, prints.simulated),
+        sim.bus.subscribe(
+            topics.COMPONENT_FINGERPRINTS,
+            msgs.ComponentFingerprints,
+            lambda m: check.simulated(m.step, m.component, m.fingerprint),
+        ),
+        sim.bus.subscribe_all(TEAM_TOPICS, decided),
+        sim.bus.subscribe_all(topics.GAME_STATE, decided),
+    ]
+
+
+def _first_of(component: ComponentDifference | None, decisions: DecisionCheck, verdict: Verdict, sim):
+    """The first of the world's components and the run's nodes' messages (perception, referee, strategies)
+    that differs. At one step the nodes' come first (their commands are the step's inputs), but after the
+    states published at that step: nodes that were told another state did not depart by themselves."""
+    diff = verdict.first_difference
+    upto = sim.simulator.step_index
+    if component is not None:
+        upto = component.step
+    if diff is not None:
+        upto = min(upto, diff.step - 1)
+    decided = decisions.first(upto, sim.dt)
+    return decided if decided is not None else component
+
+
+def _components(rec: Recording, data: bytes, t_ns: int, dt_ns: int):
+    """A recorded ComponentFingerprints message, or None for one that is damaged (noted among the problems)."""
+    msg = rec.decode("simatch_msgs/msg/ComponentFingerprints", data, topics.COMPONENT_FINGERPRINTS)
+    if well_formed(msg, t_ns, dt_ns):
+        return msg
+    note = f"a component-fingerprints message at t={t_ns / layout.NS:.3f} s is damaged: left out of the comparison"
+    if note not in rec.problems:
+        rec.problems.append(note)
+    return None
+
+
+def _take_unpublished(simulator, check: ComponentCheck) -> None:
+    """The re-simulation's component rows not yet published (those of the control period under way)."""
+    from ..sim.components import COMPONENTS
+
+    if simulator.prints is not None:
+        first, rows = simulator.prints.take()
+        check.simulated(first, COMPONENTS, rows)
 
 
 class _Fingerprints:
@@ -412,18 +453,15 @@ class _Fingerprints:
         for step in sorted(k for k in self.theirs if k <= upto):
             theirs, mine = self.theirs.pop(step), self.mine.get(step)
             if found is None and theirs != mine:
-                found = Difference(
-                    step * dt,
-                    step,
-                    "(every model)",
-                    "fingerprint of the exact states",
-                    theirs,
-                    "none" if mine is None else mine,
-                    1,
-                )
+                found = _fingerprint_difference(step, dt, theirs, "none" if mine is None else mine)
         for step in [k for k in self.mine if k <= upto]:
             del self.mine[step]
         return found
+
+
+def _fingerprint_difference(step: int, dt: float, theirs: int, mine) -> Difference:
+    """The exact states' fingerprints of step ``step`` differ."""
+    return Difference(step * dt, step, "(every model)", "fingerprint of the exact states", theirs, mine, 1)
 
 
 def _check(held, step_to, latest, encode, verdict: Verdict, rec: Recording, sim, prints: _Fingerprints) -> bool:

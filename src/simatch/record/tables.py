@@ -11,9 +11,9 @@ One table per kind of observation, one row per observation, one column per varia
   robot it perceived), one row per perceived robot.
 * one table per other message type (``vel_cmd``, ``action_cmd``, ``strategy_info``, ``coach_info``,
   ``team_strategy``, ``game_state``, ``ball_contacts``, ``clock``, ``operator_command``,
-  ``state_fingerprint``, ``world_inputs``): scalar fields as columns, nested messages flattened
-  (``pass_cmd_catch_x``); a variable-length field is a list column in Parquet (a list of structs for a list
-  of messages, e.g. ``team_strategy.strategies``) and JSON text in CSV.
+  ``state_fingerprint``, ``component_fingerprints``, ``world_inputs``): scalar fields as columns, nested
+  messages flattened (``pass_cmd_catch_x``); a variable-length field is a list column in Parquet (a list of
+  structs for a list of messages, e.g. ``team_strategy.strategies``) and JSON text in CSV.
 
 Every table in `ALWAYS` is written, with its columns, even when the recording holds none of its messages (a
 run nobody intervened in has no ``operator_command`` rows). An empty value is null in every table: an empty
@@ -91,6 +91,7 @@ ALWAYS: dict[str, tuple[str, tuple[str, ...]]] = {
     "clock": ("Clock", ()),
     "operator_command": ("OperatorCommand", ()),
     "state_fingerprint": ("StateFingerprint", ()),
+    "component_fingerprints": ("ComponentFingerprints", ()),
     "world_inputs": ("WorldInputs", ()),
 }
 STATE_COLUMNS = ("x", "y", "z", "yaw", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")

@@ -1,7 +1,8 @@
 """The simulator on the bus (the simulation interface).
 
 `SimulatorNode` (phase SENSE) publishes, every physics step, the model/link states (float32) and ball
-contacts, on every control tick the clock, the fingerprint of the exact states and each robot's
+contacts, on every control tick the clock, the fingerprint of the exact states, the component fingerprints of
+the steps since the last tick (`simatch.sim.components`) and each robot's
 OmniVisionInfo (each only when somebody listens; a robot's perception may be taken at a later step of the
 control period, its phase: see `set_vision_phase`); it takes every robot's VelCmd and ActionCmd.
 `PhysicsNode` (phase ACT) applies the watchdog and advances the physics once every node has handled the
@@ -15,12 +16,14 @@ import numpy as np
 
 from .. import msgs
 from ..bus import Node, NodeContext, Phase, topics
+from .components import COMPONENTS, ComponentPrints
 from .inputs import InputLog
 from .simulator import Simulator, fingerprint  # noqa: F401 (fingerprint: for the reproduction)
 
 # built positionally (every physics step; see msgs.positional)
 _ModelStates = msgs.positional(msgs.ModelStates, "stamp step name pose twist")
 _StateFingerprint = msgs.positional(msgs.StateFingerprint, "stamp step fingerprint")
+_ComponentFingerprints = msgs.positional(msgs.ComponentFingerprints, "stamp step component fingerprint")
 _Clock = msgs.positional(msgs.Clock, "stamp step tick")
 _BallContacts = msgs.positional(msgs.BallContacts, "stamp step touching holder kicker kick_speed lob")
 _F32 = np.float32  # the states' numbers, as the messages define them
@@ -66,6 +69,7 @@ class SimulatorNode(Node):
         self.pub_clock = bus.publisher(topics.CLOCK, msgs.Clock)
         self.pub_models = bus.publisher(topics.MODEL_STATES, msgs.ModelStates)
         self.pub_fingerprint = bus.publisher(topics.STATE_FINGERPRINT, msgs.StateFingerprint)
+        self.pub_components = bus.publisher(topics.COMPONENT_FINGERPRINTS, msgs.ComponentFingerprints)
         self.pub_links = bus.publisher(topics.LINK_STATES, msgs.LinkStates)
         self.pub_contacts = bus.publisher(topics.BALL_CONTACTS, msgs.BallContacts)
         self.pub_events = bus.publisher(topics.EVENTS, msgs.GameEvent)
@@ -142,8 +146,11 @@ class SimulatorNode(Node):
                     break
         if self.pub_models.active:
             self.pub_models.put(_ModelStates(now, k, sim.model_names, *sim.model_state_arrays32()))
-        if into == 0 and self.pub_fingerprint.active:
-            self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
+        if into == 0:
+            if self.pub_fingerprint.active:
+                self.pub_fingerprint.put(_StateFingerprint(now, k, sim.state_fingerprint()))
+            if sim.prints is not None or self.pub_components.active:
+                self._component_prints(now)
         if self.pub_links.active:
             names, pose, twist = sim.link_state_arrays()
             self.pub_links.put(
@@ -170,6 +177,20 @@ class SimulatorNode(Node):
                 )
         if sim.events:
             self.flush_events()
+
+    def _component_prints(self, now: float) -> None:
+        """At a control tick: the component fingerprints of the steps since the last one go out, and they are
+        taken from now on while somebody listens (`simatch.sim.components`), not at all while nobody does."""
+        sim = self.sim
+        if not self.pub_components.active:
+            sim.prints = None
+            return
+        if sim.prints is None:
+            sim.prints = ComponentPrints(sim)
+            return
+        first, rows = sim.prints.take()
+        if len(rows):
+            self.pub_components.put(_ComponentFingerprints(now, first, list(COMPONENTS), rows))
 
     def flush_events(self) -> None:
         for ev in self.sim.take_events():

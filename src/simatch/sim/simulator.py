@@ -12,6 +12,7 @@ connects it to the other subsystems.
 * `simatch.sim.services`: the Gazebo-like world services (`WorldServices`);
 * `simatch.sim.readout`: the states, the fingerprint and the digest (`StateReadout`);
 * `simatch.sim.sensing`: the robots' perception and the ball's contacts (`Sensing`);
+* `simatch.sim.components`: each step's per-component fingerprints, while somebody records them (`prints`);
 * `simatch.sim.ballhandling`, `simatch.sim.flight`, `simatch.robots.drive`: the mechanisms.
 
 This module builds the world, steps it, plans the wheels and reports events.
@@ -36,6 +37,7 @@ from ..config.schema import Scene
 from ..robots.drive import OmniDrive, plan_drive
 from .ballhandling import BallHandling
 from .commands import MAX_COMMAND_SPEED, MAX_COMMAND_TURN, MAX_KICK_REQUEST, CommandError, CommandIntake
+from .components import ComponentPrints
 from .engine import EngineViews
 from .flight import AerialFleet, frame_contacts
 from .inputs import InputLog, install
@@ -101,6 +103,8 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
         if self.ix.aerial is not None:
             self._init_aerial()
         self._init_readout()
+        #: the per-component fingerprints of each step, while somebody listens (`simatch.sim.components`)
+        self.prints: ComponentPrints | None = None
         self._init_sensing(seed)
         self._plan_drive(np.ones(self.ng, dtype=bool), self.control_steps)
 
@@ -226,23 +230,33 @@ class Simulator(CommandIntake, WorldServices, StateReadout, Sensing):
         into = k % cs
         if watch and into == 0:
             self.watchdog(self.scene.control.command_timeout, cs)
+        fp = self.prints  # each component's fingerprint, while recorded (`simatch.sim.components`)
+        if fp is not None:
+            fp.inputs()
         if drive.any_dirty or (into == 0 and any(self._drive_ramping)):
             self._plan_drive(drive.dirty | drive.ramping if into == 0 else drive.dirty.copy(), cs - into)
         if self.track_wheels:
             self.wheel_travel += np.einsum("nwk,nk->nw", drive.M, self.engine.setpoint) * self.dt
         self.ball.before_step(k, self.usable)
-        if self._wrenches:
+        wrenched = self._wrenches  # (the list of this step: applying them makes a new one)
+        if wrenched:
             self._apply_wrenches()
         if self.aerial is not None:
             self.aerial.step(d.ctrl)
             self._frame_vel = d.qvel[self._frame_v]  # before the step: what a drone hits something with
+        if fp is not None:
+            fp.before_physics(bool(wrenched))
         e = self.engine  # the ball's height and vertical speed, before and after the step: a bounce?
         qpos = e.qpos_flat
         vz = e.qvel_flat[e.ball_vz]
         z = qpos[e.ball_z]
         mujoco.mj_step(self.m, d)
+        if fp is not None:
+            fp.physics()
         if vz < -BOUNCE_MIN_SPEED and qpos[e.ball_z] < self.ball_radius and self.restitution > 0:
             self._bounce(z, vz)
+            if fp is not None:
+                fp.bounce()
         if self.aerial is not None:
             self._frame_contacts()
         self.step_index += 1
