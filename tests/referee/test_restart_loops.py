@@ -14,20 +14,32 @@ TEAMS = "tests.referee.teams"
 MATCH = {"match.half_duration": 120.0, "match.half_time": 5.0}
 
 
+SAMPLE = 0.5  # [s] how often the game is looked at
+
+
 def _play(cyan: str, magenta: str = "nubot", **overrides) -> tuple[float, dict, Counter]:
     """Play the match to its end; the share of the halves' time with the ball in play, the result, the events."""
+    share, result, events, _, _ = _play_timed(cyan, magenta, **overrides)
+    return share, result, events
+
+
+def _play_timed(cyan: str, magenta: str = "nubot", **overrides) -> tuple[float, dict, Counter, float, object]:
+    """`_play`, the longest stretch of the halves without the ball in play [s], and the referee's settings."""
     settings = {**MATCH, "teams.cyan.strategy": cyan, "teams.magenta.strategy": magenta, **overrides}
-    in_play = samples = 0
+    in_play = samples = dead = longest = 0
     with simatch.Simulation("msl_5v5", seed=1, overrides=settings) as sim:
         while not sim.done:
-            sim.run(0.5, until_done=True)
+            sim.run(SAMPLE, until_done=True)
             game = sim.game
             if game["stage"] in ("first_half", "second_half"):
                 samples += 1
                 in_play += bool(game["ball_in_play"])
+                dead = 0 if game["ball_in_play"] else dead + 1
+                longest = max(longest, dead)
         result = sim.judge.result()
         events = Counter(e["type"] for e in sim.events)
-    return in_play / max(samples, 1), result, events
+        judge = sim.judge.p
+    return in_play / max(samples, 1), result, events, longest * SAMPLE, judge
 
 
 def test_a_team_that_encroaches_at_every_restart_is_cautioned_and_the_match_goes_on():
@@ -61,9 +73,14 @@ def test_a_team_that_never_takes_its_restarts_does_not_stop_the_match():
 
 
 def test_a_team_that_stands_still_does_not_stop_the_match():
-    share, result, events = _play("none")
-    assert result["ended"]
-    assert share > 0.5, (share, events)
+    """Every restart of a team that never moves ends in the restart timeout, and the opponents score at will,
+    each goal a kick-off of the still team: the ball is dead after each for the stop, the kick-off's
+    preparation and the timeout, and never longer (how much of the match that is depends on the goals)."""
+    share, result, events, longest, judge = _play_timed("none")
+    assert result["ended"] and events["restart_timeout"] >= 3 and events["goal"] >= 3, events
+    bound = judge.stop_time + judge.kickoff_prepare_time + judge.restart_timeout + 2.0
+    assert longest <= bound, (longest, bound, events)
+    assert share > 0.3, (share, events)
 
 
 @pytest.mark.parametrize("max_retakes", [0, 2])
