@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import re
 import subprocess
+import sys
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -21,9 +22,10 @@ PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["
 
 
 def _make(target: str, tmp_path) -> list[str]:
-    """The commands ``make TARGET`` runs on a machine with nothing set up (a .venv of its own in tmp_path)."""
+    """The commands ``make TARGET`` runs with this interpreter on a machine with nothing set up (a venv of its own
+    in tmp_path)."""
     out = subprocess.run(
-        ["make", "-n", "-B", target, f"VENV={tmp_path / 'venv'}"],
+        ["make", "-n", "-B", target, f"PYTHON={sys.executable}", f"VENV={tmp_path / 'venv'}"],
         cwd=ROOT,
         capture_output=True,
         text=True,
