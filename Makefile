@@ -6,7 +6,8 @@
 # The interpreter: any supported Python (3.11, 3.12, 3.13), e.g. `make test PYTHON=python3.12`. The default
 # python3 sets up .venv; another one a venv of its own, .venv-py312 (so the two never mix).
 PYTHON ?= python3
-PY     := $(shell $(PYTHON) -c 'import sys; print("%d%d" % sys.version_info[:2])' 2>/dev/null)
+PYV    := $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PY     := $(subst .,,$(PYV))
 VENV   ?= $(if $(filter python3,$(PYTHON)),.venv,.venv-py$(PY))
 BIN    := $(VENV)/bin
 
@@ -56,8 +57,10 @@ $(VENV)/.installed-test: $(VENV)/.installed-run $(wildcard $(LOCK_TEST)) Makefil
 	touch $@
 
 # a clear error for an interpreter that does not run or has no lock here (an unsupported Python)
-CHECK_LOCK = @test -n "$(PY)" || { echo "make: $(PYTHON) does not run (PYTHON=python3.12 names another)" >&2; exit 1; }; \
-	test -f $(LOCK_TEST) || { echo "make: no lock for Python $(PY) in locks/ (supported: 3.11, 3.12, 3.13)" >&2; exit 1; }
+CHECK_LOCK = @test -n "$(PY)" || { echo "make: the interpreter $(PYTHON) does not run here (with pyenv: \
+	PYENV_VERSION=3.12.1 make ... PYTHON=python3.12)" >&2; exit 1; }; \
+	test -f $(LOCK_TEST) || { echo "make: Python $(PYV) is not supported (no lock in locks/): \
+	the supported Pythons are 3.11, 3.12 and 3.13" >&2; exit 1; }
 
 # writes locks/ anew for every supported Python from pyproject.toml's ranges (docs/install.md)
 lock:
