@@ -63,6 +63,10 @@ def _values(name: str) -> list:
     return out
 
 
+def _as_tuple(msg, fields) -> tuple:
+    return tuple(getattr(msg, f) for f in fields)
+
+
 @pytest.mark.parametrize("name", msgs.names())
 def test_the_maker_builds_the_message_the_class_builds(name):
     cls = msgs.typestore.types[name]
@@ -76,8 +80,7 @@ def test_the_maker_builds_the_message_the_class_builds(name):
     # compared as tuples of the fields (identity first, so the same array compares equal): the dataclass's own ==
     # compares field by field since Python 3.13, and an array's == is an array, whose truth is an error
     fields = msgs.fields(name)
-    built = cls(*values)
-    assert type(msg) is cls and tuple(getattr(msg, f) for f in fields) == tuple(getattr(built, f) for f in fields)
+    assert type(msg) is cls and _as_tuple(msg, fields) == _as_tuple(cls(*values), fields)
     assert all(getattr(msg, f) is v for f, v in zip(fields, values))  # the objects themselves
     assert msgs.encode(msg) == msgs.encode(cls(*values))
     assert gc.is_tracked(msg)  # (its slots hold objects: the cycle collector sees it, as the class's)
