@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import re
 import subprocess
+import sys
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -14,14 +15,17 @@ from pathlib import Path
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
+from .lockfile import TAG
+
 ROOT = Path(__file__).resolve().parents[1]
 PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
 
 
 def _make(target: str, tmp_path) -> list[str]:
-    """The commands ``make TARGET`` runs on a machine with nothing set up (a .venv of its own in tmp_path)."""
+    """The commands ``make TARGET`` runs with this interpreter on a machine with nothing set up (a venv of its own
+    in tmp_path)."""
     out = subprocess.run(
-        ["make", "-n", "-B", target, f"VENV={tmp_path / 'venv'}"],
+        ["make", "-n", "-B", target, f"PYTHON={sys.executable}", f"VENV={tmp_path / 'venv'}"],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -31,19 +35,33 @@ def _make(target: str, tmp_path) -> list[str]:
     return [line for line in out.splitlines() if " install " in line and "pip" in line]
 
 
-def test_make_run_installs_the_project_without_extras(tmp_path):
+def test_make_run_installs_the_run_lock_then_the_project_without_extras(tmp_path):
     installs = _make("run", tmp_path)
     project = [line for line in installs if "-e" in line.split()]
     assert len(project) == 1 and project[0].split()[-1] == ".", installs
+    assert "--no-deps" in project[0].split(), "the run lock brings the dependencies, pip resolves nothing more"
+    assert any(line.endswith(f"-r locks/pylock.run-{TAG}.toml") for line in installs), installs
     assert not any("[" in line for line in installs), f"the run set-up installs extras: {installs}"
 
 
-def test_make_test_adds_the_test_extras_named_in_one_place(tmp_path):
+def test_make_test_adds_the_test_lock_of_the_extras_named_in_one_place(tmp_path):
     extras = re.search(r"^TEST_EXTRAS\s*:=\s*(\S+)\s*$", (ROOT / "Makefile").read_text(), re.M).group(1).split(",")
     assert "test" in extras and set(extras) <= set(PROJECT["optional-dependencies"])
     installs = _make("test", tmp_path)
     assert installs[: len(_make("run", tmp_path))] == _make("run", tmp_path), "the test set-up builds on the run one"
-    assert installs[-1].endswith(f"-e '.[{','.join(extras)}]'"), installs
+    assert installs[-1].endswith(f"-r locks/pylock.test-{TAG}.toml"), installs  # its extras: tests/test_lock.py
+
+
+def test_an_interpreter_without_a_lock_is_refused_with_the_supported_pythons(tmp_path):
+    out = subprocess.run(
+        ["make", "setup-run", "PYTHON=python2-no-such-interpreter", f"VENV={tmp_path / 'venv'}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode != 0 and "python2-no-such-interpreter does not run here" in out.stderr, out.stderr
+    assert not (tmp_path / "venv").exists()
 
 
 def _names(requirements: list[str]) -> set[str]:

@@ -15,6 +15,8 @@ from pettingzoo.test import parallel_api_test
 import simatch.envs
 from simatch.envs.action import AERIAL_NAMES
 
+from ..lockfile import skip_unless_locked
+
 
 @pytest.mark.slow
 def test_the_aerial_scenes_pass_the_parallel_api_test():
@@ -127,6 +129,7 @@ def test_soccer_scenes_keep_their_layout():
 def test_a_drone_policy_plays_in_a_run_as_it_did_in_its_environment(tmp_path):
     """A policy saved for the evading drone (its climb in the action, heights and the pillars in its
     observation) plays as the `Policy` strategy of a plain run: the same run, bit for bit."""
+    skip_unless_locked("stable-baselines3")
     import torch
     from stable_baselines3 import PPO
 

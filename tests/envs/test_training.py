@@ -11,12 +11,15 @@ from pathlib import Path
 
 import pytest
 
+from ..lockfile import skip_unless_locked
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(1800)  # a few CPU seconds of training, but a shared machine may give it little wall time
 def test_the_striker_example_trains_saves_and_its_policy_plays_in_a_run(tmp_path):
+    skip_unless_locked("stable-baselines3")
     out = tmp_path / "ppo"
     cmd = [
         sys.executable,

@@ -2,11 +2,12 @@
 
 **rospy in the bridge process.** Debian's ROS 1 (``python3-rospy`` and friends, ``apt-get``) lives in
 ``/usr/lib/python3/dist-packages``, built for Debian's Python 3.11. simatch runs in its own virtual
-environment (any CPython 3.11, e.g. pyenv's), whose packages the bridge needs too (Zenoh, MuJoCo for an
-embedded run, numpy 2). Both are CPython 3.11 with the same ABI (``cpython-311-x86_64-linux-gnu``), so
-Debian's few C extensions (roslz4, netifaces, Cryptodome) load in the venv's interpreter. `use_rospy`
-therefore *appends* Debian's folder to ``sys.path``, after the venv's site-packages, and only in the process
-that bridges (``simatch ros1``, or ``simatch run --ros1``): the venv's own packages keep precedence, and
+environment (CPython 3.11, 3.12 or 3.13, e.g. pyenv's), whose packages the bridge needs too (Zenoh, MuJoCo for
+an embedded run, numpy 2). rospy, genpy and rosgraph are pure Python and import under all three; Debian's few
+C extensions (roslz4, netifaces, Cryptodome) are built for CPython 3.11's ABI and load only under 3.11; what
+the bridge does with rospy reaches none of them (its tests pass under 3.13; simatch writes bags with rosbags).
+`use_rospy` therefore *appends* Debian's folder to ``sys.path``, after the venv's site-packages, and only in the
+process that bridges (``simatch ros1``, or ``simatch run --ros1``): the venv's own packages keep precedence, and
 Debian's fill in only what the venv lacks (rospy, genpy, rosgraph, yaml...). Nothing is installed into the
 venv, and no other simatch process sees Debian's packages. One exception: ROS *message* packages. ROS 2's
 wheels (the ``ros2`` extra) put packages of the same names into the venv (``std_msgs``, ``geometry_msgs``,
