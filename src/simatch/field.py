@@ -294,3 +294,14 @@ class FieldGeometry:
             "obstacles": [ob.describe() for ob in self.obstacles],
             "ceiling": self.ceiling,
         }
+
+
+def arc_points(item: dict, per_turn: int) -> list[tuple[float, float]]:
+    """The points of an ``arc`` of `FieldGeometry.lines` as a polyline, ``per_turn`` segments for a whole
+    circle (at least four), for viewers that draw lines only."""
+    (cx, cy), r = item["center"], item["radius"]
+    a0, a1 = item["start"], item["end"]
+    n = max(4, int(abs(a1 - a0) / (2 * math.pi) * per_turn))
+    return [
+        (cx + r * math.cos(a0 + (a1 - a0) * k / n), cy + r * math.sin(a0 + (a1 - a0) * k / n)) for k in range(n + 1)
+    ]

@@ -30,6 +30,7 @@ import struct
 import numpy as np
 
 from ..config.schema import Scene
+from ..field import arc_points
 from ..msgs.cdr import Codec
 from ..robots.looks import member_looks
 from . import foxglove_msgs as fg
@@ -158,14 +159,7 @@ class SceneBuilder:
             if item["kind"] == "polyline":
                 lines.append(self._line(item["points"], F.line_width, white))
             elif item["kind"] == "arc":
-                (cx, cy), r = item["center"], item["radius"]
-                a0, a1 = item["start"], item["end"]
-                n = max(4, int(abs(a1 - a0) / (2 * math.pi) * 72))
-                pts = [
-                    (cx + r * math.cos(a0 + (a1 - a0) * k / n), cy + r * math.sin(a0 + (a1 - a0) * k / n))
-                    for k in range(n + 1)
-                ]
-                lines.append(self._line(pts, F.line_width, white))
+                lines.append(self._line(arc_points(item, 72), F.line_width, white))
             elif item["kind"] == "dot":
                 (cx, cy), r = item["center"], item["radius"]
                 cylinders.append(

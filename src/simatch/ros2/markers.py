@@ -3,12 +3,11 @@
 
 from __future__ import annotations
 
-import math
-
 from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from ..field import arc_points
 from . import names
 from .convert import WorldPose, quaternion_of_yaw
 
@@ -44,13 +43,7 @@ def field(spec) -> list:
             pts = item["points"]
             segs = zip(pts[:-1], pts[1:])
         elif item["kind"] == "arc":
-            (cx, cy), r = item["center"], item["radius"]
-            a0, a1 = item["start"], item["end"]
-            k = max(4, int(abs(a1 - a0) / (2 * math.pi) * 48))
-            arc = [
-                (cx + r * math.cos(a0 + (a1 - a0) * i / k), cy + r * math.sin(a0 + (a1 - a0) * i / k))
-                for i in range(k + 1)
-            ]
+            arc = arc_points(item, 48)
             segs = zip(arc[:-1], arc[1:])
         else:
             continue
