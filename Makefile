@@ -24,12 +24,12 @@ LOCK_PYTHONS ?= python3.11 python3.12 python3.13
 # name them: a part whose tests need an extra adds it here (learn: docs/learning.md; ros2: docs/ros.md).
 TEST_EXTRAS := test,learn,ros2
 
-.PHONY: run test setup setup-run system-deps ros2-interfaces bench clean lock
+.PHONY: run test setup setup-run system-deps ros2-interfaces other-python bench clean lock
 
 run: setup-run
 	$(BIN)/simatch run msl_5v5 --events all
 
-test: setup system-deps ros2-interfaces
+test: setup system-deps ros2-interfaces other-python
 	$(BIN)/python -m pytest
 
 bench: setup-run
@@ -77,6 +77,17 @@ $(VENV)/.ros2-interfaces: $(VENV)/.installed-test $(wildcard src/simatch/msgs/si
 
 system-deps:
 	scripts/install-system-deps.sh
+
+# Another supported Python of this machine (on PATH or pyenv's: scripts/other-python.sh), set up to run simatch
+# (its run lock, in a venv of its own), for the tests that verify a recording made under one Python under
+# another (tests/record/test_divergence.py finds the checkout's venvs). None here: those tests are skipped.
+OTHER_PYTHON ?= $(shell scripts/other-python.sh $(PYV))
+
+OTHER_VENV = .venv-py$(shell $(OTHER_PYTHON) -c 'import sys; print("%d%d" % sys.version_info[:2])')
+
+other-python:
+	$(if $(OTHER_PYTHON),$(MAKE) setup-run PYTHON=$(OTHER_PYTHON) VENV=$(OTHER_VENV),@echo "make: no other \
+	supported Python here: the tests across Python versions will be skipped")
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info .pytest_cache

@@ -12,6 +12,7 @@ import tomllib
 from importlib import metadata
 from pathlib import Path
 
+import pytest
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
@@ -21,18 +22,19 @@ ROOT = Path(__file__).resolve().parents[1]
 PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
 
 
-def _make(target: str, tmp_path) -> list[str]:
-    """The commands ``make TARGET`` runs with this interpreter on a machine with nothing set up (a venv of its own
-    in tmp_path)."""
+def _make(target: str, tmp_path, *settings: str, venv: str | None = None) -> list[str]:
+    """The pip commands ``make TARGET`` runs with this interpreter on a machine with nothing set up (a venv of its
+    own in tmp_path), into that venv (or into ``venv``)."""
+    into = venv or str(tmp_path / "venv")
     out = subprocess.run(
-        ["make", "-n", "-B", target, f"PYTHON={sys.executable}", f"VENV={tmp_path / 'venv'}"],
+        ["make", "-n", "-B", target, f"PYTHON={sys.executable}", f"VENV={tmp_path / 'venv'}", *settings],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=60,
         check=True,
     ).stdout
-    return [line for line in out.splitlines() if " install " in line and "pip" in line]
+    return [line for line in out.splitlines() if " install " in line and line.startswith(f"{into}/bin/pip")]
 
 
 def test_make_run_installs_the_run_lock_then_the_project_without_extras(tmp_path):
@@ -50,6 +52,25 @@ def test_make_test_adds_the_test_lock_of_the_extras_named_in_one_place(tmp_path)
     installs = _make("test", tmp_path)
     assert installs[: len(_make("run", tmp_path))] == _make("run", tmp_path), "the test set-up builds on the run one"
     assert installs[-1].endswith(f"-r locks/pylock.test-{TAG}.toml"), installs  # its extras: tests/test_lock.py
+
+
+def test_make_test_sets_up_another_python_in_a_venv_of_its_own(tmp_path):
+    """For the tests across Python versions, `make test` installs the run lock of the newest other supported
+    Python the machine has (scripts/other-python.sh) into a venv named after it, never into the test venv."""
+    this = f"{sys.version_info[0]}.{sys.version_info[1]}"
+    other = subprocess.run(
+        [str(ROOT / "scripts" / "other-python.sh"), this], capture_output=True, text=True, timeout=60, check=True
+    ).stdout.strip()
+    if not other:
+        pytest.skip("this machine has no other supported Python")
+    version = subprocess.run(
+        [other, "-c", "import sys; print('%d%d' % sys.version_info[:2])"], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    assert version != this.replace(".", "") and (ROOT / "locks" / f"pylock.run-py{version}.toml").exists()
+    installs = _make("test", tmp_path, venv=f".venv-py{version}")
+    assert installs[-2].endswith(f"-r locks/pylock.run-py{version}.toml"), installs
+    assert installs[-1].split()[-4:] == ["--no-deps", "--no-build-isolation", "-e", "."], installs
+    assert _make("test", tmp_path, "OTHER_PYTHON=", venv=f".venv-py{version}") == []
 
 
 def test_an_interpreter_without_a_lock_is_refused_with_the_supported_pythons(tmp_path):

@@ -215,14 +215,15 @@ def test_a_strategy_that_decides_otherwise_is_named_from_the_strategies(tmp_path
 
 ROOT = Path(__file__).resolve().parents[2]
 #: other Pythons to check recordings across: SIMATCH_OTHER_PYTHONS (interpreters, separated by os.pathsep), or the
-#: checkout's .venv-3.* (each with simatch's run dependencies and its C extensions built in place for it)
+#: checkout's venvs (`make test` sets one up for another supported Python of the machine: its run dependencies,
+#: its C extensions built in place)
 OTHER_PYTHONS = os.environ.get("SIMATCH_OTHER_PYTHONS", "")
 
 
 def _other_python() -> str:
     """Another Python than this one that runs simatch from this checkout (the test is skipped without one)."""
     candidates = [c for c in OTHER_PYTHONS.split(os.pathsep) if c] or [
-        str(p) for p in sorted(ROOT.glob(".venv-3.*/bin/python"))
+        str(p) for p in sorted(ROOT.glob(".venv*/bin/python"))
     ]
     tried = []
     for python in candidates:
@@ -237,9 +238,9 @@ def _other_python() -> str:
             return python
         tried.append(f"{python}: {(probe.stderr.strip().splitlines() or ['the same Python as this one'])[-1]}")
     pytest.skip(
-        "no other Python runs simatch here (CI has Python 3.11 only; set SIMATCH_OTHER_PYTHONS to another "
-        "interpreter with simatch's run dependencies and its C extensions built for it)"
-        + (f"; tried {'; '.join(tried)}" if tried else "")
+        "no other Python runs simatch here (`make test` sets one up where the machine has another supported "
+        "Python; or set SIMATCH_OTHER_PYTHONS to an interpreter with simatch's run dependencies and its C "
+        "extensions built for it)" + (f"; tried {'; '.join(tried)}" if tried else "")
     )
 
 

@@ -447,19 +447,38 @@ _S33, _S29, _S32 = np.uint64(33), np.uint64(29), np.uint64(32)
 
 
 @kernel
-def mix64(words):
-    """The fingerprint of ``words`` (uint64, C-ordered): see above; the same on every machine (integer
-    arithmetic modulo 2**64)."""
-    h = np.uint64(words.size) * _P3
-    for w in words:
-        h ^= w * _P2
-        h = ((h << _L31) | (h >> _R33)) * _P1
+def mix_begin(n):
+    """The running value of a fingerprint of ``n`` words, before the first (`mix64` in parts: a fingerprint of
+    words that are not one array, e.g. a strided column, with the same value as `mix64` of them gathered)."""
+    return np.uint64(n) * _P3
+
+
+@kernel
+def mix_word(h, w):
+    """The running value ``h`` after one more word ``w``."""
+    h ^= w * _P2
+    return ((h << _L31) | (h >> _R33)) * _P1
+
+
+@kernel
+def mix_end(h):
+    """The fingerprint from the running value after the last word."""
     h ^= h >> _S33
     h *= _P2
     h ^= h >> _S29
     h *= _P3
     h ^= h >> _S32
     return h
+
+
+@kernel
+def mix64(words):
+    """The fingerprint of ``words`` (uint64, C-ordered): see above; the same on every machine (integer
+    arithmetic modulo 2**64)."""
+    h = mix_begin(words.size)
+    for w in words:
+        h = mix_word(h, w)
+    return mix_end(h)
 
 
 @kernel(**_MODEL_STATES, state=Vector, words=Words)
