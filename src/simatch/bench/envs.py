@@ -71,7 +71,10 @@ def _make(scene: str):
 def _vector(scene: str, n: int, steps: int) -> float:
     from gymnasium.vector import AsyncVectorEnv
 
-    envs = AsyncVectorEnv([_make(scene) for _ in range(n)])
+    # the workers start from a fresh interpreter (forkserver), not as forks of this process: a fork copies the
+    # locks other threads of this process hold (a test session's browser driver, a bus), and a worker hung on
+    # one of them under Python 3.13 (the default start method forks on Linux until Python 3.14)
+    envs = AsyncVectorEnv([_make(scene) for _ in range(n)], context="forkserver")
     try:
         envs.reset(seed=0)
         envs.action_space.seed(0)
