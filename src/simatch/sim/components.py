@@ -265,6 +265,7 @@ class ComponentPrints:
         self.first = sim.step_index  # the step of the first row not yet taken
         self._block = np.zeros((capacity, len(COMPONENTS)), dtype=np.uint64)
         self._cursor = np.zeros(2, dtype=np.int64)
+        self._counts = memoryview(self._cursor)  # the cursor's items as Python ints (cheaper than NumPy's scalars)
         # every row starts with the constants' fingerprints (taken once: nothing changes them while stepping)
         start = np.zeros(len(COMPONENTS), dtype=np.uint64)
         start[ENGINE] = constants([getattr(m, name) for name in ENGINE_CONSTANTS])
@@ -287,12 +288,13 @@ class ComponentPrints:
 
     def take(self) -> tuple[int, np.ndarray]:
         """The first step and the rows (steps x components, flat) since the last take, and forget them."""
-        if self._cursor[1]:
+        cursor = self._counts
+        if cursor[1]:
             raise RuntimeError(
                 f"more than {len(self._block)} steps' component fingerprints were not taken: take them more often"
             )
-        n = int(self._cursor[0])
-        first, rows = self.first, self._block[:n].ravel().copy()
+        n = cursor[0]
+        first, rows = self.first, self._block[:n].flatten()
         self.first += n
-        self._cursor[0] = 0
+        cursor[0] = 0
         return first, rows
