@@ -6,7 +6,9 @@
 # The interpreter: any supported Python (3.11, 3.12, 3.13), e.g. `make test PYTHON=python3.12`. The default
 # python3 sets up .venv; another one a venv of its own, .venv-py312 (so the two never mix).
 PYTHON ?= python3
-PYV    := $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+# an interpreter's version (X.Y), empty if it does not run
+pyversion = $(shell $(1) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PYV    := $(call pyversion,$(PYTHON))
 PY     := $(subst .,,$(PYV))
 VENV   ?= $(if $(filter python3,$(PYTHON)),.venv,.venv-py$(PY))
 BIN    := $(VENV)/bin
@@ -83,7 +85,7 @@ system-deps:
 # another (tests/record/test_divergence.py finds the checkout's venvs). None here: those tests are skipped.
 OTHER_PYTHON ?= $(shell scripts/other-python.sh $(PYV))
 
-OTHER_VENV = .venv-py$(shell $(OTHER_PYTHON) -c 'import sys; print("%d%d" % sys.version_info[:2])')
+OTHER_VENV = .venv-py$(subst .,,$(call pyversion,$(OTHER_PYTHON)))
 
 other-python:
 	$(if $(OTHER_PYTHON),$(MAKE) setup-run PYTHON=$(OTHER_PYTHON) VENV=$(OTHER_VENV),@echo "make: no other \

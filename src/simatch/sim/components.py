@@ -141,11 +141,7 @@ structref.define_boxing(_SourcesType, Sources)
 _Sources = _SourcesType(list(SOURCES))
 
 
-@kernel(
-    block=_Block, cursor=_Cursor, start=Words, qpos=Words, qvel=Words, act=Words, cmd=Words, aerial=Words,
-    usable=_Flags, ctrl=Words, ground=Int, biasprm=_Block, ball_q=Int, ball_v=Int, eq_data=_Block,
-    eq_active=_Flags, xfrc=Words, warmstart=Words, has_aerial=Bool,
-)  # fmt: skip
+@kernel(**dict(SOURCES))
 def _sources(
     block, cursor, start, qpos, qvel, act, cmd, aerial, usable, ctrl, ground, biasprm, ball_q, ball_v, eq_data,
     eq_active, xfrc, warmstart, has_aerial,
@@ -169,15 +165,6 @@ def _bytes(flags):
 
 
 @kernel
-def _mix(words):
-    """`mix64` of a tuple of words, as if they were an array."""
-    h = mix_begin(len(words))
-    for w in words:
-        h = mix_word(h, w)
-    return mix_end(h)
-
-
-@kernel
 def _row(s):
     """The row of the step under way (the last one begun; the last row again if the block is full)."""
     return min(s.cursor[0], s.block.shape[0]) - 1
@@ -195,7 +182,7 @@ def take_inputs(s):
     else:
         cursor[0] = row + 1
     block[row, :] = s.start
-    block[row, INPUTS] = _mix(
+    block[row, INPUTS] = mix64(
         (mix64(s.qpos), mix64(s.qvel), mix64(s.act), mix64(s.cmd), mix64(s.aerial), _bytes(s.usable))
     )
 
@@ -211,14 +198,14 @@ def take_before_physics(s, wrenched):
     h = mix_begin(ground)
     for i in range(ground):
         h = mix_word(h, s.biasprm[i, 0])
-    block[row, DRIVE] = _mix((mix64(s.ctrl[:ground]), mix_end(h)))
+    block[row, DRIVE] = mix64((mix64(s.ctrl[:ground]), mix_end(h)))
     eq = s.eq_data
     h = mix_begin(6 * eq.shape[0])
     for e in range(eq.shape[0]):
         for j in range(6):
             h = mix_word(h, eq[e, j])
     q, v = s.ball_q, s.ball_v
-    block[row, BALL] = _mix((mix64(s.qpos[q : q + 7]), mix64(s.qvel[v : v + 6]), mix_end(h), _bytes(s.eq_active)))
+    block[row, BALL] = mix64((mix64(s.qpos[q : q + 7]), mix64(s.qvel[v : v + 6]), mix_end(h), _bytes(s.eq_active)))
     if wrenched:
         block[row, FORCES] = mix64(s.xfrc)
     if s.has_aerial:
@@ -228,14 +215,14 @@ def take_before_physics(s, wrenched):
 @kernel(s=_Sources)
 def take_physics(s):
     """The fingerprint of what MuJoCo's step left: qpos, qvel, act and the solver's warm start."""
-    s.block[_row(s), PHYSICS] = _mix((mix64(s.qpos), mix64(s.qvel), mix64(s.act), mix64(s.warmstart)))
+    s.block[_row(s), PHYSICS] = mix64((mix64(s.qpos), mix64(s.qvel), mix64(s.act), mix64(s.warmstart)))
 
 
 @kernel(s=_Sources)
 def take_bounce(s):
     """The fingerprint of what the ball's bounce left: qpos and qvel."""
     empty = mix64(s.act[:0])
-    s.block[_row(s), BOUNCE] = _mix((mix64(s.qpos), mix64(s.qvel), empty, empty))
+    s.block[_row(s), BOUNCE] = mix64((mix64(s.qpos), mix64(s.qvel), empty, empty))
 
 
 def _words(array: np.ndarray) -> np.ndarray:

@@ -473,9 +473,9 @@ def mix_end(h):
 
 @kernel
 def mix64(words):
-    """The fingerprint of ``words`` (uint64, C-ordered): see above; the same on every machine (integer
-    arithmetic modulo 2**64)."""
-    h = mix_begin(words.size)
+    """The fingerprint of ``words`` (uint64, C-ordered: an array, or a tuple of words taken as one): see above;
+    the same on every machine (integer arithmetic modulo 2**64)."""
+    h = mix_begin(len(words))
     for w in words:
         h = mix_word(h, w)
     return mix_end(h)
